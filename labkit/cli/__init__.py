@@ -1,0 +1,57 @@
+"""The ``labkit`` command. Each sub-command lives in its own module ``labkit.cli.<name>``
+exposing ``register(subparsers)``, which adds its parser and sets ``func(args) -> int``.
+
+Expected faults (:class:`labkit.errors.LabkitError`) end as one line on stderr and exit 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from labkit import __version__
+from labkit.errors import LabkitError
+
+COMMANDS = [
+    "demo", "ports", "probe", "emulate", "run", "replay", "analyse", "synth",
+    "fit", "simulate", "bench", "reproduce", "report",
+]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="labkit", description="labkit: measure, replay and model PFR / MBS rigs"
+    )
+    parser.add_argument("--version", action="version", version=f"labkit {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in COMMANDS:
+        module_name = f"labkit.cli.{name}"
+        try:
+            module = importlib.import_module(module_name)
+        except ModuleNotFoundError as exc:
+            if exc.name == module_name:  # command not built yet
+                continue
+            raise
+        module.register(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 1
+    try:
+        return int(args.func(args) or 0)
+    except LabkitError as exc:
+        print(f"labkit {args.command}: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"labkit {args.command}: interrupted; motors commanded to zero", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

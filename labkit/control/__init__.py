@@ -1,0 +1,1 @@
+"""labkit.control (see ARCHITECTURE.md)."""

@@ -1,0 +1,1 @@
+"""labkit.devices (see ARCHITECTURE.md)."""

@@ -1,0 +1,245 @@
+"""What every driver shares: the Reading, the device-class interfaces and the driver registry.
+
+A driver is one small class per real protocol. It receives an *open* serial port (any
+``serial.SerialBase``: a real device, ``sim://``, ``replay://``, a pty) and a
+:class:`~labkit.io.clock.Clock`; it never opens ports and never sleeps on the wall clock.
+Parsing and formatting live in pure module-level functions (``parse_*`` / ``format_*``)
+so they can be fuzzed without I/O.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import serial
+
+from labkit.io.clock import Clock
+
+
+@dataclass(frozen=True)
+class Reading:
+    """One measurement, SI inside (ARCHITECTURE rule 5).
+
+    ``t`` is the clock time (s) at which the bytes were received; ``quantity`` is e.g.
+    ``"force"``, ``"mass"``, ``"angular_speed"``; ``value`` is in ``unit`` (SI: N, kg,
+    rad/s); ``raw`` are the bytes of the frame it was parsed from.
+    """
+
+    t: float
+    quantity: str
+    value: float
+    unit: str
+    stable: bool = True
+    overload: bool = False
+    raw: bytes = b""
+    device: str = ""
+    flags: frozenset[str] = field(default_factory=frozenset)
+
+    def as_json(self) -> dict[str, Any]:
+        """The probe's JSON object: keys t, value, unit, stable, overload, raw (+ quantity)."""
+        return {
+            "t": self.t,
+            "quantity": self.quantity,
+            "value": self.value,
+            "unit": self.unit,
+            "stable": self.stable,
+            "overload": self.overload,
+            "raw": self.raw.decode("latin-1"),
+        }
+
+
+@dataclass(frozen=True)
+class MotorStatus:
+    """Controller telemetry. ``duty`` in -1..1; ``speed_rad_s`` when the controller measures it."""
+
+    t: float
+    duty: float
+    target_duty: float
+    speed_rad_s: float | None = None
+    input_voltage_v: float | None = None
+    temperature_c: float | None = None
+    errors: frozenset[str] = field(default_factory=frozenset)
+    raw: bytes = b""
+
+    def as_json(self) -> dict[str, Any]:
+        return {
+            "t": self.t,
+            "value": self.duty,
+            "unit": "1",
+            "stable": not self.errors,
+            "overload": bool(self.errors),
+            "speed_rad_s": self.speed_rad_s,
+            "input_voltage_v": self.input_voltage_v,
+            "temperature_c": self.temperature_c,
+            "errors": sorted(self.errors),
+            "raw": self.raw.decode("latin-1"),
+        }
+
+
+class Device(ABC):
+    """Common part of every driver."""
+
+    kind: ClassVar[str] = ""          # "balance" | "tach" | "motor"
+    protocol: ClassVar[str] = ""      # registry name, e.g. "mtsics"
+    #: serial settings the real device ships with (e.g. A&D: 2400 7E1)
+    default_serial: ClassVar[dict[str, Any]] = {"baudrate": 9600}
+
+    def __init__(self, port: serial.SerialBase, clock: Clock, name: str = "", **options: Any):
+        self.port = port
+        self.clock = clock
+        self.name = name or self.protocol
+        self.options = options
+        self.last_bytes = b""  # tail of what was last received, for error messages
+
+    def identify(self) -> dict[str, Any]:
+        """Whatever the protocol tells about the device (model, serial, firmware); may be {}."""
+        return {}
+
+    def close(self) -> None:
+        """Release the device (motors: command zero first). Closes the port."""
+        try:
+            self.port.close()
+        except Exception:  # noqa: BLE001 - closing a dead port must not mask the real error
+            pass
+
+    def __enter__(self) -> Device:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+class Balance(Device):
+    """A balance or load cell. Readings are force (N) when the unit allows, else mass (kg)."""
+
+    kind = "balance"
+
+    @abstractmethod
+    def read(self, timeout: float = 2.0) -> Reading:
+        """The next reading, stable or not (MT-SICS ``SI``, A&D ``Q``, stream latest)."""
+
+    def read_stable(self, timeout: float = 20.0) -> Reading:
+        """The next stable reading (MT-SICS ``S``); default: poll ``read`` until stable."""
+        deadline = self.clock.now() + timeout
+        while True:
+            reading = self.read(timeout=max(0.1, deadline - self.clock.now()))
+            if reading.stable and not reading.overload:
+                return reading
+            if self.clock.now() >= deadline:
+                from labkit.errors import DeviceTimeout
+
+                raise DeviceTimeout(self.name, "read_stable", reading.raw, "no stable reading")
+            self.clock.sleep(0.05)
+
+    @abstractmethod
+    def zero(self, timeout: float = 20.0) -> None:
+        """Set zero (MT-SICS ``Z``, A&D ``Z``, HX711 ``t``)."""
+
+    def tare(self, timeout: float = 20.0) -> None:
+        """Tare; defaults to zero for devices without a separate tare."""
+        self.zero(timeout)
+
+
+class Tachometer(Device):
+    """A streaming tachometer. A reader (thread on a real clock) keeps the latest readings."""
+
+    kind = "tach"
+
+    @abstractmethod
+    def latest(self) -> Reading | None:
+        """The newest angular-speed reading (rad/s), or None before the first one."""
+
+    @abstractmethod
+    def readings_since(self, t: float) -> list[Reading]:
+        """All readings received at clock time > t, oldest first."""
+
+    def wait_reading(self, timeout: float = 2.0) -> Reading:
+        """Block (on the clock) until a reading newer than now arrives."""
+        start = self.clock.now()
+        while True:
+            new = self.readings_since(start)
+            if new:
+                return new[-1]
+            if self.clock.now() - start >= timeout:
+                from labkit.errors import DeviceTimeout
+
+                raise DeviceTimeout(self.name, "stream", self.last_bytes, f"no reading in {timeout} s")
+            self.clock.sleep(0.01)
+
+
+class MotorController(Device):
+    """A motor PWM/speed controller. Never starts a motor on open.
+
+    Implementations refresh the setpoint at >= 20 Hz (``clock.every``) once the motor is
+    enabled, and command zero/brake on ``stop()``, ``close()`` and any exception.
+    """
+
+    kind = "motor"
+    supports_speed_command: ClassVar[bool] = False
+
+    @abstractmethod
+    def enable(self) -> None:
+        """Allow motion (SMC: exit safe start). Only protocols/runners call this, never probe."""
+
+    @abstractmethod
+    def set_duty(self, duty: float) -> None:
+        """Target duty cycle in -1..1 (sign = direction)."""
+
+    def set_speed(self, speed_rad_s: float) -> None:
+        """Closed-loop speed in the controller (VESC SET_RPM). Not all controllers can."""
+        raise NotImplementedError(f"{self.protocol} has no speed command; use labkit.control")
+
+    @abstractmethod
+    def stop(self) -> None:
+        """Command zero (brake where the protocol has it). Must not raise on a dead port."""
+
+    @abstractmethod
+    def status(self) -> MotorStatus:
+        """Read status/variables (errors, duty, speed where known). Never starts the motor."""
+
+    def close(self) -> None:
+        try:
+            self.stop()
+        finally:
+            super().close()
+
+
+DriverClass = type[Device]
+_DRIVERS: dict[tuple[str, str], DriverClass] = {}
+
+
+def register_driver(cls: DriverClass) -> DriverClass:
+    """Class decorator: make ``cls`` findable as ``(cls.kind, cls.protocol)``."""
+    _DRIVERS[(cls.kind, cls.protocol)] = cls
+    return cls
+
+
+def _load_driver_modules() -> None:
+    # Importing the packages registers their drivers.
+    import labkit.devices.loadcell  # noqa: F401
+    import labkit.devices.motor  # noqa: F401
+    import labkit.devices.tachometer  # noqa: F401
+
+
+def driver_class(kind: str, protocol: str) -> DriverClass:
+    """Look up a driver; raises KeyError with the known names."""
+    _load_driver_modules()
+    try:
+        return _DRIVERS[(kind, protocol)]
+    except KeyError:
+        known = sorted(p for k, p in _DRIVERS if k == kind)
+        raise KeyError(f"no {kind} driver {protocol!r}; known: {', '.join(known)}") from None
+
+
+def known_drivers() -> dict[str, list[str]]:
+    _load_driver_modules()
+    out: dict[str, list[str]] = {}
+    for kind, protocol in sorted(_DRIVERS):
+        out.setdefault(kind, []).append(protocol)
+    return out
+
+
+Parser = Callable[[bytes], Any]

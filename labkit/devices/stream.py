@@ -1,0 +1,120 @@
+"""Reading unsolicited device output into a timestamped buffer without blocking anyone.
+
+A :class:`StreamReader` owns one port's input. ``pump()`` reads whatever bytes are there
+(never waiting), cuts them into frames with a framer and hands each frame with its
+receive time to a callback. On a real clock a periodic job (its own thread) pumps
+continuously, so a slow motor write never blocks a fast sensor (ANCHORS 9.2.4); on a
+virtual clock the clock runs the same job while time advances, so replay is deterministic.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections import deque
+from collections.abc import Callable
+
+import serial
+
+from labkit.errors import DeviceDisconnected
+from labkit.io.clock import Clock, PeriodicJob
+
+
+class LineFramer:
+    """Cuts a byte stream at a terminator (default LF; CR-only devices pass ``b"\\r"``).
+
+    Lines are returned without the terminator and with a trailing CR stripped. A line
+    longer than ``max_len`` is dropped (garbage, or wrong baud) and counted.
+    """
+
+    def __init__(self, terminator: bytes = b"\n", max_len: int = 256) -> None:
+        self.terminator = terminator
+        self.max_len = max_len
+        self.buffer = bytearray()
+        self.dropped = 0
+
+    def feed(self, data: bytes) -> list[bytes]:
+        self.buffer += data
+        lines: list[bytes] = []
+        while True:
+            idx = self.buffer.find(self.terminator)
+            if idx < 0:
+                if len(self.buffer) > self.max_len:
+                    self.buffer.clear()
+                    self.dropped += 1
+                return lines
+            line = bytes(self.buffer[:idx])
+            del self.buffer[: idx + len(self.terminator)]
+            if len(line) > self.max_len:
+                self.dropped += 1
+                continue
+            lines.append(line.rstrip(b"\r"))
+
+
+class StreamReader:
+    """Pump a port into ``on_frame(t, frame)``; runs on the clock every ``period`` seconds."""
+
+    def __init__(
+        self,
+        port: serial.SerialBase,
+        clock: Clock,
+        framer: LineFramer | object,
+        on_frame: Callable[[float, bytes], None],
+        device: str = "",
+        period: float = 0.005,
+        history: int = 4096,
+    ) -> None:
+        self.port = port
+        self.clock = clock
+        self.framer = framer
+        self.on_frame = on_frame
+        self.device = device
+        self.period = period
+        self.tail = deque(maxlen=history)  # recent raw bytes, for error messages
+        self.error: BaseException | None = None
+        self._lock = threading.Lock()
+        self._job: PeriodicJob | None = None
+
+    @property
+    def last_bytes(self) -> bytes:
+        return bytes(self.tail)[-64:]
+
+    def start(self) -> None:
+        if self._job is None:
+            self._job = self.clock.every(self.period, self._tick, name=f"{self.device}-reader")
+
+    def stop(self) -> None:
+        if self._job is not None:
+            self._job.cancel()
+            self._job = None
+
+    def _tick(self, _t: float) -> None:
+        if self.error is not None:
+            return
+        try:
+            self.pump()
+        except Exception as exc:  # noqa: BLE001 - kept and re-raised to the caller via check()
+            self.error = exc
+
+    def check(self) -> None:
+        """Raise the reader's error (e.g. disconnect) in the caller's thread."""
+        if self.error is not None:
+            err = self.error
+            if isinstance(err, serial.SerialException):
+                raise DeviceDisconnected(self.device, "stream", self.last_bytes, str(err)) from err
+            raise err
+
+    def pump(self) -> int:
+        """Read what is waiting now, frame it, deliver frames. Returns the number of frames."""
+        with self._lock:
+            waiting = self.port.in_waiting
+            if not waiting:
+                return 0
+            data = self.port.read(waiting)
+            if not data:
+                return 0
+            t = self.clock.now()
+            self.tail.extend(data)
+            frames = self.framer.feed(data)
+        for frame in frames:
+            self.on_frame(t, frame)
+        return len(frames)

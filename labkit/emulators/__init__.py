@@ -1,0 +1,1 @@
+"""labkit.emulators (see ARCHITECTURE.md)."""

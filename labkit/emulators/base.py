@@ -1,0 +1,172 @@
+"""Emulators: byte-level stand-ins for real devices, driven by a shared seeded plant.
+
+An :class:`Emulator` sees the host's bytes (``receive``) and produces the device's bytes
+(``emit``) as a function of clock time, so the same object can sit behind a ``sim://``
+port (virtual or real clock) or a pseudo-terminal (``labkit emulate``). Emulators carry
+their *own* formatting code: they must not share parsing code with the drivers in a way
+that would hide a protocol bug (ARCHITECTURE).
+
+Faults are switchable and seeded (PROTOCOLS 5.2), given as ``faults=name:value,...`` in
+the ``sim://`` URL and parsed by :func:`parse_faults`. Every emulator understands the common
+ones handled here; protocol-specific ones are documented on each emulator.
+"""
+
+from __future__ import annotations
+
+import random
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+from labkit.emulators.plant import RigPlant
+
+#: pyserial's POSIX message when a USB adapter is unplugged mid-read (PROTOCOLS 4)
+DISCONNECT_MESSAGE = (
+    "device reports readiness to read but returned no data "
+    "(device disconnected or multiple access on port?)"
+)
+
+COMMON_FAULTS = {
+    "garbage": "probability per emitted chunk of inserting 1-8 junk bytes (0x00/0xFF/random)",
+    "split": "probability of splitting an emitted chunk into two reads",
+    "drop_reply": "probability of not answering a command at all",
+    "delay": "extra reply latency in seconds",
+    "disconnect_at": "clock time (s after open) at which the device disappears",
+    "reconnect_after": "seconds after a disconnect at which it comes back (power-on state)",
+    "wrong_baud": "1: the host's bytes are received as if at the wrong baud (all garbled)",
+}
+
+
+def parse_faults(text: str | None) -> dict[str, float]:
+    """Parse ``"garbage:0.1,disconnect_at:5"`` (also ``=`` or ``;``) into a dict of floats.
+
+    A bare name means 1 (``"overload"`` -> ``{"overload": 1.0}``). Raises ValueError naming
+    the bad item.
+    """
+    out: dict[str, float] = {}
+    if not text:
+        return out
+    for item in text.replace(";", ",").split(","):
+        item = item.strip()
+        if not item:
+            continue
+        sep = ":" if ":" in item else ("=" if "=" in item else None)
+        if sep is None:
+            out[item] = 1.0
+            continue
+        name, _, value = item.partition(sep)
+        try:
+            out[name.strip()] = float(value)
+        except ValueError:
+            raise ValueError(f"fault {name.strip()!r}: {value!r} is not a number") from None
+    return out
+
+
+@dataclass
+class Emulator:
+    """Base of all emulators. Subclasses implement ``handle`` (commands) and ``produce``.
+
+    * ``receive(data, t)``: host -> device bytes arriving at time ``t``.
+    * ``emit(t)``: device -> host bytes that are ready at time ``t`` (the port calls it
+      whenever the host reads or asks ``in_waiting``).
+    * ``connected(t)``: False while unplugged; the port then raises SerialException with
+      :data:`DISCONNECT_MESSAGE`.
+    """
+
+    protocol: ClassVar[str] = ""
+    kind: ClassVar[str] = ""
+
+    plant: RigPlant
+    seed: int = 0
+    faults: dict[str, float] = field(default_factory=dict)
+    role: str = ""
+
+    def __post_init__(self) -> None:
+        self.rng = random.Random(self.seed)
+        self._outbox: list[tuple[float, bytes]] = []  # (ready time, bytes)
+        self._opened_at: float | None = None
+        self.power_on_count = 0
+
+    # ---- life cycle -------------------------------------------------------------------
+    def open(self, t: float) -> None:
+        if self._opened_at is None:
+            self._opened_at = t
+            self.power_on(t)
+
+    def power_on(self, t: float) -> None:
+        """Reset to the power-on state (subclasses add banners, safe-start...)."""
+        self.power_on_count += 1
+
+    def since_open(self, t: float) -> float:
+        return t - (self._opened_at if self._opened_at is not None else t)
+
+    def connected(self, t: float) -> bool:
+        at = self.faults.get("disconnect_at")
+        if at is None or self.since_open(t) < at:
+            return True
+        back = self.faults.get("reconnect_after")
+        return back is not None and self.since_open(t) >= at + back
+
+    # ---- bytes ------------------------------------------------------------------------
+    def receive(self, data: bytes, t: float) -> None:
+        if self.faults.get("wrong_baud"):
+            data = bytes(self.rng.randrange(256) for _ in data)
+        self.handle(data, t)
+
+    def handle(self, data: bytes, t: float) -> None:
+        """Process host bytes (subclasses). Use ``reply`` to answer."""
+
+    def produce(self, t: float) -> None:
+        """Queue unsolicited output due up to ``t`` (streaming devices)."""
+
+    def reply(self, data: bytes, t: float, latency: float = 0.0) -> None:
+        """Queue ``data`` to be readable at ``t + latency`` (+ the ``delay`` fault)."""
+        if self.rng.random() < self.faults.get("drop_reply", 0.0):
+            return
+        self._queue(data, t + latency + self.faults.get("delay", 0.0))
+
+    def _queue(self, data: bytes, ready: float) -> None:
+        garbage = self.faults.get("garbage", 0.0)
+        if garbage and self.rng.random() < garbage:
+            junk = bytes(self.rng.choice((0x00, 0xFF, self.rng.randrange(256)))
+                         for _ in range(self.rng.randint(1, 8)))
+            data = junk + data if self.rng.random() < 0.5 else data + junk
+        split = self.faults.get("split", 0.0)
+        if split and len(data) > 1 and self.rng.random() < split:
+            cut = self.rng.randint(1, len(data) - 1)
+            self._outbox.append((ready, data[:cut]))
+            self._outbox.append((ready + 0.002, data[cut:]))
+        else:
+            self._outbox.append((ready, data))
+
+    def emit(self, t: float) -> bytes:
+        self.produce(t)
+        ready = [c for c in self._outbox if c[0] <= t]
+        if not ready:
+            return b""
+        self._outbox = [c for c in self._outbox if c[0] > t]
+        ready.sort(key=lambda c: c[0])
+        return b"".join(c[1] for c in ready)
+
+    def next_ready_time(self) -> float | None:
+        """When the next queued byte becomes readable (None if nothing is queued)."""
+        return min((c[0] for c in self._outbox), default=None)
+
+
+_EMULATORS: dict[str, type[Emulator]] = {}
+
+
+def register_emulator(cls: type[Emulator]) -> type[Emulator]:
+    """Class decorator: make ``cls`` available as ``sim://<cls.protocol>``."""
+    _EMULATORS[cls.protocol] = cls
+    return cls
+
+
+def emulator_class(protocol: str) -> type[Emulator]:
+    import labkit.emulators.balances  # noqa: F401  (registers on import)
+    import labkit.emulators.motors  # noqa: F401
+    import labkit.emulators.tachometers  # noqa: F401
+
+    try:
+        return _EMULATORS[protocol]
+    except KeyError:
+        raise KeyError(f"no emulator {protocol!r}; known: {', '.join(sorted(_EMULATORS))}") from None

@@ -1,0 +1,1 @@
+"""labkit.io (see ARCHITECTURE.md)."""

@@ -1,0 +1,1 @@
+"""labkit.model (see ARCHITECTURE.md)."""

@@ -1,0 +1,1 @@
+"""labkit.protocols (see ARCHITECTURE.md)."""

@@ -1,0 +1,1 @@
+"""labkit.session (see ARCHITECTURE.md)."""

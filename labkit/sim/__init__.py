@@ -1,0 +1,1 @@
+"""labkit.sim (see ARCHITECTURE.md)."""

@@ -1,0 +1,1 @@
+"""labkit.stream (see ARCHITECTURE.md)."""

@@ -1,0 +1,1 @@
+"""labkit.vision (see ARCHITECTURE.md)."""
