@@ -79,6 +79,8 @@ class Emulator:
     seed: int = 0
     faults: dict[str, float] = field(default_factory=dict)
     role: str = ""
+    #: protocol-specific options from the sim:// query string or the rig file (strings)
+    options: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         self.rng = random.Random(self.seed)

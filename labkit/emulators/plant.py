@@ -89,6 +89,15 @@ class RigPlant:
         with self._lock:
             self.motor(name).set_duty(duty, t)
 
+    def floator_spin(self, t: float) -> float:
+        """Spin of the floating magnet about its dipole axis (rad/s) at time t.
+
+        Placeholder dynamics (constant); the spin-critical plant (Fig. 6.18) replaces it.
+        Returns 0 when the floator has dropped (no target for the spin tachometer).
+        """
+        with self._lock:
+            return self.floator_spin_rad_s if self.floator_present else 0.0
+
     def force(self, t: float) -> float:
         """The force (N, upward on the rotor = downward on the balance pan) at time t."""
         with self._lock:
