@@ -243,3 +243,16 @@ def known_drivers() -> dict[str, list[str]]:
 
 
 Parser = Callable[[bytes], Any]
+
+
+_PARSER_BENCHMARKS: dict[str, tuple[bytes, Callable[[bytes], Any]]] = {}
+
+
+def register_parser_benchmark(protocol: str, sample: bytes, parse: Callable[[bytes], Any]) -> None:
+    """Offer ``parse(sample)`` (one typical frame/line of ``protocol``) to ``labkit bench io``."""
+    _PARSER_BENCHMARKS[protocol] = (sample, parse)
+
+
+def parser_benchmarks() -> dict[str, tuple[bytes, Callable[[bytes], Any]]]:
+    _load_driver_modules()
+    return dict(_PARSER_BENCHMARKS)
