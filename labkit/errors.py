@@ -65,3 +65,18 @@ class ReplayMismatch(LabkitError):
 
 class SafetyError(LabkitError):
     """An interlock tripped (speed above limit, tachometer silent, ...). Motors are at zero."""
+
+
+class DataFileError(LabkitError):
+    """A data file (CSV, results.json, session) cannot be used. Formats as ``file:key: reason``."""
+
+    def __init__(self, file: str, key: str, reason: str) -> None:
+        self.file, self.key, self.reason = str(file), key, reason
+        super().__init__(f"{self.file}:{key}: {reason}" if key else f"{self.file}: {reason}")
+
+
+class FitError(LabkitError):
+    """A fit cannot give a trustworthy answer (too few points, NaN, a parameter at a bound...).
+
+    Names the model, the series and what to change in the data.
+    """
