@@ -1,0 +1,236 @@
+"""Closed-loop rotor speed: a motor controller steered by a tachometer, with interlocks.
+
+:class:`SpeedControl` runs one or two :class:`SpeedLoop` s as one clock job (a thread on a
+real clock, in-line on a virtual one). Every control period each loop
+
+1. checks its interlocks: tachometer silent (no reading for ``tach_timeout_s``) or
+   disconnected, implausible reading (not finite, negative, above twice the limit),
+   over-speed (above ``max_speed*(1+overspeed_margin)``), controller error flags;
+2. moves its ramped setpoint toward the target at the rig's ``max_ramp``;
+3. commands feed-forward + PI duty (:func:`labkit.control.pi.pi_step`);
+4. updates its settle detector.
+
+Any trip, and any exception inside a tick, commands *every* motor of the rig to zero in
+that same tick and latches the reason; :meth:`SpeedControl.check` raises it as
+:class:`labkit.errors.SafetyError` in the protocol's thread.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from labkit.control.pi import PIGains, PIState, SettleDetector, pi_step, ramp_toward
+from labkit.errors import SafetyError
+
+Emit = Callable[[dict[str, Any]], None]
+
+
+@dataclass
+class LoopSnapshot:
+    """What a loop knows after its last tick (for events, progress and rerun)."""
+
+    t: float
+    target_rad_s: float
+    setpoint_rad_s: float
+    measured_rad_s: float | None
+    duty: float
+    settled: bool
+
+
+class Tripped(Exception):
+    """Raised inside a tick to trip the interlock with a reason."""
+
+
+class SpeedLoop:
+    """One motor + one tachometer. Not thread-safe on its own: :class:`SpeedControl` locks."""
+
+    def __init__(self, name: str, motor: Any, tach: Any, *, period_s: float, gains: PIGains,
+                 max_speed_rad_s: float, max_ramp_rad_s2: float, overspeed_margin: float,
+                 settle_tolerance_rad_s: float, settle_hold_s: float, tach_timeout_s: float,
+                 check_status: bool = True) -> None:
+        self.name, self.motor, self.tach = name, motor, tach
+        self.period_s = period_s
+        self.gains = gains
+        self.max_speed = max_speed_rad_s
+        self.max_ramp = max_ramp_rad_s2
+        self.overspeed = max_speed_rad_s * (1.0 + overspeed_margin)
+        self.tach_timeout = tach_timeout_s
+        self.check_status = check_status
+        self.state = PIState()
+        self.settle = SettleDetector(settle_tolerance_rad_s, settle_hold_s)
+        self.target = 0.0
+        self.setpoint = 0.0
+        self.enabled = False
+        self.started_at: float | None = None
+        self.last_t: float | None = None
+        self.snapshot = LoopSnapshot(0.0, 0.0, 0.0, None, 0.0, False)
+
+    def set_target(self, speed_rad_s: float) -> None:
+        if not math.isfinite(speed_rad_s) or speed_rad_s < 0:
+            raise SafetyError(f"{self.name}: target speed {speed_rad_s!r} rad/s is not allowed")
+        if speed_rad_s > self.max_speed:
+            raise SafetyError(
+                f"{self.name}: target {speed_rad_s * 60 / (2 * math.pi):.0f} RPM is above the rig's "
+                f"limit of {self.max_speed * 60 / (2 * math.pi):.0f} RPM")
+        self.target = speed_rad_s
+        self.settle.reset()
+
+    def _measure(self, t: float) -> float | None:
+        check = getattr(self.tach, "check", None)
+        if callable(check):
+            try:
+                check()
+            except Exception as exc:  # noqa: BLE001 - any tach fault is an interlock
+                raise Tripped(f"tachometer {self.tach.name} lost: {exc}") from exc
+        reading = self.tach.latest()
+        since = reading.t if reading is not None else self.started_at
+        if since is not None and t - since > self.tach_timeout:
+            raise Tripped(f"tachometer {self.tach.name} silent for {t - since:.2f} s "
+                          f"(limit {self.tach_timeout:.2f} s)")
+        if reading is None:
+            return None
+        value = reading.value
+        if not math.isfinite(value) or value < 0 or value > 2.0 * self.max_speed:
+            raise Tripped(f"tachometer {self.tach.name} implausible reading {value!r} rad/s")
+        if value > self.overspeed:
+            raise Tripped(f"over-speed on {self.name}: {value * 60 / (2 * math.pi):.0f} RPM > "
+                          f"{self.overspeed * 60 / (2 * math.pi):.0f} RPM")
+        return value
+
+    def tick(self, t: float) -> LoopSnapshot:
+        if self.started_at is None:
+            self.started_at = t
+        dt = self.period_s if self.last_t is None else max(0.0, t - self.last_t)
+        self.last_t = t
+        measured = self._measure(t)
+        if self.check_status and self.enabled:
+            errors = self.motor.status().errors
+            if errors:
+                raise Tripped(f"motor controller {self.motor.name} reports errors: {', '.join(sorted(errors))}")
+        self.setpoint = ramp_toward(self.setpoint, self.target, self.max_ramp, dt)
+        if self.target > 0 and not self.enabled:
+            self.motor.enable()
+            self.enabled = True
+        if self.enabled:
+            duty = pi_step(self.gains, self.state, self.setpoint,
+                           measured if measured is not None else 0.0, dt)
+            self.motor.set_duty(duty)
+        error = (measured if measured is not None else math.inf) - self.target
+        settled = self.setpoint == self.target and self.settle.update(t, error)
+        self.snapshot = LoopSnapshot(t, self.target, self.setpoint, measured, self.state.duty, settled)
+        return self.snapshot
+
+
+class SpeedControl:
+    """Runs the rig's speed loops on the clock; latches the first interlock and zeroes motors."""
+
+    def __init__(self, clock: Any, loops: list[SpeedLoop], all_motors: list[Any],
+                 period_s: float, emit: Emit | None = None) -> None:
+        self.clock = clock
+        self.loops = {loop.name: loop for loop in loops}
+        self.all_motors = all_motors
+        self.period_s = period_s
+        self.emit = emit or (lambda event: None)
+        self.tripped: str | None = None
+        self.tripped_at: float | None = None
+        self._lock = threading.RLock()
+        self._job: Any = None
+
+    # ---- life cycle -----------------------------------------------------------------------
+    def start(self) -> None:
+        if self._job is None:
+            self._job = self.clock.every(self.period_s, self._tick, name="speed-control")
+
+    def stop(self, reason: str = "end of protocol") -> None:
+        """Stop the job and command every motor to zero (normal end or any exit path)."""
+        with self._lock:
+            if self._job is not None:
+                self._job.cancel()
+                self._job = None
+            for loop in self.loops.values():
+                loop.target = loop.setpoint = 0.0
+            self._zero_all()
+
+    def _zero_all(self) -> list[str]:
+        failed = []
+        for motor in self.all_motors:
+            try:
+                motor.stop()
+            except Exception as exc:  # noqa: BLE001 - keep stopping the others
+                failed.append(f"{getattr(motor, 'name', motor)}: {exc}")
+        return failed
+
+    def trip(self, reason: str) -> None:
+        """Interlock: every motor to zero now, latch ``reason``, emit an ``interlock`` event."""
+        with self._lock:
+            failed = self._zero_all()
+            if self.tripped is None:
+                self.tripped = reason
+                self.tripped_at = self.clock.now()
+                if self._job is not None:
+                    self._job.cancel()
+                    self._job = None
+                event: dict[str, Any] = {"type": "interlock", "t": self.tripped_at, "reason": reason}
+                if failed:
+                    event["stop_failed"] = failed
+                self.emit(event)
+
+    def check(self) -> None:
+        """Raise :class:`SafetyError` in the caller's thread if an interlock tripped."""
+        if self.tripped is not None:
+            raise SafetyError(f"interlock: {self.tripped}; motors commanded to zero")
+
+    # ---- the control period ---------------------------------------------------------------
+    def _tick(self, t: float) -> None:
+        with self._lock:
+            if self.tripped is not None:
+                return
+            try:
+                for loop in self.loops.values():
+                    loop.tick(t)
+            except Tripped as exc:
+                self.trip(str(exc))
+            except Exception as exc:  # noqa: BLE001 - any fault in a tick is an interlock
+                self.trip(f"control fault: {type(exc).__name__}: {exc}")
+
+    # ---- used by the runner ---------------------------------------------------------------
+    def set_targets(self, targets: dict[str, float]) -> None:
+        with self._lock:
+            self.check()
+            for name in targets:
+                if name not in self.loops:
+                    raise SafetyError(f"no speed loop {name!r}; this rig has {', '.join(self.loops)}")
+            for name, speed in targets.items():
+                self.loops[name].set_target(speed)
+        self.start()
+
+    def settled(self) -> bool:
+        with self._lock:
+            return all(loop.snapshot.settled for loop in self.loops.values())
+
+    def snapshots(self) -> dict[str, LoopSnapshot]:
+        with self._lock:
+            return {name: loop.snapshot for name, loop in self.loops.items()}
+
+
+def build_speed_control(open_rig: Any, clock: Any, emit: Emit | None = None,
+                        loops: list[str] | None = None) -> SpeedControl:
+    """Speed loops for ``open_rig`` as its rig file pairs them (``[control]``)."""
+    rig = open_rig.rig
+    c, lim = rig.control, rig.limits
+    gains = PIGains(c.full_speed_rad_s, c.kp, c.ki, lim.max_duty)
+    built = []
+    for cfg in c.loops:
+        if loops is not None and cfg.name not in loops:
+            continue
+        built.append(SpeedLoop(
+            cfg.name, open_rig.devices[cfg.motor], open_rig.devices[cfg.tach],
+            period_s=c.period_s, gains=gains, max_speed_rad_s=lim.max_speed_rad_s,
+            max_ramp_rad_s2=lim.max_ramp_rad_s2, overspeed_margin=lim.overspeed_margin,
+            settle_tolerance_rad_s=c.settle_tolerance_rad_s, settle_hold_s=c.settle_hold_s,
+            tach_timeout_s=c.tach_timeout_s))
+    return SpeedControl(clock, built, list(open_rig.motors().values()), c.period_s, emit)
