@@ -63,6 +63,22 @@ class ReplayMismatch(LabkitError):
     """What a driver wrote during replay differs from the cassette."""
 
 
+class PortURLError(LabkitError, ValueError):
+    """A port URL (``sim://``, ``record://``, ``replay://``...) cannot be used. Names URL and reason."""
+
+    def __init__(self, url: str, reason: str) -> None:
+        self.url, self.reason = url, reason
+        super().__init__(f"{url}: {reason}")
+
+
+class CassetteError(LabkitError):
+    """A cassette file is unreadable. Names file, line and problem."""
+
+    def __init__(self, file: str, line: int, problem: str) -> None:
+        self.file, self.line, self.problem = str(file), line, problem
+        super().__init__(f"{self.file}:{line}: {problem}")
+
+
 class SafetyError(LabkitError):
     """An interlock tripped (speed above limit, tachometer silent, ...). Motors are at zero."""
 

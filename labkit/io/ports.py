@@ -1,0 +1,49 @@
+"""Opening ports from URLs: the one seam between drivers and wires (ANCHORS 9.2.1).
+
+``open_port(url, clock=..., baudrate=..., timeout=...)`` accepts everything
+``serial.serial_for_url`` does (device paths, ``socket://``, ``loop://``, ``hwgrep://``, pty
+paths) plus labkit's own schemes, registered once with pyserial:
+
+* ``sim://<protocol>?seed=N&faults=...`` - an emulator (labkit.io.sim_port);
+* ``record://<inner-url>?cassette=PATH&port=NAME`` - tee every byte to a cassette;
+* ``replay://<cassette>?mode=strict|timed`` - serve a cassette.
+
+labkit's ports wait on the given clock (default :func:`labkit.io.clock.current_clock`);
+native ports ignore it.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any
+
+import serial
+
+from labkit.io.clock import Clock, current_clock
+
+HANDLER_PACKAGE = "labkit.io.urlhandlers"
+_register_lock = threading.Lock()
+
+
+def register_url_handlers() -> None:
+    """Make pyserial find ``sim://``, ``record://`` and ``replay://`` (idempotent)."""
+    with _register_lock:
+        if HANDLER_PACKAGE not in serial.protocol_handler_packages:
+            serial.protocol_handler_packages.append(HANDLER_PACKAGE)
+
+
+def open_port(url: str, *, clock: Clock | None = None, **serial_settings: Any) -> serial.SerialBase:
+    """Open ``url`` with pyserial settings (``baudrate``, ``bytesize``, ``parity``, ``timeout``...).
+
+    Raises ``serial.SerialException`` when the port cannot be opened and
+    :class:`labkit.errors.PortURLError` for a malformed labkit URL.
+    """
+    register_url_handlers()
+    port = serial.serial_for_url(url, do_not_open=True, **serial_settings)
+    if hasattr(port, "clock"):
+        port.clock = clock if clock is not None else current_clock()
+    port.open()
+    return port
+
+
+register_url_handlers()

@@ -1,0 +1,160 @@
+"""Host an emulator on a real pseudo-terminal, so any program can open it as a serial port.
+
+``PtyHost(emulator)`` opens a pty pair in raw mode and starts a pump thread: bytes the user
+writes to ``host.path`` (``/dev/pts/N``) go to ``emulator.receive``, and whatever
+``emulator.emit`` produces is written back. When the emulator's ``connected(t)`` turns
+False the host closes the pty, so the user's pyserial read or write fails with a real
+``SerialException``/``OSError``; when it comes back the device appears under a *new* path
+(``host.path`` changes and ``on_reconnect(new_path)`` is called), like a USB adapter that
+re-enumerates as another ttyUSB.
+"""
+
+from __future__ import annotations
+
+import errno
+import fcntl
+import os
+import select
+import threading
+import tty
+from collections.abc import Callable
+
+from labkit.emulators.base import Emulator
+from labkit.io.clock import Clock, current_clock
+
+#: how often the pump looks at the emulator when nothing arrives (s)
+PUMP_PERIOD_S = 0.002
+
+
+class _Pty:
+    """One pty pair. We keep the slave open too, so the master never sees EIO between users."""
+
+    def __init__(self) -> None:
+        self.master, self.slave = os.openpty()
+        tty.setraw(self.slave)
+        tty.setraw(self.master)
+        flags = fcntl.fcntl(self.master, fcntl.F_GETFL)
+        fcntl.fcntl(self.master, fcntl.F_SETFL, flags | os.O_NONBLOCK)
+        self.path = os.ttyname(self.slave)
+
+    def close(self) -> None:
+        for fd in (self.master, self.slave):
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+
+
+class PtyHost:
+    """Serve ``emulator`` on ``/dev/pts/N`` until :meth:`close`. Use as a context manager too."""
+
+    def __init__(
+        self,
+        emulator: Emulator,
+        clock: Clock | None = None,
+        on_reconnect: Callable[[str], None] | None = None,
+    ) -> None:
+        self.emulator = emulator
+        self.clock = clock if clock is not None else current_clock()
+        self.on_reconnect = on_reconnect
+        self.dropped_bytes = 0  # device output lost because nobody read the pty
+        self.paths: list[str] = []  # every path this device has had, oldest first
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._pty: _Pty | None = _Pty()
+        self._spare: _Pty | None = None
+        self.path = self._pty.path
+        self.paths.append(self.path)
+        self.emulator.open(self.clock.now())
+        self.error: BaseException | None = None
+        self._thread = threading.Thread(target=self._run, name=f"pty-{emulator.role}", daemon=True)
+        self._thread.start()
+
+    @property
+    def connected(self) -> bool:
+        return self._pty is not None
+
+    # -- pump ---------------------------------------------------------------------------
+    def _run(self) -> None:
+        try:
+            while not self._stop.is_set():
+                self._step()
+        except BaseException as exc:  # noqa: BLE001 - kept for close() / the caller to see
+            self.error = exc
+
+    def _step(self) -> None:
+        now = self.clock.now()
+        with self._lock:
+            if self._pty is None:
+                if self.emulator.connected(now):
+                    self._replug(now)
+                else:
+                    self._stop.wait(PUMP_PERIOD_S)
+                    return
+            elif not self.emulator.connected(now):
+                self._unplug()
+                return
+            pty = self._pty
+        ready, _, _ = select.select([pty.master], [], [], PUMP_PERIOD_S)
+        now = self.clock.now()
+        with self._lock:
+            if self._pty is not pty:
+                return
+            if ready:
+                try:
+                    data = os.read(pty.master, 4096)
+                except OSError as exc:
+                    if exc.errno not in (errno.EAGAIN, errno.EIO):
+                        raise
+                    data = b""
+                if data:
+                    self.emulator.receive(data, now)
+            out = self.emulator.emit(now)
+            if out:
+                self._write(pty, out)
+
+    def _write(self, pty: _Pty, data: bytes) -> None:
+        view = memoryview(data)
+        while view:
+            try:
+                n = os.write(pty.master, view)
+            except BlockingIOError:
+                self.dropped_bytes += len(view)  # like a UART whose host buffer overflowed
+                return
+            view = view[n:]
+
+    def _unplug(self) -> None:
+        """Device gone: reserve the next pty first (so the new path differs), then hang up."""
+        assert self._pty is not None
+        self._spare = _Pty()
+        self._pty.close()
+        self._pty = None
+
+    def _replug(self, now: float) -> None:
+        self._pty, self._spare = (self._spare or _Pty()), None
+        self.path = self._pty.path
+        self.paths.append(self.path)
+        self.emulator.power_on(now)
+        if self.on_reconnect is not None:
+            self.on_reconnect(self.path)
+
+    # -- life cycle ---------------------------------------------------------------------
+    def close(self) -> None:
+        """Stop the pump and release the pty (idempotent)."""
+        self._stop.set()
+        if self._thread.is_alive() and threading.current_thread() is not self._thread:
+            self._thread.join(timeout=2.0)
+        with self._lock:
+            for pty in (self._pty, self._spare):
+                if pty is not None:
+                    pty.close()
+            self._pty = self._spare = None
+
+    def __enter__(self) -> PtyHost:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        return f"PtyHost({self.emulator.protocol!r}, path={self.path!r})"

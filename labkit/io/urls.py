@@ -1,0 +1,138 @@
+"""Pure parsing of labkit's port URLs (no I/O): ``sim://``, ``record://``, ``replay://``.
+
+* ``sim://<protocol>?seed=N&faults=a:1,b:2&plant=NAME&role=ROLE&<emulator options>``
+* ``record://<inner-url>?cassette=PATH&port=NAME`` - ``cassette`` and ``port`` are taken out
+  of the query; every other query key stays with the inner URL, so
+  ``record://sim://mtsics?seed=3&cassette=rec/b.jsonl&port=balance`` records
+  ``sim://mtsics?seed=3``. A real device: ``record:///dev/ttyUSB0?cassette=rec/b.jsonl``.
+* ``replay://<cassette-path>?mode=strict|timed`` (relative paths are relative to the working
+  directory; ``replay:///abs/path.jsonl`` for absolute ones).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from urllib.parse import parse_qsl, quote, unquote
+
+from labkit.emulators.base import parse_faults
+from labkit.errors import PortURLError
+
+RECORD_KEYS = ("cassette", "port")
+REPLAY_MODES = ("strict", "timed")
+
+
+def split_scheme(url: str) -> tuple[str, str]:
+    """``"sim://mtsics?x=1"`` -> ``("sim", "mtsics?x=1")``; no scheme -> ``("", url)``."""
+    scheme, sep, rest = url.partition("://")
+    if not sep:
+        return "", url
+    return scheme.lower(), rest
+
+
+def _split_query(rest: str) -> tuple[str, list[tuple[str, str]]]:
+    path, _, query = rest.partition("?")
+    return path, parse_qsl(query, keep_blank_values=True)
+
+
+@dataclass(frozen=True)
+class SimSpec:
+    """What a ``sim://`` URL asks for."""
+
+    protocol: str
+    seed: int = 0
+    faults: dict[str, float] = field(default_factory=dict)
+    plant: str = "default"
+    role: str = ""
+    options: dict[str, str] = field(default_factory=dict)
+
+
+def parse_sim_url(url: str) -> SimSpec:
+    """Parse ``sim://<protocol>?seed=..&faults=..&plant=..&role=..&<options>``."""
+    scheme, rest = split_scheme(url)
+    if scheme != "sim":
+        raise PortURLError(url, "expected a sim://<protocol>?... URL")
+    protocol, query = _split_query(rest)
+    protocol = protocol.strip("/")
+    if not protocol:
+        raise PortURLError(url, "no emulator protocol after sim://")
+    seed, faults, plant, role = 0, {}, "default", ""
+    options: dict[str, str] = {}
+    for key, value in query:
+        if key == "seed":
+            try:
+                seed = int(value)
+            except ValueError:
+                raise PortURLError(url, f"seed={value!r} is not an integer") from None
+        elif key == "faults":
+            try:
+                faults.update(parse_faults(value))
+            except ValueError as exc:
+                raise PortURLError(url, str(exc)) from None
+        elif key == "plant":
+            plant = value or "default"
+        elif key == "role":
+            role = value
+        else:
+            options[key] = value
+    return SimSpec(protocol, seed, faults, plant, role or protocol, options)
+
+
+@dataclass(frozen=True)
+class RecordSpec:
+    """What a ``record://`` URL asks for: the inner URL, the cassette path and the port name."""
+
+    inner_url: str
+    cassette: str
+    port: str
+
+
+def parse_record_url(url: str) -> RecordSpec:
+    """Split ``record://<inner>?cassette=..&port=..`` (other query keys stay with the inner URL)."""
+    scheme, rest = split_scheme(url)
+    if scheme != "record":
+        raise PortURLError(url, "expected a record://<inner-url>?cassette=PATH URL")
+    inner, query = _split_query(rest)
+    own = {k: v for k, v in query if k in RECORD_KEYS}
+    kept = [(k, v) for k, v in query if k not in RECORD_KEYS]
+    if not inner:
+        raise PortURLError(url, "no inner port URL after record://")
+    if not own.get("cassette"):
+        raise PortURLError(url, "record:// needs ?cassette=PATH (one cassette file per port)")
+    if kept:
+        inner += "?" + "&".join(f"{quote(k, safe='')}={quote(v, safe=':,/.;-_')}" for k, v in kept)
+    cassette = own["cassette"]
+    port = own.get("port") or _stem(cassette)
+    return RecordSpec(inner, cassette, port)
+
+
+def _stem(path: str) -> str:
+    name = path.replace("\\", "/").rsplit("/", 1)[-1]
+    return name.split(".", 1)[0] or "port"
+
+
+@dataclass(frozen=True)
+class ReplaySpec:
+    """What a ``replay://`` URL asks for."""
+
+    cassette: str
+    mode: str = "strict"
+
+
+def parse_replay_url(url: str) -> ReplaySpec:
+    """Parse ``replay://<cassette-path>?mode=strict|timed``."""
+    scheme, rest = split_scheme(url)
+    if scheme != "replay":
+        raise PortURLError(url, "expected a replay://<cassette-path>?mode=strict|timed URL")
+    path, query = _split_query(rest)
+    path = unquote(path)
+    if not path:
+        raise PortURLError(url, "no cassette path after replay://")
+    mode = "strict"
+    for key, value in query:
+        if key == "mode":
+            if value not in REPLAY_MODES:
+                raise PortURLError(url, f"mode={value!r}; choose one of {', '.join(REPLAY_MODES)}")
+            mode = value
+        else:
+            raise PortURLError(url, f"unknown replay option {key!r} (only mode=strict|timed)")
+    return ReplaySpec(path, mode)
