@@ -1,0 +1,230 @@
+"""Configurable line reader for third-party HX711 + Arduino sketches (PROTOCOLS 1.4).
+
+There is no HX711 serial standard: each sketch prints its own lines. A *preset* names a
+known sketch (its line pattern, baud rate and tare command); any option can be overridden
+in the rig file. A line pattern is a regular expression with a named group ``value``
+(and optionally ``unit``); lines that do not match (boot banners, ``Tare complete``) are
+skipped, never read as numbers. Values become SI with ``(value - offset) * scale`` in
+``unit`` (``g``, ``kg``, ``N``... or ``raw`` for uncalibrated ADC counts).
+
+The sketches stream continuously; the driver reads the next line that arrives after the
+call. They report no stability: a reading is flagged stable only when ``stable_std`` is
+set and the last ``stable_window`` values spread less than it; otherwise stable is True
+with the flag ``stability_unknown``.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import statistics
+from collections import deque
+from dataclasses import dataclass
+from typing import Any
+
+import serial
+
+from labkit.devices.base import Balance, Reading, register_driver, register_parser_benchmark
+from labkit.devices.loadcell.linkio import FrameError, LineLink, eol_bytes
+from labkit.devices.loadcell.units import UnitError, to_si
+from labkit.errors import DeviceReplyError
+from labkit.io.clock import Clock
+
+FLOAT = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d{1,3})?"
+
+#: HX711 24-bit two's complement saturation codes (PROTOCOLS 1.4)
+HX711_MAX = 0x7FFFFF
+HX711_MIN = -0x800000
+
+
+@dataclass(frozen=True)
+class Preset:
+    """A known sketch: how its lines look, its baud rate and how it tares."""
+
+    pattern: str
+    baudrate: int
+    unit: str = "g"
+    tare_command: str = "t"
+    tare_reply: str | None = None   # regex of the line confirming a tare (None: none sent)
+
+
+PRESETS: dict[str, Preset] = {
+    # olkal/HX711_ADC example Read_1x_load_cell: "Load_cell output val: 12.34"
+    "hx711_adc": Preset(rf"Load_cell output val:\s*(?P<value>{FLOAT})", 57600, "g", "t",
+                        r"Tare complete"),
+    # bogde/HX711 examples: "one reading:\t1.23\t| average:\t1.25" or "Reading: 1.23 g"
+    "bogde": Preset(rf"(?:average:\s*(?P<value>{FLOAT}))|(?:Reading:\s*(?P<value2>{FLOAT})"
+                    rf"\s*(?P<unit>[A-Za-z]+)?)", 38400, "g", "t", None),
+    # sketches that print one bare number per line
+    "bare_float": Preset(rf"\s*(?P<value>{FLOAT})\s*", 115200, "g", "t", None),
+}
+
+
+@dataclass(frozen=True)
+class LineValue:
+    value: float
+    unit: str | None
+
+
+def compile_pattern(pattern: str) -> re.Pattern[str]:
+    """Compile a line pattern; it must have a group named ``value`` (or ``value2``)."""
+    try:
+        rx = re.compile(pattern)
+    except re.error as exc:
+        raise ValueError(f"pattern {pattern!r}: {exc}") from None
+    if "value" not in rx.groupindex:
+        raise ValueError(f"pattern {pattern!r} has no (?P<value>...) group")
+    return rx
+
+
+def parse_value_line(line: bytes, pattern: re.Pattern[str]) -> LineValue:
+    """The number in ``line`` if the whole line matches ``pattern``; else FrameError.
+
+    Only finite numbers are accepted (``nan``/``inf`` printed by a broken sketch are
+    garbage, not readings).
+    """
+    line = line.rstrip(b"\r\n")
+    try:
+        text = line.decode("ascii")
+    except UnicodeDecodeError:
+        raise FrameError(f"not ASCII: {line!r}") from None
+    if any(ord(c) < 0x20 and c != "\t" for c in text):
+        raise FrameError(f"control bytes in {line!r}")
+    m = pattern.fullmatch(text)
+    if not m:
+        raise FrameError(f"line does not match the pattern: {line!r}")
+    groups = m.groupdict()
+    raw = groups.get("value") or groups.get("value2")
+    if raw is None:
+        raise FrameError(f"no value in {line!r}")
+    try:
+        value = float(raw)
+    except ValueError:
+        raise FrameError(f"bad number {raw!r}") from None
+    if not math.isfinite(value):
+        raise FrameError(f"non-finite number in {line!r}")
+    return LineValue(value, groups.get("unit"))
+
+
+def format_value_line(preset: str, value: float, decimals: int = 2) -> bytes:
+    """A line as the preset's sketch prints it (for tests and documentation)."""
+    number = f"{value:.{decimals}f}"
+    if preset == "hx711_adc":
+        return f"Load_cell output val: {number}\r\n".encode("ascii")
+    if preset == "bogde":
+        return f"one reading:\t{number}\t| average:\t{number}\r\n".encode("ascii")
+    if preset == "bare_float":
+        return f"{number}\r\n".encode("ascii")
+    raise ValueError(f"unknown preset {preset!r}; known: {', '.join(PRESETS)}")
+
+
+_BENCH_RX = compile_pattern(PRESETS["hx711_adc"].pattern)
+register_parser_benchmark("line_regex", b"Load_cell output val: 12.34\r\n",
+                          lambda line: parse_value_line(line, _BENCH_RX))
+
+
+@register_driver
+class LineRegexBalance(Balance):
+    """A load cell behind a third-party Arduino sketch that prints one value per line.
+
+    Options: ``preset`` (``hx711_adc`` default, ``bogde``, ``bare_float``), ``pattern``
+    (regex with ``(?P<value>...)``), ``unit`` (unit of the printed value after
+    calibration: ``g`` default, ``kg``, ``N``, or ``raw``), ``scale`` (1), ``offset`` (0),
+    ``capacity`` (in ``unit``; beyond it a reading is overload), ``tare_command`` (``t``),
+    ``tare_reply`` (regex), ``stable_std`` and ``stable_window`` (8), ``eol`` (``"CRLF"``).
+    """
+
+    protocol = "line_regex"
+    default_serial = {"baudrate": 57600, "bytesize": 8, "parity": "N", "stopbits": 1}
+
+    def __init__(self, port: serial.SerialBase, clock: Clock, name: str = "", **options: Any):
+        super().__init__(port, clock, name, **options)
+        preset_name = str(options.get("preset", "hx711_adc"))
+        if preset_name not in PRESETS:
+            raise ValueError(f"preset {preset_name!r}: known presets are {', '.join(PRESETS)}")
+        preset = PRESETS[preset_name]
+        self.preset = preset_name
+        self.pattern = compile_pattern(str(options.get("pattern", preset.pattern)))
+        self.unit = str(options.get("unit", preset.unit))
+        self.scale = float(options.get("scale", 1.0))
+        self.offset = float(options.get("offset", 0.0))
+        capacity = options.get("capacity")
+        self.capacity = float(capacity) if capacity is not None else None
+        self.tare_command = str(options.get("tare_command", preset.tare_command))
+        reply = options.get("tare_reply", preset.tare_reply)
+        self.tare_reply = re.compile(str(reply)) if reply else None
+        stable_std = options.get("stable_std")
+        self.stable_std = float(stable_std) if stable_std is not None else None
+        self.window: deque[float] = deque(maxlen=int(options.get("stable_window", 8)))
+        self.serial_expected = dict(self.default_serial, baudrate=preset.baudrate)
+        eol = eol_bytes(str(options.get("eol", "CRLF")))
+        self.link = LineLink(port, clock, self.name, expected_serial=self.serial_expected,
+                             write_eol=eol, read_eol=b"\r" if eol == b"\r" else b"\n")
+        if self.unit != "raw":
+            try:
+                to_si(1.0, self.unit)
+            except UnitError as exc:
+                raise ValueError(str(exc)) from None
+
+    def _accept(self, line: bytes) -> LineValue | None:
+        return parse_value_line(line, self.pattern)
+
+    def _reading(self, t: float, line: bytes, parsed: LineValue) -> Reading:
+        shown = (parsed.value - self.offset) * self.scale
+        unit = parsed.unit or self.unit
+        if unit == "raw":
+            overload = parsed.value >= HX711_MAX or parsed.value <= HX711_MIN
+            quantity, value, si_unit = "adc_counts", shown, "1"
+        else:
+            overload = self.capacity is not None and abs(shown) > self.capacity
+            try:
+                quantity, value, si_unit = to_si(shown, unit)
+            except UnitError as exc:
+                raise DeviceReplyError(self.name, "stream", line, str(exc)) from None
+        flags: set[str] = set()
+        if overload:
+            self.window.clear()
+            return Reading(t, quantity, float("nan"), si_unit, stable=False, overload=True,
+                           raw=line, device=self.name, flags=frozenset({"overload"}))
+        self.window.append(value)
+        if self.stable_std is None:
+            stable = True
+            flags.add("stability_unknown")
+        else:
+            full = len(self.window) == self.window.maxlen
+            stable = full and statistics.pstdev(self.window) <= self._stable_std_si(unit)
+        return Reading(t, quantity, value, si_unit, stable=stable, overload=False, raw=line,
+                       device=self.name, flags=frozenset(flags))
+
+    def _stable_std_si(self, unit: str) -> float:
+        assert self.stable_std is not None
+        if unit == "raw":
+            return self.stable_std * abs(self.scale)
+        return to_si(self.stable_std * abs(self.scale), unit)[1]
+
+    def identify(self) -> dict[str, Any]:
+        """Sketches do not identify themselves: the preset and pattern in use."""
+        return {"protocol": self.protocol, "preset": self.preset, "pattern": self.pattern.pattern}
+
+    def read(self, timeout: float = 2.0) -> Reading:
+        """The next value line received after this call (older buffered lines are dropped)."""
+        self.link.discard_stale("stream")
+        t, line, parsed = self.link.exchange(None, self._accept, timeout)
+        return self._reading(t, line, parsed)
+
+    def zero(self, timeout: float = 20.0) -> None:
+        """Send the tare command (``t``); wait for the sketch's confirmation line if it has one,
+        else for the next value line."""
+        self.window.clear()
+        self.link.discard_stale(self.tare_command)
+        rx = self.tare_reply
+
+        def accept(line: bytes) -> bool | None:
+            if rx is not None:
+                text = line.decode("ascii", "replace")
+                return True if rx.search(text) else None
+            parse_value_line(line, self.pattern)
+            return True
+
+        self.link.send(self.tare_command)
+        self.link.exchange(None, accept, timeout)
