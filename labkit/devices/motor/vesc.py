@@ -1,0 +1,324 @@
+"""VESC UART packets (PROTOCOLS 3.2): BLDC controllers with closed-loop ERPM.
+
+Framing: ``02 LEN payload CRChi CRClo 03`` (payload <= 255 bytes), ``03 LENhi LENlo ...``
+for longer payloads. The CRC is CRC-16/XMODEM (poly 0x1021, init 0) over the payload,
+big-endian. A receiver that sees a bad length, stop byte or CRC discards one byte and
+scans again, silently, exactly as the firmware does. Payload byte 0 is the command ID;
+fields are big-endian fixed point. Set commands get no reply and each one resets the
+controller's 1 s communication timeout, which releases the motor when we fall silent.
+
+Speeds are electrical: ERPM = mechanical RPM x pole pairs, so a 100 000 RPM rig needs a
+1-pole-pair motor or a raised ERPM limit.
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+from dataclasses import dataclass
+from typing import Any
+
+from labkit.devices.base import MotorStatus, register_driver, register_parser_benchmark
+from labkit.devices.motor.keepalive import KeepAliveMotor
+from labkit.errors import DeviceError, DeviceTimeout
+
+COMM_FW_VERSION = 0
+COMM_GET_VALUES = 4
+COMM_SET_DUTY = 5
+COMM_SET_CURRENT = 6
+COMM_SET_CURRENT_BRAKE = 7
+COMM_SET_RPM = 8
+COMM_REBOOT = 29
+COMM_ALIVE = 30
+
+MAX_PAYLOAD = 1024
+RAD_S_PER_RPM = 2.0 * math.pi / 60.0
+
+FAULT_CODES = {
+    0: "none", 1: "over_voltage", 2: "under_voltage", 3: "drv", 4: "abs_over_current",
+    5: "over_temp_fet", 6: "over_temp_motor", 7: "gate_driver_over_voltage",
+    8: "gate_driver_under_voltage", 9: "mcu_under_voltage", 10: "booting_from_watchdog_reset",
+    11: "encoder_spi", 12: "encoder_sincos_below_min_amplitude",
+    13: "encoder_sincos_above_max_amplitude", 14: "flash_corruption",
+    15: "high_offset_current_sensor_1", 16: "high_offset_current_sensor_2",
+    17: "high_offset_current_sensor_3", 18: "unbalanced_currents",
+}
+
+
+def fault_name(code: int) -> str:
+    return FAULT_CODES.get(code, f"fault_{code}")
+
+
+def crc16_xmodem(data: bytes) -> int:
+    """CRC-16/XMODEM: poly 0x1021, init 0, no reflection, no final xor."""
+    crc = 0
+    for byte in data:
+        crc ^= byte << 8
+        for _ in range(8):
+            crc = ((crc << 1) ^ 0x1021) & 0xFFFF if crc & 0x8000 else (crc << 1) & 0xFFFF
+    return crc
+
+
+def format_packet(payload: bytes) -> bytes:
+    """Frame a payload: start byte, length, payload, CRC-16 (big-endian), 0x03."""
+    if not 0 < len(payload) <= 0xFFFF:
+        raise ValueError(f"payload length {len(payload)} not in 1..65535")
+    head = bytes([2, len(payload)]) if len(payload) <= 255 else b"\x03" + struct.pack(">H", len(payload))
+    return head + payload + struct.pack(">H", crc16_xmodem(payload)) + b"\x03"
+
+
+def parse_packet(buffer: bytes | bytearray) -> tuple[bytes | None, int]:
+    """Look at the start of ``buffer``: (payload, bytes consumed) for a whole valid packet,
+    (None, 1) when the first byte cannot start one (drop it and rescan), (None, 0) when
+    more bytes are needed."""
+    if not buffer:
+        return None, 0
+    start = buffer[0]
+    if start == 2:
+        if len(buffer) < 2:
+            return None, 0
+        length, head = buffer[1], 2
+        valid = length > 0
+    elif start == 3:
+        if len(buffer) < 3:
+            return None, 0
+        length, head = (buffer[1] << 8) | buffer[2], 3
+        valid = length >= 255
+    else:
+        return None, 1
+    if not valid or length > MAX_PAYLOAD:
+        return None, 1
+    total = head + length + 3
+    if len(buffer) < total:
+        return None, 0
+    payload = bytes(buffer[head:head + length])
+    crc = (buffer[head + length] << 8) | buffer[head + length + 1]
+    if buffer[total - 1] != 3 or crc != crc16_xmodem(payload):
+        return None, 1
+    return payload, total
+
+
+class VescFramer:
+    """Byte stream -> payloads, resyncing one byte at a time like the firmware."""
+
+    def __init__(self) -> None:
+        self.buffer = bytearray()
+        self.dropped = 0
+
+    def feed(self, data: bytes) -> list[bytes]:
+        self.buffer += data
+        out: list[bytes] = []
+        while self.buffer:
+            payload, used = parse_packet(self.buffer)
+            if used == 0:
+                break
+            del self.buffer[:used]
+            if payload is None:
+                self.dropped += 1
+            else:
+                out.append(payload)
+        return out
+
+
+def _int32(value: float) -> bytes:
+    return struct.pack(">i", max(-(2**31), min(2**31 - 1, round(value))))
+
+
+def format_set_duty(duty: float) -> bytes:
+    """SET_DUTY packet, duty -1..1 as int32 x 100 000."""
+    return format_packet(bytes([COMM_SET_DUTY]) + _int32(max(-1.0, min(1.0, duty)) * 100_000))
+
+
+def format_set_rpm(erpm: float) -> bytes:
+    """SET_RPM packet: electrical RPM as int32."""
+    return format_packet(bytes([COMM_SET_RPM]) + _int32(erpm))
+
+
+def format_set_current(amps: float) -> bytes:
+    return format_packet(bytes([COMM_SET_CURRENT]) + _int32(amps * 1000))
+
+
+def format_set_current_brake(amps: float) -> bytes:
+    return format_packet(bytes([COMM_SET_CURRENT_BRAKE]) + _int32(amps * 1000))
+
+
+def format_request(command_id: int) -> bytes:
+    """A bare request/keep-alive packet (FW_VERSION, GET_VALUES, ALIVE, REBOOT)."""
+    return format_packet(bytes([command_id]))
+
+
+@dataclass(frozen=True)
+class VescValues:
+    """GET_VALUES reply (firmware 3.x..6.x). Fields past ``fault_code`` are None on old firmware."""
+
+    temp_mosfet_c: float
+    temp_motor_c: float
+    current_motor_a: float
+    current_in_a: float
+    id_a: float
+    iq_a: float
+    duty: float
+    erpm: float
+    input_voltage_v: float
+    amp_hours: float
+    amp_hours_charged: float
+    watt_hours: float
+    watt_hours_charged: float
+    tachometer: int
+    tachometer_abs: int
+    fault_code: int
+    pid_pos: float | None = None
+    controller_id: int | None = None
+    timeout_active: bool | None = None
+
+    @property
+    def fault(self) -> str:
+        return fault_name(self.fault_code)
+
+
+_VALUES_HEAD = struct.Struct(">hhiiiihihiiiiiiB")  # fields 0..15 (52 bytes)
+
+
+def parse_values(payload: bytes) -> VescValues:
+    """Decode a GET_VALUES payload (ID 4), tolerating the shorter replies of old firmware."""
+    if not payload or payload[0] != COMM_GET_VALUES:
+        raise ValueError("not a GET_VALUES payload")
+    body = payload[1:]
+    if len(body) < _VALUES_HEAD.size:
+        raise ValueError(f"GET_VALUES payload has {len(body)} bytes, needs at least {_VALUES_HEAD.size}")
+    (t_fet, t_mot, i_mot, i_in, i_d, i_q, duty, erpm, vin, ah, ahc, wh, whc,
+     tach, tach_abs, fault) = _VALUES_HEAD.unpack_from(body)
+    rest = body[_VALUES_HEAD.size:]
+    pid_pos = struct.unpack_from(">i", rest)[0] / 1e6 if len(rest) >= 4 else None
+    controller_id = rest[4] if len(rest) >= 5 else None
+    timeout_active = bool(rest[19] & 1) if len(rest) >= 20 else None
+    return VescValues(t_fet / 10, t_mot / 10, i_mot / 100, i_in / 100, i_d / 100, i_q / 100,
+                      duty / 1000, float(erpm), vin / 10, ah / 1e4, ahc / 1e4, wh / 1e4, whc / 1e4,
+                      tach, tach_abs, fault, pid_pos, controller_id, timeout_active)
+
+
+def parse_fw_version(payload: bytes) -> dict[str, Any]:
+    """FW_VERSION payload: major, minor, NUL-terminated hardware name (tail ignored)."""
+    if len(payload) < 3 or payload[0] != COMM_FW_VERSION:
+        raise ValueError("not a FW_VERSION payload")
+    name, nul, _ = payload[3:].partition(b"\x00")
+    return {"firmware": f"{payload[1]}.{payload[2]:02d}",
+            "hardware": name.decode("ascii", "replace") if nul else ""}
+
+
+@register_driver
+class Vesc(KeepAliveMotor):
+    """VESC over UART or USB.
+
+    Options: ``pole_pairs`` (motor pole pairs, default 1: ERPM = RPM x pole pairs),
+    ``brake_current_a`` (stop() brakes with this current; 0 = release/coast; default 2 A),
+    ``reply_timeout_s`` (0.2).
+    """
+
+    protocol = "vesc"
+    default_serial = {"baudrate": 115200, "bytesize": 8, "parity": "N", "stopbits": 1}
+    supports_speed_command = True
+
+    def __init__(self, port: Any, clock: Any, name: str = "", **options: Any):
+        super().__init__(port, clock, name, **options)
+        self.pole_pairs = int(options.get("pole_pairs", 1))
+        if self.pole_pairs < 1:
+            raise ValueError(f"vesc option pole_pairs={self.pole_pairs}: must be >= 1")
+        self.brake_current_a = float(options.get("brake_current_a", 2.0))
+        self.reply_timeout_s = float(options.get("reply_timeout_s", 0.2))
+        self.framer = VescFramer()
+        self.mode: tuple[str, float] | None = None  # ("duty", d) or ("erpm", e)
+        self.flush_input("open")
+
+    def request(self, command_id: int, label: str) -> bytes:
+        """Send a request and return the reply payload with the same ID (others skipped)."""
+        self.check_keepalive()
+        with self.io_lock:
+            self.flush_input(label)
+            self.framer = VescFramer()
+            self.write(format_request(command_id), label)
+            deadline = self.clock.now() + self.reply_timeout_s
+            while True:
+                for payload in self.framer.feed(self.read_available(label)):
+                    if payload[0] == command_id:
+                        return payload
+                if self.clock.now() >= deadline:
+                    raise DeviceTimeout(self.name, label, self.last_bytes,
+                                        f"no valid reply packet in {self.reply_timeout_s} s")
+                self.clock.sleep(0.001)
+
+    def values(self) -> VescValues:
+        payload = self.request(COMM_GET_VALUES, "GET_VALUES")
+        try:
+            return parse_values(payload)
+        except ValueError as exc:
+            raise DeviceError(self.name, "GET_VALUES", payload, str(exc)) from None
+
+    def identify(self) -> dict[str, Any]:
+        payload = self.request(COMM_FW_VERSION, "FW_VERSION")
+        try:
+            return {"model": "vesc", **parse_fw_version(payload)}
+        except ValueError as exc:
+            raise DeviceError(self.name, "FW_VERSION", payload, str(exc)) from None
+
+    def enable(self) -> None:
+        """VESC has no safe start: start the 20 Hz keep-alive (ALIVE until a setpoint)."""
+        self.check_keepalive()
+        self.mode = None
+        self.enabled = True
+        self.send_setpoint()
+        self.start_keepalive()
+
+    def set_duty(self, duty: float) -> None:
+        self.require_enabled("SET_DUTY")
+        self.mode = ("duty", max(-1.0, min(1.0, duty)))
+        self.send_setpoint()
+
+    def set_speed(self, speed_rad_s: float) -> None:
+        """Closed-loop speed in the controller: SET_RPM with ERPM = RPM x pole pairs."""
+        self.require_enabled("SET_RPM")
+        self.mode = ("erpm", speed_rad_s / RAD_S_PER_RPM * self.pole_pairs)
+        self.send_setpoint()
+
+    def send_setpoint(self) -> None:
+        if self.mode is None:
+            self.write(format_request(COMM_ALIVE), "ALIVE")
+        elif self.mode[0] == "duty":
+            self.write(format_set_duty(self.mode[1]), f"SET_DUTY {self.mode[1]:.4f}")
+        else:
+            self.write(format_set_rpm(self.mode[1]), f"SET_RPM {self.mode[1]:.0f}")
+
+    def send_zero(self) -> None:
+        self.mode = None
+        if self.brake_current_a > 0:
+            self.write(format_set_current_brake(self.brake_current_a), "SET_CURRENT_BRAKE")
+        else:
+            self.write(format_set_current(0.0), "SET_CURRENT 0")
+
+    def status(self) -> MotorStatus:
+        v = self.values()
+        errors = set() if v.fault_code == 0 else {v.fault}
+        if v.timeout_active:
+            errors.add("comm_timeout")
+        target = self.mode[1] if self.mode and self.mode[0] == "duty" else 0.0
+        return MotorStatus(
+            t=self.clock.now(), duty=v.duty, target_duty=target,
+            speed_rad_s=v.erpm / self.pole_pairs * RAD_S_PER_RPM,
+            input_voltage_v=v.input_voltage_v, temperature_c=v.temp_mosfet_c,
+            errors=frozenset(errors), raw=self.last_bytes,
+        )
+
+
+SAMPLE_VALUES_PACKET = format_packet(
+    bytes([COMM_GET_VALUES]) + _VALUES_HEAD.pack(250, 300, 150, 120, 0, 150, 500, 30000, 243,
+                                                  0, 0, 0, 0, 1000, 1000, 0) + bytes(21))
+
+
+def _parse_values_packet(data: bytes) -> VescValues:
+    payload, _ = parse_packet(data)
+    if payload is None:
+        raise ValueError("bad packet")
+    return parse_values(payload)
+
+
+register_parser_benchmark("vesc", SAMPLE_VALUES_PACKET, _parse_values_packet)

@@ -1,0 +1,268 @@
+"""The labkit pulse-counter tachometer line protocol (PROTOCOLS 2.3, labkit-defined).
+
+An Arduino (``firmware/labkit_tach``) times pulses from an optical or Hall sensor with the
+period method, averaging over every pulse of an output window, and prints one line per
+window (115200 8N1, LF)::
+
+    T,<seq>,<t_ms>,<rpm>,<period_us>,<pulses>,<flags>
+      seq        line counter (restarts at 0 after a reset)
+      t_ms       device millis() at the end of the window
+      rpm        60e6 / (period_us * ppr), mechanical revolutions per minute
+      period_us  mean pulse period in the window (0 when no pulse)
+      pulses     pulses counted in the window
+      flags      0 ok | Z zero-speed timeout | O overflow/too fast | N noisy (glitch rejected)
+
+Host commands ``PPR <n>``, ``RATE <hz>``, ``ZTO <ms>`` answer ``OK`` or ``ERR <text>``;
+``ID?`` answers ``ID labkit-tach <ver>``. At boot (also after the DTR reset that opening
+the port causes) the device prints ``# labkit-tach <ver> ppr=<n> rate=<hz> zto=<ms>``; lines
+starting with ``#`` are comments. At 1 pulse/rev, 100 000 RPM is a 600 us period, well
+inside the firmware's 50 us floor.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from collections import deque
+from dataclasses import dataclass
+from typing import Any
+
+from labkit.devices.base import Reading, register_driver, register_parser_benchmark
+from labkit.devices.stream import LineFramer
+from labkit.devices.tachometer.streaming import StreamingTachometer, rpm_to_rad_s
+from labkit.errors import DeviceReplyError, DeviceTimeout
+
+FLAG_NAMES = {"Z": "zero_speed", "O": "over_range", "N": "noisy"}
+#: relative disagreement allowed between rpm and 60e6/(period_us*ppr) (print rounding)
+CONSISTENCY_TOLERANCE = 0.005
+
+
+@dataclass(frozen=True)
+class TachSample:
+    """One ``T,...`` line, decoded but not yet converted to SI."""
+
+    seq: int
+    t_ms: int
+    rpm: float
+    period_us: float
+    pulses: int
+    flags: frozenset[str]
+
+
+def _non_negative_number(text: bytes, what: str) -> float:
+    if not text or not all(c in b"0123456789." for c in text) or text.count(b".") > 1 or text == b".":
+        raise ValueError(f"{what} {text!r} is not a non-negative decimal number")
+    return float(text)
+
+
+def _non_negative_int(text: bytes, what: str) -> int:
+    if not (text.isdigit() and text.isascii()) or len(text) > 12:
+        raise ValueError(f"{what} {text!r} is not a non-negative integer")
+    return int(text)
+
+
+def parse_tach_sample(line: bytes) -> TachSample:
+    """Decode a ``T,<seq>,<t_ms>,<rpm>,<period_us>,<pulses>,<flags>`` line (no LF).
+
+    Raises ValueError naming the bad field. Also checks the line against itself: a
+    zero-speed line must say 0 rpm, and an ok line must not claim pulses with a zero period.
+    """
+    fields = line.strip().split(b",")
+    if len(fields) != 7 or fields[0] != b"T":
+        raise ValueError(f"not a T line with 7 fields: {line[:40]!r}")
+    seq = _non_negative_int(fields[1], "seq")
+    t_ms = _non_negative_int(fields[2], "t_ms")
+    rpm = _non_negative_number(fields[3], "rpm")
+    period_us = _non_negative_number(fields[4], "period_us")
+    pulses = _non_negative_int(fields[5], "pulses")
+    flag_text = fields[6].decode("ascii", "replace")
+    if flag_text == "0":
+        flags: frozenset[str] = frozenset()
+    elif flag_text and all(c in FLAG_NAMES for c in flag_text) and len(set(flag_text)) == len(flag_text):
+        flags = frozenset(FLAG_NAMES[c] for c in flag_text)
+    else:
+        raise ValueError(f"flags {fields[6]!r} not 0 or a set of Z/O/N")
+    if "zero_speed" in flags and rpm != 0.0:
+        raise ValueError(f"zero-speed line with rpm {rpm}")
+    if not flags and rpm > 0 and period_us == 0:
+        raise ValueError("rpm without a pulse period")
+    return TachSample(seq, t_ms, rpm, period_us, pulses, flags)
+
+
+def consistent_with_ppr(sample: TachSample, ppr: int) -> bool:
+    """True when rpm agrees with 60e6/(period_us*ppr) (catches corrupted digits)."""
+    if sample.flags & {"zero_speed", "over_range"} or sample.period_us == 0:
+        return True
+    expected = 60e6 / (sample.period_us * ppr)
+    return abs(sample.rpm - expected) <= CONSISTENCY_TOLERANCE * expected + 0.2
+
+
+def parse_banner(line: bytes) -> dict[str, str] | None:
+    """``# labkit-tach 1.0 ppr=1 rate=10 zto=1000`` -> {"version": "1.0", "ppr": "1", ...}.
+
+    None for any other line (other ``#`` lines are plain comments).
+    """
+    parts = line.strip().split()
+    if len(parts) < 3 or parts[0] != b"#" or parts[1] != b"labkit-tach":
+        return None
+    out = {"version": parts[2].decode("ascii", "replace")}
+    for part in parts[3:]:
+        key, sep, value = part.partition(b"=")
+        if sep:
+            out[key.decode("ascii", "replace")] = value.decode("ascii", "replace")
+    return out
+
+
+def format_command(name: str, value: int | None = None) -> bytes:
+    """``PPR 2``/``RATE 50``/``ZTO 500``/``ID?`` as bytes with LF."""
+    if name == "ID?":
+        return b"ID?\n"
+    if name not in ("PPR", "RATE", "ZTO") or value is None or int(value) <= 0:
+        raise ValueError(f"bad labkit-tach command {name} {value}")
+    return f"{name} {int(value)}\n".encode("ascii")
+
+
+def is_reply(line: bytes) -> bool:
+    return line == b"OK" or line.startswith(b"ERR") or line.startswith(b"ID ")
+
+
+@register_driver
+class LabkitTachometer(StreamingTachometer):
+    """Driver of the labkit Arduino pulse tachometer.
+
+    Options: ``ppr`` (pulses per revolution, default 1: always sent on open), ``rate_hz``
+    (line rate, default: the device's), ``zto_ms`` (zero-speed timeout, default: the
+    device's), ``boot_timeout_s`` (wait for the banner or data after open, default 3 s:
+    opening an Arduino's port resets it), ``reply_timeout_s`` (default 0.5 s).
+    After a reset (a new boot banner) the options are sent again and the next reading
+    carries the flag ``reset``.
+    """
+
+    protocol = "labkit_tach"
+    default_serial = {"baudrate": 115200, "bytesize": 8, "parity": "N", "stopbits": 1}
+
+    def __init__(self, port: Any, clock: Any, name: str = "", **options: Any):
+        self.ppr = int(options.get("ppr", 1))
+        if self.ppr < 1:
+            raise ValueError(f"labkit_tach option ppr={self.ppr}: must be >= 1")
+        self.rate_hz = options.get("rate_hz")
+        self.zto_ms = options.get("zto_ms")
+        self.reply_timeout_s = float(options.get("reply_timeout_s", 0.5))
+        self.banner: dict[str, str] = {}
+        self.resets = 0
+        self.lines_lost = 0
+        self._replies: deque[bytes] = deque()
+        self._state_lock = threading.Lock()
+        self._alive = False
+        self._needs_config = False
+        self._configuring = False
+        self._flag_reset = False
+        self._last_seq: int | None = None
+        super().__init__(port, clock, name, **options)
+        try:
+            self._wait_alive(float(options.get("boot_timeout_s", 3.0)))
+            self._configure()
+        except Exception:
+            self.close()
+            raise
+
+    def make_framer(self) -> LineFramer:
+        return LineFramer(b"\n", max_len=128)
+
+    # ---- frames -------------------------------------------------------------------------
+    def parse_frame(self, t: float, frame: bytes) -> Reading | None:
+        line = frame.strip()
+        if not line:
+            return None
+        if line.startswith(b"#"):
+            banner = parse_banner(line)
+            if banner is not None:
+                with self._state_lock:
+                    if self._alive:
+                        self.resets += 1
+                        self._flag_reset = True
+                        self._needs_config = True
+                    self.banner = banner
+                    self._alive = True
+                    self._last_seq = None
+            return None
+        if is_reply(line):
+            self._replies.append(line)
+            return None
+        sample = parse_tach_sample(line)
+        if not consistent_with_ppr(sample, self.ppr):
+            raise ValueError(f"rpm {sample.rpm} disagrees with period {sample.period_us} us, ppr {self.ppr}")
+        with self._state_lock:
+            self._alive = True
+            if self._last_seq is not None and sample.seq > self._last_seq + 1:
+                self.lines_lost += sample.seq - self._last_seq - 1
+            self._last_seq = sample.seq
+            flags = set(sample.flags)
+            if self._flag_reset:
+                flags.add("reset")
+                self._flag_reset = False
+        if "over_range" in flags:
+            return Reading(t, "angular_speed", math.nan, "rad/s", stable=False, overload=True,
+                           raw=frame, device=self.name, flags=frozenset(flags))
+        return Reading(t, "angular_speed", rpm_to_rad_s(sample.rpm), "rad/s",
+                       stable="noisy" not in flags, raw=frame, device=self.name,
+                       flags=frozenset(flags))
+
+    # ---- commands -----------------------------------------------------------------------
+    def _wait_alive(self, timeout: float) -> None:
+        deadline = self.clock.now() + timeout
+        while not self._alive:
+            self._check_reader()
+            if self.clock.now() >= deadline:
+                raise DeviceTimeout(self.name, "open", self.reader.last_bytes,
+                                    f"no boot banner or T line in {timeout} s (wrong port or baud?)")
+            self.clock.sleep(0.005)
+
+    def command(self, text: str, value: int | None = None) -> bytes:
+        """Send one command, return its reply line (``OK``/``ID ...``); ERR raises."""
+        data = format_command(text, value)
+        label = data.decode().strip()
+        for _attempt in range(2):
+            self._replies.clear()
+            self.port.write(data)
+            deadline = self.clock.now() + self.reply_timeout_s
+            while not self._replies:
+                self.reader.check()
+                if self.clock.now() >= deadline:
+                    break
+                self.clock.sleep(0.002)
+            if self._replies:
+                reply = self._replies.popleft()
+                if reply.startswith(b"ERR"):
+                    raise DeviceReplyError(self.name, label, self.reader.last_bytes,
+                                           f"device answered {reply.decode('ascii', 'replace')!r}")
+                return reply
+        raise DeviceTimeout(self.name, label, self.reader.last_bytes,
+                            f"no reply in {self.reply_timeout_s} s")
+
+    def _configure(self) -> None:
+        self._configuring = True
+        try:
+            self.command("PPR", self.ppr)
+            if self.rate_hz is not None:
+                self.command("RATE", int(self.rate_hz))
+            if self.zto_ms is not None:
+                self.command("ZTO", int(self.zto_ms))
+            self._needs_config = False
+        finally:
+            self._configuring = False
+
+    def _check_reader(self) -> None:
+        super()._check_reader()
+        if self._needs_config and not self._configuring:
+            self._configure()
+
+    def identify(self) -> dict[str, Any]:
+        reply = self.command("ID?").decode("ascii", "replace").split()
+        out: dict[str, Any] = {"model": reply[1] if len(reply) > 1 else "",
+                               "firmware": reply[2] if len(reply) > 2 else "", "ppr": self.ppr}
+        return out
+
+
+SAMPLE_LINE = b"T,1234,123400,24000.0,2500.0,40,0"
+register_parser_benchmark("labkit_tach", SAMPLE_LINE, parse_tach_sample)

@@ -1,0 +1,99 @@
+"""The part every streaming tachometer shares: a reader job filling a timestamped buffer.
+
+A tachometer talks without being asked. One :class:`~labkit.devices.stream.StreamReader`
+per device (a thread on a real clock, a clock job on a virtual one) cuts the bytes into
+frames and hands each to :meth:`StreamingTachometer.parse_frame`; accepted readings go into
+a bounded, time-ordered buffer that ``latest()``, ``readings_since(t)`` and
+``wait_reading(timeout)`` read without ever touching the port. A reader failure (the USB
+adapter unplugged mid-read) surfaces in the caller's thread as
+:class:`~labkit.errors.DeviceDisconnected`.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+import threading
+from typing import Any
+
+import serial
+
+from labkit.devices.base import Reading, Tachometer
+from labkit.devices.stream import StreamReader
+from labkit.io.clock import Clock
+
+RAD_S_PER_RPM = 2.0 * math.pi / 60.0
+
+
+def rpm_to_rad_s(rpm: float) -> float:
+    """Mechanical RPM -> rad/s (SI inside, ARCHITECTURE rule 5)."""
+    return rpm * RAD_S_PER_RPM
+
+
+class StreamingTachometer(Tachometer):
+    """Base of the stream-reading tachometer drivers (subclasses give framer and parser)."""
+
+    #: readings kept in memory (about 1 h at 10 Hz)
+    history: int = 50_000
+    #: how often the reader pumps the port (s)
+    reader_period: float = 0.005
+
+    def __init__(self, port: serial.SerialBase, clock: Clock, name: str = "", **options: Any):
+        super().__init__(port, clock, name, **options)
+        self._times: list[float] = []
+        self._readings: list[Reading] = []
+        self._buffer_lock = threading.Lock()
+        self.frames_rejected = 0
+        self.reader = StreamReader(port, clock, self.make_framer(), self._on_frame,
+                                   device=self.name, period=self.reader_period)
+        try:
+            port.reset_input_buffer()
+        except (serial.SerialException, OSError, AttributeError):
+            pass  # the reader will report a dead port on its first read
+        self.reader.start()
+
+    # ---- subclass hooks -----------------------------------------------------------------
+    def make_framer(self) -> Any:
+        raise NotImplementedError
+
+    def parse_frame(self, t: float, frame: bytes) -> Reading | None:
+        """Turn one frame into a reading, or None (comment, reply, garbage)."""
+        raise NotImplementedError
+
+    # ---- buffer -------------------------------------------------------------------------
+    def _on_frame(self, t: float, frame: bytes) -> None:
+        try:
+            reading = self.parse_frame(t, frame)
+        except ValueError:
+            self.frames_rejected += 1
+            return
+        if reading is not None:
+            self._store(reading)
+
+    def _store(self, reading: Reading) -> None:
+        with self._buffer_lock:
+            self._times.append(reading.t)
+            self._readings.append(reading)
+            if len(self._readings) > self.history:
+                drop = len(self._readings) - self.history
+                del self._times[:drop]
+                del self._readings[:drop]
+
+    def _check_reader(self) -> None:
+        self.last_bytes = self.reader.last_bytes
+        self.reader.check()
+
+    def latest(self) -> Reading | None:
+        self._check_reader()
+        with self._buffer_lock:
+            return self._readings[-1] if self._readings else None
+
+    def readings_since(self, t: float) -> list[Reading]:
+        self._check_reader()
+        with self._buffer_lock:
+            start = bisect.bisect_right(self._times, t)
+            return self._readings[start:]
+
+    def close(self) -> None:
+        self.reader.stop()
+        super().close()

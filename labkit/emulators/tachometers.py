@@ -1,0 +1,277 @@
+"""Tachometer emulators: the Lutron 16-byte stream and the labkit pulse counter.
+
+Both read the shared plant: ``source=rotor`` (default; any motor name of the plant) gives
+``plant.speed(t, name)``, ``source=floator`` gives the floating magnet's spin
+``plant.floator_spin(t)`` (the Fig. 6.18 set-up's second tachometer). They write their own
+bytes with their own formatting code (no code shared with the drivers).
+
+Fault knobs besides the common ones of :mod:`labkit.emulators.base` (PROTOCOLS 5.2):
+
+* ``overload`` - Lutron: over-range frames; labkit-tach: every line flagged ``O``.
+* ``mid_frame`` - the first bytes after open are the tail of a frame/line.
+* ``noisy`` - labkit-tach: probability per line of a rejected glitch (flag ``N``).
+* ``error_reply`` - labkit-tach: probability of answering a valid command ``ERR busy``.
+* ``reset_at`` - labkit-tach: clock time (s after open) of a device reset (banner, seq 0,
+  settings back to defaults).
+* ``wrong_baud`` - also garbles what the device sends (the host reads at the wrong rate).
+"""
+
+from __future__ import annotations
+
+import math
+
+from labkit.emulators.base import Emulator, register_emulator
+
+TWO_PI = 2.0 * math.pi
+
+
+class _StreamingTachEmulator(Emulator):
+    """Shared scheduling: one frame every 1/rate s, nothing while unplugged or booting."""
+
+    kind = "tach"
+    default_rate_hz = 1.0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        self.rate_hz = float(self.options.get("rate_hz", self.default_rate_hz))
+        self.source = self.options.get("source", "rotor")
+        self._next_t: float | None = None
+        self._down = False
+        self._started_mid_frame = False
+
+    def source_speed(self, t: float) -> float:
+        """rad/s seen by the sensor: the named motor's speed, or the floator's spin."""
+        if self.source == "floator":
+            return self.plant.floator_spin(t)
+        return self.plant.speed(t, self.source)
+
+    def stream_start(self, t: float) -> float:
+        return t
+
+    def power_on(self, t: float) -> None:
+        super().power_on(t)
+        self._next_t = self.stream_start(t) + 1.0 / self.rate_hz
+
+    def produce(self, t: float) -> None:
+        if self._next_t is None:
+            return
+        if not self.connected(t):
+            self._down = True
+            return
+        if self._down:  # plugged back in: power-on state
+            self._down = False
+            self._outbox.clear()
+            self.power_on(t)
+        self.check_events(t)
+        while self._next_t is not None and self._next_t <= t:
+            when = self._next_t
+            data = self.frame(when)
+            self._next_t = when + 1.0 / self.rate_hz
+            if data:
+                self.send(data, when)
+
+    def send(self, data: bytes, when: float) -> None:
+        if self.faults.get("mid_frame") and not self._started_mid_frame:
+            self._started_mid_frame = True
+            data = data[len(data) // 2:]
+        if self.faults.get("wrong_baud"):
+            data = bytes(self.rng.randrange(256) for _ in data)
+        self._queue(data, when)
+
+    def check_events(self, t: float) -> None:
+        """Time-triggered faults (subclasses)."""
+
+    def frame(self, t: float) -> bytes:  # pragma: no cover - interface
+        raise NotImplementedError
+
+
+@register_emulator
+class Lutron16Emulator(_StreamingTachEmulator):
+    """A Lutron-format tachometer display streaming 16-byte frames (PROTOCOLS 2.1).
+
+    Options: ``rate_hz`` (1), ``annunciator`` (two digits, default ``00``: the real RPM code
+    is model-specific, PROTOCOLS 6), ``display`` (``1``), ``noise_rpm`` (Gaussian, 0),
+    ``no_target`` (``zero`` or ``hold``: what the meter shows when the beam sees nothing).
+    Resolution follows the DT-2236 class: 0.1 RPM below 10 000, 1 RPM up to 99 999, then
+    over-range.
+    """
+
+    protocol = "lutron16"
+    default_rate_hz = 1.0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        self.annunciator = self.options.get("annunciator", "00").encode("ascii")[:2].rjust(2, b"0")
+        self.display = self.options.get("display", "1").encode("ascii")[:1]
+        self.noise_rpm = float(self.options.get("noise_rpm", 0.0))
+        self.hold = self.options.get("no_target", "zero") == "hold"
+        self._shown_rpm = 0.0
+
+    def frame(self, t: float) -> bytes:
+        rpm = abs(self.source_speed(t)) * 60.0 / TWO_PI
+        if rpm > 0 and self.noise_rpm:
+            rpm = max(0.0, rpm + self.rng.gauss(0.0, self.noise_rpm))
+        if rpm == 0.0 and self.hold:
+            rpm = self._shown_rpm
+        self._shown_rpm = rpm
+        head = b"\x024" + self.display + self.annunciator + b"0"
+        if self.faults.get("overload") or round(rpm) > 99_999:
+            return head + b"0" + b"  OL    " + b"\r"
+        if rpm < 9999.95:
+            return head + b"1" + b"%08d" % round(rpm * 10) + b"\r"
+        return head + b"0" + b"%08d" % round(rpm) + b"\r"
+
+
+@register_emulator
+class LabkitTachEmulator(_StreamingTachEmulator):
+    """The labkit Arduino pulse tachometer (PROTOCOLS 2.3, ``firmware/labkit_tach``).
+
+    Emulates the firmware's period method: pulse edges at ``ppr`` per revolution are
+    time-stamped with ``micros()`` (``tick_us`` resolution, 4 us on a 16 MHz AVR, plus
+    ``jitter_us`` Gaussian), the line reports the mean period of the pulses in the window.
+    Options: ``ppr`` (1), ``rate_hz`` (10), ``zto_ms`` (1000), ``boot_s`` (0.2: bootloader
+    delay after the DTR reset of opening the port), ``dtr_reset`` (1; 0 = the device kept
+    running, no banner), ``tick_us`` (4), ``jitter_us`` (0), ``min_period_us`` (50: shorter
+    is flagged ``O``), ``version`` (``1.0``).
+    """
+
+    protocol = "labkit_tach"
+    default_rate_hz = 10.0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        self.version = self.options.get("version", "1.0")
+        self.boot_s = float(self.options.get("boot_s", 0.2))
+        self.dtr_reset = self.options.get("dtr_reset", "1") not in ("0", "false", "no")
+        self.tick_us = float(self.options.get("tick_us", 4.0))
+        self.jitter_us = float(self.options.get("jitter_us", 0.0))
+        self.min_period_us = float(self.options.get("min_period_us", 50.0))
+        self._defaults = (int(self.options.get("ppr", 1)), self.rate_hz,
+                          int(self.options.get("zto_ms", 1000)))
+        self._line = bytearray()
+        self._reset_done = False
+        self._boot_t = 0.0
+
+    # ---- power / time -------------------------------------------------------------------
+    def stream_start(self, t: float) -> float:
+        return self._boot_end
+
+    def power_on(self, t: float) -> None:
+        self.ppr, self.rate_hz, self.zto_ms = self._defaults
+        first_boot = self.power_on_count == 0
+        silent = first_boot and not self.dtr_reset
+        self._boot_t = t - (10.0 if silent else 0.0)
+        self._boot_end = t if silent else t + self.boot_s
+        self.seq = 0 if not silent else 4242
+        self._phase = 0.0           # pulses (fractional) since boot
+        self._last_pulse: float | None = None
+        self._sum_periods_us = 0.0
+        self._count = 0
+        self._last_period_us: float | None = None
+        self._window_t = self._boot_end
+        self._line.clear()
+        super().power_on(t)
+        if not silent:
+            banner = (f"# labkit-tach {self.version} ppr={self.ppr} rate={self.rate_hz:g} "
+                      f"zto={self.zto_ms}\n").encode("ascii")
+            self._queue(banner, self._boot_end)
+
+    def check_events(self, t: float) -> None:
+        at = self.faults.get("reset_at")
+        if at is not None and not self._reset_done and self.since_open(t) >= at:
+            self._reset_done = True
+            self._outbox.clear()
+            self.power_on(t)
+
+    def _micros(self, t: float) -> float:
+        """What ``micros()`` returns at clock time t (tick resolution, jitter)."""
+        us = (t - self._boot_t) * 1e6
+        if self.jitter_us:
+            us += self.rng.gauss(0.0, self.jitter_us)
+        return math.floor(us / self.tick_us) * self.tick_us
+
+    # ---- one output window --------------------------------------------------------------
+    def frame(self, t: float) -> bytes:
+        speed = abs(self.source_speed(t))
+        rate = speed / TWO_PI * self.ppr            # pulses per second
+        start = self._window_t
+        self._window_t = t
+        phase0 = self._phase
+        self._phase = phase0 + rate * (t - start)
+        first = math.floor(phase0) + 1
+        n = math.floor(self._phase) - math.floor(phase0)
+        if n > 0 and rate > 0:
+            edges = [start + (k - phase0) / rate for k in (first, first + n - 1)]
+            prev = self._last_pulse
+            if prev is None:      # the first edge only starts the timing
+                prev, n = edges[0], n - 1
+            if n > 0:
+                self._sum_periods_us += self._micros(edges[1]) - self._micros(prev)
+                self._count += n
+            self._last_pulse = edges[1]
+        flags = ""
+        pulses = self._count
+        if self._count:
+            period = self._sum_periods_us / self._count
+            self._last_period_us = period
+            self._sum_periods_us, self._count = 0.0, 0
+        elif self._last_period_us is not None and self._last_pulse is not None \
+                and (t - self._last_pulse) * 1000.0 <= self.zto_ms:
+            period = self._last_period_us
+        else:
+            period = 0.0
+            self._last_period_us = None
+            flags = "Z"
+        if period > 0 and (period < self.min_period_us or self.faults.get("overload")):
+            flags = "O"
+        if flags != "Z" and self.rng.random() < self.faults.get("noisy", 0.0):
+            flags += "N"
+        rpm = 60e6 / (period * self.ppr) if period > 0 and "Z" not in flags else 0.0
+        t_ms = int((t - self._boot_t) * 1000.0)
+        line = f"T,{self.seq},{t_ms},{rpm:.1f},{period:.1f},{pulses},{flags or '0'}\n"
+        self.seq += 1
+        return line.encode("ascii")
+
+    # ---- commands -----------------------------------------------------------------------
+    def handle(self, data: bytes, t: float) -> None:
+        if t < self._boot_end or not self.connected(t):
+            return  # the bootloader (or an unplugged cable) eats the bytes
+        self._line += data
+        while b"\n" in self._line:
+            raw, _, rest = bytes(self._line).partition(b"\n")
+            self._line = bytearray(rest)
+            self._command(raw.strip().decode("ascii", "replace"), t)
+        if len(self._line) > 64:
+            self._line.clear()
+
+    def _command(self, text: str, t: float) -> None:
+        if not text:
+            return
+        if self.rng.random() < self.faults.get("error_reply", 0.0):
+            self.reply(b"ERR busy\n", t, 0.001)
+            return
+        if text == "ID?":
+            self.reply(f"ID labkit-tach {self.version}\n".encode(), t, 0.001)
+            return
+        name, _, arg = text.partition(" ")
+        limits = {"PPR": (1, 64), "RATE": (1, 200), "ZTO": (10, 10_000)}
+        if name not in limits:
+            self.reply(b"ERR unknown command\n", t, 0.001)
+            return
+        try:
+            value = int(arg)
+        except ValueError:
+            value = -1
+        low, high = limits[name]
+        if not low <= value <= high:
+            self.reply(b"ERR bad value\n", t, 0.001)
+            return
+        if name == "PPR":
+            self.ppr = value
+            self._phase, self._last_pulse, self._count, self._sum_periods_us = 0.0, None, 0, 0.0
+            self._last_period_us = None
+        elif name == "RATE":
+            self.rate_hz = float(value)
+        else:
+            self.zto_ms = value
+        self.reply(b"OK\n", t, 0.001)
