@@ -1,0 +1,89 @@
+"""``labkit fit INPUT --model NAME``: fit a session, results JSON or CSV against the PFR model.
+
+Prints values, standard errors, 95 % intervals and fit quality per series; ``--json OUT``
+writes ``{"model", "series": {NAME: {"params": {P: {"value", "stderr", "ci95"}}, "n",
+"rms_residual", "warnings"}}}``; ``--plot OUT.png`` draws data, fit and residuals.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+
+from labkit.errors import FitError
+from labkit.fit.data import load_table
+from labkit.fit.models import MODELS, PAPER_OMEGA_C
+from labkit.fit.table_fit import FitOptions, fit_table
+from labkit.fit.text import format_report
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("fit", help="fit data against the PFR model (Eq. 5.24, 5.81, 5.85, 6.13, 6.37)",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("input", help="session directory, results JSON or CSV with a header row")
+    p.add_argument("--model", required=True, choices=list(MODELS), help="model to fit")
+    p.add_argument("--x", help="x column (default per model, see docs/fitting.md)")
+    p.add_argument("--y", help="y column")
+    p.add_argument("--sigma", help="column of y uncertainties (default: <y>_stderr if present)")
+    p.add_argument("--series", help="column that splits the data into series (default: 'series')")
+    p.add_argument("--inertia", type=float, metavar="KG_M2",
+                   help="floator moment of inertia for pfr-force and cone-angle")
+    p.add_argument("--omega-c", default=str(PAPER_OMEGA_C), metavar="RAD_S|fit|inf",
+                   help="spin-critical: fixed omega_c (default 3000 as in Eq. 6.37), 'fit', "
+                   "or 'inf' (Eq. 5.69)")
+    p.add_argument("--fix", action="append", default=[], metavar="NAME=VALUE",
+                   help="fix a parameter (SI), e.g. --fix tau_S=0 or --fix d=4; repeatable")
+    p.add_argument("--bootstrap", type=int, default=0, metavar="N", help="also give bootstrap intervals")
+    p.add_argument("--seed", type=int, default=0, help="bootstrap seed")
+    p.add_argument("--json", metavar="OUT", help="write the fit as JSON ('-' for stdout)")
+    p.add_argument("--plot", metavar="OUT.png", help="write data, fit and residuals as a PNG")
+    p.set_defaults(func=run)
+
+
+def parse_omega_c(text: str) -> float | str:
+    t = text.strip().lower()
+    if t == "fit":
+        return "fit"
+    if t in ("inf", "none"):
+        return math.inf
+    try:
+        return float(t)
+    except ValueError:
+        raise FitError(f"--omega-c must be a number, 'fit' or 'inf', got {text!r}") from None
+
+
+def parse_fixes(items: list[str]) -> dict[str, float]:
+    out = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        try:
+            if not sep:
+                raise ValueError
+            out[name.strip()] = float(value)
+        except ValueError:
+            raise FitError(f"--fix expects NAME=NUMBER, got {item!r}") from None
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    options = FitOptions(x=args.x, y=args.y, sigma=args.sigma, series=args.series, inertia=args.inertia,
+                         omega_c=parse_omega_c(args.omega_c), fixed=parse_fixes(args.fix),
+                         bootstrap=args.bootstrap, seed=args.seed)
+    table = load_table(args.input)
+    report = fit_table(table, args.model, options)
+    to_stdout = args.json == "-"
+    print(format_report(report), file=sys.stderr if to_stdout else sys.stdout)
+    if args.json:
+        text = json.dumps(report.to_json(), indent=2)
+        if to_stdout:
+            print(text)
+        else:
+            Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+            Path(args.json).write_text(text + "\n")
+    if args.plot:
+        from labkit.report.figures import fit_figure
+        fit_figure(report, args.plot)
+    return 0

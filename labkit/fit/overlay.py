@@ -1,0 +1,32 @@
+"""Model overlays: a simulator's (or closed form's) prediction drawn over fitted data.
+
+The hook is deliberately plain data: an :class:`Overlay` is a label and x/y arrays in the
+data's units, optionally tied to one series. Build one from any function of x with
+:func:`overlay_from_function`, e.g. the simulated cone angle for the rig's magnets at each
+measured speed::
+
+    ov = overlay_from_function("simulated (labkit.sim)", simulate_cone_angle, speeds)
+    fit_figure(report, "fit.png", overlays=[ov])
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Overlay:
+    label: str
+    x: np.ndarray
+    y: np.ndarray
+    series: str | None = None   # None: drawn on every series' panel
+
+
+def overlay_from_function(label: str, fn: Callable[[float], float], x, series: str | None = None) -> Overlay:
+    """Evaluate ``fn`` at each x (a scalar function, e.g. one simulation per speed)."""
+    xs = np.asarray(x, dtype=float)
+    ys = np.array([float(fn(float(v))) for v in xs])
+    return Overlay(label, xs, ys, series)

@@ -1,0 +1,1 @@
+"""Reports: a self-contained folder (markdown + PNG figures) for a session or result file."""

@@ -1,0 +1,89 @@
+"""Figures for fits and reports (matplotlib's Agg canvas: no display, no global backend).
+
+``fit_figure`` draws data with the fitted curve above and residuals below. Speed sweeps are
+drawn log-log like the paper's Fig. 5.25; spin-critical pairs like Fig. 6.18 (spin against
+rotor speed, one colour per series).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from labkit.fit.overlay import Overlay
+from labkit.fit.table_fit import FitReport
+
+LOG_LOG = {"power-law", "pfr-force", "mbs-distance"}
+
+
+def fit_figure(report: FitReport, path: str | Path, *, overlays: Sequence[Overlay] = (),
+               title: str | None = None) -> Path:
+    """Data + fitted curve (top) and residuals (bottom) for every series of ``report``."""
+    fig = Figure(figsize=(7.0, 6.5), dpi=110)
+    FigureCanvasAgg(fig)
+    gs = fig.add_gridspec(2, 1, height_ratios=[3, 1.3], hspace=0.08)
+    ax = fig.add_subplot(gs[0])
+    axr = fig.add_subplot(gs[1], sharex=ax)
+    colors = ["tab:blue", "tab:red", "tab:green", "tab:purple", "tab:orange", "tab:brown"]
+    loglog = report.model in LOG_LOG
+    for i, (name, res) in enumerate(report.series.items()):
+        c = colors[i % len(colors)]
+        label = "data" if name == "all" else f"series {name}"
+        ax.plot(res.x, res.y, "o", color=c, ms=5, label=label)
+        lo, hi = float(np.min(res.x)), float(np.max(res.x))
+        grid = np.geomspace(lo, hi, 200) if loglog and lo > 0 else np.linspace(lo, hi, 200)
+        ax.plot(grid, res.predict(grid), "-", color=c, lw=1.5, label=f"fit: {_param_text(res)}")
+        axr.plot(res.x, res.residuals, "o", color=c, ms=4)
+    for ov in overlays:
+        ax.plot(ov.x, ov.y, "--", color="0.3", lw=1.2, label=ov.label)
+    axr.axhline(0.0, color="0.5", lw=0.8)
+    if loglog:
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+    first = next(iter(report.series.values()))
+    ax.set_ylabel(first.y_name)
+    axr.set_xlabel(first.x_name)
+    axr.set_ylabel(f"residual\n{first.residual_space}")
+    ax.tick_params(labelbottom=False)
+    ax.grid(True, which="both", alpha=0.25)
+    axr.grid(True, alpha=0.25)
+    ax.legend(fontsize=8, loc="best")
+    ax.set_title(title or f"{report.model} fit", fontsize=11)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, bbox_inches="tight")
+    return path
+
+
+def _param_text(res) -> str:
+    parts = []
+    for k, p in res.params.items():
+        if p.fixed or p.derived:
+            continue
+        parts.append(f"{k} = {p.value:.4g} ± {p.stderr:.2g}")
+    return ", ".join(parts)
+
+
+def contact_sheet(frames: Sequence[np.ndarray], labels: Sequence[str], path: str | Path,
+                  columns: int = 4) -> Path:
+    """Frames (H x W x 3 BGR/RGB uint8 or H x W grey) in a grid with a label under each."""
+    n = max(1, len(frames))
+    rows = (n + columns - 1) // columns
+    fig = Figure(figsize=(3.0 * columns, 2.6 * rows), dpi=100)
+    FigureCanvasAgg(fig)
+    for i, (frame, label) in enumerate(zip(frames, labels, strict=True)):
+        ax = fig.add_subplot(rows, columns, i + 1)
+        img = np.asarray(frame)
+        if img.ndim == 3 and img.shape[2] == 3:
+            img = img[:, :, ::-1]  # OpenCV BGR -> RGB
+        ax.imshow(img, cmap="gray" if img.ndim == 2 else None)
+        ax.set_title(label, fontsize=8)
+        ax.axis("off")
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, bbox_inches="tight")
+    return path
