@@ -48,6 +48,11 @@ class _StreamingTachEmulator(Emulator):
     def stream_start(self, t: float) -> float:
         return t
 
+    def next_output_time(self, t: float) -> float | None:
+        """The next frame or queued reply, so a virtual clock can jump straight there."""
+        times = [x for x in (self._next_t, self.next_ready_time()) if x is not None]
+        return min(times, default=None)
+
     def power_on(self, t: float) -> None:
         super().power_on(t)
         self._next_t = self.stream_start(t) + 1.0 / self.rate_hz
@@ -97,6 +102,7 @@ class Lutron16Emulator(_StreamingTachEmulator):
     """
 
     protocol = "lutron16"
+    serial_settings = {"baudrate": 9600, "bytesize": 8, "parity": "N", "stopbits": 1}
     default_rate_hz = 1.0
 
     def __post_init__(self) -> None:
@@ -136,6 +142,7 @@ class LabkitTachEmulator(_StreamingTachEmulator):
     """
 
     protocol = "labkit_tach"
+    serial_settings = {"baudrate": 115200, "bytesize": 8, "parity": "N", "stopbits": 1}
     default_rate_hz = 10.0
 
     def __post_init__(self) -> None:

@@ -160,6 +160,7 @@ class PololuSmc(KeepAliveMotor):
         self.reply_timeout_s = float(options.get("reply_timeout_s", 0.1))
         self.quiet_s = float(options.get("quiet_s", 0.003))
         self.target_speed = 0
+        self.last_reply = b""
         self.flush_input("open")
         if as_bool(options.get("autobaud", self.device_number is not None)):
             self.write(b"\xAA", "autobaud 0xAA")
@@ -189,6 +190,7 @@ class PololuSmc(KeepAliveMotor):
                     continue
             value = parse_variable(reply, variable_id)
             if _plausible(variable_id, value):
+                self.last_reply = reply
                 return value
             last = DeviceError(self.name, label, reply, f"implausible value {value}")
         assert last is not None
@@ -243,7 +245,11 @@ class PololuSmc(KeepAliveMotor):
         self.send(CMD_BRAKE, bytes([amount]), f"brake {amount}")
 
     def status(self) -> MotorStatus:
-        values = {vid: self.get_variable(vid) for vid in self.status_variables}
+        values: dict[int, int] = {}
+        raw = b""
+        for vid in self.status_variables:
+            values[vid] = self.get_variable(vid)
+            raw += self.last_reply
         t = self.clock.now()
         temperature = values.get(VAR_TEMPERATURE_A)
         vin = values.get(VAR_INPUT_VOLTAGE)
@@ -254,7 +260,7 @@ class PololuSmc(KeepAliveMotor):
             input_voltage_v=None if vin is None else vin / 1000.0,
             temperature_c=None if temperature is None else temperature / 10.0,
             errors=decode_error_bits(values[VAR_ERROR_STATUS]),
-            raw=self.last_bytes,
+            raw=raw,
         )
 
     def reset_flags(self) -> str:

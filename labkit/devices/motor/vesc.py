@@ -176,7 +176,7 @@ class VescValues:
         return fault_name(self.fault_code)
 
 
-_VALUES_HEAD = struct.Struct(">hhiiiihihiiiiiiB")  # fields 0..15 (52 bytes)
+_VALUES_HEAD = struct.Struct(">hhiiiihihiiiiiiB")  # fields 0..15 (53 bytes)
 
 
 def parse_values(payload: bytes) -> VescValues:
@@ -227,6 +227,7 @@ class Vesc(KeepAliveMotor):
         self.brake_current_a = float(options.get("brake_current_a", 2.0))
         self.reply_timeout_s = float(options.get("reply_timeout_s", 0.2))
         self.framer = VescFramer()
+        self.last_reply = b""
         self.mode: tuple[str, float] | None = None  # ("duty", d) or ("erpm", e)
         self.flush_input("open")
 
@@ -249,6 +250,7 @@ class Vesc(KeepAliveMotor):
 
     def values(self) -> VescValues:
         payload = self.request(COMM_GET_VALUES, "GET_VALUES")
+        self.last_reply = payload
         try:
             return parse_values(payload)
         except ValueError as exc:
@@ -305,13 +307,13 @@ class Vesc(KeepAliveMotor):
             t=self.clock.now(), duty=v.duty, target_duty=target,
             speed_rad_s=v.erpm / self.pole_pairs * RAD_S_PER_RPM,
             input_voltage_v=v.input_voltage_v, temperature_c=v.temp_mosfet_c,
-            errors=frozenset(errors), raw=self.last_bytes,
+            errors=frozenset(errors), raw=self.last_reply,
         )
 
 
 SAMPLE_VALUES_PACKET = format_packet(
     bytes([COMM_GET_VALUES]) + _VALUES_HEAD.pack(250, 300, 150, 120, 0, 150, 500, 30000, 243,
-                                                  0, 0, 0, 0, 1000, 1000, 0) + bytes(21))
+                                                  0, 0, 0, 0, 1000, 1000, 0) + bytes(20))
 
 
 def _parse_values_packet(data: bytes) -> VescValues:
