@@ -53,8 +53,8 @@ PRESETS: dict[str, Preset] = {
     "hx711_adc": Preset(rf"Load_cell output val:\s*(?P<value>{FLOAT})", 57600, "g", "t",
                         r"Tare complete"),
     # bogde/HX711 examples: "one reading:\t1.23\t| average:\t1.25" or "Reading: 1.23 g"
-    "bogde": Preset(rf"(?:average:\s*(?P<value>{FLOAT}))|(?:Reading:\s*(?P<value2>{FLOAT})"
-                    rf"\s*(?P<unit>[A-Za-z]+)?)", 38400, "g", "t", None),
+    "bogde": Preset(rf"(?:one reading:\s*{FLOAT}\s*\|\s*average:\s*(?P<value>{FLOAT}))"
+                    rf"|(?:Reading:\s*(?P<value2>{FLOAT})\s*(?P<unit>[A-Za-z]+)?)", 38400, "g", "t", None),
     # sketches that print one bare number per line
     "bare_float": Preset(rf"\s*(?P<value>{FLOAT})\s*", 115200, "g", "t", None),
 }
@@ -131,7 +131,8 @@ class LineRegexBalance(Balance):
     (regex with ``(?P<value>...)``), ``unit`` (unit of the printed value after
     calibration: ``g`` default, ``kg``, ``N``, or ``raw``), ``scale`` (1), ``offset`` (0),
     ``capacity`` (in ``unit``; beyond it a reading is overload), ``tare_command`` (``t``),
-    ``tare_reply`` (regex), ``stable_std`` and ``stable_window`` (8), ``eol`` (``"CRLF"``).
+    ``tare_reply`` (regex), ``tare_settle_s`` (1.5, wait after a tare the
+    sketch does not confirm), ``stable_std`` and ``stable_window`` (8), ``eol`` (``"CRLF"``).
     """
 
     protocol = "line_regex"
@@ -153,10 +154,11 @@ class LineRegexBalance(Balance):
         self.tare_command = str(options.get("tare_command", preset.tare_command))
         reply = options.get("tare_reply", preset.tare_reply)
         self.tare_reply = re.compile(str(reply)) if reply else None
+        self.tare_settle_s = float(options.get("tare_settle_s", 1.5))
         stable_std = options.get("stable_std")
         self.stable_std = float(stable_std) if stable_std is not None else None
         self.window: deque[float] = deque(maxlen=int(options.get("stable_window", 8)))
-        self.serial_expected = dict(self.default_serial, baudrate=preset.baudrate)
+        self.serial_expected = self.serial_defaults(options)
         eol = eol_bytes(str(options.get("eol", "CRLF")))
         self.link = LineLink(port, clock, self.name, expected_serial=self.serial_expected,
                              write_eol=eol, read_eol=b"\r" if eol == b"\r" else b"\n")
@@ -166,17 +168,24 @@ class LineRegexBalance(Balance):
             except UnitError as exc:
                 raise ValueError(str(exc)) from None
 
+    @classmethod
+    def serial_defaults(cls, options: dict[str, Any]) -> dict[str, Any]:
+        """Serial settings of the sketch the options name (its preset's baud rate)."""
+        preset = PRESETS.get(str(options.get("preset", "hx711_adc")), PRESETS["hx711_adc"])
+        return dict(cls.default_serial, baudrate=preset.baudrate)
+
     def _accept(self, line: bytes) -> LineValue | None:
         return parse_value_line(line, self.pattern)
 
     def _reading(self, t: float, line: bytes, parsed: LineValue) -> Reading:
         shown = (parsed.value - self.offset) * self.scale
         unit = parsed.unit or self.unit
+        # a printed saturation code is overload whatever the calibration (PROTOCOLS 1.4)
+        overload = parsed.value >= HX711_MAX or parsed.value <= HX711_MIN
+        overload = overload or (self.capacity is not None and abs(shown) > self.capacity)
         if unit == "raw":
-            overload = parsed.value >= HX711_MAX or parsed.value <= HX711_MIN
             quantity, value, si_unit = "adc_counts", shown, "1"
         else:
-            overload = self.capacity is not None and abs(shown) > self.capacity
             try:
                 quantity, value, si_unit = to_si(shown, unit)
             except UnitError as exc:
@@ -227,4 +236,7 @@ class LineRegexBalance(Balance):
             return True
 
         self.link.send(self.tare_command)
+        if rx is None:  # no confirmation line: give the sketch its averaging time
+            self.clock.sleep(self.tare_settle_s)
+            self.link.discard_stale(self.tare_command)
         self.link.exchange(None, accept, timeout)
