@@ -473,7 +473,7 @@ def open_rig(rig: Rig, clock: Any, record_to: str | Path | None = None,
     is re-raised.
     """
     from labkit.devices.base import driver_class
-    from labkit.io import open_port
+    from labkit.io.ports import open_port
 
     opened = OpenRig(rig, clock)
     try:

@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from labkit.control.pi import PIGains, PIState, SettleDetector, pi_step, ramp_toward
@@ -78,6 +78,7 @@ class SpeedLoop:
                 f"limit of {self.max_speed * 60 / (2 * math.pi):.0f} RPM")
         self.target = speed_rad_s
         self.settle.reset()
+        self.snapshot = replace(self.snapshot, target_rad_s=speed_rad_s, settled=False)
 
     def _measure(self, t: float) -> float | None:
         check = getattr(self.tach, "check", None)
@@ -88,7 +89,8 @@ class SpeedLoop:
                 raise Tripped(f"tachometer {self.tach.name} lost: {exc}") from exc
         reading = self.tach.latest()
         since = reading.t if reading is not None else self.started_at
-        if since is not None and t - since > self.tach_timeout:
+        moving = self.target > 0 or self.setpoint > 0
+        if moving and since is not None and t - since > self.tach_timeout:
             raise Tripped(f"tachometer {self.tach.name} silent for {t - since:.2f} s "
                           f"(limit {self.tach_timeout:.2f} s)")
         if reading is None:
@@ -110,7 +112,8 @@ class SpeedLoop:
         if self.check_status and self.enabled:
             errors = self.motor.status().errors
             if errors:
-                raise Tripped(f"motor controller {self.motor.name} reports errors: {', '.join(sorted(errors))}")
+                raise Tripped(f"motor controller {self.motor.name} reports errors: "
+                              f"{', '.join(sorted(errors))}")
         self.setpoint = ramp_toward(self.setpoint, self.target, self.max_ramp, dt)
         if self.target > 0 and not self.enabled:
             self.motor.enable()
@@ -137,6 +140,8 @@ class SpeedControl:
         self.emit = emit or (lambda event: None)
         self.tripped: str | None = None
         self.tripped_at: float | None = None
+        self.zero_requested = False
+        self.zeroed_at: float | None = None
         self._lock = threading.RLock()
         self._job: Any = None
 
@@ -179,6 +184,12 @@ class SpeedControl:
                     event["stop_failed"] = failed
                 self.emit(event)
 
+    def request_zero(self) -> None:
+        """Ask for the safe state at the next control tick (first Ctrl-C); safe from a signal handler."""
+        self.zero_requested = True
+        if not self.clock.is_virtual and self._job is None:
+            self._zero_all()
+
     def check(self) -> None:
         """Raise :class:`SafetyError` in the caller's thread if an interlock tripped."""
         if self.tripped is not None:
@@ -188,6 +199,13 @@ class SpeedControl:
     def _tick(self, t: float) -> None:
         with self._lock:
             if self.tripped is not None:
+                return
+            if self.zero_requested:
+                if self.zeroed_at is None:
+                    for loop in self.loops.values():
+                        loop.target = loop.setpoint = 0.0
+                    self._zero_all()
+                    self.zeroed_at = t
                 return
             try:
                 for loop in self.loops.values():

@@ -7,11 +7,16 @@ plant is exact on any clock and costs nothing between reads.
 
 Defaults follow the paper: the balance force is the fitted law of Fig. 5.25,
 ``grams = 224e6 * rpm**-1.9`` (a PFR force falling roughly as omega^-2, Eq. 5.81).
+
+The spin-critical plant of Fig. 6.18 (:class:`FloatorPlant`, preset ``fig618``): a floator
+held in the bound state spins up about its dipole axis and drops when its spin reaches the
+critical spin of Eq. 6.37 (Eq. 5.69 with the paper's extra term), with seeded noise.
 """
 
 from __future__ import annotations
 
 import math
+import random
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -57,6 +62,84 @@ class MotorPlant:
         self.duty = max(-1.0, min(1.0, duty))
 
 
+@dataclass(frozen=True)
+class SpinCriticalLaw:
+    """Eq. 6.37: ``-k w^2 = C (1 - w/w_ref)`` with ``k = v/w - 1`` (w rotor, v floator spin).
+
+    Solved for the spin at which the bound state breaks:
+    ``v_crit(w) = w - C (1 - w/w_ref) / w``. The paper fits C = 4.7e5 (series 1, a 15 mm
+    sphere) and 6.63e5 (series 2) with w_ref = 3000 rad/s.
+    """
+
+    c: float = 4.7e5
+    w_ref_rad_s: float = 3000.0
+
+    def critical_spin(self, w: float) -> float:
+        """Spin (rad/s) at which the floator drops at rotor speed ``w`` (rad/s); < 0: cannot trap."""
+        if w <= 0:
+            return -math.inf
+        return w - self.c * (1.0 - w / self.w_ref_rad_s) / w
+
+    def min_trap_speed(self) -> float:
+        """Lowest rotor speed holding a floator without spin (v_crit = 0): w^2 + C w / w_ref - C = 0."""
+        b = self.c / self.w_ref_rad_s
+        return (-b + math.sqrt(b * b + 4.0 * self.c)) / 2.0
+
+
+@dataclass
+class FloatorPlant:
+    """A floator held by the rotor (Fig. 6.18 set-up), its spin and its drop.
+
+    While held, the spin relaxes toward ``spin_ratio * w`` with time constant
+    ``spin_tau_s`` (the small torque of Sec. 6.5 that spins it up). It drops when the
+    spin reaches ``v_crit(w) * (1 + e)``, e ~ N(0, ``noise_rel``) drawn (seeded) each time
+    it is placed; or at once when the rotor is too slow to trap it. ``reload_s`` after a
+    drop the "operator" places it again with zero spin (only if the rotor can hold it).
+    """
+
+    law: SpinCriticalLaw = field(default_factory=SpinCriticalLaw)
+    mass_kg: float = 13.36e-3
+    spin_ratio: float = 0.95
+    spin_tau_s: float = 6.0
+    noise_rel: float = 0.01
+    reload_s: float = 2.0
+    step_s: float = 0.01
+    seed: int = 0
+    present: bool = False
+    spin_rad_s: float = 0.0
+    t: float = 0.0
+    drops: int = 0
+    dropped_at: float | None = None
+    _threshold: float = 1.0
+
+    def __post_init__(self) -> None:
+        self.rng = random.Random(self.seed)
+
+    def _place(self, t: float, w: float) -> None:
+        if self.law.critical_spin(w) > 0:
+            self.present, self.spin_rad_s = True, 0.0
+            self._threshold = 1.0 + self.rng.gauss(0.0, self.noise_rel)
+        self.dropped_at = None if self.present else t
+
+    def advance(self, t: float, rotor_speed: Callable[[float], float]) -> None:
+        """Advance to time ``t``; ``rotor_speed(t)`` is the rotor's angular speed (rad/s)."""
+        while self.t < t:
+            t1 = min(t, self.t + self.step_s)
+            w = rotor_speed(t1)
+            if self.present:
+                target = self.spin_ratio * w
+                decay = math.exp(-(t1 - self.t) / self.spin_tau_s)
+                self.spin_rad_s = target + (self.spin_rad_s - target) * decay
+                if self.spin_rad_s >= self.law.critical_spin(w) * self._threshold:
+                    self.present, self.drops, self.dropped_at = False, self.drops + 1, t1
+            else:
+                if self.dropped_at is None:
+                    self.dropped_at = t1
+                if t1 - self.dropped_at >= self.reload_s:
+                    self._place(t1, w)
+            self.t = t1
+
+
 @dataclass
 class RigPlant:
     """Shared state of an emulated rig: motors by name, the PFR force, the floator's spin.
@@ -71,6 +154,8 @@ class RigPlant:
     motors: dict[str, MotorPlant] = field(default_factory=dict)
     floator_spin_rad_s: float = 0.0
     floator_present: bool = True
+    #: the spin-critical floator (Fig. 6.18); None: constant spin, force from ``force_law``
+    floator: FloatorPlant | None = None
     _lock: threading.RLock = field(default_factory=threading.RLock, repr=False)
 
     def motor(self, name: str = "rotor") -> MotorPlant:
@@ -96,11 +181,23 @@ class RigPlant:
         Returns 0 when the floator has dropped (no target for the spin tachometer).
         """
         with self._lock:
+            self._advance_floator(t)
             return self.floator_spin_rad_s if self.floator_present else 0.0
+
+    def _advance_floator(self, t: float) -> None:
+        if self.floator is None:
+            return
+        self.floator.advance(t, lambda tt: self.speed(tt))
+        self.floator_present = self.floator.present
+        self.floator_spin_rad_s = self.floator.spin_rad_s
 
     def force(self, t: float) -> float:
         """The force (N, upward on the rotor = downward on the balance pan) at time t."""
         with self._lock:
+            if self.floator is not None:
+                # balance under the rotator: it carries the held floator's weight (Eq. 6.33)
+                self._advance_floator(t)
+                return self.floator.mass_kg * G0 if self.floator.present else 0.0
             if not self.floator_present:
                 return 0.0
             return self.force_law(self.speed(t))
@@ -110,11 +207,32 @@ _PLANTS: dict[str, RigPlant] = {}
 _PLANTS_LOCK = threading.Lock()
 
 
+def fig618_plant(seed: int = 0) -> RigPlant:
+    """The spin-critical rig of Fig. 6.18 (series 1: 15 mm sphere, 13.36 g, C = 4.7e5)."""
+    return RigPlant(seed=seed, floator=FloatorPlant(seed=seed))
+
+
+#: plant presets by name; ``plant=fig618`` or ``plant=fig618.anything`` in a sim:// URL
+PLANT_PRESETS: dict[str, Callable[[int], RigPlant]] = {
+    "fig525": lambda seed: RigPlant(seed=seed),
+    "fig618": fig618_plant,
+}
+
+
+def make_plant(name: str, seed: int = 0) -> RigPlant:
+    """A fresh plant for ``name``: the preset named by the part before the first dot, else default."""
+    preset = PLANT_PRESETS.get(name.split(".", 1)[0])
+    return preset(seed) if preset else RigPlant(seed=seed)
+
+
 def shared_plant(name: str, seed: int = 0) -> RigPlant:
-    """The process-wide plant called ``name`` (created on first use), shared by sim:// ports."""
+    """The process-wide plant called ``name`` (created on first use), shared by sim:// ports.
+
+    Names starting with a preset (``fig525``, ``fig618``, ``fig618.test3``) get that preset.
+    """
     with _PLANTS_LOCK:
         if name not in _PLANTS:
-            _PLANTS[name] = RigPlant(seed=seed)
+            _PLANTS[name] = make_plant(name, seed)
         return _PLANTS[name]
 
 

@@ -1,0 +1,61 @@
+"""Quick fits written into results.json (the full fitting machinery lives elsewhere).
+
+* :func:`fit_power_law`: ``y = a x^b`` as the paper plots Fig. 5.25 (x in RPM, y in grams
+  force; the paper found a = 224e6, b = -1.9).
+* :func:`fit_spin_critical_c`: Eq. 6.37, ``-k w^2 = C (1 - w/w_ref)`` with ``k = v/w - 1``;
+  linear in C, so it is a one-parameter least-squares fit through the origin of
+  ``y = w^2 - v w`` against ``x = 1 - w/w_ref`` (paper: C = 4.7e5 and 6.63e5, w_ref = 3000).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.optimize import curve_fit
+
+
+def _param(value: float, stderr: float) -> dict[str, float]:
+    return {"value": float(value), "stderr": float(stderr)}
+
+
+def fit_power_law(x: list[float], y: list[float], sigma: list[float] | None = None) -> dict:
+    """Weighted least squares of ``y = a x^b``; started from a log-log line. Needs y > 0."""
+    xa, ya = np.asarray(x, float), np.asarray(y, float)
+    keep = (xa > 0) & (ya > 0)
+    if keep.sum() < 3:
+        raise ValueError(f"power-law fit needs >= 3 positive points, got {int(keep.sum())}")
+    xa, ya = xa[keep], ya[keep]
+    sig = None
+    if sigma is not None:
+        sig = np.asarray(sigma, float)[keep]
+        sig = np.where(sig > 0, sig, np.nan)
+        sig = None if np.isnan(sig).all() else np.where(np.isnan(sig), np.nanmax(sig), sig)
+    b0, log_a0 = np.polyfit(np.log(xa), np.log(ya), 1)
+    # fit around a reference x so a and b are not strongly correlated, then convert
+    x_ref = float(np.exp(np.mean(np.log(xa))))
+    (c, b), cov = curve_fit(lambda xx, c, b: c * (xx / x_ref) ** b, xa, ya,
+                            p0=(math.exp(log_a0) * x_ref**b0, b0), sigma=sig, maxfev=10000)
+    a = c / x_ref**b
+    # error propagation for a = c * x_ref^-b
+    ja = np.array([x_ref**-b, -a * math.log(x_ref)])
+    var_a = float(ja @ cov @ ja)
+    return {"model": "power_law", "formula": "y = a * x^b", "x": "speed_rpm", "y": "force_g",
+            "params": {"a": _param(a, math.sqrt(max(var_a, 0.0))),
+                       "b": _param(b, math.sqrt(max(cov[1, 1], 0.0)))},
+            "n": int(len(xa))}
+
+
+def fit_spin_critical_c(rotor_rad_s: list[float], spin_rad_s: list[float], w_ref: float = 3000.0) -> dict:
+    """C of Eq. 6.37 from (rotor speed w, floator spin v) pairs at the drop, with its stderr."""
+    w, v = np.asarray(rotor_rad_s, float), np.asarray(spin_rad_s, float)
+    if len(w) < 1:
+        raise ValueError("Eq. 6.37 fit needs at least one (rotor, spin) pair")
+    x = 1.0 - w / w_ref
+    y = w**2 - v * w          # = -k w^2 with k = v/w - 1
+    c = float(np.sum(x * y) / np.sum(x * x))
+    dof = len(w) - 1
+    stderr = float(math.sqrt(np.sum((y - c * x) ** 2) / dof / np.sum(x * x))) if dof > 0 else math.nan
+    return {"model": "eq6.37", "formula": "-k w^2 = C (1 - w/w_ref), k = v/w - 1",
+            "x": "rotor_rad_s", "y": "spin_rad_s",
+            "params": {"C": _param(c, stderr), "w_ref": _param(w_ref, 0.0)}, "n": int(len(w))}

@@ -1,0 +1,353 @@
+"""The protocol runner: plan, check, run steps with bluesky-style interruption, always stop safe.
+
+A protocol (:class:`ProtocolDef`) plans a list of :class:`Step` s from the rig and the
+parameters, then runs each with plain Python using the :class:`RunContext` verbs ``set``,
+``settle``, ``record``, ``sleep`` and ``checkpoint``. The runner
+
+* checks the plan before anything opens: the devices the protocol needs, every target
+  against the rig's speed limit, the session directory (``--dry-run`` stops here and
+  prints the plan);
+* opens the rig (every port recorded into the session's cassettes), starts the speed loops;
+* on the first Ctrl-C commands every motor to zero at the next control tick and stops at
+  the next checkpoint; on a second Ctrl-C trips the interlock at once (ANCHORS 9.2.7);
+* whatever happens (interlock, exception, Ctrl-C, normal end) stops the loops, zeroes
+  every motor, closes the ports and writes ``results.json`` and the exit status.
+"""
+
+from __future__ import annotations
+
+import signal
+import threading
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from labkit.control.loop import SpeedControl, build_speed_control
+from labkit.errors import LabkitError, SafetyError
+from labkit.protocols.events import EventBus, Sink
+from labkit.rig import Rig, open_rig, rad_s_to_rpm
+
+CONTROL_EVENT_INTERVAL_S = 0.25
+
+
+class StopRequested(LabkitError):
+    """The operator asked to stop (Ctrl-C); the run ended at a checkpoint, motors at zero."""
+
+
+@dataclass
+class Step:
+    """One planned step: targets per speed loop (rad/s) and protocol data."""
+
+    index: int
+    label: str
+    targets_rad_s: dict[str, float]
+    data: dict[str, Any] = field(default_factory=dict)
+    est_duration_s: float = 0.0
+
+
+class ProtocolDef:
+    """Base of a protocol: ``defaults`` (keys with unit suffixes), ``needs`` ((role, kind), ...)."""
+
+    name: str = ""
+    summary: str = ""
+    defaults: dict[str, Any] = {}
+    needs: tuple[tuple[str, str], ...] = ()
+
+    def plan(self, rig: Rig, params: dict[str, Any]) -> list[Step]:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def run_step(self, ctx: RunContext, step: Step) -> dict[str, Any]:  # pragma: no cover
+        raise NotImplementedError
+
+    def setup(self, ctx: RunContext) -> None:
+        """Once, after the rig is open and before the first step (e.g. tare the balance)."""
+
+    def fit(self, points: list[dict[str, Any]]) -> dict[str, Any]:
+        return {"model": "none", "params": {}}
+
+
+def check_plan(protocol: ProtocolDef, rig: Rig, steps: list[Step]) -> None:
+    """Refuse a plan the rig cannot do: missing devices or loops, targets beyond the limit."""
+    for role, kind in protocol.needs:
+        rig.require(role, kind, needed_by=protocol.name)
+    loops = {lc.name for lc in rig.control.loops}
+    limit = rig.limits.max_speed_rad_s
+    for step in steps:
+        for loop, target in step.targets_rad_s.items():
+            if loop not in loops:
+                raise LabkitError(f"{protocol.name}: the rig has no speed loop {loop!r} "
+                                  f"(pair a {loop}_motor with a {loop}_tach in {rig.path})")
+            if target > limit:
+                raise SafetyError(
+                    f"{protocol.name}: step {step.index + 1} asks {rad_s_to_rpm(target):.0f} RPM, above "
+                    f"the rig's limit of {rad_s_to_rpm(limit):.0f} RPM ({rig.path}: limits.max_speed); "
+                    "nothing was started")
+            if target < 0:
+                raise SafetyError(f"{protocol.name}: step {step.index + 1} asks a negative speed")
+
+
+def format_plan(protocol: ProtocolDef, rig: Rig, steps: list[Step], done: set[int] | None = None) -> str:
+    """The dry-run table: one line per step with targets in RPM and an estimated duration."""
+    done = done or set()
+    lines = [f"{protocol.name} on {rig.name} ({rig.path}): {len(steps)} steps, "
+             f"limit {rad_s_to_rpm(rig.limits.max_speed_rad_s):.0f} RPM"]
+    total = 0.0
+    for s in steps:
+        targets = ", ".join(f"{k} {rad_s_to_rpm(v):.0f} RPM" for k, v in s.targets_rad_s.items())
+        mark = "done " if s.index in done else ""
+        total += 0 if s.index in done else s.est_duration_s
+        lines.append(f"  {s.index + 1:3d}. {mark}{s.label:<28s} {targets:<24s} ~{s.est_duration_s:.0f} s")
+    lines.append(f"estimated time: {total / 60:.1f} min; all targets within the rig's limits")
+    return "\n".join(lines)
+
+
+class RunContext:
+    """What a step function may do. Every wait polls the interlocks and is a checkpoint."""
+
+    def __init__(self, runner: Runner, devices: dict[str, Any], control: SpeedControl) -> None:
+        self.runner = runner
+        self.clock = runner.clock
+        self.rig = runner.rig
+        self.params = runner.params
+        self.devices = devices
+        self.control = control
+        self.step: Step | None = None
+        self._last_control_event = -1e9
+
+    # ---- events -------------------------------------------------------------------------
+    def now(self) -> float:
+        return self.clock.now()
+
+    def emit(self, event: dict[str, Any]) -> None:
+        event.setdefault("t", self.clock.now())
+        self.runner.bus.emit(event)
+
+    def emit_reading(self, role: str, reading: Any) -> None:
+        self.emit({"type": "reading", "t": reading.t, "device": role, "quantity": reading.quantity,
+                   "value": reading.value, "unit": reading.unit, "stable": reading.stable,
+                   "overload": reading.overload})
+
+    def _control_event(self) -> None:
+        now = self.clock.now()
+        if now - self._last_control_event < CONTROL_EVENT_INTERVAL_S:
+            return
+        self._last_control_event = now
+        loops = {name: {"target_rad_s": s.target_rad_s, "setpoint_rad_s": s.setpoint_rad_s,
+                        "measured_rad_s": s.measured_rad_s, "duty": s.duty, "settled": s.settled}
+                 for name, s in self.control.snapshots().items()}
+        self.emit({"type": "control", "loops": loops})
+
+    # ---- verbs --------------------------------------------------------------------------
+    def checkpoint(self) -> None:
+        """Raise if an interlock tripped or the operator asked to stop."""
+        self.control.check()
+        if self.runner.stop_count:
+            raise StopRequested("stopped by Ctrl-C at a checkpoint; motors at zero")
+
+    def set(self, **targets_rad_s: float) -> None:
+        """Set speed-loop targets in rad/s (ramped at the rig's limit), e.g. ``set(rotor=1000)``."""
+        self.checkpoint()
+        self.control.set_targets(targets_rad_s)
+        for loop, target in targets_rad_s.items():
+            self.emit({"type": "setpoint", "loop": loop, "target_rad_s": target})
+
+    def sleep(self, duration_s: float) -> None:
+        """Wait ``duration_s`` on the clock in control periods, checking at each."""
+        end = self.clock.now() + duration_s
+        period = self.control.period_s
+        while True:
+            self.checkpoint()
+            remaining = end - self.clock.now()
+            if remaining <= 1e-12:
+                return
+            self.clock.sleep(min(period, remaining))
+            self._control_event()
+
+    def settle(self, timeout_s: float | None = None) -> float:
+        """Wait until every loop holds its target within tolerance for the hold time.
+
+        Returns the settle time (s). Raises :class:`LabkitError` (run ends, motors zero) if
+        it does not settle within ``timeout_s`` (default: the rig's ``settle_timeout``).
+        """
+        timeout = timeout_s if timeout_s is not None else self.rig.control.settle_timeout_s
+        start = self.clock.now()
+        while True:
+            self.checkpoint()
+            if self.control.settled():
+                took = self.clock.now() - start
+                speeds = {n: s.measured_rad_s for n, s in self.control.snapshots().items()}
+                self.emit({"type": "settled", "index": self.step.index if self.step else None,
+                           "settle_time_s": took, "speeds_rad_s": speeds})
+                return took
+            if self.clock.now() - start > timeout:
+                snaps = self.control.snapshots()
+                state = ", ".join(
+                    f"{n}: target {rad_s_to_rpm(s.target_rad_s):.0f} RPM, measured "
+                    + ("none" if s.measured_rad_s is None else f"{rad_s_to_rpm(s.measured_rad_s):.0f} RPM")
+                    for n, s in snaps.items())
+                raise LabkitError(f"speed did not settle within {timeout:.0f} s ({state}); motors at zero")
+            self.clock.sleep(self.control.period_s)
+            self._control_event()
+
+    def wait_stopped(self, loop: str = "rotor", below_rad_s: float = 5.0, timeout_s: float = 30.0) -> None:
+        """Command ``loop`` to zero and wait until its tachometer reads below ``below_rad_s``."""
+        self.set(**{loop: 0.0})
+        tach = self.devices[self.rig_loop(loop).tach]
+        start = self.clock.now()
+        while True:
+            self.checkpoint()
+            reading = tach.latest()
+            if reading is not None and reading.t > start and reading.value < below_rad_s:
+                return
+            if self.clock.now() - start > timeout_s:
+                raise LabkitError(f"{loop} did not stop within {timeout_s:.0f} s")
+            self.clock.sleep(self.control.period_s)
+            self._control_event()
+
+    def rig_loop(self, name: str) -> Any:
+        for lc in self.rig.control.loops:
+            if lc.name == name:
+                return lc
+        raise LabkitError(f"no speed loop {name!r} in {self.rig.path}")
+
+    def read(self, role: str) -> Any:
+        """One balance reading (emitted as a ``reading`` event)."""
+        reading = self.devices[role].read()
+        self.emit_reading(role, reading)
+        return reading
+
+    def record(self, role: str, duration_s: float, min_n: int = 1) -> list[Any]:
+        """Balance readings for ``duration_s`` (at least ``min_n``), each a checkpoint."""
+        device = self.devices[role]
+        start = self.clock.now()
+        out = []
+        while self.clock.now() - start < duration_s or len(out) < min_n:
+            self.checkpoint()
+            reading = device.read()
+            self.emit_reading(role, reading)
+            out.append(reading)
+            self._control_event()
+        return out
+
+    def tach_readings(self, role: str, since: float) -> list[Any]:
+        return list(self.devices[role].readings_since(since))
+
+
+@dataclass
+class RunOutcome:
+    status: str                  # "completed" | "interrupted" | "failed" | "dry-run"
+    reason: str | None
+    session: Path | None
+    results: dict[str, Any] | None
+    error: BaseException | None = None
+
+
+class Runner:
+    """Runs one protocol on one rig. See the module docstring for the guarantees."""
+
+    def __init__(self, protocol: ProtocolDef, rig: Rig, params: dict[str, Any], *, clock: Any,
+                 sinks: list[Sink] | None = None, session: Any = None,
+                 previous_points: list[dict[str, Any]] | None = None, done_steps: set[int] | None = None,
+                 port_override: Any = None) -> None:
+        self.protocol = protocol
+        self.rig = rig
+        self.params = params
+        self.clock = clock
+        self.bus = EventBus(sinks)
+        self.session = session
+        if session is not None:
+            self.bus.add(session)
+        self.previous_points = list(previous_points or [])
+        self.done_steps = set(done_steps or ())
+        self.port_override = port_override
+        self.stop_count = 0
+        self.control: SpeedControl | None = None
+        self.steps = protocol.plan(rig, params)
+        check_plan(protocol, rig, self.steps)
+
+    def dry_run(self) -> str:
+        return format_plan(self.protocol, self.rig, self.steps, self.done_steps)
+
+    # ---- Ctrl-C -------------------------------------------------------------------------
+    def request_stop(self) -> None:
+        """What Ctrl-C does: 1st - motors to zero at the next tick, stop at next checkpoint;
+        2nd - interlock now (every motor zero) and KeyboardInterrupt."""
+        self.stop_count += 1
+        self.bus.emit({"type": "stop_request", "t": self.clock.now(), "count": self.stop_count})
+        if self.control is None:
+            return
+        if self.stop_count == 1:
+            self.control.request_zero()
+        else:
+            self.control.trip("Ctrl-C pressed twice")
+            raise KeyboardInterrupt
+
+    def _install_sigint(self) -> Any:
+        if threading.current_thread() is not threading.main_thread():
+            return None
+        return signal.signal(signal.SIGINT, lambda signum, frame: self.request_stop())
+
+    # ---- the run ------------------------------------------------------------------------
+    def run(self) -> RunOutcome:
+        status, reason, error = "completed", None, None
+        new_points: list[dict[str, Any]] = []
+        opened = None
+        previous_handler = self._install_sigint()
+        cassettes = self.session.cassette_dir if self.session is not None else None
+        self.bus.emit({"type": "start", "t": self.clock.now(), "protocol": self.protocol.name,
+                       "params": self.params, "rig": self.rig.name, "n_steps": len(self.steps),
+                       "session": str(self.session.path) if self.session is not None else None,
+                       "resumed_from": (self.session.meta.get("resumed_from") if self.session else None),
+                       "dry_run": False})
+        try:
+            opened = open_rig(self.rig, self.clock, record_to=cassettes, port_override=self.port_override)
+            self.control = build_speed_control(opened, self.clock, emit=self.bus.emit)
+            ctx = RunContext(self, opened.devices, self.control)
+            self.protocol.setup(ctx)
+            for step in self.steps:
+                if step.index in self.done_steps:
+                    continue
+                ctx.checkpoint()
+                ctx.step = step
+                self.bus.emit({"type": "step", "t": self.clock.now(), "index": step.index,
+                               "n_steps": len(self.steps), "label": step.label,
+                               "targets_rad_s": step.targets_rad_s, "eta_s": step.est_duration_s})
+                point = self.protocol.run_step(ctx, step)
+                point = {"step": step.index, **point}
+                new_points.append(point)
+                self.bus.emit({"type": "point", "t": self.clock.now(), "index": step.index, "point": point})
+                self.bus.emit({"type": "checkpoint", "t": self.clock.now(), "index": step.index})
+        except StopRequested as exc:
+            status, reason, error = "interrupted", str(exc), exc
+        except KeyboardInterrupt as exc:
+            status, reason, error = "interrupted", "Ctrl-C pressed twice; motors commanded to zero", exc
+        except BaseException as exc:  # noqa: BLE001 - every exit path ends in the safe state
+            status = "failed"
+            reason = str(exc) if isinstance(exc, LabkitError) else f"{type(exc).__name__}: {exc}"
+            error = exc
+            if not (self.control is not None and self.control.tripped):
+                self.bus.emit({"type": "fault", "t": self.clock.now(), "reason": reason})
+        finally:
+            if self.control is not None:
+                self.control.stop()
+            if opened is not None:
+                opened.close()
+            if previous_handler is not None:
+                signal.signal(signal.SIGINT, previous_handler)
+        points = self.previous_points + new_points
+        results = {"protocol": self.protocol.name, "points": points, "fit": self._fit(points)}
+        self.bus.emit({"type": "results", "t": self.clock.now(), "results": results})
+        steps_done = len(self.done_steps) + len(new_points)
+        self.bus.emit({"type": "stop", "t": self.clock.now(), "status": status, "reason": reason,
+                       "steps_done": steps_done})
+        if self.session is not None:
+            self.session.write_results(results)
+            self.session.finish(status, reason)
+        return RunOutcome(status, reason, self.session.path if self.session else None, results, error)
+
+    def _fit(self, points: list[dict[str, Any]]) -> dict[str, Any]:
+        try:
+            return self.protocol.fit(points)
+        except Exception as exc:  # noqa: BLE001 - a failed quick fit must not lose the data
+            return {"model": getattr(self.protocol, "fit_model", "unknown"), "params": {},
+                    "error": f"{type(exc).__name__}: {exc}"}

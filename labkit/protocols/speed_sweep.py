@@ -1,0 +1,128 @@
+"""``speed-sweep``: PFR force on a balance against rotor speed (the paper's Fig. 5.25).
+
+For each planned speed (a range or list, optionally up then down for hysteresis, repeated)
+the step: reads the balance at rest (rotor stopped), ramps to the speed, settles, averages
+the balance for ``record_s``, stops the rotor and reads the balance at rest again. The
+force is the mean at speed minus the rest reading interpolated linearly in time between
+the two rest readings (drift correction), with its standard error. With
+``zero=start`` the rest readings are skipped and the balance is only zeroed once.
+
+Result rows (``points`` of results.json): step, direction, repeat, target_rpm,
+speed_rad_s, speed_rpm, speed_std_rpm, force_n, force_g, force_stderr_n, force_stderr_g, n,
+settle_time_s, drift_n, unstable. Quick fit: y = a x^b (x in RPM, y in grams force).
+"""
+
+from __future__ import annotations
+
+import math
+import statistics
+from typing import Any
+
+from labkit.errors import LabkitError
+from labkit.protocols.params import ParamError
+from labkit.protocols.quickfit import fit_power_law
+from labkit.protocols.runner import ProtocolDef, RunContext, Step
+from labkit.rig import G0, Rig, rad_s_to_rpm, rpm_to_rad_s
+
+
+def reading_force_n(reading: Any) -> float:
+    """A balance reading as a force (N): kg readings are a mass under standard gravity."""
+    if reading.unit == "N":
+        return float(reading.value)
+    if reading.unit == "kg":
+        return float(reading.value) * G0
+    raise LabkitError(f"{reading.device or 'balance'}: cannot use a reading in {reading.unit!r} as a force")
+
+
+def mean_stderr(values: list[float]) -> tuple[float, float]:
+    mean = statistics.fmean(values)
+    if len(values) < 2:
+        return mean, math.nan
+    return mean, statistics.stdev(values) / math.sqrt(len(values))
+
+
+class SpeedSweep(ProtocolDef):
+    name = "speed-sweep"
+    summary = "PFR force vs rotor speed on a balance (Fig. 5.25)"
+    fit_model = "power_law"
+    defaults: dict[str, Any] = {
+        "speeds_rpm": [6000.0 + 1000.0 * i for i in range(15)],  # 6000:20000:1000
+        "up_down": False,        # also sweep back down (hysteresis)
+        "repeats": 1,
+        "record_s": 3.0,         # averaging time at each speed
+        "min_samples": 5,
+        "zero": "each",          # "each": rest readings before/after every step; "start": zero once
+        "settle_timeout_s": 0.0,  # 0: the rig's control.settle_timeout
+    }
+    needs = (("rotor_motor", "motor"), ("rotor_tach", "tach"), ("balance", "balance"))
+
+    def plan(self, rig: Rig, params: dict[str, Any]) -> list[Step]:
+        speeds = list(params["speeds_rpm"])
+        if not speeds:
+            raise ParamError("speed-sweep: speeds_rpm is empty")
+        if params["zero"] not in ("each", "start"):
+            raise ParamError(f"--set zero: must be each or start, got {params['zero']!r}")
+        if params["repeats"] < 1:
+            raise ParamError("--set repeats: must be >= 1")
+        legs = [("up", speeds)]
+        if params["up_down"]:
+            legs.append(("down", list(reversed(speeds))[1:]))
+        steps: list[Step] = []
+        ramp = rig.limits.max_ramp_rad_s2
+        for repeat in range(int(params["repeats"])):
+            for direction, leg in legs:
+                for rpm in leg:
+                    target = rpm_to_rad_s(rpm)
+                    est = 2 * target / ramp + rig.control.settle_hold_s + float(params["record_s"]) + 3.0
+                    steps.append(Step(len(steps), f"{direction} {rpm:.0f} RPM (run {repeat + 1})",
+                                      {"rotor": target},
+                                      {"direction": direction, "repeat": repeat, "target_rpm": rpm},
+                                      est_duration_s=est))
+        return steps
+
+    def setup(self, ctx: RunContext) -> None:
+        balance = ctx.devices["balance"]
+        before = balance.read_stable()
+        ctx.emit({"type": "zero", "device": "balance", "value": before.value, "unit": before.unit})
+        balance.zero()
+
+    def _rest(self, ctx: RunContext) -> tuple[float, float]:
+        ctx.wait_stopped("rotor")
+        reading = ctx.devices["balance"].read_stable()
+        ctx.emit_reading("balance", reading)
+        return reading.t, reading_force_n(reading)
+
+    def run_step(self, ctx: RunContext, step: Step) -> dict[str, Any]:
+        p = ctx.params
+        each = p["zero"] == "each"
+        rest0 = self._rest(ctx) if each else None
+        ctx.set(rotor=step.targets_rad_s["rotor"])
+        settle_time = ctx.settle(p["settle_timeout_s"] or None)
+        t_start = ctx.now()
+        readings = ctx.record("balance", float(p["record_s"]), int(p["min_samples"]))
+        t_end = ctx.now()
+        speeds = [r.value for r in ctx.tach_readings("rotor_tach", t_start) if r.t <= t_end]
+        rest1 = self._rest(ctx) if each else None
+        forces = [reading_force_n(r) for r in readings]
+        drift = 0.0
+        if rest0 and rest1:
+            t_mid = 0.5 * (t_start + t_end)
+            frac = (t_mid - rest0[0]) / (rest1[0] - rest0[0]) if rest1[0] > rest0[0] else 0.5
+            drift = rest0[1] + frac * (rest1[1] - rest0[1])
+        force, stderr = mean_stderr([f - drift for f in forces])
+        speed = statistics.fmean(speeds) if speeds else math.nan
+        speed_std = statistics.stdev(speeds) if len(speeds) > 1 else math.nan
+        return {
+            "direction": step.data["direction"], "repeat": step.data["repeat"],
+            "target_rpm": step.data["target_rpm"],
+            "speed_rad_s": speed, "speed_rpm": rad_s_to_rpm(speed), "speed_std_rpm": rad_s_to_rpm(speed_std),
+            "force_n": force, "force_g": force / G0 * 1e3,
+            "force_stderr_n": stderr, "force_stderr_g": stderr / G0 * 1e3,
+            "n": len(forces), "settle_time_s": settle_time, "drift_n": drift,
+            "unstable": sum(1 for r in readings if not r.stable),
+        }
+
+    def fit(self, points: list[dict[str, Any]]) -> dict[str, Any]:
+        usable = [pt for pt in points if math.isfinite(pt["speed_rpm"]) and pt["force_g"] > 0]
+        return fit_power_law([pt["speed_rpm"] for pt in usable], [pt["force_g"] for pt in usable],
+                             [pt["force_stderr_g"] for pt in usable])

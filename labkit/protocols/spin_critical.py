@@ -1,0 +1,178 @@
+"""``spin-critical``: rotor speed and floator spin at the moment the bound state breaks (Fig. 6.18).
+
+Procedure of the paper (Sec. 6.5): start at the lowest rotor speed that traps the floator,
+raise the speed by ``step_pct`` (10 %) per run. At each speed, for each trial: wait until a
+floator is held (the balance carrying the rotator reads its weight; on a real rig the
+operator places it), watch its spin tachometer while it spins up, and detect the drop by
+a balance step (the weight disappears), the spin tachometer losing its target (silent or
+below ``spin_loss_rpm``), or the operator pressing Enter. The pair (rotor speed, spin just
+before the drop) is registered. Trials repeat until ``consistent_n`` successive spins agree
+within ``consistency_pct`` (at most ``max_trials``).
+
+Result rows: step, target_rpm, rotor_rad_s, rotor_rpm, spin_rad_s, spin_rpm, k (= v/w - 1,
+Eq. 6.37), consistent, trials [{rotor_rad_s, spin_rad_s, cause, hold_s}], no_drop.
+Quick fit: C of Eq. 6.37, ``-k w^2 = C (1 - w/3000)``.
+"""
+
+from __future__ import annotations
+
+import math
+import select
+import statistics
+import sys
+from typing import Any
+
+from labkit.protocols.params import ParamError
+from labkit.protocols.quickfit import fit_spin_critical_c
+from labkit.protocols.runner import ProtocolDef, RunContext, Step
+from labkit.protocols.speed_sweep import reading_force_n
+from labkit.rig import G0, Rig, rad_s_to_rpm, rpm_to_rad_s
+
+
+def operator_pressed_enter() -> bool:
+    """True if a line is waiting on an interactive stdin (never blocks; False when not a TTY)."""
+    try:
+        if not sys.stdin.isatty():
+            return False
+        ready, _, _ = select.select([sys.stdin], [], [], 0)
+        if ready:
+            sys.stdin.readline()
+            return True
+    except (OSError, ValueError):
+        pass
+    return False
+
+
+class SpinCritical(ProtocolDef):
+    name = "spin-critical"
+    summary = "rotor speed and floator spin at the drop (Fig. 6.18, Eq. 6.37)"
+    fit_model = "eq6.37"
+    defaults: dict[str, Any] = {
+        "start_rpm": 6000.0,        # lowest speed that traps the floator without spin
+        "stop_rpm": 12000.0,        # last run at or below this
+        "step_pct": 10.0,           # speed increase per run
+        "max_trials": 4,
+        "consistent_n": 2,
+        "consistency_pct": 5.0,
+        "place_timeout_s": 60.0,    # waiting for a floator to be held
+        "trial_timeout_s": 90.0,    # no drop within this: register "no drop" and go on
+        "held_fraction": 0.5,       # balance above this fraction of the floator weight = held
+        "spin_loss_rpm": 60.0,      # spin tach below this (or silent) = target lost
+        "floator_mass_g": 0.0,      # 0: bodies.floator.mass from the rig file
+        "w_ref_rad_s": 3000.0,      # Eq. 6.37's reference speed
+    }
+    needs = (("rotor_motor", "motor"), ("rotor_tach", "tach"), ("floator_tach", "tach"),
+             ("balance", "balance"))
+    w_ref = 3000.0
+
+    def plan(self, rig: Rig, params: dict[str, Any]) -> list[Step]:
+        start, stop, pct = params["start_rpm"], params["stop_rpm"], params["step_pct"]
+        if start <= 0 or stop < start:
+            raise ParamError(f"spin-critical: need 0 < start_rpm <= stop_rpm, got {start:g}, {stop:g}")
+        if pct <= 0:
+            raise ParamError("--set step_pct: must be > 0")
+        if params["max_trials"] < 1 or params["consistent_n"] < 1:
+            raise ParamError("--set max_trials/consistent_n: must be >= 1")
+        mass = params["floator_mass_g"] * 1e-3
+        floator = rig.bodies.get("floator")
+        if mass <= 0 and (floator is None or not floator.mass_kg):
+            raise ParamError(f"spin-critical needs the floator's mass: bodies.floator.mass_g in {rig.path} "
+                             "or --set floator_mass_g=...")
+        self.w_ref = float(params["w_ref_rad_s"])
+        steps, rpm = [], float(start)
+        while rpm <= stop * (1 + 1e-9):
+            est = params["max_trials"] * 20.0
+            steps.append(Step(len(steps), f"{rpm:.0f} RPM", {"rotor": rpm_to_rad_s(rpm)},
+                              {"target_rpm": rpm}, est_duration_s=est))
+            rpm *= 1 + pct / 100.0
+        return steps
+
+    def _weight_n(self, ctx: RunContext) -> float:
+        grams = ctx.params["floator_mass_g"]
+        return grams * 1e-3 * G0 if grams > 0 else ctx.rig.bodies["floator"].mass_kg * G0
+
+    def setup(self, ctx: RunContext) -> None:
+        balance = ctx.devices["balance"]
+        before = balance.read_stable()
+        ctx.emit({"type": "zero", "device": "balance", "value": before.value, "unit": before.unit})
+        balance.zero()
+
+    def _wait_held(self, ctx: RunContext, threshold: float) -> None:
+        start = ctx.now()
+        while reading_force_n(ctx.read("balance")) < threshold:
+            if ctx.now() - start > ctx.params["place_timeout_s"]:
+                raise ParamError(f"no floator held within {ctx.params['place_timeout_s']:.0f} s at "
+                                 f"{rad_s_to_rpm(ctx.control.snapshots()['rotor'].target_rad_s):.0f} RPM "
+                                 "(is start_rpm high enough to trap it?)")
+            ctx.sleep(ctx.control.period_s)
+
+    def _trial(self, ctx: RunContext, threshold: float) -> dict[str, Any] | None:
+        """Watch one held floator until it drops; None if it never does."""
+        p = ctx.params
+        self._wait_held(ctx, threshold)
+        held_at = last_held = ctx.now()
+        loss = rpm_to_rad_s(p["spin_loss_rpm"])
+        spin_seen = False
+        while True:
+            cause = None
+            reading = ctx.read("balance")
+            if reading_force_n(reading) >= threshold:
+                last_held = reading.t
+            else:
+                cause = "balance"
+            spin = ctx.devices["floator_tach"].latest()
+            if spin is not None and spin.t > held_at and spin.value > loss:
+                spin_seen = True
+            if cause is None and spin_seen:
+                silent = spin is None or ctx.now() - spin.t > ctx.rig.control.tach_timeout_s
+                if silent or spin.value < loss:
+                    cause = "spin_loss"
+            if cause is None and not ctx.clock.is_virtual and operator_pressed_enter():
+                cause = "key"
+            if cause is not None:
+                before = [r for r in ctx.tach_readings("floator_tach", held_at) if r.t <= last_held]
+                rotor = [r.value for r in ctx.tach_readings("rotor_tach", held_at) if r.t <= last_held]
+                if not before or not rotor:
+                    return None
+                return {"rotor_rad_s": statistics.fmean(rotor), "spin_rad_s": before[-1].value,
+                        "cause": cause, "hold_s": last_held - held_at}
+            if ctx.now() - held_at > p["trial_timeout_s"]:
+                return None
+            ctx.sleep(ctx.control.period_s)
+
+    def run_step(self, ctx: RunContext, step: Step) -> dict[str, Any]:
+        p = ctx.params
+        ctx.set(rotor=step.targets_rad_s["rotor"])
+        ctx.settle()
+        threshold = p["held_fraction"] * self._weight_n(ctx)
+        trials: list[dict[str, Any]] = []
+        consistent = False
+        for trial_no in range(int(p["max_trials"])):
+            ctx.checkpoint()
+            trial = self._trial(ctx, threshold)
+            if trial is None:
+                break
+            trials.append(trial)
+            ctx.emit({"type": "drop", "index": step.index, "trial": trial_no, **trial})
+            recent = [t["spin_rad_s"] for t in trials[-int(p["consistent_n"]):]]
+            if len(recent) >= p["consistent_n"]:
+                spread = (max(recent) - min(recent)) / max(abs(statistics.fmean(recent)), 1e-9)
+                if spread * 100.0 <= p["consistency_pct"]:
+                    consistent = True
+                    break
+        row: dict[str, Any] = {"target_rpm": step.data["target_rpm"], "trials": trials,
+                               "consistent": consistent, "no_drop": not trials}
+        if not trials:
+            row.update(rotor_rad_s=None, rotor_rpm=None, spin_rad_s=None, spin_rpm=None, k=None)
+            return row
+        use = trials[-int(p["consistent_n"]):] if consistent else trials
+        w = statistics.fmean(t["rotor_rad_s"] for t in use)
+        v = statistics.median(t["spin_rad_s"] for t in use)
+        row.update(rotor_rad_s=w, rotor_rpm=rad_s_to_rpm(w), spin_rad_s=v, spin_rpm=rad_s_to_rpm(v),
+                   k=v / w - 1.0)
+        return row
+
+    def fit(self, points: list[dict[str, Any]]) -> dict[str, Any]:
+        pairs = [(pt["rotor_rad_s"], pt["spin_rad_s"]) for pt in points
+                 if pt.get("rotor_rad_s") is not None and math.isfinite(pt["rotor_rad_s"])]
+        return fit_spin_critical_c([w for w, _ in pairs], [v for _, v in pairs], self.w_ref)

@@ -1,0 +1,54 @@
+"""Readings files as tables: JSONL -> Parquet (pyarrow, which rerun-sdk brings) and CSV."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+COLUMNS = ("t", "quantity", "value", "unit", "stable", "overload")
+
+
+def read_jsonl(path: Path) -> list[dict]:
+    """Lines of a JSONL file; a torn last line (crash mid-write) is skipped."""
+    rows = []
+    with open(path, encoding="utf-8") as f:
+        for line in f:
+            line = line.strip()
+            if not line:
+                continue
+            try:
+                rows.append(json.loads(line))
+            except json.JSONDecodeError:
+                continue  # only the last line of a killed run can be torn
+    return rows
+
+
+def readings_to_parquet(src: Path, dest: Path) -> None:
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    rows = read_jsonl(src)
+    table = pa.table({c: [r.get(c) for r in rows] for c in COLUMNS})
+    pq.write_table(table, dest)
+
+
+def readings_to_csv(src: Path, dest: Path) -> int:
+    """Write ``src`` (readings JSONL) as CSV; returns the number of rows."""
+    rows = read_jsonl(src)
+    with open(dest, "w", newline="", encoding="utf-8") as f:
+        writer = csv.writer(f)
+        writer.writerow(COLUMNS)
+        for r in rows:
+            writer.writerow([r.get(c) for c in COLUMNS])
+    return len(rows)
+
+
+def export_csv(session: Path) -> list[Path]:
+    """Export every device's readings of a session to ``readings/ROLE.csv``."""
+    out = []
+    for src in sorted((session / "readings").glob("*.jsonl")):
+        dest = src.with_suffix(".csv")
+        readings_to_csv(src, dest)
+        out.append(dest)
+    return out

@@ -1,0 +1,213 @@
+"""A run directory, written append-only as the run goes, readable after any crash.
+
+Layout (documented in docs/protocols.md)::
+
+    SESSION/
+      run.json            metadata: protocol, params, rig name, versions, git commit, clock,
+                          start/end, notes, status and reason, resumed_from
+      rig.toml            the rig file exactly as read
+      events.jsonl        one event per line (setpoints, settles, points, drops, interlocks...)
+      readings/ROLE.jsonl one reading per line per device: t, quantity, value, unit, stable, overload
+      readings/ROLE.parquet  the same as a table, written at the end (pyarrow)
+      cassettes/ROLE.jsonl   every serial byte of that port (record://)
+      results.json        {"protocol", "points", "fit"} at the end
+
+Lines are flushed to the OS at least once a second (events at once), so SIGKILL loses at
+most the last second. ``run.json`` is replaced atomically (write + rename) so it is never
+half-written; a session killed mid-run keeps ``"status": "running"``.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+from importlib import metadata
+from pathlib import Path
+from typing import Any, TextIO
+
+from labkit.errors import LabkitError
+
+FLUSH_INTERVAL_S = 0.5  # wall-clock seconds between flushes of reading files (< 1 s)
+
+
+class SessionError(LabkitError):
+    """A session directory cannot be created, written or read. Names the path."""
+
+
+def _utc_now() -> str:
+    return _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
+
+
+def _versions() -> dict[str, str]:
+    out = {"python": platform.python_version()}
+    for dist in ("labkit", "numpy", "scipy", "pyserial", "rerun-sdk", "pyarrow"):
+        try:
+            out[dist] = metadata.version(dist)
+        except metadata.PackageNotFoundError:
+            pass
+    return out
+
+
+def _git_commit() -> str | None:
+    here = Path(__file__).resolve().parent
+    try:
+        out = subprocess.run(["git", "-C", str(here), "rev-parse", "HEAD"], capture_output=True,
+                             text=True, timeout=5, check=False)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return out.stdout.strip() or None if out.returncode == 0 else None
+
+
+def _json_default(obj: Any) -> Any:
+    if isinstance(obj, bytes):
+        return obj.decode("latin-1")
+    if isinstance(obj, (set, frozenset)):
+        return sorted(obj)
+    if hasattr(obj, "item"):  # numpy scalars
+        return obj.item()
+    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
+
+
+def dumps(obj: Any) -> str:
+    return json.dumps(obj, default=_json_default, separators=(",", ":"))
+
+
+def write_json_atomic(path: Path, data: Any) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(data, default=_json_default, indent=2) + "\n", encoding="utf-8")
+    os.replace(tmp, path)
+
+
+def new_session_dir(root: str | Path, protocol: str) -> Path:
+    """``root/YYYYmmdd-HHMMSS-protocol`` (``-2``, ``-3``... if taken). Raises SessionError."""
+    root = Path(root)
+    stamp = _dt.datetime.now(_dt.UTC).strftime("%Y%m%d-%H%M%S")
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+        for n in range(1, 1000):
+            path = root / (f"{stamp}-{protocol}" + (f"-{n}" if n > 1 else ""))
+            try:
+                path.mkdir()
+                return path
+            except FileExistsError:
+                continue
+    except OSError as exc:
+        raise SessionError(f"{root}: cannot create a session directory: {exc.strerror or exc}") from None
+    raise SessionError(f"{root}: too many sessions with the same name")
+
+
+def check_writable(root: str | Path) -> None:
+    """Fail early (before any motor turns) when sessions cannot be written under ``root``."""
+    root = Path(root)
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+        probe = root / f".labkit-write-test-{os.getpid()}"
+        probe.write_text("")
+        probe.unlink()
+    except OSError as exc:
+        raise SessionError(f"{root}: session directory is not writable: {exc.strerror or exc}") from None
+
+
+class Session:
+    """Writer of one run directory; also a sink (``on_event``) for the runner's events."""
+
+    def __init__(self, path: Path, meta: dict[str, Any]) -> None:
+        self.path = path
+        self.meta = meta
+        self.cassette_dir = path / "cassettes"
+        self.readings_dir = path / "readings"
+        self.cassette_dir.mkdir(exist_ok=True)
+        self.readings_dir.mkdir(exist_ok=True)
+        self._events: TextIO = open(path / "events.jsonl", "a", encoding="utf-8")  # noqa: SIM115
+        self._readings: dict[str, TextIO] = {}
+        self._last_flush = time.monotonic()
+        self.closed = False
+
+    # ---- creation -------------------------------------------------------------------------
+    @classmethod
+    def create(cls, root: str | Path, *, protocol: str, params: dict[str, Any], rig_name: str,
+               rig_text: str, clock: str, notes: str = "", resumed_from: str | None = None,
+               argv: list[str] | None = None) -> Session:
+        path = new_session_dir(root, protocol)
+        meta = {
+            "schema": 1,
+            "protocol": protocol,
+            "params": params,
+            "rig": rig_name,
+            "rig_file": "rig.toml",
+            "clock": clock,
+            "started": _utc_now(),
+            "ended": None,
+            "status": "running",
+            "reason": None,
+            "notes": notes,
+            "resumed_from": resumed_from,
+            "argv": argv if argv is not None else sys.argv[1:],
+            "versions": _versions(),
+            "git_commit": _git_commit(),
+            "host": platform.node(),
+        }
+        try:
+            (path / "rig.toml").write_text(rig_text, encoding="utf-8")
+            write_json_atomic(path / "run.json", meta)
+            return cls(path, meta)
+        except OSError as exc:
+            raise SessionError(f"{path}: cannot write: {exc.strerror or exc}") from None
+
+    # ---- writing --------------------------------------------------------------------------
+    def on_event(self, event: dict[str, Any]) -> None:
+        if self.closed:
+            return
+        if event.get("type") == "reading":
+            role = str(event.get("device", "unknown"))
+            f = self._readings.get(role)
+            if f is None:
+                f = self._readings[role] = open(self.readings_dir / f"{role}.jsonl", "a",  # noqa: SIM115
+                                                encoding="utf-8")
+            f.write(dumps({k: v for k, v in event.items() if k not in ("type", "device")}) + "\n")
+            self._maybe_flush()
+        else:
+            self._events.write(dumps(event) + "\n")
+            self.flush()
+
+    def _maybe_flush(self) -> None:
+        if time.monotonic() - self._last_flush >= FLUSH_INTERVAL_S:
+            self.flush()
+
+    def flush(self) -> None:
+        self._events.flush()
+        for f in self._readings.values():
+            f.flush()
+        self._last_flush = time.monotonic()
+
+    def write_results(self, results: dict[str, Any]) -> None:
+        write_json_atomic(self.path / "results.json", results)
+
+    def update_meta(self, **changes: Any) -> None:
+        self.meta.update(changes)
+        write_json_atomic(self.path / "run.json", self.meta)
+
+    def finish(self, status: str, reason: str | None = None) -> None:
+        """Close files, export Parquet, and record the exit status (never raises)."""
+        if self.closed:
+            return
+        try:
+            self.flush()
+        finally:
+            self._events.close()
+            for f in self._readings.values():
+                f.close()
+            self.closed = True
+        try:
+            from labkit.session.export import readings_to_parquet
+
+            for role_file in sorted(self.readings_dir.glob("*.jsonl")):
+                readings_to_parquet(role_file, role_file.with_suffix(".parquet"))
+        except Exception:  # noqa: BLE001 - the JSONL files stay the primary record
+            pass
+        self.update_meta(ended=_utc_now(), status=status, reason=reason)
