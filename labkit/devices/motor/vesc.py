@@ -111,13 +111,27 @@ class VescFramer:
         while self.buffer:
             payload, used = parse_packet(self.buffer)
             if used == 0:
-                break
+                # Waiting for the rest of a packet. If a complete valid packet already
+                # starts later, the first byte was a false start whose length field lies
+                # (the firmware recovers from that with its receive timeout).
+                later = self._later_packet_start()
+                if later is None:
+                    break
+                del self.buffer[:later]
+                self.dropped += later
+                continue
             del self.buffer[:used]
             if payload is None:
                 self.dropped += 1
             else:
                 out.append(payload)
         return out
+
+    def _later_packet_start(self) -> int | None:
+        for i in range(1, len(self.buffer)):
+            if self.buffer[i] in (2, 3) and parse_packet(self.buffer[i:])[0] is not None:
+                return i
+        return None
 
 
 def _int32(value: float) -> bytes:
