@@ -271,7 +271,7 @@ class MtSicsEmulator(BalanceEmulator):
     model = "XS205 DualRange"
 
     def banner(self, t: float) -> None:
-        self._queue(f'I4 A "{self.serial_number}"\r\n'.encode("ascii"), t + 0.05)
+        self._queue(f'I4 A "{self.serial_number}"\r\n'.encode("ascii"), t)
 
     def _weight_line(self, cid: str, status: str, value: float | None) -> bytes:
         if value is None:

@@ -18,6 +18,7 @@ import serial
 
 from labkit.devices.stream import LineFramer
 from labkit.errors import DeviceDisconnected, DeviceTimeout
+from labkit.io.calls import port_call
 from labkit.io.clock import Clock
 
 T = TypeVar("T")
@@ -162,6 +163,11 @@ class LineLink:
         arrived the message says to check baud rate/parity.
         """
         label = command if command is not None else "listen"
+        with port_call(label):
+            return self._exchange(label, command, accept, timeout, retry_after)
+
+    def _exchange(self, label: str, command: str | None, accept: Callable[[bytes], T | None],
+                  timeout: float, retry_after: float | None) -> tuple[float, bytes, T]:
         if command is not None:
             self.discard_stale(label)
             self.send(command)

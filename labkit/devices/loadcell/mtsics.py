@@ -8,6 +8,7 @@ load carry no number; ``ES``/``ET``/``EL`` are general errors.
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 from typing import Any
@@ -110,8 +111,11 @@ def parse_weight(line: bytes) -> MtWeight:
         unit = reply.fields[1]
         if not unit.isalnum() and unit != "%":
             raise FrameError(f"bad unit in {line!r}")
+        value = float(reply.fields[0])
+        if not math.isfinite(value):
+            raise FrameError(f"weight out of range: {line!r}")
         status = "S" if reply.status == "A" else reply.status
-        return MtWeight(reply.command, status, float(reply.fields[0]), unit)
+        return MtWeight(reply.command, status, value, unit)
     if reply.status in ("+", "-", "I", "L") and not reply.fields:
         return MtWeight(reply.command, reply.status, None, None)
     raise FrameError(f"not a weight reply: {line!r}")
