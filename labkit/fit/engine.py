@@ -219,12 +219,12 @@ def _estimate(par: Param, theta, cov, tq, warns: list[str], model: str) -> Param
             raise FitError(f"{model}: {par.name} = {value:.4g} should be positive")
         g = _gradient(lambda t: math.log(par.value_of(t)), theta)
         se_log = math.sqrt(max(float(g @ cov @ g), 0.0))
-        est = ParamEstimate(value, value * se_log,
-                            (value * math.exp(-tq * se_log), value * math.exp(tq * se_log)),
+        half = min(tq * se_log, 700.0)  # beyond e^700 the interval is (0, inf) in practice
+        est = ParamEstimate(value, value * se_log, (value * math.exp(-half), value * math.exp(half)),
                             par.unit, derived=par.derived)
         if se_log > 1.0:
             warns.append(f"{par.name} not identifiable: known only to a factor "
-                         f"{math.exp(se_log):.3g} (1 sigma); widen the range of the data")
+                         f"{math.exp(min(se_log, 700.0)):.3g} (1 sigma); widen the range of the data")
         return est
     g = _gradient(par.value_of, theta)
     se = math.sqrt(max(float(g @ cov @ g), 0.0))

@@ -16,7 +16,13 @@ from __future__ import annotations
 import numpy as np
 
 from labkit.errors import FitError
-from labkit.fit.checks import require_finite, require_positive, require_sigma, require_spread
+from labkit.fit.checks import (
+    require_finite,
+    require_points,
+    require_positive,
+    require_sigma,
+    require_spread,
+)
 from labkit.fit.engine import Param, solve
 from labkit.fit.result import FitResult
 
@@ -35,6 +41,7 @@ def fit_cone_angle(omega, phi, *, inertia: float | None = None, spin=None, sigma
     """Fit tau_C and tau_S (or tau_S fixed) given the floator's moment of inertia ``inertia``."""
     omega = np.abs(require_finite(MODEL, x_name, omega))
     phi = require_finite(MODEL, y_name, phi)
+    require_points(MODEL, len(omega), 1 if tau_S is not None else 2)
     require_positive(MODEL, x_name, omega, "speeds must be non-zero")
     require_spread(MODEL, x_name, omega)
     sigma = require_sigma(MODEL, "sigma", sigma)

@@ -18,7 +18,13 @@ import math
 import numpy as np
 
 from labkit.errors import FitError
-from labkit.fit.checks import require_finite, require_positive, require_sigma, require_spread
+from labkit.fit.checks import (
+    require_finite,
+    require_points,
+    require_positive,
+    require_sigma,
+    require_spread,
+)
 from labkit.fit.engine import Param, solve
 from labkit.fit.models.power_law import fit_power_law
 from labkit.fit.result import FitResult
@@ -50,6 +56,7 @@ def fit_mbs_force(r, force, *, sigma=None, fixed: dict[str, float] | None = None
                        "(Eq. 5.85 has a, b, c, d)")
     r = require_finite(FORCE_MODEL, x_name, r)
     force = require_finite(FORCE_MODEL, y_name, force)
+    require_points(FORCE_MODEL, len(r), 4 - len(fixed))
     require_positive(FORCE_MODEL, x_name, r, "distances between magnet centres")
     require_spread(FORCE_MODEL, x_name, r)
     require_spread(FORCE_MODEL, y_name, force)

@@ -17,7 +17,13 @@ import math
 import numpy as np
 
 from labkit.errors import FitError
-from labkit.fit.checks import require_finite, require_positive, require_sigma, require_spread
+from labkit.fit.checks import (
+    require_finite,
+    require_points,
+    require_positive,
+    require_sigma,
+    require_spread,
+)
 from labkit.fit.engine import Param, solve
 from labkit.fit.result import FitResult
 
@@ -38,6 +44,7 @@ def fit_pfr_force(omega, force, *, sigma=None, inertia: float | None = None,
     """Fit F(omega) with K and tau_S free (or ``tau_S`` fixed). ``inertia`` in kg m^2."""
     omega = np.abs(require_finite(MODEL, x_name, omega))
     force = require_finite(MODEL, y_name, force)
+    require_points(MODEL, len(omega), 1 if tau_S is not None else 2)
     require_positive(MODEL, x_name, omega, "speeds must be non-zero")
     require_positive(MODEL, y_name, force, "the PFR force is repulsive and fitted in log space")
     require_spread(MODEL, x_name, omega)

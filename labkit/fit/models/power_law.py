@@ -11,7 +11,13 @@ import math
 
 import numpy as np
 
-from labkit.fit.checks import require_finite, require_positive, require_sigma, require_spread
+from labkit.fit.checks import (
+    require_finite,
+    require_points,
+    require_positive,
+    require_sigma,
+    require_spread,
+)
 from labkit.fit.engine import Param, solve
 from labkit.fit.result import FitResult
 
@@ -28,6 +34,7 @@ def fit_power_law(x, y, *, sigma=None, x_name: str = "x", y_name: str = "y",
     """Fit y = a x^b; ``sigma`` (absolute, in y units) weights the points relative to each other."""
     x = require_finite(model, x_name, x)
     y = require_finite(model, y_name, y)
+    require_points(model, len(x), 2)
     require_positive(model, x_name, x, "a power law is fitted in log space")
     require_positive(model, y_name, y, "a power law is fitted in log space; negative or zero "
                      "forces mean a tare or sign problem")
@@ -46,7 +53,7 @@ def fit_power_law(x, y, *, sigma=None, x_name: str = "x", y_name: str = "y",
         Param(na, lambda t: math.exp(t[0] - t[1] * lx0), positive=True),
         Param(nb, lambda t: float(t[1]), zero_ok=True),
     ]
-    return solve(
+    result = solve(
         model=model,
         model_rs=lambda t: t[0] + t[1] * u,
         y_rs=ly,
@@ -59,3 +66,18 @@ def fit_power_law(x, y, *, sigma=None, x_name: str = "x", y_name: str = "y",
         weights=weights,
         x_name=x_name, y_name=y_name,
     )
+    return _check_exponent(result, nb, float(np.ptp(lx)))
+
+
+EXPONENT_HALF_WIDTH = 0.5   # a 95 % interval wider than +-0.5 does not fix an exponent
+
+
+def _check_exponent(result: FitResult, name: str, log_span: float) -> FitResult:
+    from dataclasses import replace
+    p = result.params[name]
+    half = (p.ci95[1] - p.ci95[0]) / 2
+    if half <= EXPONENT_HALF_WIDTH or any(name + " not identifiable" in w for w in result.warnings):
+        return result
+    return replace(result, warnings=(*result.warnings,
+                   f"exponent {name} not identifiable: 95 % interval +-{half:.2g}; x spans only a factor "
+                   f"{math.exp(log_span):.3g} (the paper's Fig. 5.25 spans ~3): widen the range"))

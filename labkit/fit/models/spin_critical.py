@@ -17,7 +17,13 @@ import math
 import numpy as np
 
 from labkit.errors import FitError
-from labkit.fit.checks import require_finite, require_positive, require_sigma, require_spread
+from labkit.fit.checks import (
+    require_finite,
+    require_points,
+    require_positive,
+    require_sigma,
+    require_spread,
+)
 from labkit.fit.engine import Param, solve
 from labkit.fit.result import FitResult
 
@@ -39,6 +45,7 @@ def fit_spin_critical(omega, spin, *, omega_c: float | str = PAPER_OMEGA_C, sigm
     """Fit C with ``omega_c`` fixed (a number, ``math.inf`` for Eq. 5.69) or ``"fit"``."""
     omega = require_finite(MODEL, x_name, omega)
     spin = require_finite(MODEL, y_name, spin)
+    require_points(MODEL, len(omega), 2 if omega_c == "fit" else 1)
     require_positive(MODEL, x_name, omega, "rotor speeds of the pairs")
     require_spread(MODEL, x_name, omega)
     sigma = require_sigma(MODEL, "sigma", sigma)
