@@ -139,6 +139,7 @@ class ControlSettings:
     settle_hold_s: float = 1.0
     settle_timeout_s: float = 30.0
     tach_timeout_s: float = 0.5           # tachometer silent this long -> interlock
+    status_period_s: float = 0.25         # how often controller error flags are read
     loops: tuple[LoopConfig, ...] = ()
 
 
@@ -309,6 +310,7 @@ def _control(file: str, table: Any, devices: dict[str, DeviceConfig]) -> Control
         settle_hold_s=sec.quantity("settle_hold", "s", default=d.settle_hold_s, allow_zero=True),
         settle_timeout_s=sec.quantity("settle_timeout", "s", default=d.settle_timeout_s),
         tach_timeout_s=sec.quantity("tach_timeout", "s", default=d.tach_timeout_s),
+        status_period_s=sec.quantity("status_period", "s", default=d.status_period_s),
     )
     for gain in ("kp", "ki"):
         v = sec.raw(gain, (int, float), default=getattr(d, gain))

@@ -6,6 +6,7 @@ real clock, in-line on a virtual one). Every control period each loop
 1. checks its interlocks: tachometer silent (no reading for ``tach_timeout_s``) or
    disconnected, implausible reading (not finite, negative, above twice the limit),
    over-speed (above ``max_speed*(1+overspeed_margin)``), controller error flags;
+   (read every ``status_period_s``; the trip follows in the tick that reads them);
 2. moves its ramped setpoint toward the target at the rig's ``max_ramp``;
 3. commands feed-forward + PI duty (:func:`labkit.control.pi.pi_step`);
 4. updates its settle detector.
@@ -51,7 +52,7 @@ class SpeedLoop:
     def __init__(self, name: str, motor: Any, tach: Any, *, period_s: float, gains: PIGains,
                  max_speed_rad_s: float, max_ramp_rad_s2: float, overspeed_margin: float,
                  settle_tolerance_rad_s: float, settle_hold_s: float, tach_timeout_s: float,
-                 check_status: bool = True) -> None:
+                 status_period_s: float = 0.0) -> None:
         self.name, self.motor, self.tach = name, motor, tach
         self.period_s = period_s
         self.gains = gains
@@ -59,7 +60,8 @@ class SpeedLoop:
         self.max_ramp = max_ramp_rad_s2
         self.overspeed = max_speed_rad_s * (1.0 + overspeed_margin)
         self.tach_timeout = tach_timeout_s
-        self.check_status = check_status
+        self.status_period = status_period_s
+        self.last_status_t: float | None = None
         self.state = PIState()
         self.settle = SettleDetector(settle_tolerance_rad_s, settle_hold_s)
         self.target = 0.0
@@ -109,7 +111,9 @@ class SpeedLoop:
         dt = self.period_s if self.last_t is None else max(0.0, t - self.last_t)
         self.last_t = t
         measured = self._measure(t)
-        if self.check_status and self.enabled:
+        due = self.last_status_t is None or t - self.last_status_t >= self.status_period - 1e-9
+        if self.enabled and due:
+            self.last_status_t = t
             errors = self.motor.status().errors
             if errors:
                 raise Tripped(f"motor controller {self.motor.name} reports errors: "
@@ -250,5 +254,5 @@ def build_speed_control(open_rig: Any, clock: Any, emit: Emit | None = None,
             period_s=c.period_s, gains=gains, max_speed_rad_s=lim.max_speed_rad_s,
             max_ramp_rad_s2=lim.max_ramp_rad_s2, overspeed_margin=lim.overspeed_margin,
             settle_tolerance_rad_s=c.settle_tolerance_rad_s, settle_hold_s=c.settle_hold_s,
-            tach_timeout_s=c.tach_timeout_s))
+            tach_timeout_s=c.tach_timeout_s, status_period_s=c.status_period_s))
     return SpeedControl(clock, built, list(open_rig.motors().values()), c.period_s, emit)

@@ -16,6 +16,7 @@ parameters, then runs each with plain Python using the :class:`RunContext` verbs
 
 from __future__ import annotations
 
+import math
 import signal
 import threading
 from dataclasses import dataclass, field
@@ -28,6 +29,17 @@ from labkit.protocols.events import EventBus, Sink
 from labkit.rig import Rig, open_rig, rad_s_to_rpm
 
 CONTROL_EVENT_INTERVAL_S = 0.25
+
+
+def normalise(value: Any) -> Any:
+    """JSON-ready copy: NaN/inf -> None, tuples -> lists (what results.json reads back as)."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {str(k): normalise(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [normalise(v) for v in value]
+    return value
 
 
 class StopRequested(LabkitError):
@@ -313,7 +325,7 @@ class Runner:
                                "n_steps": len(self.steps), "label": step.label,
                                "targets_rad_s": step.targets_rad_s, "eta_s": step.est_duration_s})
                 point = self.protocol.run_step(ctx, step)
-                point = {"step": step.index, **point}
+                point = normalise({"step": step.index, **point})
                 new_points.append(point)
                 self.bus.emit({"type": "point", "t": self.clock.now(), "index": step.index, "point": point})
                 self.bus.emit({"type": "checkpoint", "t": self.clock.now(), "index": step.index})
@@ -335,7 +347,7 @@ class Runner:
             if previous_handler is not None:
                 signal.signal(signal.SIGINT, previous_handler)
         points = self.previous_points + new_points
-        results = {"protocol": self.protocol.name, "points": points, "fit": self._fit(points)}
+        results = normalise({"protocol": self.protocol.name, "points": points, "fit": self._fit(points)})
         self.bus.emit({"type": "results", "t": self.clock.now(), "results": results})
         steps_done = len(self.done_steps) + len(new_points)
         self.bus.emit({"type": "stop", "t": self.clock.now(), "status": status, "reason": reason,

@@ -123,6 +123,7 @@ class SpeedSweep(ProtocolDef):
         }
 
     def fit(self, points: list[dict[str, Any]]) -> dict[str, Any]:
-        usable = [pt for pt in points if math.isfinite(pt["speed_rpm"]) and pt["force_g"] > 0]
-        return fit_power_law([pt["speed_rpm"] for pt in usable], [pt["force_g"] for pt in usable],
-                             [pt["force_stderr_g"] for pt in usable])
+        usable = [pt for pt in points
+                  if pt.get("speed_rpm") is not None and pt.get("force_g") is not None and pt["force_g"] > 0]
+        sigma = [pt["force_stderr_g"] if pt.get("force_stderr_g") is not None else math.nan for pt in usable]
+        return fit_power_law([pt["speed_rpm"] for pt in usable], [pt["force_g"] for pt in usable], sigma)

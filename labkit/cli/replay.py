@@ -1,0 +1,52 @@
+"""``labkit replay SESSION``: re-run a session's protocol against its own serial cassettes.
+
+Every port is served from ``SESSION/cassettes/ROLE.jsonl`` (strict: what the drivers send
+must match the recording byte for byte), on a virtual clock, so a recorded run replays in
+seconds. The results are compared with the session's ``results.json``; any difference is
+printed and the exit status is 1. ``--export-csv`` instead writes ``readings/*.csv``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from labkit.protocols.launch import replay_session
+from labkit.session import export_csv, load_session
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("replay", help="re-run a session against its cassettes and check its results",
+                       description=__doc__.split("\n\n")[1] if __doc__ else None)
+    p.add_argument("session", help="session directory")
+    p.add_argument("--export-csv", action="store_true", help="only export readings/*.jsonl to CSV")
+    try:
+        from labkit.stream import add_rerun_argument
+
+        add_rerun_argument(p)
+    except ImportError:  # pragma: no cover
+        p.add_argument("--rerun", default=None, metavar="SPEC")
+    p.set_defaults(func=main)
+
+
+def main(args: argparse.Namespace) -> int:
+    if args.export_csv:
+        record = load_session(args.session)
+        for path in export_csv(record.path):
+            print(path)
+        return 0
+    # RERUN HOOK: args.rerun (a RerunSpec) is stored for the stream engineer's run sink
+    result = replay_session(Path(args.session))
+    out = result.outcome
+    if out.status != "completed" and out.error is not None and result.recorded is None:
+        print(f"labkit replay: {out.status}: {out.reason}", file=sys.stderr)
+        return 2
+    if result.identical:
+        n = len((out.results or {}).get("points", []))
+        print(f"replayed {args.session}: {n} points, results identical to results.json")
+        return 0
+    print(f"labkit replay: results differ from {args.session}/results.json:", file=sys.stderr)
+    for line in result.differences[:20]:
+        print(f"  {line}", file=sys.stderr)
+    return 1

@@ -1,0 +1,113 @@
+"""``labkit run RIG PROTOCOL``: run a measurement protocol into a session directory.
+
+Checks everything first (rig file, protocol, parameters, the rig's speed limit, that the
+session folder is writable) and prints one line and exits 2 on a problem, before any motor
+turns. ``--dry-run`` prints the plan and stops. Ctrl-C once: motors to zero, the run stops
+at the next checkpoint and can be resumed; twice: safe state at once.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+from labkit.protocols import PROTOCOLS, ProgressSink
+from labkit.protocols.launch import execute, prepare_run
+
+
+def add_common(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--sessions", default="sessions", metavar="DIR",
+                   help="folder for session directories (default: ./sessions)")
+    p.add_argument("--clock", choices=("auto", "real", "virtual"), default="auto",
+                   help="auto (default): virtual when every device is emulated (sim://), else real")
+    p.add_argument("--notes", default="", help="operator notes stored in run.json")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    try:
+        from labkit.stream import add_rerun_argument
+
+        add_rerun_argument(p)
+    except ImportError:  # pragma: no cover - the stream package is part of labkit
+        p.add_argument("--rerun", default=None, metavar="SPEC", help="spawn | connect[:ADDR] | save:FILE")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("run", help="run a measurement protocol on a rig (speed-sweep, spin-critical)",
+                       description=__doc__.split("\n\n")[1] if __doc__ else None)
+    p.add_argument("rig", nargs="?", help="rig file (rigs/*.toml) or a bundled rig name")
+    p.add_argument("protocol", nargs="?", help=f"one of: {', '.join(sorted(PROTOCOLS))}")
+    p.add_argument("--set", dest="sets", action="append", default=[], metavar="KEY=VALUE",
+                   help="protocol parameter, e.g. speeds_rpm=6000:20000:1000 (repeatable)")
+    p.add_argument("--dry-run", action="store_true",
+                   help="print the planned steps and check limits; no motion")
+    p.add_argument("--resume", metavar="SESSION", help="continue the remaining steps of SESSION as a new run")
+    add_common(p)
+    p.set_defaults(func=main)
+
+
+def sinks_for(args: argparse.Namespace) -> list[Any]:
+    sinks: list[Any] = []
+    if not args.no_progress:
+        sinks.append(ProgressSink())
+    return sinks
+
+
+def attach_rerun(args: argparse.Namespace, runner: Any, session_path: Any) -> Any:
+    """RERUN HOOK: the stream engineer wires a rerun sink here (labkit.stream).
+
+    ``args.rerun`` is a parsed ``RerunSpec`` (or None). When ``labkit.stream`` offers
+    ``run_sink(spec, session_path) -> Sink`` it is added to the run's event bus; until
+    then the spec is stored in run.json and nothing is streamed.
+    """
+    spec = getattr(args, "rerun", None)
+    if spec is None:
+        return None
+    try:
+        from labkit.stream import run_sink  # type: ignore[attr-defined]
+    except ImportError:
+        print("labkit: rerun streaming of runs is not wired yet; --rerun stored in run.json", file=sys.stderr)
+        return None
+    sink = run_sink(spec, session_path)
+    runner.bus.add(sink)
+    return sink
+
+
+def report(outcome: Any) -> int:
+    where = f" (session {outcome.session})" if outcome.session else ""
+    fit = (outcome.results or {}).get("fit") or {}
+    params = ", ".join(f"{k} = {v['value']:.4g} +/- {v['stderr']:.2g}"
+                       for k, v in fit.get("params", {}).items() if v.get("stderr") is not None)
+    if outcome.status == "completed":
+        print(f"completed {len((outcome.results or {}).get('points', []))} points{where}")
+        if params:
+            print(f"quick fit ({fit.get('model')}): {params}")
+        return 0
+    print(f"labkit run: {outcome.status}: {outcome.reason}{where}", file=sys.stderr)
+    if outcome.session:
+        print(f"resume with: labkit run --resume {outcome.session}", file=sys.stderr)
+    return 130 if outcome.status == "interrupted" else 2
+
+
+def main(args: argparse.Namespace) -> int:
+    prep = prepare_run(args.rig, args.protocol, args.sets, clock=args.clock,
+                       session_root=None if args.dry_run else args.sessions, resume=args.resume,
+                       sinks=[] if args.dry_run else sinks_for(args))
+    if args.dry_run:
+        print(prep.runner.dry_run())
+        return 0
+    sinks: list[Any] = []
+
+    def on_session(runner: Any, session: Any) -> None:
+        session.update_meta(rerun=str(args.rerun) if args.rerun else None)
+        sink = attach_rerun(args, runner, session.path)
+        if sink is not None:
+            sinks.append(sink)
+
+    try:
+        outcome = execute(prep, args.sessions, notes=args.notes, on_session=on_session)
+    finally:
+        for sink in sinks:
+            close = getattr(sink, "close", None)
+            if callable(close):
+                close()
+    return report(outcome)

@@ -1,0 +1,178 @@
+"""Everything ``labkit run``, ``labkit demo`` and ``labkit replay`` share, as plain functions.
+
+* :func:`prepare_run` resolves rig, protocol and parameters (or a session to resume),
+  checks the plan against the rig's limits and that sessions can be written: every bad
+  input fails here, before any port is opened or any motor turns.
+* :func:`execute` runs a prepared plan into a new session directory.
+* :func:`replay_session` re-runs a session's protocol against its own cassettes on a
+  virtual clock and compares the results with the recorded ``results.json``.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from labkit.errors import LabkitError
+from labkit.io.clock import Clock, RealClock, VirtualClock, use_clock
+from labkit.protocols import get_protocol
+from labkit.protocols.events import Sink
+from labkit.protocols.params import resolve_params
+from labkit.protocols.runner import ProtocolDef, Runner, RunOutcome, normalise
+from labkit.rig import Rig, load_rig
+from labkit.session import Session, SessionRecord, check_writable, load_session
+
+
+@dataclass
+class PreparedRun:
+    rig: Rig
+    protocol: ProtocolDef
+    params: dict[str, Any]
+    clock: Clock
+    runner: Runner
+    resumed_from: SessionRecord | None = None
+    carried_points: list[dict[str, Any]] = field(default_factory=list)
+
+
+def all_simulated(rig: Rig) -> bool:
+    return all(d.port.startswith("sim://") for d in rig.devices.values())
+
+
+def make_clock(kind: str, rig: Rig) -> Clock:
+    """``auto``: virtual when every device is emulated (sim://), else real."""
+    if kind == "virtual" or (kind == "auto" and all_simulated(rig)):
+        return VirtualClock()
+    if kind in ("real", "auto"):
+        return RealClock()
+    raise LabkitError(f"--clock {kind!r}: expected auto, real or virtual")
+
+
+def fresh_emulators(rig: Rig) -> None:
+    """A new run on emulators starts from fresh plants (shared plants are per process)."""
+    if any(d.port.startswith("sim://") for d in rig.devices.values()):
+        from labkit.emulators.plant import reset_plants
+
+        reset_plants()
+
+
+def carried_points(record: SessionRecord) -> list[dict[str, Any]]:
+    """All result rows a session holds: those it carried from earlier runs plus its own."""
+    return list(record.meta.get("carried_points") or []) + record.completed_points()
+
+
+def prepare_run(rig_path: str | Path | None, protocol_name: str | None, sets: list[str] | None, *,
+                clock: str = "auto", session_root: str | Path | None = "sessions",
+                resume: str | Path | None = None, sinks: list[Sink] | None = None) -> PreparedRun:
+    """Validate everything and build the runner; nothing is opened yet."""
+    record = None
+    if resume is not None:
+        record = load_session(resume)
+        rig = load_rig(record.rig_path())
+        if protocol_name and protocol_name != record.protocol:
+            raise LabkitError(f"--resume {resume}: that session ran {record.protocol}, not {protocol_name}")
+        protocol = get_protocol(record.protocol)
+        params = resolve_params(protocol.defaults, record.params, protocol.name)
+        if sets:
+            raise LabkitError("--resume continues with the session's own parameters; drop --set")
+    else:
+        if rig_path is None or protocol_name is None:
+            raise LabkitError("give RIG and PROTOCOL (or --resume SESSION)")
+        rig = load_rig(rig_path)
+        protocol = get_protocol(protocol_name)
+        params = resolve_params(protocol.defaults, sets, protocol.name)
+    the_clock = make_clock(clock, rig)
+    points = carried_points(record) if record is not None else []
+    done = {int(p["step"]) for p in points if "step" in p}
+    runner = Runner(protocol, rig, params, clock=the_clock, sinks=sinks, previous_points=points,
+                    done_steps=done)
+    if record is not None and len(done) >= len(runner.steps):
+        raise LabkitError(f"--resume {resume}: all {len(runner.steps)} steps are already done")
+    if session_root is not None:
+        check_writable(session_root)
+    return PreparedRun(rig, protocol, params, the_clock, runner, record, points)
+
+
+def execute(prep: PreparedRun, session_root: str | Path | None = "sessions", notes: str = "",
+            on_session: Callable[[Runner, Session], None] | None = None) -> RunOutcome:
+    """Run a prepared plan, writing a session under ``session_root`` (None: no session).
+
+    ``on_session(runner, session)`` is called once the session exists, before any port
+    opens (the CLI adds its rerun sink there).
+    """
+    runner = prep.runner
+    if session_root is not None:
+        session = Session.create(
+            session_root, protocol=prep.protocol.name, params=_jsonable(prep.params), rig_name=prep.rig.name,
+            rig_text=prep.rig.text, clock="virtual" if prep.clock.is_virtual else "real", notes=notes,
+            resumed_from=str(prep.resumed_from.path) if prep.resumed_from else None)
+        session.update_meta(carried_points=prep.carried_points,
+                            steps_planned=len(runner.steps))
+        runner.session = session
+        runner.bus.add(session)
+        if on_session is not None:
+            on_session(runner, session)
+    if prep.clock.is_virtual:
+        fresh_emulators(prep.rig)
+    with use_clock(prep.clock):
+        return runner.run()
+
+
+def _jsonable(params: dict[str, Any]) -> dict[str, Any]:
+    return json.loads(json.dumps(params))
+
+
+def replay_url(session: Path, role: str) -> str:
+    """The ``replay://`` URL of one device's cassette in a session (timed, strict)."""
+    return f"replay://{(session / 'cassettes' / f'{role}.jsonl').resolve()}?mode=timed"
+
+
+@dataclass
+class ReplayOutcome:
+    outcome: RunOutcome
+    recorded: dict[str, Any] | None
+    identical: bool
+    differences: list[str]
+
+
+def diff_results(a: Any, b: Any, path: str = "results") -> list[str]:
+    """Human-readable differences between two JSON values (first few)."""
+    if type(a) is not type(b):
+        return [f"{path}: {a!r} != {b!r}"]
+    if isinstance(a, dict):
+        out = []
+        for k in sorted(set(a) | set(b)):
+            if k not in a or k not in b:
+                out.append(f"{path}.{k}: only in {'replay' if k in a else 'recording'}")
+            else:
+                out += diff_results(a[k], b[k], f"{path}.{k}")
+        return out
+    if isinstance(a, list):
+        if len(a) != len(b):
+            return [f"{path}: {len(a)} entries != {len(b)}"]
+        pairs = enumerate(zip(a, b, strict=True))
+        return [d for i, (x, y) in pairs for d in diff_results(x, y, f"{path}[{i}]")]
+    return [] if a == b else [f"{path}: {a!r} != {b!r}"]
+
+
+def replay_session(path: str | Path, sinks: list[Sink] | None = None) -> ReplayOutcome:
+    """Re-run a session's protocol against its cassettes on a virtual clock; compare results."""
+    record = load_session(path)
+    if not (record.path / "cassettes").is_dir():
+        raise LabkitError(f"{record.path}: no cassettes to replay")
+    rig = load_rig(record.rig_path())
+    protocol = get_protocol(record.protocol)
+    params = resolve_params(protocol.defaults, record.params, protocol.name)
+    points = list(record.meta.get("carried_points") or [])
+    done = {int(p["step"]) for p in points if "step" in p}
+    clock = VirtualClock()
+    runner = Runner(protocol, rig, params, clock=clock, sinks=sinks, previous_points=points,
+                    done_steps=done, port_override=lambda dev: replay_url(record.path, dev.role))
+    with use_clock(clock):
+        outcome = runner.run()
+    replayed = normalise(outcome.results)
+    recorded = record.results
+    diffs = diff_results(replayed, recorded) if recorded is not None else ["recording has no results.json"]
+    return ReplayOutcome(outcome, recorded, not diffs, diffs)
