@@ -1,0 +1,37 @@
+"""Annotate port traffic with the driver call that caused it (the cassette's ``call`` key).
+
+    with port_call("read_stable"):
+        port.write(b"S\\r\\n")
+        line = port.read_until(b"\\n")
+
+``record://`` ports store the innermost active annotation with each event, and a strict
+replay mismatch quotes it, so a diff says which driver method went astray. Annotations are
+per thread and optional; without one the port operation's own name is used.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+_local = threading.local()
+
+
+@contextmanager
+def port_call(name: str) -> Iterator[None]:
+    """Mark every port operation inside the block as caused by ``name``."""
+    stack = getattr(_local, "stack", None)
+    if stack is None:
+        stack = _local.stack = []
+    stack.append(name)
+    try:
+        yield
+    finally:
+        stack.pop()
+
+
+def current_call(default: str) -> str:
+    """The innermost active annotation of this thread, else ``default``."""
+    stack = getattr(_local, "stack", None)
+    return stack[-1] if stack else default

@@ -1,0 +1,190 @@
+"""Cassettes: what went over one serial port, byte-exact, as JSON lines (ANCHORS 9.2.2).
+
+Line 1 is a header::
+
+    {"format": "labkit-cassette", "schema": 1, "labkit_version": "0.1.0",
+     "created": "2026-11-22T09:00:00+00:00", "port": "balance", "url": "sim://mtsics?seed=3",
+     "serial": {"baudrate": 9600, "bytesize": 8, "parity": "N", "stopbits": 1, "timeout": 1.0},
+     "device": {"vid_pid": "0403:6001", "serial_number": "A12", ...}, "clock": "real"}
+
+Then one event per line, ``t`` in seconds since the port was first opened (on the port's
+clock)::
+
+    {"t": 0.0,   "port": "balance", "dir": "ctl", "event": "open", "serial": {...}}
+    {"t": 0.001, "port": "balance", "dir": "tx",  "data": "SI\\r\\n", "call": "read"}
+    {"t": 0.052, "port": "balance", "dir": "rx",  "data": "S S      12.345 g\\r\\n"}
+    {"t": 0.300, "port": "balance", "dir": "rx",  "data": "AP8=", "enc": "b64"}
+    {"t": 1.300, "port": "balance", "dir": "ctl", "event": "short_read", "asked": 1, "got": 0}
+    {"t": 5.000, "port": "balance", "dir": "ctl", "event": "error", "call": "read",
+     "class": "SerialException", "module": "serial.serialutil", "message": "device reports..."}
+
+``data`` is UTF-8 text when every character is printable (or CR, LF, TAB), else base64 with
+``"enc": "b64"``. Each ``rx`` event is exactly what one read call returned (chunk-preserving);
+``short_read`` follows a read that returned fewer bytes than asked (``got`` 0: a timeout).
+Control events: ``open``, ``close``, ``reconfigure``, ``reset_input_buffer``, ``short_read``,
+``error``, ``identity``.
+"""
+
+from __future__ import annotations
+
+import base64
+import binascii
+import json
+import threading
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+from labkit import __version__
+from labkit.errors import CassetteError
+
+FORMAT = "labkit-cassette"
+SCHEMA = 1
+DIRECTIONS = ("tx", "rx", "ctl")
+CONTROL_EVENTS = (
+    "open", "close", "reconfigure", "reset_input_buffer", "short_read", "error", "identity",
+)
+
+
+def is_printable_text(data: bytes) -> bool:
+    """True when ``data`` is UTF-8 made of printable characters, CR, LF and TAB only."""
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        return False
+    return all(ch.isprintable() or ch in "\r\n\t" for ch in text)
+
+
+def encode_data(data: bytes) -> dict[str, str]:
+    """``{"data": text}`` for printable bytes, else ``{"data": base64, "enc": "b64"}``."""
+    if is_printable_text(data):
+        return {"data": data.decode("utf-8")}
+    return {"data": base64.b64encode(data).decode("ascii"), "enc": "b64"}
+
+
+def decode_data(event: dict[str, Any]) -> bytes:
+    """The bytes of an event's ``data`` (inverse of :func:`encode_data`)."""
+    data = event.get("data", "")
+    if event.get("enc") == "b64":
+        return base64.b64decode(data, validate=True)
+    return data.encode("utf-8")
+
+
+def make_header(port: str, url: str, serial: dict[str, Any], device: dict[str, Any] | None = None,
+                clock: str = "real") -> dict[str, Any]:
+    return {
+        "format": FORMAT,
+        "schema": SCHEMA,
+        "labkit_version": __version__,
+        "created": datetime.now(UTC).isoformat(timespec="seconds"),
+        "port": port,
+        "url": url,
+        "serial": serial,
+        "device": device or {},
+        "clock": clock,
+    }
+
+
+class CassetteWriter:
+    """Writes one cassette file; thread-safe; every event is flushed at once (a crash loses nothing)."""
+
+    def __init__(self, path: str | Path, header: dict[str, Any]) -> None:
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._lock = threading.Lock()
+        self._file = self.path.open("w", encoding="utf-8")
+        self._write_line(header)
+
+    def _write_line(self, obj: dict[str, Any]) -> None:
+        self._file.write(json.dumps(obj, ensure_ascii=False) + "\n")
+        self._file.flush()
+
+    def event(self, t: float, port: str, direction: str, data: bytes | None = None,
+              **fields: Any) -> None:
+        """Append one event (``fields`` e.g. ``event="short_read", asked=4, got=0, call="read"``)."""
+        obj: dict[str, Any] = {"t": t, "port": port, "dir": direction}
+        if data is not None:
+            obj.update(encode_data(data))
+        obj.update({k: v for k, v in fields.items() if v is not None})
+        with self._lock:
+            if not self._file.closed:
+                self._write_line(obj)
+
+    def close(self) -> None:
+        with self._lock:
+            if not self._file.closed:
+                self._file.close()
+
+    def reopen(self) -> None:
+        """Append again after :meth:`close` (a port closed and re-opened keeps its cassette)."""
+        with self._lock:
+            if self._file.closed:
+                self._file = self.path.open("a", encoding="utf-8")
+
+
+@dataclass(frozen=True)
+class Cassette:
+    """A loaded cassette: the header and the events in file order (``data`` decoded to bytes)."""
+
+    path: Path
+    header: dict[str, Any]
+    events: list[dict[str, Any]]
+
+    @property
+    def port(self) -> str:
+        return str(self.header.get("port", self.path.stem))
+
+
+def load_cassette(path: str | Path) -> Cassette:
+    """Read and validate a cassette. Problems raise CassetteError naming file, line and key."""
+    path = Path(path)
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except OSError as exc:
+        raise CassetteError(str(path), 0, f"cannot read cassette: {exc.strerror or exc}") from None
+    if not lines:
+        raise CassetteError(str(path), 1, "empty file, expected a labkit-cassette header")
+    header = _json_line(path, 1, lines[0])
+    if header.get("format") != FORMAT:
+        raise CassetteError(str(path), 1, f"format is {header.get('format')!r}, expected {FORMAT!r}")
+    if header.get("schema") != SCHEMA:
+        raise CassetteError(str(path), 1, f"schema {header.get('schema')!r} is not supported "
+                                          f"(this labkit reads schema {SCHEMA})")
+    events = []
+    for number, line in enumerate(lines[1:], start=2):
+        if not line.strip():
+            continue
+        event = _json_line(path, number, line)
+        events.append(_checked_event(path, number, event))
+    return Cassette(path, header, events)
+
+
+def _json_line(path: Path, number: int, line: str) -> dict[str, Any]:
+    try:
+        obj = json.loads(line)
+    except json.JSONDecodeError as exc:
+        raise CassetteError(str(path), number, f"not JSON: {exc.msg}") from None
+    if not isinstance(obj, dict):
+        raise CassetteError(str(path), number, "expected a JSON object")
+    return obj
+
+
+def _checked_event(path: Path, number: int, event: dict[str, Any]) -> dict[str, Any]:
+    if not isinstance(event.get("t"), (int, float)):
+        raise CassetteError(str(path), number, "key 't': missing or not a number")
+    direction = event.get("dir")
+    if direction not in DIRECTIONS:
+        raise CassetteError(str(path), number, f"key 'dir': {direction!r} is not tx, rx or ctl")
+    if direction == "ctl" and event.get("event") not in CONTROL_EVENTS:
+        raise CassetteError(str(path), number, f"key 'event': {event.get('event')!r} is not one of "
+                                               f"{', '.join(CONTROL_EVENTS)}")
+    if direction in ("tx", "rx"):
+        if not isinstance(event.get("data"), str):
+            raise CassetteError(str(path), number, "key 'data': missing or not a string")
+        try:
+            event = {**event, "bytes": decode_data(event)}
+        except (binascii.Error, ValueError):
+            raise CassetteError(str(path), number, "key 'data': invalid base64") from None
+    event["line"] = number
+    return event

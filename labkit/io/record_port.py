@@ -1,0 +1,199 @@
+"""``record://<inner-url>?cassette=PATH&port=NAME``: a port that tees every byte to a cassette.
+
+Wraps *any* port URL (a real device, ``hwgrep://``, ``sim://``, a pty path). Each read call
+becomes one ``rx`` event holding exactly what it returned (plus ``short_read`` when it
+returned fewer bytes than asked, including empty reads on timeout); each write is a ``tx``
+event; open, close, reconfigure, reset_input_buffer and errors are ``ctl`` events. See
+:mod:`labkit.io.cassette` for the format.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import serial
+from serial.serialutil import to_bytes
+
+from labkit.io.calls import current_call
+from labkit.io.cassette import CassetteWriter, make_header
+from labkit.io.clocked import ClockedSerial
+from labkit.io.urls import parse_record_url
+
+#: exceptions a port raises for wire trouble (recorded, then re-raised)
+WIRE_ERRORS = (serial.SerialException, OSError)
+
+
+def usb_identity(device_path: str) -> dict[str, Any]:
+    """VID:PID, serial number, manufacturer... of a native serial device, or {} if unknown."""
+    try:
+        from serial.tools import list_ports
+
+        for info in list_ports.comports():
+            if info.device == device_path and info.vid is not None:
+                return {
+                    "vid_pid": f"{info.vid:04X}:{info.pid:04X}",
+                    "serial_number": info.serial_number,
+                    "manufacturer": info.manufacturer,
+                    "product": info.product,
+                    "description": info.description,
+                    "location": info.location,
+                }
+    except Exception:  # noqa: BLE001 - identity is a nicety; recording must not fail on it
+        return {}
+    return {}
+
+
+def error_fields(exc: BaseException, call: str) -> dict[str, Any]:
+    """The ``error`` control event's fields for an exception."""
+    return {
+        "event": "error",
+        "call": call,
+        "class": type(exc).__name__,
+        "module": type(exc).__module__,
+        "message": str(exc),
+        "errno": getattr(exc, "errno", None),
+    }
+
+
+class RecordSerial(ClockedSerial):
+    """A recording port. ``inner`` is the wrapped port; ``cassette_path`` where events go."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        self.inner: serial.SerialBase | None = None
+        self.writer: CassetteWriter | None = None
+        self.port_name = ""
+        self.cassette_path = ""
+        self._t0: float | None = None
+        super().__init__(*args, **kwargs)
+
+    # -- events -------------------------------------------------------------------------
+    def _t(self) -> float:
+        assert self._t0 is not None and self.clock is not None
+        return self.clock.now() - self._t0
+
+    def _event(self, direction: str, data: bytes | None = None, **fields: Any) -> None:
+        if self.writer is not None:
+            self.writer.event(self._t(), self.port_name, direction, data, **fields)
+
+    def _error(self, exc: BaseException, call: str) -> None:
+        self._event("ctl", **error_fields(exc, current_call(call)))
+
+    def note_identity(self, identity: dict[str, Any]) -> None:
+        """Store what the driver learned about the device (model, serial...) in the cassette."""
+        self._event("ctl", event="identity", identity=identity)
+
+    # -- life cycle ---------------------------------------------------------------------
+    def open(self) -> None:
+        if self.is_open:
+            raise serial.SerialException("Port is already open.")
+        if self._port is None:
+            raise serial.SerialException("Port must be configured before it can be used.")
+        from labkit.io.ports import open_port
+
+        spec = parse_record_url(self.portstr)
+        clock = self._resolve_clock()
+        if self.writer is None:
+            self.port_name, self.cassette_path = spec.port, spec.cassette
+            self._t0 = clock.now()
+            identity = usb_identity(spec.inner_url)
+            self.writer = CassetteWriter(spec.cassette, make_header(
+                spec.port, spec.inner_url, self.settings_summary(), identity,
+                clock="virtual" if clock.is_virtual else "real",
+            ))
+        else:
+            self.writer.reopen()
+        self._event("ctl", event="open", serial=self.settings_summary())
+        try:
+            self.inner = open_port(spec.inner_url, clock=clock, **self.get_settings())
+        except WIRE_ERRORS as exc:
+            self._error(exc, "open")
+            raise
+        self.is_open = True
+
+    def close(self) -> None:
+        if self.inner is not None:
+            try:
+                self.inner.close()
+            finally:
+                self.inner = None
+                self._event("ctl", event="close", call=current_call("close"))
+        if self.writer is not None:
+            self.writer.close()
+        self.is_open = False
+
+    def _reconfigure_port(self) -> None:
+        if self.inner is not None and self.is_open:
+            self.inner.apply_settings(self.get_settings())
+            self._event("ctl", event="reconfigure", serial=self.settings_summary())
+
+    def _live(self) -> serial.SerialBase:
+        self._require_open()
+        assert self.inner is not None
+        return self.inner
+
+    # -- traffic ------------------------------------------------------------------------
+    def write(self, data: bytes) -> int:
+        inner = self._live()
+        data = to_bytes(data)
+        try:
+            n = inner.write(data)
+        except WIRE_ERRORS as exc:
+            self._error(exc, "write")
+            raise
+        self._event("tx", data, call=current_call("write"))
+        return n
+
+    def read(self, size: int = 1) -> bytes:
+        inner = self._live()
+        try:
+            data = inner.read(size)
+        except WIRE_ERRORS as exc:
+            self._error(exc, "read")
+            raise
+        self._note_read(data, size, len(data) < size, "read")
+        return data
+
+    def read_until(self, expected: bytes = b"\n", size: int | None = None) -> bytes:
+        inner = self._live()
+        try:
+            data = inner.read_until(expected, size)
+        except WIRE_ERRORS as exc:
+            self._error(exc, "read_until")
+            raise
+        short = not data.endswith(expected) and (size is None or len(data) < size)
+        self._note_read(data, size, short, "read_until")
+        return data
+
+    def _note_read(self, data: bytes, asked: int | None, short: bool, call: str) -> None:
+        if data:
+            self._event("rx", data, call=current_call(call))
+        if short:
+            self._event("ctl", event="short_read", asked=asked, got=len(data),
+                        call=current_call(call))
+
+    @property
+    def in_waiting(self) -> int:
+        inner = self._live()
+        try:
+            return inner.in_waiting
+        except WIRE_ERRORS as exc:
+            self._error(exc, "in_waiting")
+            raise
+
+    def reset_input_buffer(self) -> None:
+        inner = self._live()
+        try:
+            inner.reset_input_buffer()
+        except WIRE_ERRORS as exc:
+            self._error(exc, "reset_input_buffer")
+            raise
+        self._event("ctl", event="reset_input_buffer", call=current_call("reset_input_buffer"))
+
+    def reset_output_buffer(self) -> None:
+        self._live().reset_output_buffer()
+
+
+def serial_class_for_url(url: str) -> tuple[str, type[RecordSerial]]:
+    """pyserial hook (``labkit.io.urlhandlers.protocol_record``)."""
+    parse_record_url(url)
+    return url, RecordSerial
