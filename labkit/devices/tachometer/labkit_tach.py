@@ -122,6 +122,17 @@ def format_command(name: str, value: int | None = None) -> bytes:
     return f"{name} {int(value)}\n".encode("ascii")
 
 
+LINE_STARTS = (b"T,", b"OK", b"ERR", b"ID ", b"#")
+
+
+def strip_junk(line: bytes) -> bytes:
+    """Drop bytes before the first known line start (power-on junk, noise on the wire)."""
+    if line.startswith(LINE_STARTS):
+        return line
+    found = [i for i in (line.find(start) for start in LINE_STARTS) if i > 0]
+    return line[min(found):] if found else line
+
+
 def is_reply(line: bytes) -> bool:
     return line == b"OK" or line.startswith(b"ERR") or line.startswith(b"ID ")
 
@@ -154,8 +165,7 @@ class LabkitTachometer(StreamingTachometer):
         self._replies: deque[bytes] = deque()
         self._state_lock = threading.Lock()
         self._alive = False
-        self._needs_config = False
-        self._configuring = False
+        self._write_lock = threading.Lock()
         self._flag_reset = False
         self._last_seq: int | None = None
         super().__init__(port, clock, name, **options)
@@ -171,20 +181,22 @@ class LabkitTachometer(StreamingTachometer):
 
     # ---- frames -------------------------------------------------------------------------
     def parse_frame(self, t: float, frame: bytes) -> Reading | None:
-        line = frame.strip()
+        line = strip_junk(frame.strip())
         if not line:
             return None
         if line.startswith(b"#"):
             banner = parse_banner(line)
             if banner is not None:
                 with self._state_lock:
-                    if self._alive:
+                    reset = self._alive
+                    if reset:
                         self.resets += 1
                         self._flag_reset = True
-                        self._needs_config = True
                     self.banner = banner
                     self._alive = True
                     self._last_seq = None
+                if reset:
+                    self._resend_config()
             return None
         if is_reply(line):
             self._replies.append(line)
@@ -222,9 +234,10 @@ class LabkitTachometer(StreamingTachometer):
         """Send one command, return its reply line (``OK``/``ID ...``); ERR raises."""
         data = format_command(text, value)
         label = data.decode().strip()
-        for _attempt in range(2):
+        for _attempt in range(3):
             self._replies.clear()
-            self.port.write(data)
+            with self._write_lock:
+                self.port.write(data)
             deadline = self.clock.now() + self.reply_timeout_s
             while not self._replies:
                 self.reader.check()
@@ -240,22 +253,28 @@ class LabkitTachometer(StreamingTachometer):
         raise DeviceTimeout(self.name, label, self.reader.last_bytes,
                             f"no reply in {self.reply_timeout_s} s")
 
-    def _configure(self) -> None:
-        self._configuring = True
-        try:
-            self.command("PPR", self.ppr)
-            if self.rate_hz is not None:
-                self.command("RATE", int(self.rate_hz))
-            if self.zto_ms is not None:
-                self.command("ZTO", int(self.zto_ms))
-            self._needs_config = False
-        finally:
-            self._configuring = False
+    def config_commands(self) -> list[tuple[str, int]]:
+        commands = [("PPR", self.ppr)]
+        if self.rate_hz is not None:
+            commands.append(("RATE", int(self.rate_hz)))
+        if self.zto_ms is not None:
+            commands.append(("ZTO", int(self.zto_ms)))
+        return commands
 
-    def _check_reader(self) -> None:
-        super()._check_reader()
-        if self._needs_config and not self._configuring:
-            self._configure()
+    def _configure(self) -> None:
+        for name, value in self.config_commands():
+            self.command(name, value)
+
+    def _resend_config(self) -> None:
+        """After a device reset (called by the reader): send the settings, not waiting for
+        the OKs (a reader must not block); lines at the wrong PPR fail the consistency check
+        until the device has them."""
+        try:
+            with self._write_lock:
+                for name, value in self.config_commands():
+                    self.port.write(format_command(name, value))
+        except Exception:  # noqa: BLE001 - a dead port is reported by the reader itself
+            pass
 
     def identify(self) -> dict[str, Any]:
         reply = self.command("ID?").decode("ascii", "replace").split()
