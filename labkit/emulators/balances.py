@@ -141,6 +141,7 @@ class BalanceEmulator(Emulator):
         self.streaming = False
         self.pending: list[Pending] = []
         self._inbuf = b""
+        self._last_rx = -math.inf
         self._reset_done = False
         self._mid_frame_done = False
 
@@ -185,6 +186,9 @@ class BalanceEmulator(Emulator):
         if at is not None and not self._reset_done and self.since_open(t) >= at:
             self._reset_done = True
             self.power_on(t)
+        if self._inbuf and t - self._last_rx > 1.0:  # half a command, never finished
+            self._inbuf = b""
+            self.command_timeout(self._last_rx + 1.0)
         for tick in self.signal.advance(t):
             self.on_tick(tick)
 
@@ -222,6 +226,8 @@ class BalanceEmulator(Emulator):
         at = self.faults.get("reset_at")
         if at is not None and not self._reset_done and self._opened_at is not None:
             times.append(self._opened_at + at)
+        if self._inbuf:
+            times.append(self._last_rx + 1.0 + 1e-9)
         return min((x for x in times if x is not None), default=None)
 
     # ---- bytes ------------------------------------------------------------------------
@@ -233,8 +239,13 @@ class BalanceEmulator(Emulator):
             data = bytes(self.rng.randrange(256) for _ in data)
         super()._queue(data, ready)
 
+    def command_timeout(self, t: float) -> None:
+        """Answer a command whose bytes stopped coming (A&D E03; MT-SICS: ET)."""
+        self.bad_bytes(t)
+
     def handle(self, data: bytes, t: float) -> None:
         self.advance(t)
+        self._last_rx = t
         if any(not (0x20 <= b <= 0x7E or b in (0x0D, 0x0A)) for b in data):
             self._inbuf = b""  # a UART flags parity/framing errors per character
             self.bad_bytes(t)
@@ -367,7 +378,6 @@ class AndStdEmulator(BalanceEmulator):
     def __post_init__(self) -> None:
         super().__post_init__()
         self.ack_on = self.options.get("ack", "1") not in ("0", "false", "no")
-        self._last_rx = -math.inf
 
     def _ack(self, t: float, latency: float = 0.01) -> None:
         if self.ack_on:
@@ -383,12 +393,8 @@ class AndStdEmulator(BalanceEmulator):
         sign = "-" if value < 0 and float(digits) != 0 else "+"
         return f"{header},{sign}{digits}{unit}\r\n".encode("ascii")
 
-    def handle(self, data: bytes, t: float) -> None:
-        if self._inbuf and t - self._last_rx > 1.0:
-            self._inbuf = b""
-            self.reply(b"EC,E03\r\n", t, 0.01)
-        self._last_rx = t
-        super().handle(data, t)
+    def command_timeout(self, t: float) -> None:
+        self.reply(b"EC,E03\r\n", t, 0.01)
 
     def bad_bytes(self, t: float) -> None:
         self.reply(b"EC,E00\r\n", t, 0.01)

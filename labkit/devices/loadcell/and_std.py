@@ -175,7 +175,7 @@ class AndStdBalance(Balance):
         def accept(line: bytes) -> AndLine | None:
             parsed = parse_line(line)
             if isinstance(parsed, AndError):
-                raise DeviceReplyError(self.name, command, line, parsed.meaning)
+                raise DeviceReplyError(self.name, command, self.link.last_bytes, parsed.meaning)
             return parsed if isinstance(parsed, want) else None
 
         return accept

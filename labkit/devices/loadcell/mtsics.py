@@ -178,6 +178,7 @@ class MtSicsBalance(Balance):
         except (serial.SerialException, OSError):
             pass  # a dead port shows itself on the next real I/O, with a proper message
         self.reset()
+        self.resets_seen = 0  # the power-on banner before our @ is not a reset during use
 
     # ---- helpers ----------------------------------------------------------------------
     @property
@@ -189,24 +190,26 @@ class MtSicsBalance(Balance):
         pass  # the link keeps the tail
 
     def _unsolicited(self, t: float, line: bytes) -> None:
-        try:
-            reply = parse_reply(line)
-        except FrameError:
-            return
-        if reply.command == "I4":  # power-on / reset banner: tare and zero are gone
+        # the power-on / reset banner (maybe behind power-on junk): tare and zero are gone
+        if line.startswith(b'I4 A "') or b'\xffI4 A "' in line or b'\x00I4 A "' in line \
+                or b'\xfeI4 A "' in line:
             self.resets_seen += 1
             self._reset_pending = True
 
     def _accept(self, command: str, reply_id: str):
         def accept(line: bytes) -> MtReply | None:
-            reply = parse_reply(line)
+            try:
+                reply = parse_reply(line)
+            except FrameError:
+                self._unsolicited(0.0, line)
+                raise
             if reply.is_general_error:
-                raise DeviceReplyError(self.name, command, line, GENERAL_ERRORS[reply.status])
+                raise DeviceReplyError(self.name, command, self.link.last_bytes, GENERAL_ERRORS[reply.status])
             return reply if reply.command == reply_id else None
 
         return accept
 
-    def _command(self, command: str, reply_id: str, timeout: float,
+    def command(self, command: str, reply_id: str, timeout: float,
                  retry_after: float | None = None) -> tuple[float, bytes, MtReply]:
         """Send, wait for the reply with ``reply_id``; one resend after an ``ET``."""
         try:
@@ -218,7 +221,7 @@ class MtSicsBalance(Balance):
 
     def _fail(self, command: str, line: bytes, reply: MtReply) -> DeviceReplyError:
         meaning = STATUS_MEANING.get(reply.status, f"status {reply.status}")
-        return DeviceReplyError(self.name, command, line, meaning)
+        return DeviceReplyError(self.name, command, self.link.last_bytes, meaning)
 
     def _reading(self, t: float, line: bytes, command: str) -> Reading:
         try:
@@ -228,7 +231,7 @@ class MtSicsBalance(Balance):
         flags = {"device_reset"} if self._reset_pending else set()
         self._reset_pending = False
         if weight.status in ("I", "L"):
-            raise DeviceReplyError(self.name, command, line, STATUS_MEANING[weight.status])
+            raise DeviceReplyError(self.name, command, self.link.last_bytes, STATUS_MEANING[weight.status])
         if weight.overload:
             flags.add("overload" if weight.status == "+" else "underload")
             quantity, unit = self._last_quantity
@@ -246,56 +249,56 @@ class MtSicsBalance(Balance):
     # ---- public -----------------------------------------------------------------------
     def reset(self) -> str:
         """``@``: reset to the power-on state (no zeroing), cancel ``SIR``; returns serial no."""
-        _, _, reply = self._command("@", "I4", self.command_timeout, retry_after=0.5)
+        _, _, reply = self.command("@", "I4", self.command_timeout, retry_after=0.5)
         self.serial_number = parse_quoted_info(reply)
         self._reset_pending = False
         return self.serial_number
 
     def identify(self) -> dict[str, Any]:
         """``I2`` (type, capacity, unit) and ``I4`` (serial number)."""
-        _, line, reply = self._command("I2", "I2", self.command_timeout, retry_after=0.5)
+        _, line, reply = self.command("I2", "I2", self.command_timeout, retry_after=0.5)
         if reply.status != "A":
             raise self._fail("I2", line, reply)
         info: dict[str, Any] = {"protocol": self.protocol}
         info.update(parse_i2(parse_quoted_info(reply)))
-        _, line, reply = self._command("I4", "I4", self.command_timeout, retry_after=0.5)
+        _, line, reply = self.command("I4", "I4", self.command_timeout, retry_after=0.5)
         if reply.status == "A":
             info["serial"] = parse_quoted_info(reply)
         return info
 
     def read(self, timeout: float = 2.0) -> Reading:
         """``SI``: the weight now, stable (``S S``) or not (``S D``); overload -> flagged, NaN."""
-        t, line, _ = self._command("SI", "S", timeout, retry_after=min(0.5, timeout / 2))
+        t, line, _ = self.command("SI", "S", timeout, retry_after=min(0.5, timeout / 2))
         return self._reading(t, line, "SI")
 
     def read_stable(self, timeout: float = 20.0) -> Reading:
         """``S``: the balance waits for stability; ``S I`` (its own timeout) raises."""
-        t, line, _ = self._command("S", "S", timeout)
+        t, line, _ = self.command("S", "S", timeout)
         reading = self._reading(t, line, "S")
         return reading
 
     def zero(self, timeout: float = 20.0) -> None:
         """``Z``: zero when stable. ``Z I`` (not stable), ``Z +``/``Z -`` (out of range) raise."""
-        _, line, reply = self._command("Z", "Z", timeout)
+        _, line, reply = self.command("Z", "Z", timeout)
         if reply.status != "A":
             raise self._fail("Z", line, reply)
 
     def tare(self, timeout: float = 20.0) -> Reading:  # type: ignore[override]
         """``T``: tare when stable; returns the tare weight as a Reading."""
-        t, line, reply = self._command("T", "T", timeout)
+        t, line, reply = self.command("T", "T", timeout)
         if reply.status not in ("S", "A"):
             raise self._fail("T", line, reply)
         return self._reading(t, line, "T")
 
     def tare_value(self, timeout: float = 2.0) -> Reading:
         """``TA``: the stored tare weight."""
-        t, line, reply = self._command("TA", "TA", timeout, retry_after=0.5)
+        t, line, reply = self.command("TA", "TA", timeout, retry_after=0.5)
         if reply.status != "A":
             raise self._fail("TA", line, reply)
         return self._reading(t, line, "TA")
 
     def clear_tare(self, timeout: float = 2.0) -> None:
         """``TAC``: clear the tare."""
-        _, line, reply = self._command("TAC", "TAC", timeout, retry_after=0.5)
+        _, line, reply = self.command("TAC", "TAC", timeout, retry_after=0.5)
         if reply.status != "A":
             raise self._fail("TAC", line, reply)
