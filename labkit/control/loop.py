@@ -83,13 +83,10 @@ class SpeedLoop:
         self.snapshot = replace(self.snapshot, target_rad_s=speed_rad_s, settled=False)
 
     def _measure(self, t: float) -> float | None:
-        check = getattr(self.tach, "check", None)
-        if callable(check):
-            try:
-                check()
-            except Exception as exc:  # noqa: BLE001 - any tach fault is an interlock
-                raise Tripped(f"tachometer {self.tach.name} lost: {exc}") from exc
-        reading = self.tach.latest()
+        try:
+            reading = self.tach.latest()  # raises when the port is gone (real I/O, not is_open)
+        except Exception as exc:  # noqa: BLE001 - any tach fault is an interlock
+            raise Tripped(f"tachometer {self.tach.name} lost: {exc}") from exc
         since = reading.t if reading is not None else self.started_at
         moving = self.target > 0 or self.setpoint > 0
         if moving and since is not None and t - since > self.tach_timeout:
@@ -112,7 +109,7 @@ class SpeedLoop:
         self.last_t = t
         measured = self._measure(t)
         due = self.last_status_t is None or t - self.last_status_t >= self.status_period - 1e-9
-        if self.enabled and due:
+        if due:  # also before enabling: never arm a controller that reports errors
             self.last_status_t = t
             errors = self.motor.status().errors
             if errors:

@@ -44,6 +44,8 @@ class MotorPlant:
     duty: float = 0.0
     speed_rad_s: float = 0.0
     t: float = 0.0
+    #: (time, duty) of every change of commanded duty, newest last (bounded); for tests and logs
+    duty_changes: list[tuple[float, float]] = field(default_factory=list)
 
     def advance(self, t: float) -> None:
         if t <= self.t:
@@ -59,7 +61,22 @@ class MotorPlant:
 
     def set_duty(self, duty: float, t: float) -> None:
         self.advance(t)
-        self.duty = max(-1.0, min(1.0, duty))
+        duty = max(-1.0, min(1.0, duty))
+        if duty != self.duty:
+            self.duty_changes.append((t, duty))
+            del self.duty_changes[:-1000]
+        self.duty = duty
+
+    def zeroed_since(self, t: float) -> float | None:
+        """When the duty was last set to zero at or after ``t`` and stayed there (None if not)."""
+        if self.duty != 0.0:
+            return None
+        for when, duty in reversed(self.duty_changes):
+            if duty == 0.0 and when >= t:
+                return when
+            if when < t:
+                break
+        return None
 
 
 @dataclass(frozen=True)
