@@ -7,12 +7,14 @@ rotor speed, one colour per series).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.ticker import FuncFormatter
 
 from labkit.fit.overlay import Overlay
 from labkit.fit.table_fit import FitReport
@@ -44,11 +46,14 @@ def fit_figure(report: FitReport, path: str | Path, *, overlays: Sequence[Overla
     if loglog:
         ax.set_xscale("log")
         ax.set_yscale("log")
+        for axis in (ax.xaxis, ax.yaxis, axr.xaxis):
+            axis.set_major_formatter(FuncFormatter(_plain))
+            axis.set_minor_formatter(FuncFormatter(_plain_minor))
     first = next(iter(report.series.values()))
     ax.set_ylabel(first.y_name)
     axr.set_xlabel(first.x_name)
     axr.set_ylabel(f"residual\n{first.residual_space}")
-    ax.tick_params(labelbottom=False)
+    ax.tick_params(which="both", labelbottom=False)
     ax.grid(True, which="both", alpha=0.25)
     axr.grid(True, alpha=0.25)
     ax.legend(fontsize=8, loc="best")
@@ -57,6 +62,18 @@ def fit_figure(report: FitReport, path: str | Path, *, overlays: Sequence[Overla
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, bbox_inches="tight")
     return path
+
+
+def _plain(v: float, _pos=None) -> str:
+    return f"{v:g}"
+
+
+def _plain_minor(v: float, _pos=None) -> str:
+    """Label minor log ticks with mantissa 2, 3, 5 or 7 only (readable, not crowded)."""
+    if v <= 0:
+        return ""
+    mantissa = round(v / 10 ** math.floor(math.log10(v)), 6)
+    return f"{v:g}" if mantissa in (2, 3, 5, 7) else ""
 
 
 def _param_text(res) -> str:

@@ -1,0 +1,32 @@
+"""``labkit report SESSION|RESULT [--out DIR]``: a self-contained report folder.
+
+Markdown (report.md) with rig and run metadata, the data table (data.csv), fits with
+uncertainties and residual plots (PNG), a model comparison, and for video results a contact
+sheet of frames with the fitted pattern.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from labkit.fit.models import MODELS
+from labkit.report.build import build_report
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("report", help="write a report folder (markdown + PNG) for a session or result",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("source", help="session directory, results JSON, CSV, or video analysis JSON")
+    p.add_argument("--out", help="output folder (default: SESSION/report or RESULT-report)")
+    p.add_argument("--model", choices=list(MODELS), help="fit this model only (needed for plain CSVs "
+                   "whose columns do not say what they are)")
+    p.add_argument("--inertia", type=float, metavar="KG_M2",
+                   help="floator moment of inertia (default: from the session's rig.toml)")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    path = build_report(args.source, args.out, model=args.model, inertia=args.inertia)
+    print(f"report written: {path}")
+    print(f"figures and data next to it in {path.parent}")
+    return 0

@@ -1,0 +1,209 @@
+"""``build_report(source, out)``: a self-contained folder with report.md, PNG figures, data.csv
+and fits.json for a session directory, a results JSON, a CSV (with a model) or a video
+analysis result.
+"""
+
+from __future__ import annotations
+
+import csv
+import datetime as _dt
+import json
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from labkit import __version__
+from labkit.errors import DataFileError, LabkitError
+from labkit.fit.data import Table, load_table
+from labkit.fit.overlay import Overlay
+from labkit.fit.table_fit import FitReport, fit_table
+from labkit.report import markdown as md
+from labkit.report.figures import contact_sheet, fit_figure
+from labkit.report.plans import Plan, plan_for
+from labkit.report.video import overlay, sample_frames
+
+MAX_TABLE_COLUMNS = 10
+
+
+def floator_inertia(session: Path) -> float | None:
+    """Radial moment of inertia of the rig's floator (kg m^2) from the session's rig.toml."""
+    rig = session / "rig.toml"
+    if not rig.is_file():
+        return None
+    try:
+        bodies = tomllib.loads(rig.read_text()).get("bodies", {})
+    except tomllib.TOMLDecodeError:
+        return None
+    floator = bodies.get("floator", {})
+    for key in ("inertia_radial_kg_m2", "inertia_kg_m2", "inertia_axial_kg_m2"):
+        if isinstance(floator.get(key), int | float) and floator[key] > 0:
+            return float(floator[key])
+    return None
+
+
+def default_out(source: Path) -> Path:
+    return source / "report" if source.is_dir() else source.with_name(source.stem + "-report")
+
+
+def build_report(source: str | Path, out: str | Path | None = None, *, model: str | None = None,
+                 inertia: float | None = None, overlays: tuple[Overlay, ...] = ()) -> Path:
+    """Write the report folder and return the path of its report.md."""
+    source = Path(source)
+    out = Path(out) if out is not None else default_out(source)
+    if source.is_file() and source.suffix.lower() == ".json":
+        doc = _read_json(source)
+        if isinstance(doc, dict) and "pattern" in doc and "points" not in doc:
+            return _video_report(source, doc, out)
+    table = load_table(source)
+    if len(table) == 0:
+        raise DataFileError(str(source), "points", "no data points to report")
+    run = table.meta.get("run", {})
+    protocol = table.meta.get("protocol") or run.get("protocol")
+    if inertia is None and source.is_dir():
+        inertia = floator_inertia(source)
+    plan = plan_for(table, protocol, inertia, model)
+    out.mkdir(parents=True, exist_ok=True)
+    lines = [f"# labkit report: {source.name}", "",
+             f"Source: `{source}`  ", f"Generated: {_now()} by labkit {__version__}", ""]
+    lines += _metadata_section(table, run, protocol, inertia)
+    lines += _data_section(table, out)
+    lines += _fit_sections(table, plan, out, overlays)
+    (out / "report.md").write_text("\n".join(lines) + "\n")
+    return out / "report.md"
+
+
+def _now() -> str:
+    return _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
+
+
+def _read_json(path: Path):
+    try:
+        return json.loads(path.read_text())
+    except json.JSONDecodeError as exc:
+        raise DataFileError(str(path), "", f"invalid JSON ({exc.msg} at line {exc.lineno})") from None
+
+
+def _metadata_section(table: Table, run: dict, protocol: str | None, inertia: float | None) -> list[str]:
+    lines = ["## Rig and run", ""]
+    rows = [["protocol", protocol or "(not given)"]]
+    for key in ("rig", "status", "reason", "started", "ended", "clock", "notes", "git_commit",
+                "resumed_from", "host"):
+        if run.get(key) not in (None, ""):
+            rows.append([key, run[key]])
+    if run.get("params"):
+        rows.append(["params", json.dumps(run["params"], sort_keys=True)])
+    if run.get("versions"):
+        rows.append(["versions", ", ".join(f"{k} {v}" for k, v in run["versions"].items())])
+    rows.append(["floator inertia (kg m^2)", inertia if inertia else "not given"])
+    quick = table.meta.get("fit")
+    if isinstance(quick, dict) and quick.get("params"):
+        ps = ", ".join(f"{k} = {md.num((v or {}).get('value'))}" for k, v in quick["params"].items()
+                       if isinstance(v, dict))
+        rows.append(["protocol's quick fit", f"{quick.get('model', '')}: {ps}"])
+    lines += [md.table(["item", "value"], rows), ""]
+    return lines
+
+
+def _data_section(table: Table, out: Path) -> list[str]:
+    names = list(table.numeric) + list(table.text)
+    with (out / "data.csv").open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(names)
+        for i in range(len(table)):
+            w.writerow([_cell(table, n, i) for n in names])
+    shown = names[:MAX_TABLE_COLUMNS]
+    rows = [[_cell(table, n, i) for n in shown] for i in range(len(table))]
+    more = f" ({len(names) - len(shown)} more columns in data.csv)" if len(names) > len(shown) else ""
+    return ["## Data", "", f"{len(table)} rows; full table: [data.csv](data.csv){more}", "",
+            md.table(shown, rows), ""]
+
+
+def _cell(table: Table, name: str, i: int):
+    if name in table.numeric:
+        v = float(table.numeric[name][i])
+        return v if np.isfinite(v) else ""
+    return table.text[name][i]
+
+
+def _fit_sections(table: Table, plan: Plan, out: Path, overlays: tuple[Overlay, ...]) -> list[str]:
+    if not plan.fits:
+        return ["## Fits", "", "No model applies to these columns; use `labkit report --model NAME`.", ""]
+    lines = ["## Fits", ""]
+    lines += [f"{n}  " for n in plan.notes] + ([""] if plan.notes else [])
+    done: list[tuple[str, FitReport]] = []
+    fits_json = {}
+    for pf in plan.fits:
+        lines += [f"### {pf.title}", ""]
+        if pf.note:
+            lines += [pf.note.strip(), ""]
+        try:
+            report = fit_table(table, pf.model, pf.options)
+        except LabkitError as exc:
+            lines += [f"**Not fitted:** {exc}", ""]
+            continue
+        done.append((pf.title, report))
+        fits_json[pf.slug] = report.to_json()
+        fig = fit_figure(report, out / f"fig-{pf.slug}.png", overlays=(*pf.overlays, *overlays),
+                         title=pf.figure_title or pf.title)
+        lines += [f"![{pf.title}]({fig.name})", ""]
+        for name, res in report.series.items():
+            if len(report.series) > 1 or name != "all":
+                lines += [f"**Series {name}**", ""]
+            lines += [md.param_table(res), "", md.quality_line(res), ""]
+            lines += [f"> **Warning:** {w}" for w in res.warnings]
+            if res.warnings:
+                lines.append("")
+    (out / "fits.json").write_text(json.dumps(fits_json, indent=2) + "\n")
+    if len(done) > 1:
+        lines += _comparison(done)
+    return lines
+
+
+def _comparison(done: list[tuple[str, FitReport]]) -> list[str]:
+    rows = []
+    series = sorted({s for _, r in done for s in r.series})
+    for s in series:
+        entries = [(t, r.series[s]) for t, r in done if s in r.series]
+        best = min(res.aic for _, res in entries)
+        for title, res in entries:
+            rows.append([s, title, len(res.fitted_names), res.n, md.num(res.rms_residual, 4),
+                         res.residual_space, md.num(res.aic, 4), md.num(res.aic - best, 3),
+                         len(res.warnings)])
+    return ["## Model comparison", "",
+            "Models of one data set are fitted in the same residual space; lower AIC is better "
+            "(a difference above ~2 is meaningful, above ~10 decisive).", "",
+            md.table(["series", "model", "fitted params", "n", "rms residual", "residual space", "AIC",
+                      "ΔAIC", "warnings"], rows), ""]
+
+
+def _video_report(source: Path, doc: dict, out: Path) -> Path:
+    out.mkdir(parents=True, exist_ok=True)
+    pattern = doc.get("pattern") or {}
+    lines = [f"# labkit report: {source.name}", "", f"Source: `{source}`  ",
+             f"Generated: {_now()} by labkit {__version__}", "", "## Video", ""]
+    rows = [[k, doc.get(k)] for k in ("source", "frames", "fps") if k in doc]
+    if doc.get("size"):
+        rows.append(["size (px)", " x ".join(str(v) for v in doc["size"])])
+    lines += [md.table(["item", "value"], rows), "", "## Pattern", ""]
+    prow = [[k, json.dumps(v) if isinstance(v, list | dict) else v] for k, v in pattern.items()]
+    lines += [md.table(["quantity", "value"], prow), ""]
+    tilt = doc.get("tilt_rad")
+    if isinstance(tilt, dict):
+        lines += ["Tilt (cone) amplitudes from the trace (rad): "
+                  + ", ".join(f"{k} = {md.num(v)}" for k, v in tilt.items()), ""]
+    video = doc.get("source")
+    if video:
+        vpath = Path(video) if Path(video).is_absolute() else (source.parent / video)
+        if not vpath.exists():
+            vpath = Path(video)
+        try:
+            frames = sample_frames(vpath)
+            sheet = contact_sheet([overlay(f, pattern) for _, f in frames], [f"frame {i}" for i, _ in frames],
+                                  out / "contact-sheet.png")
+            lines += ["## Contact sheet", "", "Frames spread over the clip with the fitted pattern (green).",
+                      "", f"![contact sheet]({sheet.name})", ""]
+        except LabkitError as exc:
+            lines += ["## Contact sheet", "", f"**Not drawn:** {exc}", ""]
+    (out / "report.md").write_text("\n".join(lines) + "\n")
+    return out / "report.md"
