@@ -41,6 +41,8 @@ class _MotorEmulator(Emulator):
         self.motor_name = self.options.get("motor", "rotor")
         self.latency_s = float(self.options.get("latency_s", 0.001))
         self._reset_done = False
+        #: clock times of every valid motion/keep-alive command received (rate checks)
+        self.setpoint_times: list[float] = []
 
     def drive(self, duty: float, t: float) -> None:
         self.plant.set_duty(duty, t, name=self.motor_name)
@@ -220,6 +222,7 @@ class PololuSmcEmulator(_MotorEmulator):
             self.latched &= ~((1 << BIT_SAFE_START) | (1 << BIT_SERIAL) | (1 << BIT_TIMEOUT))
             self.apply(t)
         elif cmd in (0x85, 0x86, 0x89, 0x8A):
+            self.setpoint_times.append(t)
             speed = data[0] | data[1] << 5 if cmd in (0x85, 0x86) else data[0] * 3200 // 127
             speed = min(speed, 3200)
             self.target = -speed if cmd in (0x86, 0x8A) else speed
@@ -439,6 +442,7 @@ class VescEmulator(_MotorEmulator):
     def execute(self, payload: bytes, t: float) -> None:
         cid, body = payload[0], payload[1:]
         if cid in (5, 6, 7, 8, 30):
+            self.setpoint_times.append(t)
             self.last_command_t = t
             self.timed_out = False
         if cid == 0:

@@ -1,0 +1,288 @@
+"""Motor drivers against their emulators over sim:// on a virtual clock: safety (never
+start on open, zero on close and on exceptions, keep-alive >= 20 Hz) and the fault matrix."""
+
+from __future__ import annotations
+
+import pytest
+
+from labkit.devices.base import driver_class
+from labkit.emulators.plant import RAD_S_PER_RPM, reset_plants, shared_plant
+from labkit.errors import DeviceDisconnected, DeviceError, DeviceTimeout, SafetyError
+from labkit.io.clock import VirtualClock
+from labkit.io.ports import open_port
+
+MAX_SPEED = 2500.0  # rad/s at duty 1: the plant's default motor
+
+
+@pytest.fixture(autouse=True)
+def _fresh_plants():
+    reset_plants()
+    yield
+    reset_plants()
+
+
+def open_motor(protocol: str, query: str = "", clock: VirtualClock | None = None,
+               settings: dict | None = None, **options):
+    clock = clock or VirtualClock()
+    cls = driver_class("motor", protocol)
+    port = open_port(f"sim://{protocol}?plant=m{query}", clock=clock, timeout=0,
+                     **(settings or cls.default_serial))
+    return cls(port, clock, name=f"rotor_motor ({protocol})", **options), clock
+
+
+def rotor_speed(clock) -> float:
+    return shared_plant("m").speed(clock.now())
+
+
+def rotor_duty() -> float:
+    return shared_plant("m").motor("rotor").duty
+
+
+MOTORS = ["pololu_smc", "esc_bridge", "vesc"]
+
+
+# ---- safety, every protocol ------------------------------------------------------------------
+
+@pytest.mark.parametrize("protocol", MOTORS)
+def test_open_identify_and_status_never_start_the_motor(protocol):
+    motor, clock = open_motor(protocol)
+    motor.identify()
+    motor.status()
+    clock.sleep(2.0)
+    assert rotor_duty() == 0.0 and rotor_speed(clock) == 0.0
+    with pytest.raises(SafetyError):
+        motor.set_duty(0.5)
+    assert rotor_duty() == 0.0
+
+
+@pytest.mark.parametrize("protocol", MOTORS)
+def test_enable_and_set_duty_spin_the_rotor(protocol):
+    motor, clock = open_motor(protocol, "&arm_s=0.5" if protocol == "esc_bridge" else "")
+    motor.enable()
+    motor.set_duty(0.4)
+    clock.sleep(5.0)
+    # first-order plant: 12.5 time constants after the step, speed = duty x max speed
+    assert rotor_speed(clock) == pytest.approx(0.4 * MAX_SPEED, rel=1e-3)
+    status = motor.status()
+    assert status.duty == pytest.approx(0.4, abs=1e-3) and not status.errors
+
+
+@pytest.mark.parametrize("protocol", MOTORS)
+def test_keepalive_rate_is_at_least_20_hz_on_the_device_side(protocol):
+    motor, clock = open_motor(protocol, "&arm_s=0" if protocol == "esc_bridge" else "")
+    motor.enable()
+    motor.set_duty(0.2)
+    start = clock.now()
+    clock.sleep(10.0)
+    times = [t for t in motor.port.emulator.setpoint_times if t > start]
+    rate_hz = (len(times) - 1) / (times[-1] - times[0])
+    assert rate_hz >= 20.0 - 1e-6
+    gaps = [b - a for a, b in zip(times, times[1:], strict=False)]
+    assert max(gaps) <= 0.05 + 1e-9
+
+
+@pytest.mark.parametrize("protocol", MOTORS)
+def test_close_commands_zero(protocol):
+    motor, clock = open_motor(protocol, "&arm_s=0" if protocol == "esc_bridge" else "")
+    motor.enable()
+    motor.set_duty(0.6)
+    clock.sleep(3.0)
+    motor.close()
+    assert rotor_duty() == 0.0
+    clock.sleep(5.0)
+    assert rotor_speed(clock) < 0.01 * 0.6 * MAX_SPEED
+
+
+@pytest.mark.parametrize("protocol", MOTORS)
+def test_exception_inside_with_block_commands_zero(protocol):
+    motor, clock = open_motor(protocol, "&arm_s=0" if protocol == "esc_bridge" else "")
+    with pytest.raises(RuntimeError, match="analysis crashed"):
+        with motor:
+            motor.enable()
+            motor.set_duty(0.5)
+            clock.sleep(2.0)
+            assert rotor_duty() == pytest.approx(0.5, abs=1e-3)
+            raise RuntimeError("analysis crashed")
+    assert rotor_duty() == 0.0
+    with pytest.raises(SafetyError):
+        motor.set_duty(0.5)
+
+
+@pytest.mark.parametrize("protocol", MOTORS)
+def test_unplug_is_a_disconnect_and_stop_never_raises(protocol):
+    motor, clock = open_motor(protocol, "&faults=disconnect_at:1")
+    clock.sleep(1.5)
+    with pytest.raises(DeviceDisconnected) as info:
+        motor.status()
+    assert "rotor_motor" in str(info.value) and "disconnected" in str(info.value)
+    motor.stop()
+    motor.close()
+
+
+@pytest.mark.parametrize("protocol", MOTORS)
+def test_missing_reply_is_a_timeout_naming_device_and_command(protocol):
+    motor, clock = open_motor(protocol, "&faults=drop_reply:1")
+    with pytest.raises(DeviceTimeout) as info:
+        motor.status()
+    message = str(info.value)
+    assert "rotor_motor" in message and ("get variable 0" in message or "GET_VALUES" in message)
+
+
+@pytest.mark.parametrize("protocol", MOTORS)
+def test_garbage_and_split_replies_still_give_true_status(protocol):
+    motor, clock = open_motor(protocol, "&faults=garbage:0.1,split:0.5&arm_s=0")
+    motor.enable()
+    motor.set_duty(0.3)
+    clock.sleep(4.0)
+    for _ in range(10):
+        status = motor.status()
+        assert status.duty == pytest.approx(0.3, abs=1e-3)
+        assert status.input_voltage_v in (12.0, 24.0)
+
+
+# ---- Pololu SMC specifics ---------------------------------------------------------------------
+
+def test_smc_reports_safe_start_until_enabled_and_identifies():
+    motor, clock = open_motor("pololu_smc")
+    assert motor.identify() == {"model": "pololu-smc-g2", "product_id": 0xA1, "firmware": "1.04"}
+    assert motor.status().errors == {"safe_start_violation"}
+    motor.enable()
+    assert motor.status().errors == frozenset()
+    assert motor.reset_flags() == "power_or_brownout"
+
+
+def test_smc_pololu_protocol_with_crc_and_device_number():
+    motor, clock = open_motor("pololu_smc", "&crc=1&device_number=7", device_number=7, crc=True)
+    motor.enable()
+    motor.set_duty(-0.5)
+    clock.sleep(4.0)
+    assert rotor_speed(clock) == pytest.approx(-0.5 * MAX_SPEED, rel=1e-3)
+    assert motor.status().target_duty == pytest.approx(-0.5)
+
+
+def test_smc_crc_mismatch_is_refused_by_the_controller_and_the_driver_says_so():
+    motor, clock = open_motor("pololu_smc", "&crc=1")   # controller expects CRC, driver sends none
+    motor.enable()
+    motor.set_duty(0.5)
+    clock.sleep(1.0)
+    assert rotor_duty() == 0.0
+    with pytest.raises(DeviceTimeout) as info:
+        motor.status()
+    assert "get variable 0" in str(info.value)
+
+
+def test_smc_overload_error_stops_the_motor_and_is_reported():
+    motor, clock = open_motor("pololu_smc", "&faults=overload")
+    motor.enable()
+    motor.set_duty(0.5)
+    clock.sleep(2.0)
+    status = motor.status()
+    assert "over_temperature" in status.errors and status.duty == 0.0
+    assert rotor_duty() == 0.0
+
+
+def test_smc_reset_rearms_safe_start_and_the_driver_does_not_restart_it():
+    motor, clock = open_motor("pololu_smc", "&faults=reset_at:2")
+    motor.enable()
+    motor.set_duty(0.5)
+    clock.sleep(5.0)
+    status = motor.status()
+    assert "safe_start_violation" in status.errors and status.duty == 0.0
+    assert rotor_duty() == 0.0
+    assert motor.reset_flags() == "watchdog"
+
+
+def test_smc_command_timeout_stops_a_motor_whose_host_went_silent():
+    motor, clock = open_motor("pololu_smc", "&command_timeout_ms=200")
+    motor.enable()
+    motor.set_duty(0.5)
+    clock.sleep(3.0)                 # the 20 Hz keep-alive holds it
+    assert "command_timeout" not in motor.status().errors
+    motor._job.cancel()              # the host process hangs: no more refreshes
+    clock.sleep(1.0)
+    assert "command_timeout" in motor.status().errors
+    assert rotor_duty() == 0.0
+
+
+# ---- ESC bridge specifics ---------------------------------------------------------------------
+
+def test_esc_bridge_is_one_direction_and_waits_for_the_esc_to_arm():
+    motor, clock = open_motor("esc_bridge", "&arm_s=1.0")
+    assert motor.identify() == {"model": "esc_bridge"}
+    motor.enable()
+    with pytest.raises(ValueError):
+        motor.set_duty(-0.2)
+    motor.set_duty(0.5)
+    assert rotor_duty() == 0.0           # ESC not armed yet
+    clock.sleep(2.0)
+    assert rotor_duty() == pytest.approx(0.5, abs=1e-3)
+
+
+def test_esc_bridge_refuses_pololu_only_options():
+    with pytest.raises(ValueError):
+        open_motor("esc_bridge", crc=True)
+
+
+def test_esc_bridge_wrong_baud_times_out():
+    motor, clock = open_motor("esc_bridge", settings={"baudrate": 9600})
+    with pytest.raises(DeviceError):
+        motor.status()
+
+
+# ---- VESC specifics ----------------------------------------------------------------------------
+
+def test_vesc_speed_command_in_erpm_with_pole_pairs():
+    motor, clock = open_motor("vesc", "&pole_pairs=7", pole_pairs=7)
+    assert motor.identify() == {"model": "vesc", "firmware": "6.02", "hardware": "labkit-emu"}
+    motor.enable()
+    motor.set_speed(1000.0)
+    clock.sleep(5.0)
+    status = motor.status()
+    assert rotor_speed(clock) == pytest.approx(1000.0, rel=1e-3)
+    assert status.speed_rad_s == pytest.approx(1000.0, rel=1e-3)
+
+
+def test_vesc_erpm_limit_caps_the_speed():
+    motor, clock = open_motor("vesc", "&pole_pairs=7&max_erpm=70000", pole_pairs=7)
+    motor.enable()
+    motor.set_speed(20_000 * RAD_S_PER_RPM)      # 140 000 ERPM asked
+    clock.sleep(5.0)
+    assert motor.status().speed_rad_s == pytest.approx(10_000 * RAD_S_PER_RPM, rel=1e-3)
+
+
+def test_vesc_comm_timeout_releases_the_motor():
+    motor, clock = open_motor("vesc")
+    motor.enable()
+    motor.set_duty(0.5)
+    clock.sleep(2.0)
+    motor._job.cancel()               # host hangs
+    clock.sleep(1.5)
+    assert "comm_timeout" in motor.status().errors
+    assert rotor_duty() == 0.0
+
+
+@pytest.mark.parametrize("faults, name", [("fault_code:5", "over_temp_fet"),
+                                         ("overload", "abs_over_current")])
+def test_vesc_fault_codes_stop_the_motor_and_are_reported(faults, name):
+    motor, clock = open_motor("vesc", f"&faults={faults}")
+    motor.enable()
+    motor.set_duty(0.5)
+    clock.sleep(2.0)
+    assert rotor_duty() == 0.0
+    assert name in motor.status().errors
+
+
+def test_vesc_watchdog_reset_releases_the_motor_and_reports_fault_10():
+    motor, clock = open_motor("vesc", "&faults=reset_at:2")
+    motor.enable()
+    motor.set_duty(0.5)
+    clock.sleep(4.0)
+    assert rotor_duty() == 0.0
+    assert "booting_from_watchdog_reset" in motor.status().errors
+
+
+def test_vesc_wrong_baud_times_out_naming_the_request():
+    motor, clock = open_motor("vesc", settings={"baudrate": 9600})
+    with pytest.raises(DeviceTimeout) as info:
+        motor.status()
+    assert "GET_VALUES" in str(info.value)
