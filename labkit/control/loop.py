@@ -108,17 +108,17 @@ class SpeedLoop:
         dt = self.period_s if self.last_t is None else max(0.0, t - self.last_t)
         self.last_t = t
         measured = self._measure(t)
+        self.setpoint = ramp_toward(self.setpoint, self.target, self.max_ramp, dt)
+        if self.target > 0 and not self.enabled:
+            self.motor.enable()
+            self.enabled = True
         due = self.last_status_t is None or t - self.last_status_t >= self.status_period - 1e-9
-        if due:  # also before enabling: never arm a controller that reports errors
+        if self.enabled and due:  # right after enabling too: before any duty is sent
             self.last_status_t = t
             errors = self.motor.status().errors
             if errors:
                 raise Tripped(f"motor controller {self.motor.name} reports errors: "
                               f"{', '.join(sorted(errors))}")
-        self.setpoint = ramp_toward(self.setpoint, self.target, self.max_ramp, dt)
-        if self.target > 0 and not self.enabled:
-            self.motor.enable()
-            self.enabled = True
         if self.enabled:
             duty = pi_step(self.gains, self.state, self.setpoint,
                            measured if measured is not None else 0.0, dt)
