@@ -99,7 +99,7 @@ class StreamReader:
         """Raise the reader's error (e.g. disconnect) in the caller's thread."""
         if self.error is not None:
             err = self.error
-            if isinstance(err, serial.SerialException):
+            if isinstance(err, (serial.SerialException, OSError)):  # OSError: EIO from a hung-up pty/USB
                 raise DeviceDisconnected(self.device, "stream", self.last_bytes, str(err)) from err
             raise err
 
