@@ -1,0 +1,113 @@
+"""Pattern curves drawn by the reflected laser beam, as complex-valued functions of a parameter t.
+
+Every pattern is ``z(t) = c + A exp(i t) + B exp(i k t)`` with complex ``c, A, B`` and an integer
+``k`` (``z = x + i y`` in pixel coordinates, y pointing down):
+
+* ``k = -1`` is an ellipse (the conical motion of Sec. 5.2.3, Fig. 5.19/5.20); ``B = 0`` a circle;
+* ``k = n >= 2`` is an epitrochoid, ``k = 1 - n <= -2`` a hypotrochoid with ``n`` loops (the main
+  loop and the small ones, Sec. 6.5, Fig. 6.19).
+
+Eq. 6.38, ``x = cos t + b cos((1+a)/a t)``, ``y = sin t + b sin((1+a)/a t)``, is the case
+``A = scale``, ``B = scale * b``, ``k = (1+a)/a``; so ``a = 1/(k-1)``: ``a = 1/(n-1)`` for an
+epitrochoid with ``n`` loops and ``a = -1/n`` for a hypotrochoid with ``n`` loops (``a = -1/3``,
+three arms, is the small plot of Fig. 6.19).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def k_for(kind: str, loops: int) -> int:
+    """Frequency ratio k of Eq. 6.38 for a pattern kind and loop count (ellipse: k = -1)."""
+    if kind in ("circle", "ellipse"):
+        return -1
+    if kind == "epitrochoid":
+        if loops < 2:
+            raise ValueError("an epitrochoid has at least 2 loops")
+        return loops
+    if kind == "hypotrochoid":
+        if loops < 3:
+            raise ValueError("a hypotrochoid has at least 3 loops (2 loops is an ellipse)")
+        return 1 - loops
+    raise ValueError(f"unknown pattern kind {kind!r}")
+
+
+def a_for_k(k: int) -> float:
+    """Parameter a of Eq. 6.38 from the frequency ratio k = (1+a)/a."""
+    return 1.0 / (k - 1)
+
+
+def loops_for_k(k: int) -> int:
+    """Loop count (main loop plus small loops) of a trochoid with ratio k (Sec. 6.5)."""
+    return k if k >= 2 else 1 - k
+
+
+@dataclass(frozen=True)
+class Pattern:
+    """A pattern in canonical form: ``c + s R(rot) [cos t + b cos k t, sin t + b sin k t]``
+    for trochoids (Eq. 6.38), or centre, semi-axes and rotation for an ellipse."""
+
+    kind: str  # circle | ellipse | epitrochoid | hypotrochoid
+    center: tuple[float, float]
+    rotation_rad: float = 0.0
+    semi_axes: tuple[float, float] = (0.0, 0.0)  # ellipse: major, minor (px)
+    scale: float = 0.0  # trochoid: radius of the main circle (px)
+    b: float = 0.0  # trochoid: relative radius of the second term
+    loops: int = 1
+
+    @property
+    def k(self) -> int:
+        return k_for(self.kind, self.loops)
+
+    def coefficients(self) -> tuple[complex, complex, complex, int]:
+        """Complex ``(c, A, B, k)`` with ``z(t) = c + A e^{it} + B e^{ikt}``."""
+        c = complex(*self.center)
+        rot = complex(math.cos(self.rotation_rad), math.sin(self.rotation_rad))
+        if self.kind in ("circle", "ellipse"):
+            major, minor = self.semi_axes
+            # x' = M cos t, y' = m sin t  ->  (M+m)/2 e^{it} + (M-m)/2 e^{-it}
+            return c, rot * (major + minor) / 2, rot * (major - minor) / 2, -1
+        return c, rot * self.scale, rot * self.scale * self.b, self.k
+
+    def points(self, t: np.ndarray) -> np.ndarray:
+        """Curve points (N, 2) at parameters ``t``."""
+        c, a_coef, b_coef, k = self.coefficients()
+        z = c + a_coef * np.exp(1j * t) + b_coef * np.exp(1j * k * t)
+        return np.column_stack([z.real, z.imag])
+
+
+def ellipse_from_coefficients(c: complex, a_coef: complex, b_coef: complex) -> Pattern:
+    """Canonical ellipse (major first, rotation of the major axis in [0, 180) deg) from
+    ``c + A e^{it} + B e^{-it}``: semi-axes are ``|A| +- |B|``, the major axis lies at
+    ``(arg A + arg B) / 2``."""
+    major = abs(a_coef) + abs(b_coef)
+    minor = abs(abs(a_coef) - abs(b_coef))
+    rot = 0.5 * (np.angle(a_coef) + np.angle(b_coef)) if abs(b_coef) > 0 else 0.0
+    rot = float(rot % math.pi)
+    kind = "ellipse"
+    return Pattern(kind, (c.real, c.imag), rot, (float(major), float(minor)), loops=1)
+
+
+def trochoid_from_coefficients(c: complex, a_coef: complex, b_coef: complex, k: int) -> Pattern:
+    """Canonical trochoid from ``c + A e^{it} + B e^{ikt}``: reparametrise ``t -> t + tau`` so
+    that both terms share one phase, which is then the rotation. The rotation is defined modulo
+    the curve's symmetry ``2 pi / |k - 1|``; the value returned lies in ``[0, 2 pi / |k-1|)``."""
+    # want arg(A) + tau == arg(B) + k tau  (mod 2 pi)  ->  tau = (arg A - arg B) / (k - 1)
+    tau = (np.angle(a_coef) - np.angle(b_coef)) / (k - 1)
+    rot = float(np.angle(a_coef) + tau)
+    sym = 2 * math.pi / abs(k - 1)
+    rot = rot % sym
+    kind = "epitrochoid" if k >= 2 else "hypotrochoid"
+    scale = abs(a_coef)
+    return Pattern(kind, (c.real, c.imag), rot, scale=float(scale), b=float(abs(b_coef) / scale),
+                   loops=loops_for_k(k))
+
+
+def rotation_error_deg(a_rad: float, b_rad: float, period_rad: float) -> float:
+    """Smallest difference between two angles defined modulo ``period_rad``, in degrees."""
+    d = (a_rad - b_rad) % period_rad
+    return math.degrees(min(d, period_rad - d))

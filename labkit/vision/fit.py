@@ -1,0 +1,253 @@
+"""Fit and classify a trace (an unordered, weighted point cloud) as circle, ellipse, epitrochoid
+or hypotrochoid (Sec. 5.2.3 Fig. 5.19/5.20, Sec. 6.5 Eq. 6.38).
+
+All patterns share the model ``z(t) = c + v tau + A e^{it} + B e^{ikt}`` (see
+:mod:`labkit.vision.curves`), where ``tau`` is each point's time relative to the middle of the
+recording and ``v`` a slow linear drift of the pattern centre. With the curve parameter ``t_i`` of
+each point's closest curve point fixed, the model is linear in the complex ``c, v, A, B``; the fit
+alternates closest-point search and a weighted linear least-squares solve (iterative closest
+point). Pure functions: no I/O.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+from scipy.spatial import cKDTree
+
+from labkit.vision.curves import (
+    Pattern,
+    a_for_k,
+    ellipse_from_coefficients,
+    k_for,
+    trochoid_from_coefficients,
+)
+
+CIRCLE_MAX_ELLIPTICITY = 0.02  # below this an ellipse is reported as a circle
+SIMPLER_TOLERANCE = 1.12  # a simpler pattern wins unless a trochoid's residual is this much lower
+MIN_POINTS = 20
+MAX_TROCHOID_B = 1.5  # larger b means the fast term dominates: not a trochoid of Eq. 6.38
+
+
+@dataclass
+class CurveFit:
+    """One fitted model: complex coefficients, drift (px/s), residual and the canonical pattern."""
+
+    k: int
+    c: complex
+    a: complex
+    b: complex
+    drift: complex
+    rms_residual: float
+    pattern: Pattern
+
+
+@dataclass
+class Classification:
+    """The chosen fit, the ellipse fit (always reported: semi-axes, ellipticity) and all candidates'
+    residuals keyed ``"ellipse"``, ``"epitrochoid-3"``..."""
+
+    best: CurveFit
+    ellipse: CurveFit
+    residuals: dict[str, float] = field(default_factory=dict)
+
+
+def _curve(c: complex, a: complex, b: complex, k: int, t: np.ndarray) -> np.ndarray:
+    return c + a * np.exp(1j * t) + b * np.exp(1j * k * t)
+
+
+def _closest_parameters(z: np.ndarray, a: complex, b: complex, k: int, samples: int) -> np.ndarray:
+    """Parameter t of the closest point of the centred curve ``A e^{it} + B e^{ikt}`` to each z:
+    nearest of ``samples`` curve points, then two Newton steps on ``|z(t) - p|^2``."""
+    ts = np.linspace(0.0, 2 * math.pi, samples, endpoint=False)
+    curve = _curve(0j, a, b, k, ts)
+    tree = cKDTree(np.column_stack([curve.real, curve.imag]))
+    _, idx = tree.query(np.column_stack([z.real, z.imag]))
+    return _newton_parameters(z, a, b, k, ts[idx], 2)
+
+
+def _newton_parameters(z: np.ndarray, a: complex, b: complex, k: int, t: np.ndarray,
+                       steps: int) -> np.ndarray:
+    """Refine closest-point parameters by Newton steps on ``|A e^{it} + B e^{ikt} - z|^2``."""
+    for _ in range(steps):
+        e1, ek = np.exp(1j * t), np.exp(1j * k * t)
+        d = a * e1 + b * ek - z
+        d1 = 1j * (a * e1 + k * b * ek)
+        d2 = -(a * e1 + k * k * b * ek)
+        g = (np.conj(d) * d1).real
+        h = (np.abs(d1) ** 2 + (np.conj(d) * d2).real)
+        step = np.where(h > 1e-12, g / np.maximum(h, 1e-12), 0.0)
+        t = t - np.clip(step, -0.2, 0.2)
+    return t
+
+
+def _icp(z: np.ndarray, w: np.ndarray, tau: np.ndarray, k: int, c: complex, a: complex, b: complex,
+         iterations: int, fit_drift: bool, samples: int) -> CurveFit:
+    sw = np.sqrt(w)
+    v = 0j
+    t = None
+    for it in range(iterations):
+        if it % 6 == 0:
+            t = _closest_parameters(z - c - v * tau, a, b, k, samples)
+        else:
+            t = _newton_parameters(z - c - v * tau, a, b, k, t, 2)
+        cols = [np.ones_like(z), np.exp(1j * t), np.exp(1j * k * t)]
+        if fit_drift:
+            cols.append(tau.astype(complex))
+        m = np.column_stack(cols) * sw[:, None]
+        sol, *_ = np.linalg.lstsq(m, z * sw, rcond=None)
+        new = (sol[0], sol[1], sol[2], sol[3] if fit_drift else 0j)
+        moved = abs(new[0] - c) + abs(new[1] - a) + abs(new[2] - b)
+        c, a, b, v = new
+        if moved < 1e-3 and it % 6 == 5:
+            break
+    t = _closest_parameters(z - c - v * tau, a, b, k, samples)
+    r = np.abs(_curve(c, a, b, k, t) + v * tau - z)
+    rms = float(np.sqrt(np.sum(w * r * r) / np.sum(w)))
+    if k != -1 and not abs(b) <= MAX_TROCHOID_B * abs(a):
+        rms = math.inf  # degenerate: the second term dominates (a circle traced |k| times)
+    if k == -1:
+        pattern = ellipse_from_coefficients(c, a, b)
+    else:
+        pattern = trochoid_from_coefficients(c, a, b, k)
+    return CurveFit(k, c, a, b, v, rms, pattern)
+
+
+def _ellipse_start(z: np.ndarray) -> tuple[complex, complex, complex]:
+    pts = np.column_stack([z.real, z.imag]).astype(np.float32)
+    (cx, cy), (w_, h_), ang = cv2.fitEllipseAMS(pts)
+    if not all(map(math.isfinite, (cx, cy, w_, h_, ang))) or max(w_, h_) <= 0:
+        (cx, cy), (w_, h_), ang = cv2.fitEllipse(pts)
+    # OpenCV: full axes (w, h), w along angle; normalise to major first
+    major, minor, rot = w_ / 2, h_ / 2, math.radians(ang)
+    if minor > major:
+        major, minor, rot = minor, major, rot + math.pi / 2
+    e = complex(math.cos(rot), math.sin(rot))
+    return complex(cx, cy), e * (major + minor) / 2, e * (major - minor) / 2
+
+
+def _arc_uniform_canonical(b: float, k: int, n: int = 4096) -> np.ndarray:
+    t = np.linspace(0, 2 * math.pi, n, endpoint=False)
+    zc = _curve(0j, 1.0, b, k, t)
+    speed = np.abs(1j * np.exp(1j * t) + 1j * k * b * np.exp(1j * k * t))
+    return zc, speed
+
+
+def _trochoid_starts(z: np.ndarray, w: np.ndarray, k: int, bs: tuple[float, ...]):
+    """Starting coefficients for a trochoid: match the point cloud's centroid, rms radius and the
+    phase of its m-fold angular moment (m = |k - 1|, the curve's rotational symmetry) to those of
+    the canonical curve sampled uniformly in arc length."""
+    cen = complex(np.sum(w * z) / np.sum(w))
+    d = z - cen
+    rms = math.sqrt(float(np.sum(w * np.abs(d) ** 2) / np.sum(w)))
+    m = abs(k - 1)
+    mom = np.sum(w * np.abs(d) * np.exp(-1j * m * np.angle(d)))
+    for b in bs:
+        zc, speed = _arc_uniform_canonical(b, k)
+        cen_c = complex(np.sum(speed * zc) / np.sum(speed))
+        dc = zc - cen_c
+        rms_c = math.sqrt(float(np.sum(speed * np.abs(dc) ** 2) / np.sum(speed)))
+        mom_c = np.sum(speed * np.abs(dc) * np.exp(-1j * m * np.angle(dc)))
+        s = rms / rms_c
+        rho = (np.angle(mom_c) - np.angle(mom)) / m if abs(mom) > 0 else 0.0
+        e = complex(math.cos(rho), math.sin(rho))
+        yield cen - s * e * cen_c, s * e, s * b * e
+
+
+def fit_ellipse(points: np.ndarray, weights: np.ndarray | None = None, times: np.ndarray | None = None,
+                iterations: int = 30) -> CurveFit:
+    """Geometric ellipse fit (major first; rotation of the major axis) with optional linear drift."""
+    z, w, tau = _prepare(points, weights, times)
+    c, a, b = _ellipse_start(z)
+    return _icp(z, w, tau, -1, c, a, b, iterations, times is not None, 1440)
+
+
+def fit_trochoid(points: np.ndarray, kind: str, loops: int, weights: np.ndarray | None = None,
+                 times: np.ndarray | None = None, iterations: int = 90,
+                 b_starts: tuple[float, ...] = (0.15, 0.45, 0.9)) -> CurveFit:
+    """Fit an epitrochoid or hypotrochoid (Eq. 6.38) with ``loops`` loops; best of a few starts."""
+    z, w, tau = _prepare(points, weights, times)
+    k = k_for(kind, loops)
+    samples = 360 * abs(k)
+    best = None
+    for c, a, b in _trochoid_starts(z, w, k, b_starts):
+        fit = _icp(z, w, tau, k, c, a, b, iterations, times is not None, samples)
+        if best is None or fit.rms_residual < best.rms_residual:
+            best = fit
+    return best
+
+
+def _prepare(points, weights, times):
+    pts = np.asarray(points, dtype=float)
+    if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < MIN_POINTS:
+        raise ValueError(f"need at least {MIN_POINTS} points (N, 2), got shape {pts.shape}")
+    z = pts[:, 0] + 1j * pts[:, 1]
+    w = np.ones(len(z)) if weights is None else np.asarray(weights, dtype=float)
+    tau = np.zeros(len(z)) if times is None else np.asarray(times, dtype=float) - np.mean(times)
+    return z, w, tau
+
+
+def _subsample(n: int, keep: int, seed: int = 0) -> np.ndarray:
+    if n <= keep:
+        return np.arange(n)
+    return np.sort(np.random.default_rng(seed).choice(n, keep, replace=False))
+
+
+def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.ndarray | None = None,
+             max_points: int = 3000, screen_points: int = 600,
+             trochoid_loops: range = range(2, 8)) -> Classification:
+    """Fit every candidate (ellipse, epitrochoids with 2-7 loops, hypotrochoids with 3-7 loops) on a
+    subsample, refine the two best on up to ``max_points`` points, and pick the simplest pattern
+    that explains the trace (a trochoid must beat the ellipse's residual by ``SIMPLER_TOLERANCE``)."""
+    pts = np.asarray(points, dtype=float)
+    w = None if weights is None else np.asarray(weights, dtype=float)
+    tm = None if times is None else np.asarray(times, dtype=float)
+
+    def take(idx):
+        return pts[idx], (None if w is None else w[idx]), (None if tm is None else tm[idx])
+
+    full = take(_subsample(len(pts), max_points))
+    screen = take(_subsample(len(pts), screen_points, seed=1))
+    ellipse = fit_ellipse(*full)
+    residuals = {"ellipse": ellipse.rms_residual}
+    screened: list[CurveFit] = []
+    for kind, first in (("epitrochoid", 2), ("hypotrochoid", 3)):
+        for loops in trochoid_loops:
+            if loops < first:
+                continue
+            screened.append(fit_trochoid(screen[0], kind, loops, screen[1], screen[2], iterations=18))
+    screened.sort(key=lambda f: f.rms_residual)
+    for f in screened:
+        residuals[_name(f)] = f.rms_residual
+    best = ellipse
+    z, w_, tau = _prepare(*full)
+    for f in screened[:2]:
+        if not math.isfinite(f.rms_residual):
+            continue
+        fit = _icp(z, w_, tau, f.k, f.c, f.a, f.b, 60, full[2] is not None, 360 * abs(f.k))
+        residuals[_name(fit)] = fit.rms_residual
+        if fit.rms_residual * SIMPLER_TOLERANCE < best.rms_residual:
+            best = fit
+    return Classification(best, ellipse, residuals)
+
+
+def _name(fit: CurveFit) -> str:
+    return f"{fit.pattern.kind}-{fit.pattern.loops}"
+
+
+def pattern_kind(fit: CurveFit) -> str:
+    """``circle`` for an ellipse with ellipticity below ``CIRCLE_MAX_ELLIPTICITY``, else the kind."""
+    p = fit.pattern
+    if p.kind == "ellipse":
+        major, minor = p.semi_axes
+        if major > 0 and 1 - minor / major < CIRCLE_MAX_ELLIPTICITY:
+            return "circle"
+    return p.kind
+
+
+def trochoid_a(fit: CurveFit) -> float:
+    """Parameter a of Eq. 6.38 for a fitted trochoid."""
+    return a_for_k(fit.k)

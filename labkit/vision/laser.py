@@ -1,0 +1,186 @@
+"""Laser-trace analysis: frames -> accumulated trace -> pattern fit -> JSON-ready dict.
+
+Per frame the only work is a running per-pixel maximum into the accumulator of the current time
+chunk (about as cheap as decoding), so full analysis keeps pace with reading the video. Each
+chunk's accumulation is then turned into trace points (:mod:`labkit.vision.trace`) stamped with
+the chunk's mid time; the fit (:mod:`labkit.vision.fit`) carries a linear drift of the centre.
+Tilt amplitudes: the reflected beam turns by twice the magnet's tilt, so a semi-axis ``r`` on a
+screen at distance ``L`` is a tilt of ``atan(r / L) / 2`` (Sec. 5.2.3, Fig. 5.19/5.20).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+
+import cv2
+import numpy as np
+
+from labkit.errors import VideoError
+from labkit.vision.curves import a_for_k
+from labkit.vision.fit import MIN_POINTS, classify, pattern_kind
+from labkit.vision.frames import FrameSource, open_frames
+from labkit.vision.trace import trace_points
+
+FrameHook = Callable[[int, float, np.ndarray], None]
+MAX_POINTS_PER_CHUNK = 4000
+
+
+@dataclass
+class LaserQuality:
+    """Speed/accuracy settings: analyse every ``stride``-th frame, inside ``roi`` (x, y, w, h),
+    ``"auto"`` (found from the first chunk) or None (whole frame), with or without sub-pixel
+    intensity weights, in ``chunks`` time chunks (drift resolution)."""
+
+    stride: int = 1
+    roi: tuple[int, int, int, int] | str | None = None
+    subpixel: bool = True
+    chunks: int = 8
+
+
+@dataclass
+class Chunk:
+    image: np.ndarray
+    offset: tuple[int, int]
+    first: int
+    last: int
+
+
+def tilt_from_semi_axis(semi_axis_px: float, mm_per_px: float, screen_distance_mm: float) -> float:
+    """Magnet tilt amplitude (rad) from a pattern semi-axis: the beam turns by twice the tilt."""
+    return 0.5 * math.atan(semi_axis_px * mm_per_px / screen_distance_mm)
+
+
+def _clip_roi(roi: tuple[int, int, int, int], size: tuple[int, int]) -> tuple[int, int, int, int]:
+    x, y, w, h = (int(v) for v in roi)
+    x0, y0 = max(0, x), max(0, y)
+    x1, y1 = min(size[0], x + w), min(size[1], y + h)
+    if x1 - x0 < 8 or y1 - y0 < 8:
+        raise ValueError(f"region of interest {roi} lies outside the {size[0]}x{size[1]} frame")
+    return x0, y0, x1 - x0, y1 - y0
+
+
+def _auto_roi(chunk: Chunk, size: tuple[int, int]) -> tuple[int, int, int, int] | None:
+    tp = trace_points(chunk.image, chunk.offset, subpixel=False)
+    if len(tp.points) < MIN_POINTS:
+        return None
+    (x0, y0), (x1, y1) = tp.points.min(axis=0), tp.points.max(axis=0)
+    margin = 0.3 * max(x1 - x0, y1 - y0) + 0.04 * max(size)
+    return _clip_roi((x0 - margin, y0 - margin, x1 - x0 + 2 * margin, y1 - y0 + 2 * margin), size)
+
+
+def accumulate(source: FrameSource, quality: LaserQuality, on_frame: FrameHook | None = None) -> list[Chunk]:
+    """Running per-pixel maximum of the frames, one accumulator per time chunk."""
+    per_chunk = (max(1, math.ceil(source.frame_count / quality.chunks)) if source.frame_count > 0 else 30)
+    roi = quality.roi if isinstance(quality.roi, tuple) else None
+    if roi is not None:
+        roi = _clip_roi(roi, source.size)
+    chunks: list[Chunk] = []
+    fps = source.fps or 1.0
+    for index, frame in source.frames(quality.stride):
+        if on_frame is not None:
+            on_frame(index, index / fps, frame)
+        ci = index // per_chunk
+        if not chunks or ci != chunks[-1].first // per_chunk:
+            if quality.roi == "auto" and roi is None and chunks:
+                roi = _auto_roi(chunks[0], source.size)
+            x, y, w, h = roi if roi is not None else (0, 0, *source.size)
+            chunks.append(Chunk(frame[y:y + h, x:x + w].copy(), (x, y), index, index))
+            continue
+        c = chunks[-1]
+        x, y = c.offset
+        h, w = c.image.shape[:2]
+        cv2.max(c.image, frame[y:y + h, x:x + w], dst=c.image)
+        c.last = index
+    return chunks
+
+
+def _check_exposure(chunks: list[Chunk], name: str) -> None:
+    levels = np.concatenate([c.image.ravel()[:: max(1, c.image.size // 200000)] for c in chunks])
+    if levels.max() < 16:
+        raise VideoError(name, f"all frames are black (brightest grey level {int(levels.max())})")
+    if np.percentile(levels, 5) > 245:
+        raise VideoError(name, "all frames are white (saturated); reduce exposure or gain")
+
+
+def _none(reason: str) -> dict:
+    return {"type": "none", "reason": reason, "center_px": None, "semi_axes_px": None,
+            "rotation_deg": None, "ellipticity": None, "loops": None, "trochoid": None,
+            "rms_residual_px": None}
+
+
+def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | None) -> tuple[dict, dict]:
+    """Classify and fit a trace; returns the JSON ``pattern`` object and fit diagnostics."""
+    cls = classify(points, weights, times)
+    best, ell = cls.best, cls.ellipse.pattern
+    major, minor = ell.semi_axes
+    kind = pattern_kind(cls.best)
+    p = best.pattern
+    trochoid = None
+    if p.kind in ("epitrochoid", "hypotrochoid"):
+        rotation = math.degrees(p.rotation_rad)
+        trochoid = {"a": a_for_k(best.k), "b": p.b, "scale_px": p.scale, "rotation_deg": rotation}
+        loops = p.loops
+    else:
+        rotation, loops = math.degrees(ell.rotation_rad), 1
+    pattern = {"type": kind, "center_px": [p.center[0], p.center[1]], "semi_axes_px": [major, minor],
+               "rotation_deg": rotation, "ellipticity": 1 - minor / major if major > 0 else 0.0,
+               "loops": loops, "trochoid": trochoid, "rms_residual_px": best.rms_residual}
+    residuals = {k: (v if math.isfinite(v) else None) for k, v in cls.residuals.items()}
+    diag = {"drift_px_s": [float(best.drift.real), float(best.drift.imag)],
+            "candidate_residuals_px": residuals}
+    return pattern, diag
+
+
+def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px: float | None = None,
+                  quality: LaserQuality | None = None, on_frame: FrameHook | None = None) -> dict:
+    """Analyse a laser-trace video or long-exposure photo; returns the ``labkit analyse laser`` JSON.
+
+    ``on_frame(index, t_s, bgr)`` is called for every analysed frame (live streams hook in here;
+    the frame buffer is reused, copy it to keep it). Raises :class:`VideoError` for unusable input;
+    a usable file without a trace gives ``pattern.type == "none"`` with a reason.
+    """
+    quality = quality or LaserQuality()
+    t_start = time.perf_counter()
+    source = open_frames(path)
+    chunks = accumulate(source, quality, on_frame)
+    _check_exposure(chunks, source.path)
+    fps = source.fps or 0.0
+    pts, wts, tms = [], [], []
+    peak = noise = 0.0
+    rng = np.random.default_rng(0)
+    for c in chunks:
+        tp = trace_points(c.image, c.offset, quality.subpixel)
+        peak, noise = max(peak, tp.peak), max(noise, tp.noise)
+        if len(tp.points) > MAX_POINTS_PER_CHUNK:
+            keep = rng.choice(len(tp.points), MAX_POINTS_PER_CHUNK, replace=False)
+            tp.points, tp.weights = tp.points[keep], tp.weights[keep]
+        pts.append(tp.points)
+        wts.append(tp.weights)
+        t_mid = 0.5 * (c.first + c.last) / fps if fps else 0.0
+        tms.append(np.full(len(tp.points), t_mid))
+    points = np.concatenate(pts) if pts else np.zeros((0, 2))
+    weights, times = np.concatenate(wts), np.concatenate(tms)
+    qual = {"frames_analysed": len(range(0, source.frames_read, quality.stride)),
+            "stride": quality.stride, "roi": list(chunks[-1].offset) + list(chunks[-1].image.shape[1::-1]),
+            "subpixel": quality.subpixel, "chunks": len(chunks), "trace_points": int(len(points)),
+            "peak_level": peak, "noise_level": noise, "truncated": source.truncated}
+    if len(points) < MIN_POINTS:
+        reason = ("no light above the background noise" if len(points) == 0
+                  else f"only {len(points)} trace pixels found")
+        pattern, tilt = _none(reason), None
+    else:
+        use_times = times if (len(chunks) > 1 and fps) else None
+        pattern, diag = pattern_dict(points, weights, use_times)
+        qual.update(diag)
+        tilt = None
+        if screen_distance_mm and mm_per_px:
+            major, minor = pattern["semi_axes_px"]
+            tilt = {"major": tilt_from_semi_axis(major, mm_per_px, screen_distance_mm),
+                    "minor": tilt_from_semi_axis(minor, mm_per_px, screen_distance_mm)}
+    qual["settings"] = asdict(quality)
+    qual["elapsed_s"] = time.perf_counter() - t_start
+    return {"source": source.path, "frames": source.frames_read, "fps": fps, "size": list(source.size),
+            "pattern": pattern, "tilt_rad": tilt, "quality": qual}
