@@ -202,6 +202,7 @@ class LabkitTachometer(StreamingTachometer):
             self._replies.append(line)
             return None
         sample = parse_tach_sample(line)
+        self._alive = True  # a well-formed line, even at another PPR: the device is there
         if not consistent_with_ppr(sample, self.ppr):
             raise ValueError(f"rpm {sample.rpm} disagrees with period {sample.period_us} us, ppr {self.ppr}")
         with self._state_lock:

@@ -1,0 +1,66 @@
+"""Motor drivers against their emulators on real pseudo-terminals with a real clock: the
+keep-alive runs on its own thread, close commands zero, an unplug is a clear error."""
+
+from __future__ import annotations
+
+import pytest
+
+from labkit.devices.base import driver_class
+from labkit.emulators.plant import reset_plants, shared_plant
+from labkit.errors import DeviceDisconnected
+from labkit.io.clock import RealClock
+from labkit.io.ports import open_port
+from labkit.io.pty_host import PtyHost
+from labkit.io.sim_port import build_emulator
+
+pytestmark = pytest.mark.timeout(30)
+
+
+@pytest.fixture(autouse=True)
+def _fresh_plants():
+    reset_plants()
+    yield
+    reset_plants()
+
+
+def open_on_pty(host: PtyHost, protocol: str, clock: RealClock, **options):
+    cls = driver_class("motor", protocol)
+    port = open_port(host.path, clock=clock, timeout=0, **cls.default_serial)
+    return cls(port, clock, name=f"motor on {host.path}", **options)
+
+
+@pytest.mark.parametrize("protocol, query", [
+    ("pololu_smc", "command_timeout_ms=200"),
+    ("esc_bridge", "arm_s=0"),
+    ("vesc", "timeout_ms=200"),
+])
+def test_motor_over_a_pty_keeps_alive_and_stops_on_close(protocol, query):
+    clock = RealClock()
+    emulator = build_emulator(f"sim://{protocol}?plant=pty&{query}")
+    plant = shared_plant("pty")
+    with PtyHost(emulator, clock=clock) as host:
+        motor = open_on_pty(host, protocol, clock)
+        motor.identify()
+        motor.enable()
+        motor.set_duty(0.3)
+        clock.sleep(0.6)    # three times the controller's command timeout
+        status = motor.status()
+        assert status.duty == pytest.approx(0.3, abs=1e-3) and not status.errors
+        assert plant.motor("rotor").duty == pytest.approx(0.3, abs=1e-3)
+        motor.close()
+        clock.sleep(0.05)
+        assert plant.motor("rotor").duty == 0.0
+
+
+def test_unplugged_motor_controller_is_a_clear_error_and_stop_is_quiet():
+    clock = RealClock()
+    emulator = build_emulator("sim://pololu_smc?plant=pty&faults=disconnect_at:0.3")
+    with PtyHost(emulator, clock=clock) as host:
+        motor = open_on_pty(host, "pololu_smc", clock)
+        motor.enable()
+        motor.set_duty(0.2)
+        clock.sleep(0.5)
+        with pytest.raises(DeviceDisconnected) as info:
+            motor.status()
+        assert host.paths[0] in str(info.value)
+        motor.close()    # must not raise on the dead port
