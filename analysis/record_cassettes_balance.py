@@ -29,7 +29,7 @@ SESSIONS: dict[str, tuple[str, str, dict[str, Any], dict[str, Any]]] = {
                 {"baudrate": 2400, "bytesize": 7, "parity": "E", "stopbits": 1}, {}),
     "hx711_adc": ("line_regex", "sim://hx711?seed=3&plant=rec-hx711&preset=hx711_adc&startup_s=0.3",
                   {"baudrate": 57600, "bytesize": 8, "parity": "N", "stopbits": 1},
-                  {"preset": "hx711_adc"}),
+                  {"preset": "hx711_adc", "stable_std": 0.02}),
 }
 
 
