@@ -1,0 +1,95 @@
+"""``labkit ports [--json]``: the serial ports attached to this machine, with rig-file URLs.
+
+For each port: device path, description, USB VID:PID, serial number, location, and a
+``hwgrep://`` URL that finds the same adapter again after it re-enumerates (ttyUSB0 today,
+ttyUSB1 tomorrow); put that URL in the rig file's ``port`` key.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+from typing import Any
+
+NO_PORTS = (
+    "no serial ports found. Plug in the USB-serial adapter and run again; on Linux check "
+    "`dmesg | tail` and that you are in the 'dialout' group. For emulated devices use "
+    "`labkit emulate RIG`."
+)
+
+
+def hwgrep_url(device: str, vid: int | None, pid: int | None, serial_number: str | None) -> str:
+    """The most specific stable URL for a port: USB serial number, else VID:PID, else the path.
+
+    ``hwgrep://`` matches its regular expression against each port's path, description and
+    hardware id (``USB VID:PID=0403:6001 SER=A1B2 LOCATION=1-1.2``), case-insensitively.
+    """
+    if vid is None or pid is None:
+        return device
+    ids = f"{vid:04X}:{pid:04X}"
+    if serial_number:
+        return f"hwgrep://{ids}.*SER={re.escape(serial_number)}"
+    return f"hwgrep://{ids}"
+
+
+def port_row(info: Any) -> dict[str, Any]:
+    """One ``serial.tools.list_ports`` entry as a JSON-friendly dict."""
+    vid, pid = getattr(info, "vid", None), getattr(info, "pid", None)
+    return {
+        "device": info.device,
+        "description": info.description,
+        "vid_pid": f"{vid:04X}:{pid:04X}" if vid is not None and pid is not None else None,
+        "serial_number": info.serial_number,
+        "manufacturer": info.manufacturer,
+        "location": info.location,
+        "hwid": info.hwid,
+        "url": hwgrep_url(info.device, vid, pid, info.serial_number),
+    }
+
+
+def list_port_rows() -> list[dict[str, Any]]:
+    from serial.tools import list_ports
+
+    return [port_row(info) for info in sorted(list_ports.comports(), key=lambda i: i.device)]
+
+
+def format_table(rows: list[dict[str, Any]]) -> str:
+    """Rows as an aligned text table (the non-JSON output)."""
+    headers = ("device", "description", "vid_pid", "serial_number", "location", "url")
+    cells = [[str(r.get(h) or "-") for h in headers] for r in rows]
+    widths = [max(len(h), *(len(c[i]) for c in cells)) for i, h in enumerate(headers)]
+    lines = ["  ".join(h.upper().ljust(w) for h, w in zip(headers, widths, strict=True))]
+    lines += ["  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)) for row in cells]
+    return "\n".join(line.rstrip() for line in lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    rows = list_port_rows()
+    if args.json:
+        print(json.dumps(rows, indent=2))
+    elif not rows:
+        print(NO_PORTS)
+    else:
+        print(format_table(rows))
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    parser = sub.add_parser("ports", help="list attached serial ports and their hwgrep:// URLs",
+                            description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--json", action="store_true", help="print a JSON list instead of a table")
+    parser.set_defaults(func=run)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m labkit.cli.ports [--json]``: the same command without loading every other one."""
+    import sys
+
+    parser = argparse.ArgumentParser(prog="labkit")
+    register(parser.add_subparsers(dest="command"))
+    return run(parser.parse_args(["ports", *(sys.argv[1:] if argv is None else argv)]))
+
+
+if __name__ == "__main__":  # pragma: no cover
+    raise SystemExit(main())
