@@ -1,0 +1,72 @@
+"""The two protocols on their emulated rigs recover the plants' physics."""
+
+import json
+from pathlib import Path
+
+import pytest
+
+from labkit.emulators.plant import SpinCriticalLaw
+from labkit.errors import LabkitError, RigFileError, SafetyError
+from labkit.protocols.launch import execute, prepare_run
+
+RIGS = Path(__file__).resolve().parents[2] / "rigs"
+
+
+def test_speed_sweep_recovers_the_emulated_exponent(tmp_path):
+    prep = prepare_run(RIGS / "emulated-fig525.toml", "speed-sweep",
+                       ["speeds_rpm=6000:20000:2000", "record_s=1.0"], session_root=tmp_path)
+    outcome = execute(prep, tmp_path)
+    assert outcome.status == "completed"
+    results = json.loads((outcome.session / "results.json").read_text())
+    assert results["protocol"] == "speed-sweep"
+    assert len(results["points"]) == 8
+    b = results["fit"]["params"]["b"]
+    assert b["value"] == pytest.approx(-1.9, abs=0.05)   # the emulator's law: 224e6 * rpm^-1.9
+    assert b["stderr"] > 0
+    for point in results["points"]:
+        assert point["speed_rpm"] == pytest.approx(point["target_rpm"], rel=0.01)
+        assert point["force_g"] == pytest.approx(224e6 * point["speed_rpm"] ** -1.9, rel=0.03)
+        assert point["n"] >= 5
+
+
+def test_spin_critical_pairs_follow_the_plant_law(tmp_path):
+    prep = prepare_run(RIGS / "emulated-fig618.toml", "spin-critical",
+                       ["start_rpm=6600", "stop_rpm=11000", "step_pct=15", "max_trials=3"],
+                       session_root=tmp_path)
+    outcome = execute(prep, tmp_path)
+    assert outcome.status == "completed", outcome.reason
+    law = SpinCriticalLaw()  # the fig618 plant: C = 4.7e5, w_ref = 3000 rad/s, 1 % threshold noise
+    points = outcome.results["points"]
+    assert len(points) == 4
+    for p in points:
+        assert not p["no_drop"]
+        expected = law.critical_spin(p["rotor_rad_s"])
+        # 1 % plant noise (3 sigma) plus the tachometer's 0.1 s averaging window while spinning up
+        assert p["spin_rad_s"] == pytest.approx(expected, rel=0.03, abs=15), p
+        assert p["k"] == pytest.approx(p["spin_rad_s"] / p["rotor_rad_s"] - 1)
+    c = outcome.results["fit"]["params"]["C"]
+    assert c["value"] == pytest.approx(4.7e5, rel=0.03)
+    drops = [json.loads(line) for line in (outcome.session / "events.jsonl").read_text().splitlines()]
+    assert any(e["type"] == "drop" and e["cause"] == "balance" for e in drops)
+
+
+def test_dry_run_plan_lists_steps_and_checks_limits():
+    prep = prepare_run(RIGS / "emulated-fig525.toml", "speed-sweep", ["speeds_rpm=6000,12000"],
+                       session_root=None)
+    text = prep.runner.dry_run()
+    assert "2 steps" in text and "12000 RPM" in text and "limit 24000 RPM" in text
+
+
+@pytest.mark.parametrize("rig, protocol, sets, error, message", [
+    ("emulated-fig525.toml", "speed-sweep", ["speeds_rpm=20000:30000:5000"], SafetyError,
+     "asks 25000 RPM, above the rig's limit of 24000 RPM"),
+    ("emulated-fig525.toml", "spin-critical", [], RigFileError,
+     "spin-critical needs a tach device called 'floator_tach'"),
+    ("emulated-fig525.toml", "levitate", [], LabkitError, "unknown protocol 'levitate'"),
+    ("emulated-fig525.toml", "speed-sweep", ["speed=5"], LabkitError, "--set speed: unknown parameter"),
+    ("emulated-fig525.toml", "speed-sweep", ["speeds_rpm=fast"], LabkitError, "is not a number"),
+])
+def test_bad_plans_are_refused_before_anything_opens(rig, protocol, sets, error, message):
+    with pytest.raises(error, match=None) as info:
+        prepare_run(RIGS / rig, protocol, sets, session_root=None)
+    assert message in str(info.value)
