@@ -30,7 +30,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--sigma", help="column of y uncertainties (default: <y>_stderr if present)")
     p.add_argument("--series", help="column that splits the data into series (default: 'series')")
     p.add_argument("--inertia", type=float, metavar="KG_M2",
-                   help="floator moment of inertia for pfr-force and cone-angle")
+                   help="floator moment of inertia for pfr-force and cone-angle "
+                   "(default: a session's rig.toml [bodies.floator] inertia_radial_kg_m2)")
     p.add_argument("--omega-c", default=str(PAPER_OMEGA_C), metavar="RAD_S|fit|inf",
                    help="spin-critical: fixed omega_c (default 3000 as in Eq. 6.37), 'fit', "
                    "or 'inf' (Eq. 5.69)")
@@ -69,7 +70,11 @@ def parse_fixes(items: list[str]) -> dict[str, float]:
 
 
 def run(args: argparse.Namespace) -> int:
-    options = FitOptions(x=args.x, y=args.y, sigma=args.sigma, series=args.series, inertia=args.inertia,
+    inertia = args.inertia
+    if inertia is None and Path(args.input).is_dir():
+        from labkit.report.build import floator_inertia
+        inertia = floator_inertia(Path(args.input))
+    options = FitOptions(x=args.x, y=args.y, sigma=args.sigma, series=args.series, inertia=inertia,
                          omega_c=parse_omega_c(args.omega_c), fixed=parse_fixes(args.fix),
                          bootstrap=args.bootstrap, seed=args.seed)
     table = load_table(args.input)

@@ -20,13 +20,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", help="output folder (default: SESSION/report or RESULT-report)")
     p.add_argument("--model", choices=list(MODELS), help="fit this model only (needed for plain CSVs "
                    "whose columns do not say what they are)")
+    p.add_argument("--x", help="x column for --model")
+    p.add_argument("--y", help="y column for --model")
     p.add_argument("--inertia", type=float, metavar="KG_M2",
                    help="floator moment of inertia (default: from the session's rig.toml)")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    path = build_report(args.source, args.out, model=args.model, inertia=args.inertia)
+    path = build_report(args.source, args.out, model=args.model, x=args.x, y=args.y,
+                        inertia=args.inertia)
     print(f"report written: {path}")
     print(f"figures and data next to it in {path.parent}")
     return 0

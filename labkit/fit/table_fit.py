@@ -9,7 +9,7 @@ the single series ``all``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -81,6 +81,7 @@ def fit_table(table: Table, model: str, options: FitOptions | None = None) -> Fi
     if sigma_col:
         columns["sigma"] = sigma_col
     columns.update({k: v for k, v in extras.items() if v})
+    table, skipped = _drop_empty_rows(table, [x_col, y_col])
     results: dict[str, FitResult] = {}
     for name, part in _split(table, series_col):
         if model == "mbs-force" and extras.get("repulsive") and extras.get("attractive"):
@@ -92,7 +93,21 @@ def fit_table(table: Table, model: str, options: FitOptions | None = None) -> Fi
         except FitError as exc:
             raise FitError(f"{exc} [series {name!r} of {table.source}]" if name != "all"
                            else f"{exc} [{table.source}]") from None
+    if skipped:
+        note = (f"{skipped} row(s) without any {x_col} or {y_col} value skipped "
+                "(steps that produced no measurement)")
+        results = {k: replace(r, warnings=(*r.warnings, note)) for k, r in results.items()}
     return FitReport(model, table.source, results, columns)
+
+
+def _drop_empty_rows(table: Table, cols: list[str]) -> tuple[Table, int]:
+    """Rows where every one of ``cols`` is missing are steps without a measurement (e.g. a
+    spin-critical step where the floator never dropped): skip them. A row with only some
+    values missing stays, so the fit refuses it and names it."""
+    empty = np.all([~np.isfinite(table.numeric[c]) for c in cols], axis=0)
+    if not empty.any():
+        return table, 0
+    return table.subset(~empty), int(empty.sum())
 
 
 def _fit_one(table: Table, si: bool, model: str, x_col: str, y_col: str, sigma_col: str | None,

@@ -47,8 +47,13 @@ def default_out(source: Path) -> Path:
 
 
 def build_report(source: str | Path, out: str | Path | None = None, *, model: str | None = None,
-                 inertia: float | None = None, overlays: tuple[Overlay, ...] = ()) -> Path:
-    """Write the report folder and return the path of its report.md."""
+                 x: str | None = None, y: str | None = None, inertia: float | None = None,
+                 overlays: tuple[Overlay, ...] = ()) -> Path:
+    """Write the report folder and return the path of its report.md.
+
+    ``model`` (with optional ``x``/``y`` columns) replaces the automatic choice of fits;
+    ``overlays`` (e.g. simulated curves, :mod:`labkit.fit.overlay`) are drawn on every fit figure.
+    """
     source = Path(source)
     out = Path(out) if out is not None else default_out(source)
     if source.is_file() and source.suffix.lower() == ".json":
@@ -62,7 +67,7 @@ def build_report(source: str | Path, out: str | Path | None = None, *, model: st
     protocol = table.meta.get("protocol") or run.get("protocol")
     if inertia is None and source.is_dir():
         inertia = floator_inertia(source)
-    plan = plan_for(table, protocol, inertia, model)
+    plan = plan_for(table, protocol, inertia, model, x=x, y=y)
     out.mkdir(parents=True, exist_ok=True)
     lines = [f"# labkit report: {source.name}", "",
              f"Source: `{source}`  ", f"Generated: {_now()} by labkit {__version__}", ""]

@@ -39,11 +39,12 @@ class Plan:
     notes: tuple[str, ...] = field(default_factory=tuple)
 
 
-def plan_for(table: Table, protocol: str | None, inertia: float | None, model: str | None = None) -> Plan:
+def plan_for(table: Table, protocol: str | None, inertia: float | None, model: str | None = None,
+             x: str | None = None, y: str | None = None) -> Plan:
     """The fits for this data: by ``model`` when given, else by protocol or column names."""
     cols = set(table.numeric)
     if model is not None:
-        return Plan(model, (PlannedFit(model, model, model, FitOptions(inertia=inertia)),))
+        return Plan(model, (PlannedFit(model, model, model, FitOptions(x=x, y=y, inertia=inertia)),))
     if protocol == "speed-sweep" or {"speed_rpm", "force_g"} <= cols:
         return _sweep(table, inertia)
     if protocol == "spin-critical" or {"rotor_rad_s", "spin_rad_s"} <= cols:

@@ -107,3 +107,28 @@ def test_bootstrap_intervals_in_json(sweep_session: Path, capsys):
     assert lo < b["value"] < hi
     # the bootstrap and the covariance interval agree to within a factor 2 in width
     assert 0.5 < (hi - lo) / (b["ci95"][1] - b["ci95"][0]) < 2.0
+
+
+def test_steps_without_measurement_are_skipped_with_a_note(tmp_path: Path, capsys):
+    """A spin-critical step where the floator never dropped has no pair: skipped, said so."""
+    w = [625, 670, 733, 782, 827, 859, 932, 1022, 1100]
+    v = [0, 136, 266, 340, 417, 498, 574, 712, 817]
+    points = [{"step": i, "rotor_rad_s": a, "spin_rad_s": b, "no_drop": False} for i, (a, b) in
+              enumerate(zip(w, v, strict=True))]
+    points.append({"step": 9, "rotor_rad_s": None, "spin_rad_s": None, "no_drop": True})
+    session = tmp_path / "spin-session"
+    session.mkdir()
+    (session / "results.json").write_text(json.dumps({"protocol": "spin-critical", "points": points,
+                                                      "fit": {}}))
+    assert main(["fit", str(session), "--model", "spin-critical", "--json", "-"]) == 0
+    s = json.loads(capsys.readouterr().out)["series"]["all"]
+    assert s["n"] == 9
+    assert any("1 row(s) without any" in m for m in s["warnings"])
+    assert s["params"]["C"]["value"] == pytest.approx(4.70e5, rel=0.01)
+
+
+def test_inertia_from_session_rig_file(sweep_session: Path, capsys):
+    (sweep_session / "rig.toml").write_text("[bodies.floator]\ninertia_radial_kg_m2 = 3e-7\n")
+    assert main(["fit", str(sweep_session), "--model", "pfr-force", "--json", "-"]) == 0
+    p = json.loads(capsys.readouterr().out)["series"]["all"]["params"]
+    assert p["I"]["value"] == 3e-7 and "K" in p and "tau_S" in p
