@@ -49,13 +49,22 @@ def fault_name(code: int) -> str:
     return FAULT_CODES.get(code, f"fault_{code}")
 
 
+def _crc16_bitwise(byte: int) -> int:
+    crc = byte << 8
+    for _ in range(8):
+        crc = ((crc << 1) ^ 0x1021) & 0xFFFF if crc & 0x8000 else (crc << 1) & 0xFFFF
+    return crc
+
+
+_CRC16_TABLE = tuple(_crc16_bitwise(i) for i in range(256))
+
+
 def crc16_xmodem(data: bytes) -> int:
-    """CRC-16/XMODEM: poly 0x1021, init 0, no reflection, no final xor."""
+    """CRC-16/XMODEM: poly 0x1021, init 0, no reflection, no final xor (table-driven)."""
     crc = 0
+    table = _CRC16_TABLE
     for byte in data:
-        crc ^= byte << 8
-        for _ in range(8):
-            crc = ((crc << 1) ^ 0x1021) & 0xFFFF if crc & 0x8000 else (crc << 1) & 0xFFFF
+        crc = ((crc << 8) & 0xFFFF) ^ table[(crc >> 8) ^ byte]
     return crc
 
 
