@@ -47,3 +47,12 @@ def test_eq637_fits_better_than_eq569():
         with_term = fit_spin_critical(np.array(w, float), np.array(v, float), omega_c=3000.0)
         without = fit_spin_critical(np.array(w, float), np.array(v, float), omega_c=float("inf"))
         assert with_term.rms_residual < without.rms_residual
+
+
+def test_reproduce_rows():
+    from labkit.fit.reproduce import fit_reproduce_rows
+    rows = {r["id"]: r for r in fit_reproduce_rows()}
+    assert set(rows) == {"fig6.18/series1/C", "fig6.18/series2/C"}
+    for r in rows.values():
+        assert r["ok"] and abs(r["rel_diff"]) < 0.01
+        assert set(r) == {"id", "quantity", "paper", "labkit", "rel_diff", "ok", "note"}
