@@ -11,9 +11,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-from scipy.optimize import curve_fit
-
 
 def _param(value: float, stderr: float) -> dict[str, float]:
     return {"value": float(value), "stderr": float(stderr)}
@@ -21,6 +18,8 @@ def _param(value: float, stderr: float) -> dict[str, float]:
 
 def fit_power_law(x: list[float], y: list[float], sigma: list[float] | None = None) -> dict:
     """Weighted least squares of ``y = a x^b``; started from a log-log line. Needs y > 0."""
+    import numpy as np  # imported here: the CLI starts fast when no fit runs
+    from scipy.optimize import curve_fit
     xa, ya = np.asarray(x, float), np.asarray(y, float)
     keep = (xa > 0) & (ya > 0)
     if keep.sum() < 3:
@@ -48,6 +47,7 @@ def fit_power_law(x: list[float], y: list[float], sigma: list[float] | None = No
 
 def fit_spin_critical_c(rotor_rad_s: list[float], spin_rad_s: list[float], w_ref: float = 3000.0) -> dict:
     """C of Eq. 6.37 from (rotor speed w, floator spin v) pairs at the drop, with its stderr."""
+    import numpy as np
     w, v = np.asarray(rotor_rad_s, float), np.asarray(spin_rad_s, float)
     if len(w) < 1:
         raise ValueError("Eq. 6.37 fit needs at least one (rotor, spin) pair")
