@@ -29,7 +29,8 @@ from labkit.vision.curves import (
 CIRCLE_MAX_ELLIPTICITY = 0.02  # below this an ellipse is reported as a circle
 SIMPLER_TOLERANCE = 1.12  # a simpler pattern wins unless a trochoid's residual is this much lower
 MIN_POINTS = 20
-MAX_TROCHOID_B = 1.5  # larger b means the fast term dominates: not a trochoid of Eq. 6.38
+ELLIPSE_ENOUGH = 0.01  # an ellipse fitting to 1 % of its major semi-axis needs no trochoid search
+MAX_TROCHOID_B = 1.05  # larger b means the fast term dominates: not a trochoid of Eq. 6.38
 
 
 @dataclass
@@ -85,9 +86,8 @@ def _newton_parameters(z: np.ndarray, a: complex, b: complex, k: int, t: np.ndar
 
 
 def _icp(z: np.ndarray, w: np.ndarray, tau: np.ndarray, k: int, c: complex, a: complex, b: complex,
-         iterations: int, fit_drift: bool, samples: int) -> CurveFit:
+         iterations: int, fit_drift: bool, samples: int, v: complex = 0j) -> CurveFit:
     sw = np.sqrt(w)
-    v = 0j
     t = None
     for it in range(iterations):
         if it % 6 == 0:
@@ -100,6 +100,8 @@ def _icp(z: np.ndarray, w: np.ndarray, tau: np.ndarray, k: int, c: complex, a: c
         m = np.column_stack(cols) * sw[:, None]
         sol, *_ = np.linalg.lstsq(m, z * sw, rcond=None)
         new = (sol[0], sol[1], sol[2], sol[3] if fit_drift else 0j)
+        if k != -1 and abs(new[2]) > MAX_TROCHOID_B * abs(new[1]):  # stay in the trochoid family
+            new = (new[0], new[1], new[2] * MAX_TROCHOID_B * abs(new[1]) / abs(new[2]), new[3])
         moved = abs(new[0] - c) + abs(new[1] - a) + abs(new[2] - b)
         c, a, b, v = new
         if moved < 1e-3 and it % 6 == 5:
@@ -107,7 +109,7 @@ def _icp(z: np.ndarray, w: np.ndarray, tau: np.ndarray, k: int, c: complex, a: c
     t = _closest_parameters(z - c - v * tau, a, b, k, samples)
     r = np.abs(_curve(c, a, b, k, t) + v * tau - z)
     rms = float(np.sqrt(np.sum(w * r * r) / np.sum(w)))
-    if k != -1 and not abs(b) <= MAX_TROCHOID_B * abs(a):
+    if k != -1 and not abs(b) < 0.999 * MAX_TROCHOID_B * abs(a):
         rms = math.inf  # degenerate: the second term dominates (a circle traced |k| times)
     if k == -1:
         pattern = ellipse_from_coefficients(c, a, b)
@@ -197,11 +199,15 @@ def _subsample(n: int, keep: int, seed: int = 0) -> np.ndarray:
 
 
 def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.ndarray | None = None,
-             max_points: int = 3000, screen_points: int = 600,
-             trochoid_loops: range = range(2, 8)) -> Classification:
+             max_points: int = 2500, screen_points: int = 500,
+             trochoid_loops: range = range(2, 8),
+             band: tuple[np.ndarray, np.ndarray | None, np.ndarray | None] | None = None) -> Classification:
     """Fit every candidate (ellipse, epitrochoids with 2-7 loops, hypotrochoids with 3-7 loops) on a
     subsample, refine the two best on up to ``max_points`` points, and pick the simplest pattern
-    that explains the trace (a trochoid must beat the ellipse's residual by ``SIMPLER_TOLERANCE``)."""
+    that explains the trace (a trochoid must beat the ellipse's residual by ``SIMPLER_TOLERANCE``).
+    Trochoids are not tried when the ellipse already fits to ``ELLIPSE_ENOUGH`` of its size.
+    ``band`` (points, weights, times): every trace pixel; the ellipse is polished on it, because a
+    thinned centre line ends half a line width short of the sharp tips of a flat ellipse."""
     pts = np.asarray(points, dtype=float)
     w = None if weights is None else np.asarray(weights, dtype=float)
     tm = None if times is None else np.asarray(times, dtype=float)
@@ -212,7 +218,15 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
     full = take(_subsample(len(pts), max_points))
     screen = take(_subsample(len(pts), screen_points, seed=1))
     ellipse = fit_ellipse(*full)
+    if band is not None and len(band[0]) >= MIN_POINTS:
+        idx = _subsample(len(band[0]), 3 * max_points, seed=2)
+        polished = polish(ellipse, *(None if a is None else np.asarray(a)[idx] for a in band))
+        # its residual on the centre line, comparable with the trochoids'
+        z, w_, tau = _prepare(*full)
+        ellipse = _icp(z, w_, tau, -1, polished.c, polished.a, polished.b, 0, False, 1440, polished.drift)
     residuals = {"ellipse": ellipse.rms_residual}
+    if ellipse.rms_residual < ELLIPSE_ENOUGH * ellipse.pattern.semi_axes[0]:
+        return Classification(ellipse, ellipse, residuals)
     screened: list[CurveFit] = []
     for kind, first in (("epitrochoid", 2), ("hypotrochoid", 3)):
         for loops in trochoid_loops:
@@ -232,6 +246,15 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
         if fit.rms_residual * SIMPLER_TOLERANCE < best.rms_residual:
             best = fit
     return Classification(best, ellipse, residuals)
+
+
+def polish(fit: CurveFit, points: np.ndarray, weights: np.ndarray | None = None,
+           times: np.ndarray | None = None, iterations: int = 20) -> CurveFit:
+    """Refit from ``fit`` on a different point set (e.g. every trace pixel instead of the thinned
+    centre line, which ends half a line width short of sharp tips)."""
+    z, w, tau = _prepare(points, weights, times)
+    samples = 1440 if fit.k == -1 else 360 * abs(fit.k)
+    return _icp(z, w, tau, fit.k, fit.c, fit.a, fit.b, iterations, times is not None, samples)
 
 
 def _name(fit: CurveFit) -> str:

@@ -111,9 +111,10 @@ def _none(reason: str) -> dict:
             "rms_residual_px": None}
 
 
-def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | None) -> tuple[dict, dict]:
+def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | None,
+                 band: tuple | None = None) -> tuple[dict, dict]:
     """Classify and fit a trace; returns the JSON ``pattern`` object and fit diagnostics."""
-    cls = classify(points, weights, times)
+    cls = classify(points, weights, times, band=band)
     best, ell = cls.best, cls.ellipse.pattern
     major, minor = ell.semi_axes
     kind = pattern_kind(cls.best)
@@ -148,7 +149,7 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
     chunks = accumulate(source, quality, on_frame)
     _check_exposure(chunks, source.path)
     fps = source.fps or 0.0
-    pts, wts, tms = [], [], []
+    pts, wts, tms, bands = [], [], [], []
     peak = noise = 0.0
     rng = np.random.default_rng(0)
     for c in chunks:
@@ -161,6 +162,9 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
         wts.append(tp.weights)
         t_mid = 0.5 * (c.first + c.last) / fps if fps else 0.0
         tms.append(np.full(len(tp.points), t_mid))
+        if tp.band is not None and len(tp.band):
+            keep = rng.choice(len(tp.band), min(len(tp.band), 2 * MAX_POINTS_PER_CHUNK), replace=False)
+            bands.append((tp.band[keep], tp.band_weights[keep], np.full(len(keep), t_mid)))
     points = np.concatenate(pts) if pts else np.zeros((0, 2))
     weights, times = np.concatenate(wts), np.concatenate(tms)
     qual = {"frames_analysed": len(range(0, source.frames_read, quality.stride)),
@@ -172,8 +176,11 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
                   else f"only {len(points)} trace pixels found")
         pattern, tilt = _none(reason), None
     else:
-        use_times = times if (len(chunks) > 1 and fps) else None
-        pattern, diag = pattern_dict(points, weights, use_times)
+        drift = len(chunks) > 1 and fps
+        band = tuple(np.concatenate(parts) for parts in zip(*bands, strict=True)) if bands else None
+        if band is not None and not drift:
+            band = (band[0], band[1], None)
+        pattern, diag = pattern_dict(points, weights, times if drift else None, band)
         qual.update(diag)
         tilt = None
         if screen_distance_mm and mm_per_px:

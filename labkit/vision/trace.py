@@ -24,6 +24,8 @@ class TracePoints:
     weights: np.ndarray
     peak: float  # brightest residual above background (grey levels)
     noise: float  # robust noise of the residual (grey levels)
+    band: np.ndarray | None = None  # every trace pixel (M, 2), not thinned
+    band_weights: np.ndarray | None = None
 
 
 def brightness(image: np.ndarray) -> np.ndarray:
@@ -84,6 +86,15 @@ def _centreline(mask: np.ndarray, res: np.ndarray, offset: tuple[int, int], subp
     """Thin the trace band to its centre line: ridge of the distance transform (the medial axis,
     insensitive to a saturated flat top), then optionally move each ridge pixel to the intensity
     centroid of a window as wide as the band (sub-pixel refinement)."""
+    ys0, xs0 = np.nonzero(mask)
+    if len(xs0) == 0:
+        return TracePoints(np.zeros((0, 2)), np.zeros(0), peak, noise)
+    # work inside the trace's bounding box (plus a margin for the windows)
+    pad = 14
+    x0, y0 = max(0, xs0.min() - pad), max(0, ys0.min() - pad)
+    x1, y1 = min(mask.shape[1], xs0.max() + pad + 1), min(mask.shape[0], ys0.max() + pad + 1)
+    mask, res = mask[y0:y1, x0:x1], res[y0:y1, x0:x1]
+    offset = (offset[0] + x0, offset[1] + y0)
     m8 = mask.astype(np.uint8)
     dist = cv2.distanceTransform(m8, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
     ridge = (dist >= cv2.dilate(dist, np.ones((3, 3), np.uint8)) - 0.35) & (dist > 0)
@@ -105,7 +116,10 @@ def _centreline(mask: np.ndarray, res: np.ndarray, offset: tuple[int, int], subp
         x[ok], y[ok] = sx[ok] / s0[ok], sy[ok] / s0[ok]
         weights = np.clip(res[ys, xs], 1e-3, None).astype(float)
     pts = np.column_stack([x + offset[0], y + offset[1]])
-    return TracePoints(pts, weights, peak, noise)
+    bys, bxs = np.nonzero(mask)
+    band = np.column_stack([bxs + offset[0], bys + offset[1]]).astype(float)
+    band_w = np.clip(res[bys, bxs], 1e-3, None).astype(float) if subpixel else np.ones(len(bxs))
+    return TracePoints(pts, weights, peak, noise, band, band_w)
 
 
 @dataclass
