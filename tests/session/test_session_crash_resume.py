@@ -51,8 +51,8 @@ def test_sigkill_mid_sweep_leaves_a_readable_session_that_resume_completes(tmp_p
         assert len(in_step) >= event["point"]["n"]
     assert (session / "cassettes" / "rotor_motor.jsonl").stat().st_size > 0
 
-    done = subprocess.run(labkit("run", "--resume", str(session), "--sessions", str(tmp_path), "--no-progress"),
-                          capture_output=True, text=True, timeout=120)
+    resume = labkit("run", "--resume", str(session), "--sessions", str(tmp_path), "--no-progress")
+    done = subprocess.run(resume, capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
     resumed = [p for p in tmp_path.iterdir() if p != session]
     assert len(resumed) == 1
