@@ -6,5 +6,6 @@ when it moves (rerun-sdk is pinned to 0.41.x in pyproject.toml).
 """
 
 from labkit.stream.core import RerunSpec, add_rerun_argument, open_stream, parse_rerun_spec
+from labkit.stream.run import run_sink
 
-__all__ = ["RerunSpec", "add_rerun_argument", "open_stream", "parse_rerun_spec"]
+__all__ = ["RerunSpec", "add_rerun_argument", "open_stream", "parse_rerun_spec", "run_sink"]

@@ -1,0 +1,40 @@
+"""A protocol run streamed with --rerun save:FILE holds what the run measured, and only that."""
+
+import json
+
+from labkit.cli import main
+from labkit.stream.readback import column, entity_paths
+
+
+def test_demo_streams_speeds_forces_points_fit_and_events(tmp_path, capsys):
+    rrd = tmp_path / "demo.rrd"
+    code = main(["demo", "--sessions", str(tmp_path / "s"), "--no-progress", "--rerun", f"save:{rrd}",
+                 "--set", "speeds_rpm=6000:12000:2000"])
+    assert code == 0, capsys.readouterr().err
+    entities = entity_paths(rrd)
+    assert {"/rig/rotor/speed_rpm", "/rig/rotor/setpoint_rpm", "/rig/rotor/target_rpm",
+            "/results/points", "/results/fit", "/events"} <= entities
+    assert any(e.startswith("/rig/balance/") for e in entities)
+    # nothing the fig525 rig does not have
+    assert not any("floator" in e for e in entities)
+
+    session = next((tmp_path / "s").iterdir())
+    results = json.loads((session / "results.json").read_text())
+    steps, points = column(rrd, "/results/points", "Points2D:positions", "step")
+    assert len(points[-1]) == len(results["points"]) == 4
+    # the last logged point is the last result row (x in kRPM, y in grams)
+    last = results["points"][-1]
+    assert abs(points[-1][-1][0] - last["speed_rpm"] / 1000) < 1e-3
+    assert abs(points[-1][-1][1] - last["force_g"]) < 1e-3 * max(1.0, abs(last["force_g"]))
+
+    times, speeds = column(rrd, "/rig/rotor/speed_rpm", "Scalars:scalars", "time")
+    assert len(speeds) > 10 and max(v[0] for v in speeds) > 11000
+
+
+def test_without_rerun_option_the_demo_still_saves_an_rrd_in_the_session(tmp_path, capsys):
+    assert main(["demo", "--sessions", str(tmp_path), "--no-progress",
+                 "--set", "speeds_rpm=8000,10000"]) == 0
+    session = next(tmp_path.iterdir())
+    out = capsys.readouterr().out
+    assert f"rerun {session / 'run.rrd'}" in out
+    assert "/results/points" in entity_paths(session / "run.rrd")
