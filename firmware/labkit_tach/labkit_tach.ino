@@ -131,7 +131,7 @@ void printWindow() {
     flags[f++] = 'Z';
   }
   if (period > 0 && period < MIN_PERIOD_US) flags[f++] = 'O';
-  if (noisy && f == 0) flags[f++] = 'N';
+  if (noisy && flags[0] != 'Z') flags[f++] = 'N';
   flags[f] = '\0';
   float rpm = (period > 0 && flags[0] != 'Z') ? 60.0e6 / (period * ppr) : 0.0;
 
