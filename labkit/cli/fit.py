@@ -39,6 +39,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="fix a parameter (SI), e.g. --fix tau_S=0 or --fix d=4; repeatable")
     p.add_argument("--bootstrap", type=int, default=0, metavar="N", help="also give bootstrap intervals")
     p.add_argument("--seed", type=int, default=0, help="bootstrap seed")
+    p.add_argument("--strict", action="store_true",
+                   help="exit with status 3 when any fit has a warning (for scripts and CI)")
     p.add_argument("--json", metavar="OUT", help="write the fit as JSON ('-' for stdout)")
     p.add_argument("--plot", metavar="OUT.png", help="write data, fit and residuals as a PNG")
     p.set_defaults(func=run)
@@ -91,4 +93,7 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         from labkit.report.figures import fit_figure
         fit_figure(report, args.plot)
+    if args.strict and any(r.warnings for r in report.series.values()):
+        print("labkit fit: warnings present (--strict)", file=sys.stderr)
+        return 3
     return 0

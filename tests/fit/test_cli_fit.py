@@ -132,3 +132,11 @@ def test_inertia_from_session_rig_file(sweep_session: Path, capsys):
     assert main(["fit", str(sweep_session), "--model", "pfr-force", "--json", "-"]) == 0
     p = json.loads(capsys.readouterr().out)["series"]["all"]["params"]
     assert p["I"]["value"] == 3e-7 and "K" in p and "tau_S" in p
+
+
+def test_strict_turns_warnings_into_exit_3(tmp_path: Path, capsys):
+    csv = tmp_path / "narrow.csv"
+    csv.write_text("speed_rpm,force_g\n10000,5.61\n10020,5.58\n10040,5.60\n10060,5.52\n10080,5.57\n10100,5.50\n")
+    assert main(["fit", str(csv), "--model", "power-law"]) == 0
+    assert "WARNING: exponent b not identifiable" in capsys.readouterr().out
+    assert main(["fit", str(csv), "--model", "power-law", "--strict"]) == 3
