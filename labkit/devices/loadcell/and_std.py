@@ -170,6 +170,15 @@ class AndStdBalance(Balance):
         if self.mode == "command":
             self._control("C", acks=1, timeout=self.command_timeout)
 
+    @property
+    def last_bytes(self) -> bytes:  # type: ignore[override]
+        """The tail of what the device sent (the link keeps it), for error messages."""
+        return self.link.last_bytes if hasattr(self, "link") else b""
+
+    @last_bytes.setter
+    def last_bytes(self, value: bytes) -> None:
+        pass  # the link keeps the tail
+
     # ---- helpers ----------------------------------------------------------------------
     def _accept(self, command: str, want: type):
         def accept(line: bytes) -> AndLine | None:

@@ -168,6 +168,15 @@ class LineRegexBalance(Balance):
             except UnitError as exc:
                 raise ValueError(str(exc)) from None
 
+    @property
+    def last_bytes(self) -> bytes:  # type: ignore[override]
+        """The tail of what the device sent (the link keeps it), for error messages."""
+        return self.link.last_bytes if hasattr(self, "link") else b""
+
+    @last_bytes.setter
+    def last_bytes(self, value: bytes) -> None:
+        pass  # the link keeps the tail
+
     @classmethod
     def serial_defaults(cls, options: dict[str, Any]) -> dict[str, Any]:
         """Serial settings of the sketch the options name (its preset's baud rate)."""

@@ -183,7 +183,8 @@ class MtSicsBalance(Balance):
     # ---- helpers ----------------------------------------------------------------------
     @property
     def last_bytes(self) -> bytes:  # type: ignore[override]
-        return self.link.last_bytes
+        """The tail of what the device sent (the link keeps it), for error messages."""
+        return self.link.last_bytes if hasattr(self, "link") else b""
 
     @last_bytes.setter
     def last_bytes(self, value: bytes) -> None:
