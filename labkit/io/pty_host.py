@@ -7,6 +7,11 @@ False the host closes the pty, so the user's pyserial read or write fails with a
 ``SerialException``/``OSError``; when it comes back the device appears under a *new* path
 (``host.path`` changes and ``on_reconnect(new_path)`` is called), like a USB adapter that
 re-enumerates as another ttyUSB.
+
+Wrong baud: if the emulator declares ``serial_settings`` and the program opens the pty at
+another baud rate, bytes are garbled both ways, as on a real wire. (A Linux pty keeps the
+baud rate a program sets but forces 8 data bits and no parity, so only the baud rate can be
+checked here; ``sim://`` ports check bytesize, parity and stopbits too.)
 """
 
 from __future__ import annotations
@@ -14,13 +19,23 @@ from __future__ import annotations
 import errno
 import fcntl
 import os
+import random
 import select
+import termios
 import threading
 import tty
 from collections.abc import Callable
 
 from labkit.emulators.base import Emulator
 from labkit.io.clock import Clock, current_clock
+from labkit.io.sim_port import garble
+
+#: termios speed constant -> baud rate
+BAUD_OF_SPEED = {
+    getattr(termios, name): int(name[1:])
+    for name in dir(termios)
+    if name.startswith("B") and name[1:].isdigit() and int(name[1:]) > 0
+}
 
 #: how often the pump looks at the emulator when nothing arrives (s)
 PUMP_PERIOD_S = 0.002
@@ -36,6 +51,13 @@ class _Pty:
         flags = fcntl.fcntl(self.master, fcntl.F_GETFL)
         fcntl.fcntl(self.master, fcntl.F_SETFL, flags | os.O_NONBLOCK)
         self.path = os.ttyname(self.slave)
+
+    def baudrate(self) -> int | None:
+        """The baud rate the program on the slave side set (None if unknown)."""
+        try:
+            return BAUD_OF_SPEED.get(termios.tcgetattr(self.slave)[5])
+        except termios.error:
+            return None
 
     def close(self) -> None:
         for fd in (self.master, self.slave):
@@ -67,6 +89,7 @@ class PtyHost:
         self.paths.append(self.path)
         self.emulator.open(self.clock.now())
         self.error: BaseException | None = None
+        self._garble_rng = random.Random(emulator.seed * 7919 + 23)
         self._thread = threading.Thread(target=self._run, name=f"pty-{emulator.role}", daemon=True)
         self._thread.start()
 
@@ -100,6 +123,7 @@ class PtyHost:
         with self._lock:
             if self._pty is not pty:
                 return
+            wrong_baud = self.wrong_baud(pty)
             if ready:
                 try:
                     data = os.read(pty.master, 4096)
@@ -108,10 +132,18 @@ class PtyHost:
                         raise
                     data = b""
                 if data:
-                    self.emulator.receive(data, now)
+                    self.emulator.receive(garble(data, self._garble_rng) if wrong_baud else data, now)
             out = self.emulator.emit(now)
             if out:
-                self._write(pty, out)
+                self._write(pty, garble(out, self._garble_rng) if wrong_baud else out)
+
+    def wrong_baud(self, pty: _Pty) -> bool:
+        """True when the emulated device expects another baud rate than the program set."""
+        expected = (getattr(self.emulator, "serial_settings", None) or {}).get("baudrate")
+        if expected is None:
+            return False
+        actual = pty.baudrate()
+        return actual is not None and actual != expected
 
     def _write(self, pty: _Pty, data: bytes) -> None:
         view = memoryview(data)

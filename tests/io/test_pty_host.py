@@ -52,3 +52,17 @@ def test_unplug_fails_real_io_and_replug_appears_under_a_new_path():
         with serial.Serial(host.path, 9600, timeout=2.0) as again:
             again.write(b"hi\n")
             assert lines_until_echo(again) == b"ECHO hi\r\n"
+
+
+def test_opening_the_pty_at_the_wrong_baud_garbles_both_ways():
+    with PtyHost(build_emulator("sim://test_7e1?latency=0.01"), clock=RealClock()) as host:
+        with serial.Serial(host.path, 9600, timeout=0.5) as wrong:  # the device expects 2400
+            wrong.write(b"hello\n")
+            assert b"ECHO hello" not in wrong.read(64)
+        with serial.Serial(host.path, 2400, bytesize=7, parity="E", timeout=2.0) as right:
+            right.write(b"\nhello\n")  # the LF ends the junk line the device heard before
+            lines = [right.read_until(b"\n")]
+            while lines[-1] != b"ECHO hello\r\n" and lines[-1] and len(lines) < 8:
+                lines.append(right.read_until(b"\n"))
+            assert lines[-1] == b"ECHO hello\r\n"
+            assert any(x.startswith(b"ECHO ") for x in lines[:-1])  # the junk it heard at 9600
