@@ -1,0 +1,153 @@
+"""``labkit simulate SCENE``: run a scene and print its status, invariant and quantities of interest.
+
+``SCENE`` is a TOML file or the name of a bundled scene (``labkit simulate --list``).
+``--rerun SPEC`` is stored in the result (``spec.rerun``) and handed to a streaming sink if one
+is installed (``labkit.stream.sim_sink.stream_result(result, spec)``); ``labkit.sim`` itself
+never streams or prints.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import math
+import sys
+
+from labkit.sim import DEFAULT_INTEGRATOR, INTEGRATORS, bundled_scenes, compile_scene, load_scene
+from labkit.sim.run import simulate
+
+SINK_MODULE = "labkit.stream.sim_sink"
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "simulate",
+        help="simulate a scene (rigid magnetic bodies, rotators, fields)",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("scene", nargs="?", help="scene TOML file or bundled scene name")
+    p.add_argument(
+        "--cycles", type=float, default=None, help="drive periods to simulate (default: the scene's)"
+    )
+    p.add_argument(
+        "--integrator",
+        default=DEFAULT_INTEGRATOR,
+        choices=INTEGRATORS,
+        help=f"integrator (default {DEFAULT_INTEGRATOR})",
+    )
+    p.add_argument(
+        "--steps-per-period",
+        type=int,
+        default=None,
+        help="fixed steps per drive period for splittings (default: automatic)",
+    )
+    p.add_argument("--samples-per-period", type=int, default=8, help="stored samples per period (default 8)")
+    p.add_argument("--rtol", type=float, default=1e-10, help="relative tolerance of scipy references")
+    p.add_argument(
+        "--drift-threshold",
+        type=float,
+        default=1e-6,
+        help="relative invariant drift that marks the run as failed (default 1e-6)",
+    )
+    p.add_argument("--json", metavar="OUT", help="write the result summary as JSON")
+    p.add_argument("--series", action="store_true", help="include the sampled series in --json")
+    p.add_argument("--rerun", metavar="SPEC", help="stream poses to rerun (spawn, connect URL or .rrd file)")
+    p.add_argument("--list", action="store_true", help="list bundled scenes and exit")
+    p.add_argument("--compile-only", action="store_true", help="print what the scene compiles to and exit")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.list:
+        for name in bundled_scenes():
+            print(name)
+        return 0
+    if not args.scene:
+        print("labkit simulate: give a SCENE (file or bundled name; --list shows them)", file=sys.stderr)
+        return 2
+    scene = load_scene(args.scene)
+    system = compile_scene(scene)
+    if args.compile_only:
+        print(json.dumps(system.summary(), indent=2))
+        return 0
+    result = simulate(
+        scene,
+        cycles=args.cycles,
+        integrator=args.integrator,
+        steps_per_period=args.steps_per_period,
+        samples_per_period=args.samples_per_period,
+        rtol=args.rtol,
+        drift_threshold=args.drift_threshold,
+        system=system,
+    )
+    if args.rerun:
+        result.spec["rerun"] = args.rerun
+        _stream(result, args.rerun)
+    print(format_summary(result))
+    if args.json:
+        result.write_json(args.json, series=args.series)
+    return 0 if result.ok else 1
+
+
+def _stream(result, spec: str) -> None:
+    try:
+        sink = importlib.import_module(SINK_MODULE)
+    except ModuleNotFoundError as exc:
+        if exc.name != SINK_MODULE:
+            raise
+        print(
+            f"labkit simulate: no rerun sink installed yet; spec {spec!r} stored in the result",
+            file=sys.stderr,
+        )
+        return
+    sink.stream_result(result, spec)
+
+
+def _fmt(x) -> str:
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return "-"
+    return f"{x:.6g}" if isinstance(x, float) else str(x)
+
+
+def format_summary(result) -> str:
+    """Human-readable summary of a :class:`labkit.sim.SimResult`."""
+    c = result.compile
+    lines = [
+        f"scene      {result.scene}  ({c['kind']}{', ' + c['equation'] if 'equation' in c else ''})",
+        f"integrator {result.integrator}  {json.dumps(result.setting)}",
+        f"horizon    {result.cycles:g} cycles of {result.period_s:.6g} s; {result.n_force_evals} force "
+        f"evaluations in {result.wall_s:.3g} s",
+        f"status     {result.status}{'  ' + result.status_detail if result.status_detail else ''}",
+        f"invariant  {result.invariant}: max relative drift {_fmt(result.invariant_drift)}"
+        + (
+            f"; |dP| {_fmt(result.momentum_drift)}, |dJ| {_fmt(result.angular_momentum_drift)}"
+            if result.momentum_drift is not None
+            else ""
+        ),
+        f"rotation   max |R^T R - I| {_fmt(result.rotation_residual)}",
+    ]
+    for name, q in result.qoi.get("bodies", {}).items():
+        if "cone_angle_rad" in q:
+            ca = q["cone_angle_rad"]
+            eq = q.get("cone_angle_closed_form_rad")
+            lines.append(
+                f"{name:10s} cone angle mean {ca['mean']:.6g} rad (min {ca['min']:.6g}, max {ca['max']:.6g})"
+                + (f"; Eq. 5.35 at start {eq:.6g} rad" if eq is not None else "")
+            )
+        if "mean_force_N" in q:
+            f = q["mean_force_N"]
+            lines.append(f"{name:10s} mean magnetic force [{f[0]:.4g}, {f[1]:.4g}, {f[2]:.4g}] N")
+    if "reduced" in result.qoi:
+        r = result.qoi["reduced"]
+        lines.append(
+            f"reduced    {r['equation']}: angle mean {r['angle_mean_rad']:.6g} rad, "
+            f"amplitude {r['angle_amplitude_rad']:.6g} rad"
+        )
+    if "distance_m" in result.qoi:
+        d = result.qoi["distance_m"]
+        lines.append(
+            f"distance   mean {d['mean'] * 1e3:.6g} mm (min {d['min'] * 1e3:.6g}, max {d['max'] * 1e3:.6g})"
+        )
+    return "\n".join(lines)

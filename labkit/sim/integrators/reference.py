@@ -1,0 +1,179 @@
+"""scipy ``solve_ivp`` references (DOP853, Radau, LSODA) with per-component tolerances.
+
+State per body: position, velocity, rotation matrix (9), lab angular momentum;
+``dR/dt = [Omega]x R`` with ``Omega = R I^-1 R^T L``. Absolute tolerances are ``rtol`` times
+a scale per component (length, length * omega, 1, I * omega), so tiny bodies at high speed are
+controlled as well as big slow ones (NUMERICS.md 3.1). Contact and escape are terminal events.
+These are validation paths: their invariants drift (no geometric structure), which the result
+reports.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from labkit.sim.compile import CompiledSystem
+from labkit.sim.integrators import RawRun, check_memory
+from labkit.sim.integrators.kernels import compute_forces, workspace
+from labkit.sim.integrators.splitting import reduced_acceleration
+
+STRIDE = 18
+
+
+def _unpack(y: np.ndarray, nb: int):
+    s = y.reshape(nb, STRIDE)
+    return s[:, 0:3], s[:, 3:6], s[:, 6:15].reshape(nb, 3, 3), s[:, 15:18]
+
+
+def _rigid_rhs(system: CompiledSystem, counter: list[int]):
+    bf, bi, src, fld, flags, g = system.bf, system.bi, system.src, system.fld, system.flags, system.g
+    nb = bf.shape[0]
+    inv_i = 1.0 / bf[:, 1:4]
+    F = np.zeros((nb, 3))
+    T = np.zeros((nb, 3))
+    trans = bi[:, 0].astype(bool)
+    work = workspace(nb)
+
+    def rhs(t: float, y: np.ndarray) -> np.ndarray:
+        counter[0] += 1
+        x, v, R, L = _unpack(y, nb)
+        R = np.ascontiguousarray(R)
+        compute_forces(t, np.ascontiguousarray(x), R, bf, bi, src, fld, flags, F, T, work)
+        pi = np.einsum("bji,bj->bi", R, L)
+        omega = np.einsum("bij,bj->bi", R, pi * inv_i)
+        dy = np.zeros((nb, STRIDE))
+        acc = F / bf[:, :1] + g - bf[:, 10:11] / bf[:, :1] * v
+        dy[trans, 0:3] = v[trans]
+        dy[trans, 3:6] = acc[trans]
+        wx = np.zeros((nb, 3, 3))
+        wx[:, 0, 1], wx[:, 0, 2], wx[:, 1, 2] = -omega[:, 2], omega[:, 1], -omega[:, 0]
+        wx[:, 1, 0], wx[:, 2, 0], wx[:, 2, 1] = omega[:, 2], -omega[:, 1], omega[:, 0]
+        dy[:, 6:15] = np.einsum("bij,bjk->bik", wx, R).reshape(nb, 9)
+        dy[:, 15:18] = T - bf[:, 11:12] * omega
+        return dy.ravel()
+
+    return rhs
+
+
+def _events(system: CompiledSystem):
+    bf, bi, src = system.bf, system.bi, system.src
+    nb = bf.shape[0]
+    movers = [b for b in range(nb) if bi[b, 0]]
+    points = [(b, None) for b in range(nb)] + [(None, s) for s in range(src.shape[0])]
+
+    def pairs(y):
+        x = y.reshape(nb, STRIDE)[:, 0:3]
+        for a in movers:
+            for b, s in points:
+                if b == a:
+                    continue
+                if b is not None:
+                    yield a, np.linalg.norm(x[a] - x[b]), bf[a, 12] + bf[b, 12]
+                else:
+                    yield a, np.linalg.norm(x[a] - src[s, 8:11]), bf[a, 12] + src[s, 11]
+
+    def contact(t, y):
+        return min((d - r for _, d, r in pairs(y)), default=1.0)
+
+    def escape(t, y):
+        nearest = {}
+        for a, d, _ in pairs(y):
+            nearest[a] = min(nearest.get(a, math.inf), d)
+        return system.r_escape - max(nearest.values(), default=0.0)
+
+    contact.terminal, contact.direction = True, -1
+    escape.terminal, escape.direction = True, -1
+    return [contact, escape] if movers else []
+
+
+def run(
+    system: CompiledSystem,
+    cycles: float,
+    method: str,
+    name: str,
+    rtol: float = 1e-10,
+    samples_per_period: int = 8,
+    t0: float = 0.0,
+    **_: object,
+) -> RawRun:
+    """Integrate with ``solve_ivp(method)``; samples at exact multiples of ``T / samples_per_period``."""
+    t_end = t0 + cycles * system.period
+    n = int(round(cycles * samples_per_period))
+    t_eval = t0 + np.arange(n + 1) * (system.period / samples_per_period)
+    t_eval[-1] = min(t_eval[-1], t_end)
+    counter = [0]
+    setting = {"method": method, "rtol": rtol, "samples_per_period": samples_per_period}
+    if system.reduced is not None:
+        rf = system.reduced
+
+        def rhs(t, y):
+            counter[0] += 1
+            return [y[1], reduced_acceleration(rf.form, y[0], t, rf.jc, rf.js, rf.omega, rf.phase)]
+
+        scale = np.array([1.0, max(system.omega_max, 1e-300)])
+        sol = solve_ivp(
+            rhs, (t0, t_end), [rf.y0, rf.yd0], method=method, t_eval=t_eval, rtol=rtol, atol=rtol * scale
+        )
+        status = 0 if sol.success else 5
+        return RawRun(
+            name, setting, status, math.nan, counter[0], sol.t, y=sol.y[0], yd=sol.y[1], message=sol.message
+        )
+    nb = system.bf.shape[0]
+    check_memory(n + 2, nb)
+    y0 = np.concatenate([system.x0, system.v0, system.R0.reshape(nb, 9), system.L0], axis=1).ravel()
+    i_max = system.bf[:, 1:4].max(axis=1, keepdims=True)
+    length = system.length_scale
+    scale = np.concatenate(
+        [
+            np.full((nb, 3), length),
+            np.full((nb, 3), length * system.omega_max),
+            np.ones((nb, 9)),
+            np.repeat(i_max * system.omega_max, 3, axis=1),
+        ],
+        axis=1,
+    ).ravel()
+    events = _events(system) if system.r_escape or np.any(system.bi[:, 0]) else []
+    if not system.r_escape and events:
+        events = events[:1]
+    sol = solve_ivp(
+        _rigid_rhs(system, counter),
+        (t0, t_end),
+        y0,
+        method=method,
+        t_eval=t_eval,
+        rtol=rtol,
+        atol=rtol * scale,
+        events=events or None,
+    )
+    ys = sol.y.T.reshape(-1, nb, STRIDE)
+    status, event_time = (0 if sol.success else 5), math.nan
+    if sol.status == 1 and sol.t_events is not None:
+        for code, times, states in zip((3, 4), sol.t_events, sol.y_events, strict=False):
+            if len(times):
+                status, event_time = code, float(times[0])
+                ys = np.concatenate([ys, states[:1].reshape(1, nb, STRIDE)])
+                sol_t = np.concatenate([sol.t, times[:1]])
+                break
+        else:
+            sol_t = sol.t
+    else:
+        sol_t = sol.t
+    if not np.all(np.isfinite(ys)):
+        status = 1
+    x, v, R, L = ys[..., 0:3], ys[..., 3:6], ys[..., 6:15].reshape(-1, nb, 3, 3), ys[..., 15:18]
+    return RawRun(
+        name,
+        setting,
+        status,
+        event_time,
+        counter[0],
+        np.asarray(sol_t),
+        x=x.copy(),
+        v=v.copy(),
+        R=R.copy(),
+        L=L.copy(),
+        message=sol.message,
+    )

@@ -1,0 +1,487 @@
+"""Scenes: what is simulated (bodies, drives, fields, gravity, damping, initial conditions).
+
+A scene is plain data, described in TOML (``load_scene``) or built in Python from the
+dataclasses below (``Scene(...)`` then ``validate_scene``). Every quantity is SI inside;
+TOML keys carry their unit (``mass_g`` or ``mass_kg``, ``speed_rpm`` or ``omega_rad_s``), and
+giving one quantity in two units, an unknown key, a zero mass, a non-positive-definite inertia
+or overlapping bodies ends with :class:`SceneError` (``file:key: reason``).
+
+Conventions (paper Sec. 5.1-5.2):
+
+* uniform rotating field ``B = B_C [-sin th, cos th, 0] + B_S z``, ``th = omega t + phase``
+  (Eq. 5.21); an oscillating field is ``B = B_C cos(th) y + B_S z`` (Eq. 5.481);
+* a driven rotator is a point dipole spinning about the lab z axis through ``axis_point``:
+  ``m_R = m [cos g sin th, -cos g cos th, sin g]`` with tilt ``g`` (Eq. 5.25), optionally
+  shifted from the axis by ``shift`` (a vector in the rotator's frame, rotating with it);
+* body orientation ``R`` maps body to lab; a body's dipole is ``R m_body`` at ``x + R offset``.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from labkit.errors import RigFileError
+from labkit.sim import equilibrium
+from labkit.sim.rotations import euler_zxz
+
+RPM = 2.0 * math.pi / 60.0
+
+MASS_UNITS = {"kg": 1.0, "g": 1e-3}
+INERTIA_UNITS = {"kg_m2": 1.0, "g_cm2": 1e-7}
+LENGTH_UNITS = {"m": 1.0, "mm": 1e-3}
+ANGLE_UNITS = {"rad": 1.0, "deg": math.pi / 180.0}
+FIELD_UNITS = {"T": 1.0, "mT": 1e-3}
+
+
+class SceneError(RigFileError):
+    """A scene is wrong. Formats as ``file:key: reason`` (``file: reason`` without a key)."""
+
+    def __init__(self, file: str, key: str, reason: str) -> None:
+        super().__init__(file, key, reason)
+        if not key:
+            self.args = (f"{self.file}: {reason}",)
+
+    def __str__(self) -> str:
+        return str(self.args[0])
+
+
+@dataclass
+class Shape:
+    """Shape used for contact only: a sphere of ``radius_m`` or a cylinder (radius, height).
+
+    Contact is tested against the bounding sphere (cylinder: half its diagonal), which is
+    conservative: a reported contact may be a near miss by up to the shape's corner gap.
+    """
+
+    kind: str = "point"
+    radius_m: float = 0.0
+    height_m: float = 0.0
+
+    @property
+    def contact_radius_m(self) -> float:
+        if self.kind == "cylinder":
+            return math.hypot(self.radius_m, 0.5 * self.height_m)
+        return self.radius_m
+
+
+@dataclass
+class Body:
+    """A rigid body with a point dipole. ``inertia_kg_m2`` is the 3x3 tensor about the CM in
+    the body frame; ``moment_Am2`` the dipole vector in the body frame (default along body z);
+    ``rotation`` maps body to lab; ``angular_velocity_rad_s`` is in the lab frame."""
+
+    name: str
+    mass_kg: float
+    inertia_kg_m2: np.ndarray
+    moment_Am2: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    dipole_offset_m: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    shape: Shape = field(default_factory=Shape)
+    pinned: bool = False
+    damping_N_s_m: float = 0.0
+    damping_rot_N_m_s: float = 0.0
+    position_m: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    velocity_m_s: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
+    angular_velocity_rad_s: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+
+@dataclass
+class Rotator:
+    """A driven dipole on the lab z axis through ``axis_point_m``: not integrated, its angle is
+    ``phase + omega t + ramp t^2 / 2`` (Eq. 5.25 with tilt ``tilt_rad``)."""
+
+    name: str
+    moment_Am2: float
+    omega_rad_s: float
+    tilt_rad: float = 0.0
+    phase_rad: float = 0.0
+    ramp_rad_s2: float = 0.0
+    shift_m: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    axis_point_m: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    contact_radius_m: float = 0.0
+
+
+@dataclass
+class UniformField:
+    """Uniform field: ``rotating`` (Eq. 5.21), ``oscillating`` (Eq. 5.481) or ``static``."""
+
+    kind: str = "rotating"
+    B_c_T: float = 0.0
+    B_s_T: float = 0.0
+    omega_rad_s: float = 0.0
+    phase_rad: float = 0.0
+
+
+@dataclass
+class Scene:
+    name: str
+    bodies: list[Body]
+    rotators: list[Rotator] = field(default_factory=list)
+    field: UniformField | None = None
+    gravity_m_s2: np.ndarray | None = None
+    escape_radius_m: float | None = None
+    period_s: float | None = None
+    cycles: int = 100
+    description: str = ""
+    source: str = "<scene>"
+
+    def drive_omega(self) -> float:
+        """The drive's angular speed (rad/s) that sets the period and the step (h = T/N)."""
+        if self.field is not None and self.field.kind != "static" and self.field.omega_rad_s:
+            return abs(self.field.omega_rad_s)
+        if self.rotators:
+            return max(abs(r.omega_rad_s) for r in self.rotators)
+        if self.period_s:
+            return 2.0 * math.pi / self.period_s
+        spins = [float(np.linalg.norm(b.angular_velocity_rad_s)) for b in self.bodies]
+        return max(spins) if spins and max(spins) > 0 else 0.0
+
+    def period(self) -> float:
+        """Drive period T (s); raises if the scene has no drive, spin or ``period_s``."""
+        if self.period_s:
+            return float(self.period_s)
+        w = self.drive_omega()
+        if w <= 0:
+            raise SceneError(self.source, "scene.period_s", "no drive, field or spin sets a period: give one")
+        return 2.0 * math.pi / w
+
+
+# --------------------------------------------------------------------------- TOML reading
+
+
+class _Table:
+    """A TOML table being read: tracks used keys, reports unknown ones, converts units."""
+
+    def __init__(self, data: Any, path: str, source: str) -> None:
+        if not isinstance(data, dict):
+            raise SceneError(source, path, "expected a table")
+        self.data, self.path, self.source, self.used = data, path, source, set()
+
+    def key(self, k: str) -> str:
+        return f"{self.path}.{k}" if self.path else k
+
+    def error(self, k: str, reason: str) -> SceneError:
+        return SceneError(self.source, self.key(k), reason)
+
+    def get(self, k: str, default: Any = None) -> Any:
+        if k in self.data:
+            self.used.add(k)
+            return self.data[k]
+        return default
+
+    def number(self, k: str, default: float | None = None) -> float | None:
+        v = self.get(k, default)
+        if v is None:
+            return None
+        if isinstance(v, bool) or not isinstance(v, int | float):
+            raise self.error(k, f"expected a number, got {v!r}")
+        if not math.isfinite(v):
+            raise self.error(k, "must be finite")
+        return float(v)
+
+    def quantity(
+        self,
+        base: str,
+        units: dict[str, float],
+        default: Any = None,
+        required: bool = False,
+        shape: tuple[int, ...] | None = None,
+    ) -> Any:
+        """Read ``base_<unit>`` for exactly one of ``units``; converted to SI."""
+        present = [u for u in units if f"{base}_{u}" in self.data]
+        if len(present) > 1:
+            names = " and ".join(f"{base}_{u}" for u in present)
+            raise self.error(f"{base}_{present[1]}", f"inconsistent units: {names} both given")
+        if not present:
+            if required:
+                opts = " or ".join(f"{base}_{u}" for u in units)
+                raise self.error(f"{base}_{next(iter(units))}", f"missing (give {opts})")
+            return default
+        k = f"{base}_{present[0]}"
+        raw = self.get(k)
+        try:
+            arr = np.asarray(raw, dtype=float) * units[present[0]]
+        except (TypeError, ValueError):
+            raise self.error(k, f"expected numbers, got {raw!r}") from None
+        if not np.all(np.isfinite(arr)):
+            raise self.error(k, "must be finite")
+        if shape is not None and arr.shape not in [shape, ()]:
+            raise self.error(k, f"expected shape {shape}, got {list(arr.shape)}")
+        return float(arr) if arr.shape == () else arr
+
+    def sub(self, k: str) -> _Table | None:
+        v = self.get(k)
+        return None if v is None else _Table(v, self.key(k), self.source)
+
+    def finish(self) -> None:
+        unknown = sorted(set(self.data) - self.used)
+        if unknown:
+            known = ", ".join(sorted(self.used)) or "none"
+            raise self.error(unknown[0], f"unknown key (keys read here: {known})")
+
+
+def _vec3(t: _Table, base: str, units: dict[str, float], default: Any) -> np.ndarray:
+    v = t.quantity(base, units, default=None, shape=(3,))
+    if v is None:
+        return np.array(default, dtype=float)
+    if np.ndim(v) == 0:
+        raise t.error(f"{base}_{next(u for u in units if f'{base}_{u}' in t.data)}", "expected 3 numbers")
+    return np.asarray(v, dtype=float)
+
+
+def _inertia(t: _Table) -> np.ndarray:
+    v = t.quantity("inertia", INERTIA_UNITS, required=True)
+    k = next(f"inertia_{u}" for u in INERTIA_UNITS if f"inertia_{u}" in t.data)
+    arr = np.asarray(v, dtype=float)
+    if arr.shape == ():
+        return np.eye(3) * float(arr)
+    if arr.shape == (3,):
+        return np.diag(arr)
+    if arr.shape == (3, 3):
+        return arr
+    raise t.error(k, "expected a number (isotropic), 3 principal moments or a 3x3 tensor")
+
+
+def _shape(t: _Table | None) -> Shape:
+    if t is None:
+        return Shape()
+    kind = t.get("kind", "sphere")
+    if kind not in ("sphere", "cylinder", "point"):
+        raise t.error("kind", f"unknown shape {kind!r} (sphere, cylinder, point)")
+    radius = t.quantity("radius", LENGTH_UNITS, default=0.0)
+    height = t.quantity("height", LENGTH_UNITS, default=0.0)
+    t.finish()
+    if radius < 0 or height < 0:
+        raise t.error("radius_m", "must not be negative")
+    return Shape(kind, radius, height)
+
+
+def _omega(t: _Table, required: bool) -> float | None:
+    keys = [k for k in ("omega_rad_s", "speed_rpm", "frequency_hz") if k in t.data]
+    if len(keys) > 1:
+        raise t.error(keys[1], f"inconsistent units: {' and '.join(keys)} both given")
+    if not keys:
+        if required:
+            raise t.error("omega_rad_s", "missing (give omega_rad_s, speed_rpm or frequency_hz)")
+        return None
+    k = keys[0]
+    value = t.number(k)
+    return value * {"omega_rad_s": 1.0, "speed_rpm": RPM, "frequency_hz": 2.0 * math.pi}[k]
+
+
+def _field(t: _Table, bodies_moment: float) -> UniformField:
+    kind = t.get("kind", "rotating")
+    if kind not in ("rotating", "oscillating", "static"):
+        raise t.error("kind", f"unknown field kind {kind!r} (rotating, oscillating, static)")
+    omega = _omega(t, required=kind != "static") or 0.0
+    values = {}
+    for part in ("c", "s"):
+        b = t.quantity(f"B_{part}", FIELD_UNITS)
+        tau = t.number(f"tau_{part}_Nm")
+        if b is not None and tau is not None:
+            raise t.error(f"tau_{part}_Nm", f"inconsistent units: B_{part} and tau_{part}_Nm both given")
+        if tau is not None:
+            if bodies_moment <= 0:
+                raise t.error(f"tau_{part}_Nm", "a torque coefficient needs a body with a dipole moment")
+            b = tau / bodies_moment  # tau = |m| |B| (Eq. 5.22)
+        values[part] = b or 0.0
+    phase = t.quantity("phase", ANGLE_UNITS, default=0.0)
+    t.finish()
+    if kind != "static" and omega == 0.0:
+        raise t.error("omega_rad_s", f"a {kind} field needs a non-zero speed")
+    return UniformField(kind, values["c"], values["s"], omega, phase)
+
+
+def _rotator(t: _Table, i: int) -> Rotator:
+    name = str(t.get("name", f"rotator{i}"))
+    moment = t.number("moment_Am2")
+    if moment is None:
+        raise t.error("moment_Am2", "missing")
+    omega = _omega(t, required=True)
+    tilt = t.quantity("tilt", ANGLE_UNITS, default=0.0)
+    phase = t.quantity("phase", ANGLE_UNITS, default=0.0)
+    ramp = t.number("ramp_rad_s2", 0.0)
+    shift = _vec3(t, "shift", LENGTH_UNITS, [0, 0, 0])
+    axis = _vec3(t, "axis_point", LENGTH_UNITS, [0, 0, 0])
+    radius = t.quantity("radius", LENGTH_UNITS, default=0.0)
+    t.finish()
+    return Rotator(name, moment, omega, tilt, phase, ramp, shift, axis, radius)
+
+
+def _moment(t: _Table) -> np.ndarray:
+    if "moment_Am2" in t.data and "moment_vector_Am2" in t.data:
+        raise t.error("moment_vector_Am2", "give moment_Am2 (along body z) or moment_vector_Am2, not both")
+    if "moment_vector_Am2" in t.data:
+        return _vec3(t, "moment_vector", {"Am2": 1.0}, [0, 0, 0])
+    m = t.number("moment_Am2", 0.0)
+    return np.array([0.0, 0.0, m])
+
+
+def _body(t: _Table, i: int) -> tuple[Body, _Table | None]:
+    name = str(t.get("name", f"body{i}"))
+    mass = t.quantity("mass", MASS_UNITS, required=True)
+    inertia = _inertia(t)
+    moment = _moment(t)
+    offset = _vec3(t, "dipole_offset", LENGTH_UNITS, [0, 0, 0])
+    shape = _shape(t.sub("shape"))
+    pinned = bool(t.get("pinned", False))
+    damp = t.number("damping_N_s_m", 0.0)
+    damp_rot = t.number("damping_rot_N_m_s", 0.0)
+    init = t.sub("initial")
+    t.finish()
+    body = Body(name, mass, inertia, moment, offset, shape, pinned, damp, damp_rot)
+    return body, init
+
+
+def _initial(body: Body, t: _Table, scene: Scene) -> None:
+    body.position_m = _vec3(t, "position", LENGTH_UNITS, [0, 0, 0])
+    body.velocity_m_s = _vec3(t, "velocity", {"m_s": 1.0}, [0, 0, 0])
+    euler = t.quantity("euler_zxz", ANGLE_UNITS, shape=(3,))
+    matrix = t.get("rotation_matrix")
+    if euler is not None and matrix is not None:
+        raise t.error("rotation_matrix", "give euler_zxz_rad or rotation_matrix, not both")
+    if euler is not None:
+        body.rotation = euler_zxz(*np.asarray(euler, dtype=float))
+    elif matrix is not None:
+        r = np.asarray(matrix, dtype=float)
+        if r.shape != (3, 3) or not np.allclose(r.T @ r, np.eye(3), atol=1e-9) or np.linalg.det(r) < 0:
+            raise t.error("rotation_matrix", "not a proper rotation (R^T R = I, det R = +1)")
+        body.rotation = r
+    body.angular_velocity_rad_s = _vec3(t, "angular_velocity", {"rad_s": 1.0}, [0, 0, 0])
+    eq = t.get("equilibrium")
+    spin_k = t.number("spin_k", -1.0)
+    t.finish()
+    if eq is None:
+        return
+    if eq != "conical":
+        raise t.error("equilibrium", f"unknown helper {eq!r} (conical)")
+    try:
+        equilibrium.apply_conical(body, scene, spin_k=spin_k)
+    except ValueError as exc:
+        raise t.error("equilibrium", str(exc)) from None
+
+
+def scene_from_dict(data: dict, source: str = "<dict>") -> Scene:
+    """Build and validate a scene from a parsed TOML document (see docs/simulator.md)."""
+    top = _Table(data, "", source)
+    meta = top.sub("scene") or _Table({}, "scene", source)
+    name = str(meta.get("name", Path(source).stem))
+    description = str(meta.get("description", ""))
+    cycles = meta.get("cycles", 100)
+    if not isinstance(cycles, int) or cycles <= 0:
+        raise meta.error("cycles", "must be a positive whole number")
+    period = meta.number("period_s")
+    escape = meta.quantity("escape_radius", LENGTH_UNITS)
+    meta.finish()
+
+    raw_bodies = top.get("body", [])
+    if not isinstance(raw_bodies, list) or not raw_bodies:
+        raise SceneError(source, "body", "a scene needs at least one [[body]]")
+    bodies, inits = [], []
+    for i, raw in enumerate(raw_bodies):
+        b, init = _body(_Table(raw, f"body[{i}]", source), i)
+        bodies.append(b)
+        inits.append(init)
+    rotators = [
+        _rotator(_Table(raw, f"rotator[{i}]", source), i)
+        for i, raw in enumerate(top.get("rotator", []) or [])
+    ]
+    moment = max((float(np.linalg.norm(b.moment_Am2)) for b in bodies), default=0.0)
+    ftab = top.sub("field")
+    fld = _field(ftab, moment) if ftab is not None else None
+    gtab = top.sub("gravity")
+    gravity = None
+    if gtab is not None:
+        gravity = _vec3(gtab, "g", {"m_s2": 1.0}, [0.0, 0.0, -9.80665])
+        gtab.finish()
+    top.finish()
+    scene = Scene(name, bodies, rotators, fld, gravity, escape, period, cycles, description, source)
+    for b, init in zip(bodies, inits, strict=True):
+        if init is not None:
+            _initial(b, init, scene)
+    validate_scene(scene)
+    return scene
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read a scene TOML file (or a bundled scene's name, e.g. ``conical_5_1``)."""
+    p = Path(path)
+    if not p.exists():
+        bundled = Path(__file__).resolve().parent.parent / "data" / "scenes" / f"{p.stem}.toml"
+        if p.suffix in ("", ".toml") and bundled.exists():
+            p = bundled
+        else:
+            raise SceneError(str(path), "", "no such scene file (nor a bundled scene of that name)")
+    try:
+        data = tomllib.loads(p.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(str(p), "", f"not valid TOML: {exc}") from None
+    return scene_from_dict(data, source=str(p))
+
+
+def bundled_scenes() -> list[str]:
+    """Names of the scenes shipped in ``labkit/data/scenes``."""
+    d = Path(__file__).resolve().parent.parent / "data" / "scenes"
+    return sorted(p.stem for p in d.glob("*.toml"))
+
+
+# --------------------------------------------------------------------------- validation
+
+
+def validate_scene(scene: Scene) -> None:
+    """Check a scene built in Python or read from TOML; raise :class:`SceneError` if wrong."""
+    src = scene.source
+    if not scene.bodies:
+        raise SceneError(src, "body", "a scene needs at least one body")
+    names = [b.name for b in scene.bodies] + [r.name for r in scene.rotators]
+    if len(set(names)) != len(names):
+        raise SceneError(src, "body.name", f"names must be unique, got {names}")
+    for i, b in enumerate(scene.bodies):
+        key = f"body[{i}]"
+        if not (b.mass_kg > 0):
+            raise SceneError(src, f"{key}.mass_kg", f"mass must be positive, got {b.mass_kg!r}")
+        inertia = np.asarray(b.inertia_kg_m2, dtype=float)
+        if inertia.shape != (3, 3) or not np.allclose(inertia, inertia.T, rtol=1e-12, atol=0.0):
+            raise SceneError(src, f"{key}.inertia_kg_m2", "inertia tensor must be a symmetric 3x3 matrix")
+        eig = np.linalg.eigvalsh(inertia)
+        if eig[0] <= 0:
+            raise SceneError(
+                src,
+                f"{key}.inertia_kg_m2",
+                f"inertia tensor is not positive definite (eigenvalues {eig.tolist()})",
+            )
+        if eig[0] + eig[1] < eig[2] * (1.0 - 1e-9):
+            raise SceneError(
+                src,
+                f"{key}.inertia_kg_m2",
+                f"principal moments {eig.tolist()} violate I1 + I2 >= I3 (no rigid body has them)",
+            )
+        for attr in ("damping_N_s_m", "damping_rot_N_m_s"):
+            if getattr(b, attr) < 0:
+                raise SceneError(src, f"{key}.{attr}", "damping must not be negative")
+    if scene.escape_radius_m is not None and scene.escape_radius_m <= 0:
+        raise SceneError(src, "scene.escape_radius_m", "must be positive")
+    # overlapping bodies (bounding spheres, at t = 0)
+    spheres = [
+        (f"body[{i}]", b.name, b.position_m, b.shape.contact_radius_m) for i, b in enumerate(scene.bodies)
+    ]
+    for j, r in enumerate(scene.rotators):
+        spheres.append((f"rotator[{j}]", r.name, r.axis_point_m, r.contact_radius_m))
+    for a in range(len(spheres)):
+        for c in range(a + 1, len(spheres)):
+            ka, na, pa, ra = spheres[a]
+            kc, nc, pc, rc = spheres[c]
+            d = float(np.linalg.norm(np.asarray(pa) - np.asarray(pc)))
+            if d < ra + rc or (d == 0.0):
+                raise SceneError(
+                    src,
+                    f"{kc}.initial.position_m" if kc.startswith("body") else f"{kc}.axis_point_m",
+                    f"{nc} overlaps {na} ({ka}): centres {d * 1e3:.3g} mm apart, "
+                    f"contact radii sum {(ra + rc) * 1e3:.3g} mm",
+                )
