@@ -30,18 +30,30 @@ def sample_frames(path: str | Path, count: int = 8) -> list[tuple[int, np.ndarra
             raise VideoError(str(p), "cannot be decoded as an image")
         return [(0, img)]
     cap = cv2.VideoCapture(str(p))
+    advertised = int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
+    wanted = (set(np.linspace(0, advertised - 1, min(count, advertised)).round().astype(int).tolist())
+              if advertised > 0 else None)
+    kept: list[tuple[int, np.ndarray]] = []
     try:
-        frames = []
-        ok, img = cap.read()
-        while ok:
-            frames.append(img)
-            ok, img = cap.read()
+        index = 0
+        while True:
+            if wanted is not None and index not in wanted:
+                if not cap.grab():       # skip without decoding into an image
+                    break
+            else:
+                ok, img = cap.read()
+                if not ok:
+                    break
+                kept.append((index, img))
+            index += 1
     finally:
         cap.release()
-    if not frames:
+    if not kept:
         raise VideoError(str(p), "no frame could be decoded")
-    idx = np.unique(np.linspace(0, len(frames) - 1, min(count, len(frames))).round().astype(int))
-    return [(int(i), frames[i]) for i in idx]
+    if wanted is None:   # frame count unknown: every frame was kept, thin out now
+        idx = np.unique(np.linspace(0, len(kept) - 1, min(count, len(kept))).round().astype(int))
+        kept = [kept[i] for i in idx]
+    return kept
 
 
 def pattern_points(pattern: dict, samples: int = 720) -> np.ndarray | None:
