@@ -215,3 +215,35 @@ def test_replay_at_other_serial_settings_is_a_mismatch(tmp_path):
     port.close()
     with pytest.raises(ReplayMismatch, match="baudrate=9600 but the recording used baudrate=2400"):
         open_port(f"replay://{cassette}", clock=VirtualClock(), timeout=0.1)
+
+
+def test_each_reopen_replays_the_next_recorded_session(tmp_path):
+    url, cassette = record(tmp_path, "sim://test_echo?faults=disconnect_at:1,reconnect_after:1")
+    clock = VirtualClock()
+    port = open_port(url, clock=clock, timeout=0.5)
+    echo_session(port, ["first"])
+    clock.advance(1.5)
+    with pytest.raises(serial.SerialException):
+        port.write(b"lost\n")
+    port.close()
+    clock.advance(1.0)
+    port.open()  # replugged: a power-cycled device
+    echo_session(port, ["second"])
+    port.close()
+    opens = [e for e in events(cassette)[1:] if e.get("event") == "open"]
+    assert len(opens) == 2
+
+    clock2 = VirtualClock()
+    replay = open_port(f"replay://{cassette}?mode=timed", clock=clock2, timeout=0.5)
+    echo_session(replay, ["first"])
+    with pytest.raises(serial.SerialException):
+        replay.write(b"lost\n")
+    replay.close()
+    with pytest.raises(ReplayMismatch, match="recorded 2 open"):
+        replay.assert_consumed()  # the second session has not been replayed yet
+    replay.open()
+    assert echo_session(replay, ["second"])[0][0] == "second"
+    replay.close()
+    replay.assert_consumed()
+    with pytest.raises(ReplayMismatch, match="opened 3 times"):
+        replay.open()
