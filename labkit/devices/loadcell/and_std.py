@@ -16,6 +16,7 @@ from typing import Any
 import serial
 
 from labkit.devices.base import Balance, Reading, register_driver, register_parser_benchmark
+from labkit.devices.loadcell.continuous import ContinuousMixin
 from labkit.devices.loadcell.linkio import FrameError, LineLink, eol_bytes
 from labkit.devices.loadcell.units import UnitError, to_si
 from labkit.errors import DeviceReplyError
@@ -137,7 +138,7 @@ register_parser_benchmark("and_std", b"ST,+00012.34  g\r\n", parse_line)
 
 
 @register_driver
-class AndStdBalance(Balance):
+class AndStdBalance(ContinuousMixin, Balance):
     """A&D balance in command mode (default) or stream mode.
 
     Options: ``eol`` (``"CRLF"``/``"CR"``, the balance's command terminator), ``ack``
@@ -145,6 +146,8 @@ class AndStdBalance(Balance):
     zero/tare wait ``settle_s``), ``mode`` (``"command"`` or ``"stream"`` for a balance
     set to stream output), ``command_timeout_s`` (2), ``settle_s`` (3).
     On open (command mode): flush, send ``C`` (cancel ``S``/``SIR``; PROTOCOLS 5.3).
+    ``start_continuous()`` sends ``SIR`` (command mode) and reads the stream on a reader;
+    ``stop_continuous()`` sends ``C``.
     """
 
     protocol = "and_std"
@@ -224,12 +227,34 @@ class AndStdBalance(Balance):
         return Reading(t, quantity, value, unit, stable=data.stable, overload=False, raw=line,
                        device=self.name, flags=flags)
 
+    # ---- continuous output (SIR / stream mode) ----------------------------------------
+    def _begin_stream(self) -> None:
+        if self.mode == "command":
+            self.link.discard_stale("SIR")
+            self.link.send("SIR")
+
+    def _end_stream(self) -> None:
+        if self.mode == "command":
+            self._control("C", acks=1, timeout=self.command_timeout)
+
+    def _stream_reading(self, t: float, line: bytes) -> Reading | None:
+        parsed = parse_line(line)
+        if isinstance(parsed, AndError):
+            raise DeviceReplyError(self.name, "SIR", line, parsed.meaning)
+        if isinstance(parsed, AndData):
+            return self._reading(t, line, parsed, "SIR")
+        return None
+
     # ---- public -----------------------------------------------------------------------
     def identify(self) -> dict[str, Any]:
         """``?ID``, ``?SN``, ``?TN`` (a model without one answers EC,E01: left out)."""
         info: dict[str, Any] = {"protocol": self.protocol}
         if self.mode == "stream":
             return info
+        with self.paused():
+            return self._identify(info)
+
+    def _identify(self, info: dict[str, Any]) -> dict[str, Any]:
         names = {"?ID": "id", "?SN": "serial", "?TN": "model"}
         for command, key in names.items():
             try:
@@ -242,7 +267,9 @@ class AndStdBalance(Balance):
         return info
 
     def read(self, timeout: float = 2.0) -> Reading:
-        """``Q``: the weight now (stream mode: the next data line)."""
+        """``Q``: the weight now (stream mode or continuous: the next data line)."""
+        if self.stream is not None:
+            return self.stream.wait_new(self.clock.now(), timeout)
         if self.mode == "stream":
             t, line, data = self._ask(None, AndData, timeout)
             return self._reading(t, line, data, "stream")
@@ -251,19 +278,21 @@ class AndStdBalance(Balance):
 
     def read_stable(self, timeout: float = 20.0) -> Reading:
         """``S``: the balance answers once the weight is stable (EC,E11 if it does not settle)."""
-        if self.mode == "stream":
+        if self.mode == "stream" or self.stream is not None:
             return super().read_stable(timeout)
         t, line, data = self._ask("S", AndData, timeout)
         return self._reading(t, line, data, "S")
 
     def zero(self, timeout: float = 20.0) -> None:
         """``Z`` (re-zero): waits for both ACKs (receipt, completion) when ``ack`` is on."""
-        self._control("Z", acks=2, timeout=timeout)
-        if not self.ack:
-            self.clock.sleep(self.settle_s)
+        with self.paused():
+            self._control("Z", acks=2, timeout=timeout)
+            if not self.ack:
+                self.clock.sleep(self.settle_s)
 
     def tare(self, timeout: float = 20.0) -> None:
         """``T``: tare, acknowledged like ``Z``."""
-        self._control("T", acks=2, timeout=timeout)
-        if not self.ack:
-            self.clock.sleep(self.settle_s)
+        with self.paused():
+            self._control("T", acks=2, timeout=timeout)
+            if not self.ack:
+                self.clock.sleep(self.settle_s)

@@ -25,6 +25,7 @@ from typing import Any
 import serial
 
 from labkit.devices.base import Balance, Reading, register_driver, register_parser_benchmark
+from labkit.devices.loadcell.continuous import ContinuousMixin
 from labkit.devices.loadcell.linkio import FrameError, LineLink, eol_bytes
 from labkit.devices.loadcell.units import UnitError, to_si
 from labkit.errors import DeviceReplyError
@@ -124,7 +125,7 @@ register_parser_benchmark("line_regex", b"Load_cell output val: 12.34\r\n",
 
 
 @register_driver
-class LineRegexBalance(Balance):
+class LineRegexBalance(ContinuousMixin, Balance):
     """A load cell behind a third-party Arduino sketch that prints one value per line.
 
     Options: ``preset`` (``hx711_adc`` default, ``bogde``, ``bare_float``), ``pattern``
@@ -160,8 +161,9 @@ class LineRegexBalance(Balance):
         self.window: deque[float] = deque(maxlen=int(options.get("stable_window", 8)))
         self.serial_expected = self.serial_defaults(options)
         eol = eol_bytes(str(options.get("eol", "CRLF")))
+        self.read_eol = b"\r" if eol == b"\r" else b"\n"
         self.link = LineLink(port, clock, self.name, expected_serial=self.serial_expected,
-                             write_eol=eol, read_eol=b"\r" if eol == b"\r" else b"\n")
+                             write_eol=eol, read_eol=self.read_eol)
         if self.unit != "raw":
             try:
                 to_si(1.0, self.unit)
@@ -220,12 +222,24 @@ class LineRegexBalance(Balance):
             return self.stable_std * abs(self.scale)
         return to_si(self.stable_std * abs(self.scale), unit)[1]
 
+    # ---- continuous: the sketch always streams; the reader just keeps every line --------
+    def _begin_stream(self) -> None:
+        self.link.discard_stale("stream")
+
+    def _end_stream(self) -> None:
+        pass
+
+    def _stream_reading(self, t: float, line: bytes) -> Reading | None:
+        return self._reading(t, line, parse_value_line(line, self.pattern))
+
     def identify(self) -> dict[str, Any]:
         """Sketches do not identify themselves: the preset and pattern in use."""
         return {"protocol": self.protocol, "preset": self.preset, "pattern": self.pattern.pattern}
 
     def read(self, timeout: float = 2.0) -> Reading:
         """The next value line received after this call (older buffered lines are dropped)."""
+        if self.stream is not None:
+            return self.stream.wait_new(self.clock.now(), timeout)
         self.link.discard_stale("stream")
         t, line, parsed = self.link.exchange(None, self._accept, timeout)
         return self._reading(t, line, parsed)
@@ -233,6 +247,10 @@ class LineRegexBalance(Balance):
     def zero(self, timeout: float = 20.0) -> None:
         """Send the tare command (``t``); wait for the sketch's confirmation line if it has one,
         else for the next value line."""
+        with self.paused():
+            self._zero(timeout)
+
+    def _zero(self, timeout: float) -> None:
         self.window.clear()
         self.link.discard_stale(self.tare_command)
         rx = self.tare_reply

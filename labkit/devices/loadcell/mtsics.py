@@ -16,6 +16,7 @@ from typing import Any
 import serial
 
 from labkit.devices.base import Balance, Reading, register_driver, register_parser_benchmark
+from labkit.devices.loadcell.continuous import ContinuousMixin
 from labkit.devices.loadcell.linkio import FrameError, LineLink, eol_bytes
 from labkit.devices.loadcell.units import UnitError, to_si
 from labkit.errors import DeviceReplyError
@@ -147,13 +148,15 @@ register_parser_benchmark("mtsics", b"S S      12.34 g\r\n", parse_weight)
 
 
 @register_driver
-class MtSicsBalance(Balance):
+class MtSicsBalance(ContinuousMixin, Balance):
     """MT-SICS balance (Mettler Toledo, labkit HX711 sketch).
 
     Options (rig file ``[devices.balance.options]``): ``eol`` (``"CRLF"`` default, ``"CR"``,
     ``"LF"``), ``command_timeout_s`` (2, for immediate commands).
     On open: flush input, send ``@`` (reset to a known state, cancels ``SIR``), wait for
-    the ``I4`` reply (PROTOCOLS 5.3 rule 3).
+    the ``I4`` reply (PROTOCOLS 5.3 rule 3). ``start_continuous()`` sends ``SIR`` and reads
+    the stream on a reader (``latest()``, ``readings_since(t)``); ``stop_continuous()``
+    sends ``@``.
     """
 
     protocol = "mtsics"
@@ -163,9 +166,10 @@ class MtSicsBalance(Balance):
         super().__init__(port, clock, name, **options)
         eol = eol_bytes(str(options.get("eol", "CRLF")))
         self.command_timeout = float(options.get("command_timeout_s", 2.0))
+        self.read_eol = b"\r" if eol == b"\r" else b"\n"
         self.link = LineLink(
             port, clock, self.name, expected_serial=self.default_serial,
-            write_eol=eol, read_eol=b"\r" if eol == b"\r" else b"\n",
+            write_eol=eol, read_eol=self.read_eol,
             on_unsolicited=self._unsolicited,
         )
         self.serial_number = ""
@@ -247,6 +251,25 @@ class MtSicsBalance(Balance):
         return Reading(t, quantity, value, unit, stable=weight.stable, overload=False, raw=line,
                        device=self.name, flags=frozenset(flags))
 
+    # ---- continuous output (SIR) ------------------------------------------------------
+    def _begin_stream(self) -> None:
+        self.link.discard_stale("SIR")
+        self.link.send("SIR")
+
+    def _end_stream(self) -> None:
+        self.reset()  # @ cancels SIR
+
+    def _stream_reading(self, t: float, line: bytes) -> Reading | None:
+        try:
+            reply = parse_reply(line)
+        except FrameError:
+            self._unsolicited(t, line)
+            raise
+        if reply.command == "S" and reply.status in "SD+-":
+            return self._reading(t, line, "SIR")
+        self._unsolicited(t, line)
+        return None
+
     # ---- public -----------------------------------------------------------------------
     def reset(self) -> str:
         """``@``: reset to the power-on state (no zeroing), cancel ``SIR``; returns serial no."""
@@ -257,6 +280,10 @@ class MtSicsBalance(Balance):
 
     def identify(self) -> dict[str, Any]:
         """``I2`` (type, capacity, unit) and ``I4`` (serial number)."""
+        with self.paused():
+            return self._identify()
+
+    def _identify(self) -> dict[str, Any]:
         _, line, reply = self.command("I2", "I2", self.command_timeout, retry_after=0.5)
         if reply.status != "A":
             raise self._fail("I2", line, reply)
@@ -268,38 +295,48 @@ class MtSicsBalance(Balance):
         return info
 
     def read(self, timeout: float = 2.0) -> Reading:
-        """``SI``: the weight now, stable (``S S``) or not (``S D``); overload -> flagged, NaN."""
+        """``SI``: the weight now, stable (``S S``) or not (``S D``); overload -> flagged, NaN.
+        While continuous: the next streamed reading."""
+        if self.stream is not None:
+            return self.stream.wait_new(self.clock.now(), timeout)
         t, line, _ = self.command("SI", "S", timeout, retry_after=min(0.5, timeout / 2))
         return self._reading(t, line, "SI")
 
     def read_stable(self, timeout: float = 20.0) -> Reading:
-        """``S``: the balance waits for stability; ``S I`` (its own timeout) raises."""
+        """``S``: the balance waits for stability; ``S I`` (its own timeout) raises.
+        While continuous: the next stable streamed reading."""
+        if self.stream is not None:
+            return super().read_stable(timeout)
         t, line, _ = self.command("S", "S", timeout)
         reading = self._reading(t, line, "S")
         return reading
 
     def zero(self, timeout: float = 20.0) -> None:
         """``Z``: zero when stable. ``Z I`` (not stable), ``Z +``/``Z -`` (out of range) raise."""
-        _, line, reply = self.command("Z", "Z", timeout)
+        with self.paused():
+            _, line, reply = self.command("Z", "Z", timeout)
         if reply.status != "A":
             raise self._fail("Z", line, reply)
 
     def tare(self, timeout: float = 20.0) -> Reading:  # type: ignore[override]
         """``T``: tare when stable; returns the tare weight as a Reading."""
-        t, line, reply = self.command("T", "T", timeout)
+        with self.paused():
+            t, line, reply = self.command("T", "T", timeout)
         if reply.status not in ("S", "A"):
             raise self._fail("T", line, reply)
         return self._reading(t, line, "T")
 
     def tare_value(self, timeout: float = 2.0) -> Reading:
         """``TA``: the stored tare weight."""
-        t, line, reply = self.command("TA", "TA", timeout, retry_after=0.5)
+        with self.paused():
+            t, line, reply = self.command("TA", "TA", timeout, retry_after=0.5)
         if reply.status != "A":
             raise self._fail("TA", line, reply)
         return self._reading(t, line, "TA")
 
     def clear_tare(self, timeout: float = 2.0) -> None:
         """``TAC``: clear the tare."""
-        _, line, reply = self.command("TAC", "TAC", timeout, retry_after=0.5)
+        with self.paused():
+            _, line, reply = self.command("TAC", "TAC", timeout, retry_after=0.5)
         if reply.status != "A":
             raise self._fail("TAC", line, reply)
