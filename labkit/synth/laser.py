@@ -96,7 +96,7 @@ def laser_truth(spec: LaserSpec) -> dict:
             rot = (rot + 90) % 180
         ellipticity = 1 - minor / major
     else:
-        axes, ellipticity, loops = [p.scale * (1 + p.b)] * 2, 0.0, p.loops
+        axes, ellipticity, loops = [p.scale * (1 + p.b), p.scale * abs(1 - p.b)], None, p.loops
         rot = math.degrees(p.rotation_rad) % (360 / abs(p.k - 1))
         trochoid = {"a": a_for_k(p.k), "b": p.b, "scale_px": p.scale, "rotation_deg": rot}
     return {

@@ -121,13 +121,16 @@ def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | No
     p = best.pattern
     trochoid = None
     if p.kind in ("epitrochoid", "hypotrochoid"):
+        # extent of a trochoid: |z - c| runs between scale (1 - b) and scale (1 + b)
+        axes, ellipticity = [p.scale * (1 + p.b), p.scale * abs(1 - p.b)], None
         rotation = math.degrees(p.rotation_rad)
         trochoid = {"a": a_for_k(best.k), "b": p.b, "scale_px": p.scale, "rotation_deg": rotation}
         loops = p.loops
     else:
+        axes, ellipticity = [major, minor], (1 - minor / major if major > 0 else 0.0)
         rotation, loops = math.degrees(ell.rotation_rad), 1
-    pattern = {"type": kind, "center_px": [p.center[0], p.center[1]], "semi_axes_px": [major, minor],
-               "rotation_deg": rotation, "ellipticity": 1 - minor / major if major > 0 else 0.0,
+    pattern = {"type": kind, "center_px": [float(p.center[0]), float(p.center[1])], "semi_axes_px": axes,
+               "rotation_deg": rotation, "ellipticity": ellipticity,
                "loops": loops, "trochoid": trochoid, "rms_residual_px": best.rms_residual}
     residuals = {k: (v if math.isfinite(v) else None) for k, v in cls.residuals.items()}
     diag = {"drift_px_s": [float(best.drift.real), float(best.drift.imag)],

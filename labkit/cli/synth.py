@@ -1,0 +1,161 @@
+"""``labkit synth {laser,strobe,testset}``: write realistic synthetic footage with its ground truth
+(``OUT`` plus ``OUT-stem.truth.json``), to test analysis or check a camera set-up before filming.
+
+A photo suffix (.png, .jpg, ...) writes one long-exposure image (the brightest value of all frames).
+``labkit synth laser OUT --angles RUN.csv`` renders a simulator run: columns ``t_s, tilt_x_rad,
+tilt_y_rad`` (header optional; or an .npz/.npy with those three arrays/columns).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from labkit.errors import VideoError
+
+
+def _size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError("expected WIDTHxHEIGHT, e.g. 640x480") from None
+    if w < 32 or h < 32 or w > 7680 or h > 4320:
+        raise argparse.ArgumentTypeError("size must be between 32x32 and 7680x4320")
+    return w, h
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    parser = sub.add_parser("synth", help="synthetic laser-screen and stroboscope footage with ground truth",
+                            description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    kinds = parser.add_subparsers(dest="kind", metavar="KIND")
+
+    laser = kinds.add_parser("laser", help="laser trace on a screen")
+    laser.add_argument("out", help="output .mp4/.avi/.mkv video or .png/.jpg photo")
+    laser.add_argument("--pattern", choices=["circle", "ellipse", "epitrochoid", "hypotrochoid"],
+                       default="circle")
+    laser.add_argument("--level", choices=["easy", "medium", "hard"], default="medium",
+                       help="footage impairments (default medium)")
+    laser.add_argument("--size", type=_size, default=(640, 480))
+    laser.add_argument("--frames", type=int, default=60)
+    laser.add_argument("--fps", type=float, default=30.0)
+    laser.add_argument("--radius-px", type=float,
+                       help="major semi-axis / outer radius (default 30%% of height)")
+    laser.add_argument("--ellipticity", type=float, default=0.3, help="ellipse: 1 - minor/major")
+    laser.add_argument("--loops", type=int, default=3, help="trochoid loops (2-7; hypotrochoid 3-7)")
+    laser.add_argument("--b", type=float, default=0.5, help="trochoid b of Eq. 6.38")
+    laser.add_argument("--rotation-deg", type=float, default=20.0)
+    laser.add_argument("--cycle-hz", type=float, default=7.3, help="main-loop frequency of the spot")
+    laser.add_argument("--exposure-ms", type=float, help="exposure per frame (default from --level)")
+    laser.add_argument("--codec", default="mp4v", help="fourcc: mp4v (.mp4), MJPG (.avi), FFV1 (.mkv)")
+    laser.add_argument("--seed", type=int, default=0)
+    laser.add_argument("--angles", metavar="RUN", help="simulator run: t_s, tilt_x_rad, tilt_y_rad")
+    laser.add_argument("--screen-distance-mm", type=float, default=500.0, help="with --angles")
+    laser.add_argument("--mm-per-px", type=float, default=0.5, help="with --angles")
+    laser.set_defaults(func=run_laser)
+
+    strobe = kinds.add_parser("strobe", help="stroboscopic side view of the floating magnet")
+    strobe.add_argument("out")
+    strobe.add_argument("--level", choices=["easy", "medium", "hard"], default="medium")
+    strobe.add_argument("--frames", type=int, default=48)
+    strobe.add_argument("--rotor-hz", type=float, default=240.0)
+    strobe.add_argument("--strobe-hz", type=float, default=15.15)
+    strobe.add_argument("--tilt-rad", type=float, default=0.25, help="tilt amplitude phi")
+    strobe.add_argument("--rc-offset-px", type=float, default=60.0, help="delta of Eq. 5.97")
+    strobe.add_argument("--codec", default="mp4v")
+    strobe.add_argument("--seed", type=int, default=0)
+    strobe.set_defaults(func=run_strobe)
+
+    testset = kinds.add_parser("testset", help="the seeded acceptance set (laser clips) into a folder")
+    testset.add_argument("folder")
+    testset.set_defaults(func=run_testset)
+    parser.set_defaults(func=lambda args: parser.print_help() or 1)
+
+
+def load_angles(path: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(t_s, tilt_x_rad, tilt_y_rad)`` from a CSV (optional header), .npy (N, 3) or .npz."""
+    p = Path(path)
+    if not p.exists():
+        raise VideoError(path, "no such file")
+    try:
+        if p.suffix == ".npz":
+            d = np.load(p)
+            arr = np.column_stack([d["t_s"], d["tilt_x_rad"], d["tilt_y_rad"]])
+        elif p.suffix == ".npy":
+            arr = np.load(p)
+        else:
+            arr = np.genfromtxt(p, delimiter=",", comments="#")
+            arr = arr[~np.isnan(arr).any(axis=1)] if arr.ndim == 2 else arr
+    except (OSError, ValueError, KeyError) as exc:
+        raise VideoError(path, f"cannot read angles: {exc}") from None
+    if arr.ndim != 2 or arr.shape[1] < 3 or len(arr) < 2:
+        raise VideoError(path, "expected at least 2 rows of t_s, tilt_x_rad, tilt_y_rad")
+    if not np.all(np.diff(arr[:, 0]) > 0):
+        raise VideoError(path, "t_s must increase")
+    return arr[:, 0], arr[:, 1], arr[:, 2]
+
+
+def run_laser(args: argparse.Namespace) -> int:
+    from labkit.synth import laser_truth, positions_from_angles, render_laser, write_clip
+    from labkit.synth.presets import laser_pattern, laser_preset
+
+    spec = laser_preset(args.level, args.size, args.seed)
+    kw = {}
+    if args.pattern == "ellipse":
+        kw["ellipticity"] = args.ellipticity
+    elif args.pattern != "circle":
+        if not 2 <= args.loops <= 7 or (args.pattern == "hypotrochoid" and args.loops < 3):
+            raise VideoError(args.out, "loops must be 2-7 for an epitrochoid and 3-7 for a hypotrochoid")
+        kw.update(loops=args.loops, b=args.b)
+    pattern = laser_pattern(args.pattern, args.size, rotation_deg=args.rotation_deg, **kw)
+    if args.radius_px:
+        f = args.radius_px / (pattern.semi_axes[0] if pattern.kind in ("circle", "ellipse")
+                              else pattern.scale * (1 + pattern.b))
+        pattern = replace(pattern, semi_axes=tuple(a * f for a in pattern.semi_axes), scale=pattern.scale * f)
+    spec = replace(spec, pattern=pattern, frames=args.frames, fps=args.fps, cycle_hz=args.cycle_hz,
+                   codec=args.codec)
+    if args.exposure_ms is not None:
+        spec = replace(spec, exposure_s=args.exposure_ms / 1000)
+    position, truth = None, None
+    if args.angles:
+        t, tx, ty = load_angles(args.angles)
+        centre = (args.size[0] / 2, args.size[1] / 2)
+        spec = replace(spec, pattern=replace(pattern, center=centre))
+        position = positions_from_angles(t, tx, ty, args.screen_distance_mm, args.mm_per_px, centre)
+        truth = {"kind": "laser", "spec": spec.to_dict(), "angles": args.angles,
+                 "screen_distance_mm": args.screen_distance_mm, "mm_per_px": args.mm_per_px,
+                 "tilt_rad": {"x_max": float(np.abs(tx).max()), "y_max": float(np.abs(ty).max())},
+                 "pattern": None}
+    truth = truth or laser_truth(spec)
+    path = write_clip(args.out, render_laser(spec, position), spec.fps, spec.codec, truth)
+    w, h = spec.size
+    print(f"wrote {path} ({spec.frames} frames {w}x{h}, {args.level}) and its truth JSON")
+    return 0
+
+
+def run_strobe(args: argparse.Namespace) -> int:
+    from labkit.synth import render_strobe, strobe_truth, write_clip
+    from labkit.synth.presets import strobe_preset
+
+    spec = replace(strobe_preset(args.level, args.seed), frames=args.frames, rotor_hz=args.rotor_hz,
+                   strobe_hz=args.strobe_hz, tilt_amplitude_rad=args.tilt_rad, rc_offset_px=args.rc_offset_px,
+                   codec=args.codec)
+    if not 0 < spec.tilt_amplitude_rad < math.pi / 2:
+        raise VideoError(args.out, "--tilt-rad must lie in (0, pi/2)")
+    path = write_clip(args.out, render_strobe(spec), spec.strobe_hz, spec.codec, strobe_truth(spec))
+    print(f"wrote {path} ({spec.frames} frames, apparent {abs(spec.apparent_hz):.3f} Hz) and its truth JSON")
+    return 0
+
+
+def run_testset(args: argparse.Namespace) -> int:
+    from labkit.synth import laser_truth, render_laser, write_clip
+    from labkit.synth.presets import laser_test_set
+
+    for name, spec in laser_test_set():
+        path = write_clip(Path(args.folder) / f"{name}.mp4", render_laser(spec), spec.fps, spec.codec,
+                          laser_truth(spec))
+        print(path)
+    return 0
