@@ -72,6 +72,8 @@ def build_report(source: str | Path, out: str | Path | None = None, *, model: st
     lines = [f"# labkit report: {source.name}", "",
              f"Source: `{source}`  ", f"Generated: {_now()} by labkit {__version__}", ""]
     lines += _metadata_section(table, run, protocol, inertia)
+    if source.is_dir():
+        lines += _events_section(source / "events.jsonl")
     lines += _data_section(table, out)
     lines += _fit_sections(table, plan, out, overlays)
     (out / "report.md").write_text("\n".join(lines) + "\n")
@@ -107,6 +109,32 @@ def _metadata_section(table: Table, run: dict, protocol: str | None, inertia: fl
                        if isinstance(v, dict))
         rows.append(["protocol's quick fit", f"{quick.get('model', '')}: {ps}"])
     lines += [md.table(["item", "value"], rows), ""]
+    return lines
+
+
+NOTABLE_EVENTS = ("interlock", "fault", "error", "drop", "reconnect", "stop")
+
+
+def _events_section(path: Path) -> list[str]:
+    """Event counts by type, and the notable ones (interlocks, faults, drops) listed."""
+    if not path.is_file():
+        return []
+    counts: dict[str, int] = {}
+    notable: list[dict] = []
+    for line in path.read_text(errors="replace").splitlines():
+        try:
+            ev = json.loads(line)
+        except json.JSONDecodeError:
+            continue  # a line cut by a crash
+        kind = str(ev.get("type", "?"))
+        counts[kind] = counts.get(kind, 0) + 1
+        if any(k in kind for k in NOTABLE_EVENTS) and len(notable) < 20:
+            notable.append(ev)
+    lines = ["## Events", "", md.table(["event", "count"], [[k, v] for k, v in sorted(counts.items())]), ""]
+    if notable:
+        lines += ["Notable events:", ""]
+        lines += [f"- `{json.dumps(ev, sort_keys=True)[:200]}`" for ev in notable]
+        lines.append("")
     return lines
 
 

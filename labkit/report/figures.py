@@ -79,7 +79,7 @@ def _plain_minor(v: float, _pos=None) -> str:
 def _param_text(res) -> str:
     parts = []
     for k, p in res.params.items():
-        if p.fixed or p.derived:
+        if p.fixed:
             continue
         parts.append(f"{k} = {p.value:.4g} ± {p.stderr:.2g}")
     return ", ".join(parts)

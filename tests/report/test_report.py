@@ -108,3 +108,14 @@ def test_cli_report_and_errors(tmp_path: Path, capsys):
     assert main(["report", str(tmp_path / "missing")]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("labkit report:") and "no such file" in err and "\n" not in err
+
+
+def test_events_summary_lists_interlocks_and_survives_a_cut_line(tmp_path: Path):
+    session = write_sweep_session(tmp_path / "s")
+    events = [{"type": "setpoint", "t": 0.0}, {"type": "setpoint", "t": 1.0},
+              {"type": "interlock", "t": 2.0, "reason": "tachometer silent"}]
+    (session / "events.jsonl").write_text("".join(json.dumps(e) + "\n" for e in events) + '{"type": "poi')
+    text = build_report(session).read_text()
+    section = text.split("## Events")[1].split("## Data")[0]
+    assert "| setpoint | 2 |" in section and "| interlock | 1 |" in section
+    assert "tachometer silent" in section
