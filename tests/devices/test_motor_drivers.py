@@ -286,3 +286,20 @@ def test_vesc_wrong_baud_times_out_naming_the_request():
     with pytest.raises(DeviceTimeout) as info:
         motor.status()
     assert "GET_VALUES" in str(info.value)
+
+
+def test_smc_commands_split_across_writes_and_junk_between_them():
+    """The controller assembles packets byte by byte; a stray data byte is a format error
+    that stops the motor until the next exit-safe-start (PROTOCOLS 3.1)."""
+    motor, clock = open_motor("pololu_smc")
+    port = motor.port
+    for byte in bytes.fromhex("83 85 00 32"):     # exit safe start, forward 1600, one byte a time
+        port.write(bytes([byte]))
+        clock.sleep(0.001)
+    assert rotor_duty() == pytest.approx(0.5)
+    port.write(b"\x12")                           # junk: a data byte outside any packet
+    assert rotor_duty() == 0.0
+    assert motor.status().errors == {"serial_error"}
+    motor.enable()
+    motor.set_duty(0.25)
+    assert rotor_duty() == pytest.approx(0.25)

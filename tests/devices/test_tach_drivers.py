@@ -241,3 +241,36 @@ def test_lutron_unplug_mid_read():
     clock.sleep(2.2)
     with pytest.raises(DeviceDisconnected):
         tach.wait_reading(timeout=3.0)
+
+
+# ---- the emulated sensor: period method with micros() quantisation ------------------------
+
+def test_micros_quantisation_scatter_is_bounded_by_one_tick_per_window():
+    # 100 000 RPM at 1 PPR: 600 us period; at 200 lines/s a window holds ~8.3 periods and
+    # its summed time is quantised to the 4 us tick, so each reading is off by at most
+    # 4 us / (pulses x 600 us) plus the float rounding of the printed period.
+    tach, clock = open_tach("labkit_tach", "&tick_us=4", rate_hz=200)
+    expected = spin_rotor(100_000.0)
+    t0 = clock.now()
+    clock.sleep(6.0)
+    readings = [r for r in tach.readings_since(t0 + 5.0)]
+    errors = []
+    for r in readings:
+        pulses = int(r.raw.split(b",")[5])
+        bound = 4.0 / (pulses * 600.0) + 2e-4
+        errors.append(abs(r.value / expected - 1.0))
+        assert errors[-1] <= bound
+    assert max(errors) > 1e-4          # the quantisation is really there
+
+
+def test_coarser_ticks_give_a_larger_scatter():
+    spreads = []
+    for tick in ("4", "64"):
+        reset_plants()
+        tach, clock = open_tach("labkit_tach", f"&tick_us={tick}", rate_hz=200)
+        spin_rotor(60_000.0)
+        t0 = clock.now()
+        clock.sleep(6.0)
+        values = [r.value for r in tach.readings_since(t0 + 5.0)]
+        spreads.append(max(values) - min(values))
+    assert spreads[1] > 4 * spreads[0]

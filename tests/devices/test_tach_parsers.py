@@ -150,3 +150,13 @@ def test_tach_lines_round_trip(seq, t_ms, period_us, pulses):
     sample = parse_tach_sample(line)
     assert (sample.seq, sample.t_ms, sample.pulses) == (seq, t_ms, pulses)
     assert consistent_with_ppr(sample, 1)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.binary(max_size=30).filter(lambda b: b"\n" not in b and b"T," not in b and b"#" not in b
+                                     and b"OK" not in b and b"ERR" not in b and b"ID " not in b))
+def test_junk_before_a_line_is_dropped(junk):
+    from labkit.devices.tachometer.labkit_tach import strip_junk
+
+    line = b"T,5,500,24000.0,2500.0,40,0"
+    assert parse_tach_sample(strip_junk(junk + line)).rpm == 24000.0
