@@ -19,7 +19,8 @@ import cv2
 import numpy as np
 
 from labkit.errors import VideoError
-from labkit.vision.fit import MIN_POINTS
+from labkit.vision.curves import a_for_k, ellipse_from_coefficients, trochoid_from_coefficients
+from labkit.vision.fit import CIRCLE_MAX_ELLIPTICITY, MAX_TROCHOID_B, SIMPLER_TOLERANCE
 from labkit.vision.frames import open_frames
 
 MIN_BODY_AREA_PX = 30
@@ -137,8 +138,6 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
     trajectory is classified, ``tip`` (top end of the body axis), ``bottom`` or ``centroid``.
     ``on_frame(index, t_s, bgr)`` is called for every frame (live streams hook in here).
     """
-    from labkit.vision.laser import pattern_dict  # shared pattern fit and JSON layout
-
     source = open_frames(path)
     fps = source.fps or (strobe_hz or 0.0)
     poses: list[BodyPose | None] = []
@@ -192,7 +191,10 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
     sign = {"tip": 1.0, "bottom": -1.0, "centroid": 0.0}[point]
     px = x + sign * half * np.sin(tilt)
     py = y - sign * half * np.cos(tilt)
-    point_pattern = _point_pattern(np.column_stack([px, py]), pattern_dict)
+    if len(idx) >= 8:
+        point_pattern = phase_pattern(np.column_stack([px, py]), np.array(phases)[idx])
+    else:
+        point_pattern = {"type": "none", "reason": f"only {len(idx)} frames with a body"}
     out = {"source": source.path, "frames": len(poses), "fps": fps, "apparent_hz": abs(cpf) * fps,
            "tilt_amplitude_rad": phi, "lateral_amplitude_px": beta, "rc_offset_px": delta,
            "phase_per_frame": phases, "point_pattern": point_pattern,
@@ -207,14 +209,42 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
     return out
 
 
-def _point_pattern(points: np.ndarray, pattern_dict) -> dict:
-    if len(points) < MIN_POINTS:
-        return {"type": "none", "reason": f"only {len(points)} frames with a body (need {MIN_POINTS})"}
-    spread = points.max(axis=0) - points.min(axis=0)
-    if min(spread) < 0.5:
-        return {"type": "none", "reason": "the point moves along a line (no area to fit)"}
-    try:
-        pattern, _ = pattern_dict(points, np.ones(len(points)), None)
-    except (ValueError, np.linalg.LinAlgError, cv2.error) as exc:
-        return {"type": "none", "reason": f"fit failed: {exc}"}
-    return pattern
+def phase_pattern(points: np.ndarray, phases: np.ndarray) -> dict:
+    """Classify a body point's trajectory with known phase per sample: least squares of
+    ``c + A e^{i s psi} + B e^{i s k psi}`` (s = +-1, the sense of rotation) for the ellipse
+    (k = -1) and the trochoids of Eq. 6.38 (epitrochoid k = 2..7, hypotrochoid k = -2..-6); the
+    ellipse wins unless a trochoid lowers the residual by ``SIMPLER_TOLERANCE``. Same JSON layout as
+    the laser pattern."""
+    z = points[:, 0] + 1j * points[:, 1]
+    fits = []
+    for k in [-1, *range(2, 8), *range(-2, -7, -1)]:
+        for s in (1, -1):
+            m = np.column_stack([np.ones_like(z), np.exp(1j * s * phases), np.exp(1j * s * k * phases)])
+            coef, *_ = np.linalg.lstsq(m, z, rcond=None)
+            rms = float(np.sqrt(np.mean(np.abs(z - m @ coef) ** 2)))
+            if k != -1 and abs(coef[2]) > MAX_TROCHOID_B * abs(coef[1]):
+                rms = math.inf
+            fits.append((rms, k, s, coef))
+    ellipse = min((f for f in fits if f[1] == -1), key=lambda f: f[0])
+    best = min(fits, key=lambda f: f[0])
+    if best[1] == -1 or best[0] * SIMPLER_TOLERANCE >= ellipse[0]:
+        best = ellipse
+    rms, k, s, (c, a, b) = best
+    # s = -1 is the same curve traversed backwards: c + A e^{-it} + B e^{-ikt} = c + A e^{it'} ...
+    # with t' = -t, so the coefficients describe the point set unchanged.
+    center = [float(c.real), float(c.imag)]
+    if k == -1:
+        p = ellipse_from_coefficients(c, a, b)
+        major, minor = p.semi_axes
+        ell = 1 - minor / major if major > 0 else 0.0
+        kind = "circle" if ell < CIRCLE_MAX_ELLIPTICITY else "ellipse"
+        return {"type": kind, "center_px": center, "semi_axes_px": [major, minor],
+                "rotation_deg": math.degrees(p.rotation_rad), "ellipticity": ell, "loops": 1,
+                "trochoid": None, "rms_residual_px": rms}
+    p = trochoid_from_coefficients(c, a, b, k)
+    extent = [p.scale * (1 + p.b), p.scale * abs(1 - p.b)]
+    return {"type": p.kind, "center_px": center, "semi_axes_px": extent,
+            "rotation_deg": math.degrees(p.rotation_rad), "ellipticity": None, "loops": p.loops,
+            "trochoid": {"a": a_for_k(k), "b": p.b, "scale_px": p.scale,
+                         "rotation_deg": math.degrees(p.rotation_rad)},
+            "rms_residual_px": rms}
