@@ -115,3 +115,13 @@ def test_probe_motor_reads_status_and_never_starts_it(capsys):
     from labkit.emulators.plant import shared_plant
 
     assert shared_plant("probe-motor").motor("rotor").duty == 0.0
+
+
+def test_probe_continuous_reads_the_sir_stream(capsys):
+    with use_clock(VirtualClock()):
+        code, out, err = probe(capsys, "balance", "--protocol", "mtsics", "--port", "sim://mtsics?seed=3",
+                               "--samples", "6", "--continuous", "--json")
+    assert code == 0, err
+    times = [json.loads(line)["t"] for line in out]
+    gaps = [b - a for a, b in zip(times[1:], times[2:], strict=False)]  # the first line answers SIR
+    assert gaps == pytest.approx([0.05] * 4, abs=0.006)  # then the emulated balance streams at 20 Hz

@@ -44,6 +44,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--timeout", type=float, default=3.0, metavar="S", help="per-reading timeout (default 3)")
     p.add_argument("-o", "--option", action="append", default=[], metavar="KEY=VALUE",
                    help="driver option, as in a rig file (e.g. preset=bogde, unit=N); repeatable")
+    p.add_argument("--continuous", action="store_true",
+                   help="balance: read its continuous output (SIR) on a reader instead of polling")
     p.add_argument("--json", action="store_true",
                    help="only JSON lines on stdout (the identification goes to stderr)")
     p.set_defaults(func=run)
@@ -132,6 +134,10 @@ def probe(args: argparse.Namespace, out=None, err=None, clock: Clock | None = No
             print(json.dumps(header), file=err)
         else:
             print("# " + json.dumps(header), file=out)
+        if getattr(args, "continuous", False):
+            if not hasattr(device, "start_continuous"):
+                raise LabkitError(f"{device.name}: --continuous is for balances with continuous output")
+            device.start_continuous()  # type: ignore[attr-defined]
         for i in range(args.samples):
             if i and args.interval > 0:
                 clock.sleep(args.interval)

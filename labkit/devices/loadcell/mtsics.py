@@ -195,9 +195,9 @@ class MtSicsBalance(ContinuousMixin, Balance):
         pass  # the link keeps the tail
 
     def _unsolicited(self, t: float, line: bytes) -> None:
-        # the power-on / reset banner (maybe behind power-on junk): tare and zero are gone
-        if line.startswith(b'I4 A "') or b'\xffI4 A "' in line or b'\x00I4 A "' in line \
-                or b'\xfeI4 A "' in line:
+        # the power-on / reset banner, maybe behind power-on junk: tare and zero are gone
+        at = line.find(b'I4 A "')
+        if at == 0 or (at > 0 and any(b < 0x20 or b > 0x7E for b in line[:at])):
             self.resets_seen += 1
             self._reset_pending = True
 
