@@ -21,6 +21,8 @@ clock)::
 ``data`` is UTF-8 text when every character is printable (or CR, LF, TAB), else base64 with
 ``"enc": "b64"``. Each ``rx`` event is exactly what one read call returned (chunk-preserving);
 ``short_read`` follows a read that returned fewer bytes than asked (``got`` 0: a timeout).
+A ``tx`` event is written before the bytes go out; if the write fails, an ``error`` event
+with ``"tx_recorded": true`` follows it.
 Control events: ``open``, ``close``, ``reconfigure``, ``reset_input_buffer``, ``short_read``,
 ``error``, ``identity``.
 """

@@ -64,6 +64,7 @@ class RecordSerial(ClockedSerial):
         self.port_name = ""
         self.cassette_path = ""
         self._t0: float | None = None
+        self._failed = False  # after the first wire error of a session nothing more is recorded
         super().__init__(*args, **kwargs)
 
     # -- events -------------------------------------------------------------------------
@@ -72,11 +73,13 @@ class RecordSerial(ClockedSerial):
         return self.clock.now() - self._t0
 
     def _event(self, direction: str, data: bytes | None = None, **fields: Any) -> None:
-        if self.writer is not None:
+        if self.writer is not None and not self._failed:
             self.writer.event(self._t(), self.port_name, direction, data, **fields)
 
-    def _error(self, exc: BaseException, call: str) -> None:
-        self._event("ctl", **error_fields(exc, current_call(call)))
+    def _error(self, exc: BaseException, call: str, **extra: Any) -> None:
+        """Record the session's first wire error; a dead port's later failures add nothing."""
+        self._event("ctl", **error_fields(exc, current_call(call)), **extra)
+        self._failed = True
 
     def note_identity(self, identity: dict[str, Any]) -> None:
         """Store what the driver learned about the device (model, serial...) in the cassette."""
@@ -102,6 +105,7 @@ class RecordSerial(ClockedSerial):
             ))
         else:
             self.writer.reopen()
+        self._failed = False
         self._event("ctl", event="open", serial=self.settings_summary())
         try:
             self.inner = open_port(spec.inner_url, clock=clock, **self.get_settings())
@@ -116,6 +120,7 @@ class RecordSerial(ClockedSerial):
                 self.inner.close()
             finally:
                 self.inner = None
+                self._failed = False  # the close itself is always recorded
                 self._event("ctl", event="close", call=current_call("close"))
         if self.writer is not None:
             self.writer.close()
@@ -133,15 +138,16 @@ class RecordSerial(ClockedSerial):
 
     # -- traffic ------------------------------------------------------------------------
     def write(self, data: bytes) -> int:
+        """Record, then write: a reply read by another thread can never precede its command
+        in the cassette. A failed write is followed by its ``error`` (``tx_recorded``)."""
         inner = self._live()
         data = to_bytes(data)
-        try:
-            n = inner.write(data)
-        except WIRE_ERRORS as exc:
-            self._error(exc, "write")
-            raise
         self._event("tx", data, call=current_call("write"))
-        return n
+        try:
+            return inner.write(data)
+        except WIRE_ERRORS as exc:
+            self._error(exc, "write", tx_recorded=True)
+            raise
 
     def read(self, size: int = 1) -> bytes:
         inner = self._live()

@@ -227,8 +227,8 @@ class ReplaySerial(ClockedSerial):
 
     def _unconsumed(self) -> str:
         session = self._session
-        if session is None:
-            return ""
+        if session is None or self._dead is not None:
+            return ""  # after a recorded error only failures follow; a dead port replays them all
         left_tx = len(session.tx) - self._tx_pos
         left_dev = session.device[self._dev_idx:]
         left_err = session.write_errors[self._write_err_idx:]
@@ -288,13 +288,17 @@ class ReplaySerial(ClockedSerial):
             session = self._session
             assert session is not None
             errors = session.write_errors
-            if self._write_err_idx < len(errors) and errors[self._write_err_idx][0] == self._tx_pos:
-                self._write_err_idx += 1
-                raise self._die(errors[self._write_err_idx - 1][1])
+            pending = errors[self._write_err_idx] if self._write_err_idx < len(errors) else None
+            if pending and pending[0] == self._tx_pos and not pending[1].get("tx_recorded"):
+                self._write_err_idx += 1  # a write that failed before its bytes were recorded
+                raise self._die(pending[1])
             expected = bytes(session.tx[self._tx_pos:self._tx_pos + len(data)])
             if expected != data:
                 self._raise_mismatch(data, expected)
             self._tx_pos += len(data)
+            if pending and pending[0] == self._tx_pos and pending[1].get("tx_recorded"):
+                self._write_err_idx += 1  # these very bytes failed to go out
+                raise self._die(pending[1])
         return len(data)
 
     def _raise_mismatch(self, data: bytes, expected: bytes) -> None:

@@ -174,9 +174,14 @@ def test_recorded_disconnect_replays_as_the_same_disconnect(tmp_path):
     assert port.read_until(b"\n") == b"READY\r\n"
     with pytest.raises(serial.SerialException):
         port.read(1)
+    for retry in (lambda: port.in_waiting, lambda: port.write(b"again\n")):
+        with pytest.raises(serial.SerialException):
+            retry()  # a driver retrying on a dead port adds nothing to the cassette
     port.close()
-    errors = [e for e in events(cassette)[1:] if e.get("event") == "error"]
+    evs = events(cassette)[1:]
+    errors = [e for e in evs if e.get("event") == "error"]
     assert len(errors) == 1 and errors[0]["message"] == DISCONNECT_MESSAGE
+    assert [e.get("event") for e in evs[-2:]] == ["error", "close"]
 
     replay = open_port(f"replay://{cassette}?mode=timed", clock=VirtualClock(), timeout=5.0)
     assert replay.read_until(b"\n") == b"READY\r\n"
