@@ -303,3 +303,12 @@ def test_smc_commands_split_across_writes_and_junk_between_them():
     motor.enable()
     motor.set_duty(0.25)
     assert rotor_duty() == pytest.approx(0.25)
+
+
+@pytest.mark.parametrize("protocol, timeout_s", [("pololu_smc", 0.1), ("vesc", 0.2)])
+def test_slow_replies_within_the_timeout_are_fine_beyond_it_a_timeout(protocol, timeout_s):
+    motor, clock = open_motor(protocol, f"&faults=delay:{timeout_s * 0.6}")
+    assert motor.status().input_voltage_v in (12.0, 24.0)
+    slow, clock = open_motor(protocol, f"&faults=delay:{timeout_s * 1.5}")
+    with pytest.raises(DeviceTimeout):
+        slow.status()

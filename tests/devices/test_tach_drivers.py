@@ -274,3 +274,10 @@ def test_coarser_ticks_give_a_larger_scatter():
         values = [r.value for r in tach.readings_since(t0 + 5.0)]
         spreads.append(max(values) - min(values))
     assert spreads[1] > 4 * spreads[0]
+
+
+def test_labkit_tach_slow_replies():
+    tach, clock = open_tach("labkit_tach", "&faults=delay:0.3")       # under the 0.5 s timeout
+    assert tach.identify()["model"] == "labkit-tach"
+    with pytest.raises(DeviceTimeout):
+        open_tach("labkit_tach", "&faults=delay:0.8")
