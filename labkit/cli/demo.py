@@ -11,7 +11,7 @@ import argparse
 import sys
 from typing import Any
 
-from labkit.cli.run import add_common, attach_rerun, sinks_for
+from labkit.cli.run import add_common, attach_rerun, rerun_text, sinks_for
 from labkit.protocols.launch import execute, prepare_run
 from labkit.rig import bundled_rig_path
 
@@ -37,7 +37,7 @@ def main(args: argparse.Namespace) -> int:
             from labkit.stream import parse_rerun_spec
 
             args.rerun = parse_rerun_spec(f"save:{session.path / 'run.rrd'}")
-        session.update_meta(rerun=str(args.rerun))
+        session.update_meta(rerun=rerun_text(args.rerun))
         sink = attach_rerun(args, runner, session.path)
         if sink is not None:
             sinks.append(sink)

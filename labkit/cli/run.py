@@ -45,6 +45,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=main)
 
 
+def rerun_text(spec: Any) -> str | None:
+    """``save:FILE`` / ``connect:ADDR`` / ``spawn`` as typed, for run.json."""
+    if spec is None:
+        return None
+    mode, target = getattr(spec, "mode", str(spec)), getattr(spec, "target", "")
+    return f"{mode}:{target}" if target else str(mode)
+
+
 def sinks_for(args: argparse.Namespace) -> list[Any]:
     sinks: list[Any] = []
     if not args.no_progress:
@@ -98,7 +106,7 @@ def main(args: argparse.Namespace) -> int:
     sinks: list[Any] = []
 
     def on_session(runner: Any, session: Any) -> None:
-        session.update_meta(rerun=str(args.rerun) if args.rerun else None)
+        session.update_meta(rerun=rerun_text(args.rerun))
         sink = attach_rerun(args, runner, session.path)
         if sink is not None:
             sinks.append(sink)
