@@ -280,4 +280,4 @@ def test_labkit_tach_slow_replies():
     tach, clock = open_tach("labkit_tach", "&faults=delay:0.3")       # under the 0.5 s timeout
     assert tach.identify()["model"] == "labkit-tach"
     with pytest.raises(DeviceTimeout):
-        open_tach("labkit_tach", "&faults=delay:0.8")
+        open_tach("labkit_tach", "&faults=delay:2.0")   # later than all three attempts
