@@ -92,7 +92,26 @@ def _drive(body: Body, scene: Scene) -> tuple[float, float, float, float]:
             raise ValueError("the conical equilibrium needs the body on the rotator's axis (x = y = 0)")
         tau_c, tau_s = dipole_torque_coefficients(rot.moment_Am2, m, abs(rel[2]), rot.tilt_rad)
         return rot.omega_rad_s, rot.phase_rad, tau_c, tau_s
-    raise ValueError("the conical equilibrium needs one rotating uniform field or one rotator")
+    others = [o for o in scene.bodies if o is not body and float(np.linalg.norm(o.moment_Am2)) > 0]
+    if fld is None and not scene.rotators and len(others) == 1:
+        # a free spinning rotator body (Sec. 6.0.1): its spin about z drives the floator
+        o = others[0]
+        m_lab = o.rotation @ np.asarray(o.moment_Am2, dtype=float)
+        m_r = float(np.linalg.norm(m_lab))
+        tilt = math.asin(max(-1.0, min(1.0, m_lab[2] / m_r)))
+        phase = math.atan2(m_lab[0], -m_lab[1])  # m_R = m [cos g sin th, -cos g cos th, sin g] (Eq. 5.25)
+        rel = (
+            body.position_m
+            + body.rotation @ body.dipole_offset_m
+            - (o.position_m + o.rotation @ o.dipole_offset_m)
+        )
+        if math.hypot(rel[0], rel[1]) > 1e-12 * max(1.0, abs(rel[2])) or rel[2] == 0.0:
+            raise ValueError("the conical equilibrium needs the body on the rotator body's z axis")
+        tau_c, tau_s = dipole_torque_coefficients(m_r, m, abs(rel[2]), tilt)
+        return float(o.angular_velocity_rad_s[2]), phase, tau_c, tau_s
+    raise ValueError(
+        "the conical equilibrium needs one rotating uniform field, one rotator or one spinning body"
+    )
 
 
 def apply_conical(body: Body, scene: Scene, spin_k: float = -1.0) -> float:

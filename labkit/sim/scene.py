@@ -402,6 +402,7 @@ def scene_from_dict(data: dict, source: str = "<dict>") -> Scene:
         gtab.finish()
     top.finish()
     scene = Scene(name, bodies, rotators, fld, gravity, escape, period, cycles, description, source)
+    validate_bodies(scene)
     for b, init in zip(bodies, inits, strict=True):
         if init is not None:
             _initial(b, init, scene)
@@ -436,6 +437,12 @@ def bundled_scenes() -> list[str]:
 
 def validate_scene(scene: Scene) -> None:
     """Check a scene built in Python or read from TOML; raise :class:`SceneError` if wrong."""
+    validate_bodies(scene)
+    validate_layout(scene)
+
+
+def validate_bodies(scene: Scene) -> None:
+    """Masses, inertia tensors, damping and names."""
     src = scene.source
     if not scene.bodies:
         raise SceneError(src, "body", "a scene needs at least one body")
@@ -467,7 +474,11 @@ def validate_scene(scene: Scene) -> None:
                 raise SceneError(src, f"{key}.{attr}", "damping must not be negative")
     if scene.escape_radius_m is not None and scene.escape_radius_m <= 0:
         raise SceneError(src, "scene.escape_radius_m", "must be positive")
-    # overlapping bodies (bounding spheres, at t = 0)
+
+
+def validate_layout(scene: Scene) -> None:
+    """Overlapping bodies and rotators (bounding spheres at t = 0)."""
+    src = scene.source
     spheres = [
         (f"body[{i}]", b.name, b.position_m, b.shape.contact_radius_m) for i, b in enumerate(scene.bodies)
     ]
