@@ -1,0 +1,71 @@
+"""``labkit reproduce [--only PREFIX ...] [--quick] [--json OUT]``: the paper beside labkit.
+
+Prints one line per row: id, paper value, labkit value, relative difference, agreement and
+the note (known misprints and explained disagreements). ``--json`` writes the rows as a list
+of ``{"id", "quantity", "paper", "labkit", "rel_diff", "ok", "note"}``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+from labkit.errors import LabkitError
+from labkit.reproduce import SUITES, Row, run
+from labkit.reproduce.paper_data import MISPRINTS
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    parser = sub.add_parser("reproduce", help="reproduce the paper's numbers and compare",
+                            description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--only", action="append", metavar="PREFIX",
+                        help="only rows whose id starts with PREFIX (repeatable), e.g. table5.7")
+    parser.add_argument("--quick", action="store_true", help="a fast subset (seconds), as used by the tests")
+    parser.add_argument("--json", metavar="OUT", type=Path, help="write the rows as JSON to OUT")
+    parser.set_defaults(func=main)
+
+
+def _fmt(value: float | str | None) -> str:
+    if value is None:
+        return "n/a"
+    if isinstance(value, str):
+        return value
+    return f"{value:.6g}"
+
+
+def format_rows(rows: list[Row]) -> str:
+    """Fixed-width table of the rows (one line each)."""
+    width = max([len(r.id) for r in rows] + [2])
+    lines = [f"{'id':<{width}}  {'paper':>11}  {'labkit':>11}  {'rel_diff':>9}  ok  note"]
+    for r in rows:
+        rel = "" if r.rel_diff is None else f"{r.rel_diff:+.2e}"
+        lines.append(f"{r.id:<{width}}  {_fmt(r.paper):>11}  {_fmt(r.labkit):>11}  {rel:>9}  "
+                     f"{'yes' if r.ok else 'NO ':<3} {r.note}")
+    return "\n".join(lines)
+
+
+def main(args: argparse.Namespace) -> int:
+    only = args.only or []
+    known = [prefix for prefix, _ in SUITES]
+    for o in only:
+        if not any(p.startswith(o) or o.startswith(p) for p in known):
+            raise LabkitError(f"--only {o!r}: no such row prefix (known: {', '.join(known)})")
+    start = time.perf_counter()
+    rows = run(only, quick=args.quick)
+    elapsed = time.perf_counter() - start
+    print(format_rows(rows))
+    agree = sum(r.ok for r in rows)
+    print(f"\n{len(rows)} rows, {agree} agree, {len(rows) - agree} differ (see notes); {elapsed:.1f} s")
+    print("Known misprints in the paper (labkit uses the consistent value):")
+    for m in MISPRINTS:
+        print(f"  - {m}")
+    if args.json:
+        try:
+            args.json.write_text(json.dumps([r.as_dict() for r in rows], indent=1) + "\n")
+        except OSError as exc:
+            raise LabkitError(f"{args.json}: cannot write ({exc.strerror})") from exc
+        print(f"wrote {args.json}", file=sys.stderr)
+    return 0
