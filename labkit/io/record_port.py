@@ -131,6 +131,35 @@ class RecordSerial(ClockedSerial):
             self.inner.apply_settings(self.get_settings())
             self._event("ctl", event="reconfigure", serial=self.settings_summary())
 
+    # -- modem lines go through to the wrapped port (DTR resets an Arduino) --------------
+    def _update_dtr_state(self) -> None:
+        if self.inner is not None and self.is_open:
+            self.inner.dtr = self._dtr_state
+
+    def _update_rts_state(self) -> None:
+        if self.inner is not None and self.is_open:
+            self.inner.rts = self._rts_state
+
+    def _update_break_state(self) -> None:
+        if self.inner is not None and self.is_open:
+            self.inner.break_condition = self._break_state
+
+    @property
+    def cts(self) -> bool:
+        return self._live().cts
+
+    @property
+    def dsr(self) -> bool:
+        return self._live().dsr
+
+    @property
+    def ri(self) -> bool:
+        return self._live().ri
+
+    @property
+    def cd(self) -> bool:
+        return self._live().cd
+
     def _live(self) -> serial.SerialBase:
         self._require_open()
         assert self.inner is not None

@@ -327,6 +327,8 @@ class ReplaySerial(ClockedSerial):
 
     def _read_chunk(self, size: int) -> bytes:
         self._require_open()
+        if size <= 0:
+            return b""
         clock = self._resolve_clock()
         deadline = None if self._timeout is None else clock.now() + self._timeout
         while True:

@@ -252,3 +252,15 @@ def test_each_reopen_replays_the_next_recorded_session(tmp_path):
     replay.assert_consumed()
     with pytest.raises(ReplayMismatch, match="opened 3 times"):
         replay.open()
+
+
+def test_modem_lines_pass_through_record_to_the_real_port(tmp_path):
+    url, _ = record(tmp_path, "loop://")
+    port = open_port(url, timeout=0.1)
+    port.rts = False
+    assert port.cts is False  # loop:// reflects RTS on CTS
+    port.rts = True
+    assert port.cts is True
+    port.write(b"ping")
+    assert port.read(4) == b"ping"
+    port.close()
