@@ -23,10 +23,17 @@ class Overlay:
     x: np.ndarray
     y: np.ndarray
     series: str | None = None   # None: drawn on every series' panel
+    x_name: str | None = None   # column names of x and y; None: drawn on any figure
+    y_name: str | None = None
+
+    def fits(self, x_name: str, y_name: str) -> bool:
+        """True when this overlay is in the units of a figure of ``x_name`` against ``y_name``."""
+        return self.x_name in (None, x_name) and self.y_name in (None, y_name)
 
 
-def overlay_from_function(label: str, fn: Callable[[float], float], x, series: str | None = None) -> Overlay:
+def overlay_from_function(label: str, fn: Callable[[float], float], x, series: str | None = None,
+                          x_name: str | None = None, y_name: str | None = None) -> Overlay:
     """Evaluate ``fn`` at each x (a scalar function, e.g. one simulation per speed)."""
     xs = np.asarray(x, dtype=float)
     ys = np.array([float(fn(float(v))) for v in xs])
-    return Overlay(label, xs, ys, series)
+    return Overlay(label, xs, ys, series, x_name, y_name)

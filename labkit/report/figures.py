@@ -40,8 +40,10 @@ def fit_figure(report: FitReport, path: str | Path, *, overlays: Sequence[Overla
         grid = np.geomspace(lo, hi, 200) if loglog and lo > 0 else np.linspace(lo, hi, 200)
         ax.plot(grid, res.predict(grid), "-", color=c, lw=1.5, label=f"fit: {_param_text(res)}")
         axr.plot(res.x, res.residuals, "o", color=c, ms=4)
+    first = next(iter(report.series.values()))
     for ov in overlays:
-        ax.plot(ov.x, ov.y, "--", color="0.3", lw=1.2, label=ov.label)
+        if ov.fits(first.x_name, first.y_name):
+            ax.plot(ov.x, ov.y, "--", color="0.3", lw=1.2, label=ov.label)
     axr.axhline(0.0, color="0.5", lw=0.8)
     if loglog:
         ax.set_xscale("log")
@@ -49,7 +51,6 @@ def fit_figure(report: FitReport, path: str | Path, *, overlays: Sequence[Overla
         for axis in (ax.xaxis, ax.yaxis, axr.xaxis):
             axis.set_major_formatter(FuncFormatter(_plain))
             axis.set_minor_formatter(FuncFormatter(_plain_minor))
-    first = next(iter(report.series.values()))
     ax.set_ylabel(first.y_name)
     axr.set_xlabel(first.x_name)
     axr.set_ylabel(f"residual\n{first.residual_space}")

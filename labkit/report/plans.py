@@ -71,7 +71,8 @@ def _sweep(table: Table, inertia: float | None) -> Plan:
         if lo > 0:
             x = np.geomspace(lo, hi, 100)
             a, b = PAPER_FIG525
-            overlays = (Overlay("paper Fig. 5.25: y = 224e6 x^-1.9", x, a * x**b),)
+            overlays = (Overlay("paper Fig. 5.25: y = 224e6 x^-1.9", x, a * x**b,
+                                x_name="speed_rpm", y_name="force_g"),)
     note_i = "" if inertia else " (no floator inertia in the rig file: K/I and tau_S/I are reported)"
     return Plan("speed-sweep", (
         PlannedFit("power-law", "Power law y = a x^b (Fig. 5.25)", "power-law", FitOptions(),

@@ -119,3 +119,13 @@ def test_events_summary_lists_interlocks_and_survives_a_cut_line(tmp_path: Path)
     section = text.split("## Events")[1].split("## Data")[0]
     assert "| setpoint | 2 |" in section and "| interlock | 1 |" in section
     assert "tachometer silent" in section
+
+
+def test_overlay_only_on_figures_in_its_units(tmp_path: Path):
+    from labkit.fit.overlay import overlay_from_function
+    ov = overlay_from_function("sim", lambda rpm: 224e6 * rpm**-1.9, [6000, 20000],
+                               x_name="speed_rpm", y_name="force_g")
+    assert ov.fits("speed_rpm", "force_g") and not ov.fits("speed_rad_s", "force_n")
+    assert ov.y[0] == pytest.approx(224e6 * 6000**-1.9)
+    report = build_report(write_sweep_session(tmp_path / "s"), overlays=(ov,))
+    assert (report.parent / "fig-power-law.png").exists()
