@@ -9,6 +9,7 @@ so they can be fuzzed without I/O.
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -39,11 +40,13 @@ class Reading:
     flags: frozenset[str] = field(default_factory=frozenset)
 
     def as_json(self) -> dict[str, Any]:
-        """The probe's JSON object: keys t, value, unit, stable, overload, raw (+ quantity)."""
+        """The probe's JSON object: keys t, value, unit, stable, overload, raw (+ quantity).
+
+        A non-finite value (overload) is ``None`` so the object stays valid JSON."""
         return {
             "t": self.t,
             "quantity": self.quantity,
-            "value": self.value,
+            "value": self.value if math.isfinite(self.value) else None,
             "unit": self.unit,
             "stable": self.stable,
             "overload": self.overload,
