@@ -282,3 +282,63 @@ class LabkitTachEmulator(_StreamingTachEmulator):
         else:
             self.zto_ms = value
         self.reply(b"OK\n", t, 0.001)
+
+
+@register_emulator
+class MonarchEmulator(_StreamingTachEmulator):
+    """A Monarch panel tachometer (ACT-3X class) answering ``@`` commands (PROTOCOLS 2.2).
+
+    ``@PI`` -> product and firmware lines, ``@D0`` -> one value line, ``@D1``/``@D2`` ->
+    ``OK`` and start/stop continuous display data (``rate_hz``, default 2: the display
+    updates at most twice a second), anything else -> ``ERR``. Value lines are the RPM with
+    one decimal, CR LF ended [U: the real number format is undocumented]. Options:
+    ``rate_hz``, ``product`` (``ACT-3X``), ``firmware`` (``1.00``), ``source``. Faults:
+    ``error_reply`` (probability of ``ERR`` to a valid command) and the common ones.
+    """
+
+    protocol = "monarch_at"
+    serial_settings = {"baudrate": 9600, "bytesize": 8, "parity": "N", "stopbits": 1}
+    default_rate_hz = 2.0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        self.product = self.options.get("product", "ACT-3X")
+        self.firmware = self.options.get("firmware", "1.00")
+        self.streaming = False
+        self._command = bytearray()
+
+    def power_on(self, t: float) -> None:
+        super().power_on(t)
+        self.streaming = False
+        self._command = bytearray()
+
+    def value_line(self, t: float) -> bytes:
+        rpm = abs(self.source_speed(t)) * 60.0 / TWO_PI
+        return f"{rpm:.1f}\r\n".encode("ascii")
+
+    def frame(self, t: float) -> bytes:
+        return self.value_line(t) if self.streaming else b""
+
+    def handle(self, data: bytes, t: float) -> None:
+        for byte in data:
+            if byte == 0x40:                      # '@' starts a command
+                self._command = bytearray(b"@")
+            elif byte == 0x0D:
+                if self._command:
+                    self._execute(bytes(self._command[1:]).decode("ascii", "replace"), t)
+                self._command = bytearray()
+            elif self._command and len(self._command) < 40:
+                self._command.append(byte)
+
+    def _execute(self, name: str, t: float) -> None:
+        if self.rng.random() < self.faults.get("error_reply", 0.0):
+            self.reply(b"ERR\r\n", t, 0.01)
+        elif name == "PI":
+            self.reply(f"{self.product}\r\n{self.firmware}\r\n".encode("ascii"), t, 0.01)
+        elif name == "D0":
+            self.reply(self.value_line(t), t, 0.01)
+        elif name in ("D1", "D2"):
+            self.streaming = name == "D1"
+            self.reply(b"OK\r\n", t, 0.01)
+        else:
+            self.reply(b"ERR\r\n", t, 0.01)

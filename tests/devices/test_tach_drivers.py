@@ -281,3 +281,38 @@ def test_labkit_tach_slow_replies():
     assert tach.identify()["model"] == "labkit-tach"
     with pytest.raises(DeviceTimeout):
         open_tach("labkit_tach", "&faults=delay:2.0")   # later than all three attempts
+
+
+# ---- Monarch "@" protocol -------------------------------------------------------------------
+
+def test_monarch_streams_the_display_value_and_identifies():
+    tach, clock = open_tach("monarch_at")
+    expected = spin_rotor(8000.0)
+    assert tach.identify() == {"model": "ACT-3X", "firmware": "1.00"}
+    clock.sleep(6.0)
+    readings = tach.readings_since(clock.now() - 2.0)
+    assert len(readings) == pytest.approx(4, abs=1)          # the display rate, 2 per second
+    assert all(r.value == pytest.approx(expected, abs=0.06 * RAD_S_PER_RPM + 1e-3 * expected)
+               for r in readings)
+
+
+def test_monarch_error_reply_names_the_command():
+    tach, clock = open_tach("monarch_at", "&faults=error_reply:1")
+    with pytest.raises(DeviceReplyError) as info:
+        tach.identify()
+    assert "@PI" in str(info.value)
+
+
+def test_monarch_split_lines_and_unplug():
+    # (no garbage case: the Monarch value lines carry no framing or checksum, so a junk
+    # byte that happens to be a digit next to a number cannot be told from the number)
+    tach, clock = open_tach("monarch_at", "&faults=split:0.7,disconnect_at:8")
+    expected = spin_rotor(3000.0)
+    clock.sleep(7.0)
+    readings = tach.readings_since(4.0)
+    assert len(readings) >= 3
+    assert all(r.value == pytest.approx(expected, abs=0.06 * RAD_S_PER_RPM + 1e-3 * expected)
+               for r in readings)
+    clock.sleep(1.5)
+    with pytest.raises(DeviceDisconnected):
+        tach.latest()

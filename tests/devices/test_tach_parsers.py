@@ -160,3 +160,35 @@ def test_junk_before_a_line_is_dropped(junk):
 
     line = b"T,5,500,24000.0,2500.0,40,0"
     assert parse_tach_sample(strip_junk(junk + line)).rpm == 24000.0
+
+
+# ---- Monarch "@" protocol -------------------------------------------------------------------
+
+@pytest.mark.parametrize("line, rpm", [(b"1234.5", 1234.5), (b" 60000 RPM", 60000.0), (b"0", 0.0),
+                                       (b"+12.25rpm", 12.25)])
+def test_monarch_value_lines(line, rpm):
+    from labkit.devices.tachometer.monarch import parse_display_value
+
+    assert parse_display_value(line) == rpm
+
+
+@pytest.mark.parametrize("bad", [b"OK", b"ERR", b"ACT-3X", b"12.3.4", b"1e5", b"", b"12 Hz", b"--1"])
+def test_monarch_non_values_raise(bad):
+    from labkit.devices.tachometer.monarch import parse_display_value
+
+    with pytest.raises(ValueError):
+        parse_display_value(bad)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.binary(max_size=60))
+def test_monarch_framer_and_parser_never_crash(data):
+    from labkit.devices.tachometer.monarch import EolFramer, parse_display_value
+
+    for line in EolFramer().feed(data):
+        try:
+            value = parse_display_value(line)
+        except ValueError:
+            continue
+        assert line.strip(b" +-.0123456789RPMrpm") == b""   # only a number (and its unit) was read
+        assert value == value   # not NaN

@@ -1,3 +1,4 @@
-"""Tachometer drivers; importing the package registers them (``lutron16``, ``labkit_tach``)."""
+"""Tachometer drivers; importing the package registers them
+(``lutron16``, ``labkit_tach``, ``monarch_at``)."""
 
-from labkit.devices.tachometer import labkit_tach, lutron16  # noqa: F401
+from labkit.devices.tachometer import labkit_tach, lutron16, monarch  # noqa: F401
