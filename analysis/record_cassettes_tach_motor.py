@@ -31,6 +31,7 @@ SCENARIOS: dict[str, tuple[str, str, str, dict, float]] = {
     "tach-labkit_tach": ("tach", "labkit_tach", "seed=1&rate_hz=10&faults=garbage:0.2",
                          {"ppr": 2}, 24_000.0),
     "tach-lutron16": ("tach", "lutron16", "seed=1&rate_hz=5&faults=mid_frame", {}, 12_345.6),
+    "tach-monarch_at": ("tach", "monarch_at", "seed=1&faults=split:0.5", {}, 4_321.0),
     "motor-pololu_smc": ("motor", "pololu_smc", "seed=1&crc=1&device_number=13",
                          {"crc": True, "device_number": 13}, 0.0),
     "motor-esc_bridge": ("motor", "esc_bridge", "seed=1&arm_s=0", {}, 0.0),

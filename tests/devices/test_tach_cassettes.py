@@ -15,7 +15,8 @@ from labkit.io.clock import VirtualClock
 from labkit.io.ports import open_port
 
 CASSETTES = Path(__file__).resolve().parents[2] / "recordings" / "cassettes"
-SCRIPTS = {"tach-labkit_tach": ("labkit_tach", {"ppr": 2}), "tach-lutron16": ("lutron16", {})}
+SCRIPTS = {"tach-labkit_tach": ("labkit_tach", {"ppr": 2}), "tach-lutron16": ("lutron16", {}),
+           "tach-monarch_at": ("monarch_at", {})}
 
 
 def same(a, b) -> bool:
