@@ -125,6 +125,8 @@ class RunContext:
         self.control = control
         self.step: Step | None = None
         self._last_control_event = -1e9
+        self._tach_logged: dict[str, float] = {
+            role: -1e9 for role in devices if self.rig.devices[role].kind == "tach"}
 
     # ---- events -------------------------------------------------------------------------
     def now(self) -> float:
@@ -139,11 +141,24 @@ class RunContext:
                    "value": reading.value, "unit": reading.unit, "stable": reading.stable,
                    "overload": reading.overload})
 
+    def log_tach_readings(self) -> None:
+        """Emit the tachometers' new readings as ``reading`` events (readings/ROLE.jsonl)."""
+        for role, since in self._tach_logged.items():
+            try:
+                new = self.devices[role].readings_since(since)
+            except Exception:  # noqa: BLE001 - a dead tachometer is the interlock's business
+                continue
+            for reading in new:
+                self.emit_reading(role, reading)
+            if new:
+                self._tach_logged[role] = new[-1].t
+
     def _control_event(self) -> None:
         now = self.clock.now()
         if now - self._last_control_event < CONTROL_EVENT_INTERVAL_S:
             return
         self._last_control_event = now
+        self.log_tach_readings()
         loops = {name: {"target_rad_s": s.target_rad_s, "setpoint_rad_s": s.setpoint_rad_s,
                         "measured_rad_s": s.measured_rad_s, "duty": s.duty, "settled": s.settled}
                  for name, s in self.control.snapshots().items()}
@@ -304,6 +319,7 @@ class Runner:
         status, reason, error = "completed", None, None
         new_points: list[dict[str, Any]] = []
         opened = None
+        ctx: RunContext | None = None
         previous_handler = self._install_sigint()
         cassettes = self.session.cassette_dir if self.session is not None else None
         self.bus.emit({"type": "start", "t": self.clock.now(), "protocol": self.protocol.name,
@@ -342,6 +358,8 @@ class Runner:
         finally:
             if self.control is not None:
                 self.control.stop()
+            if ctx is not None:
+                ctx.log_tach_readings()
             if opened is not None:
                 opened.close()
             if previous_handler is not None:
