@@ -19,3 +19,11 @@ def test_conical_scene_streams_pose_trace_tilt_and_invariant(tmp_path):
     # the logged tilt is the angle of the body's z axis, computed independently here
     expected = np.arccos(np.clip(result.rotations[:, 0, 2, 2], -1, 1))
     assert np.allclose([v[0] for v in tilts], expected, atol=1e-9)
+
+
+def test_simulate_cli_with_rerun_writes_the_rrd(tmp_path, capsys):
+    from labkit.cli import main
+
+    rrd = tmp_path / "cli.rrd"
+    main(["simulate", "conical_5_1", "--cycles", "2", "--rerun", f"save:{rrd}"])
+    assert "/sim/invariant" in entity_paths(rrd)
