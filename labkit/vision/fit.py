@@ -98,7 +98,11 @@ def _icp(z: np.ndarray, w: np.ndarray, tau: np.ndarray, k: int, c: complex, a: c
         if fit_drift:
             cols.append(tau.astype(complex))
         m = np.column_stack(cols) * sw[:, None]
-        sol, *_ = np.linalg.lstsq(m, z * sw, rcond=None)
+        mh = m.conj().T
+        try:  # normal equations: a 3x3 or 4x4 complex system
+            sol = np.linalg.solve(mh @ m, mh @ (z * sw))
+        except np.linalg.LinAlgError:
+            sol, *_ = np.linalg.lstsq(m, z * sw, rcond=None)
         new = (sol[0], sol[1], sol[2], sol[3] if fit_drift else 0j)
         if k != -1 and abs(new[2]) > MAX_TROCHOID_B * abs(new[1]):  # stay in the trochoid family
             new = (new[0], new[1], new[2] * MAX_TROCHOID_B * abs(new[1]) / abs(new[2]), new[3])
@@ -146,13 +150,14 @@ def _trochoid_starts(z: np.ndarray, w: np.ndarray, k: int, bs: tuple[float, ...]
     d = z - cen
     rms = math.sqrt(float(np.sum(w * np.abs(d) ** 2) / np.sum(w)))
     m = abs(k - 1)
-    mom = np.sum(w * np.abs(d) * np.exp(-1j * m * np.angle(d)))
+    power = 2 if m == 1 else 1  # with r^1 the m = 1 moment vanishes at the centroid
+    mom = np.sum(w * np.abs(d) ** power * np.exp(-1j * m * np.angle(d)))
     for b in bs:
         zc, speed = _arc_uniform_canonical(b, k)
         cen_c = complex(np.sum(speed * zc) / np.sum(speed))
         dc = zc - cen_c
         rms_c = math.sqrt(float(np.sum(speed * np.abs(dc) ** 2) / np.sum(speed)))
-        mom_c = np.sum(speed * np.abs(dc) * np.exp(-1j * m * np.angle(dc)))
+        mom_c = np.sum(speed * np.abs(dc) ** power * np.exp(-1j * m * np.angle(dc)))
         s = rms / rms_c
         rho = (np.angle(mom_c) - np.angle(mom)) / m if abs(mom) > 0 else 0.0
         e = complex(math.cos(rho), math.sin(rho))
@@ -173,7 +178,7 @@ def fit_trochoid(points: np.ndarray, kind: str, loops: int, weights: np.ndarray 
     """Fit an epitrochoid or hypotrochoid (Eq. 6.38) with ``loops`` loops; best of a few starts."""
     z, w, tau = _prepare(points, weights, times)
     k = k_for(kind, loops)
-    samples = 360 * abs(k)
+    samples = 200 * abs(k)
     best = None
     for c, a, b in _trochoid_starts(z, w, k, b_starts):
         fit = _icp(z, w, tau, k, c, a, b, iterations, times is not None, samples)
@@ -241,7 +246,7 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
     for f in screened[:2]:
         if not math.isfinite(f.rms_residual):
             continue
-        fit = _icp(z, w_, tau, f.k, f.c, f.a, f.b, 60, full[2] is not None, 360 * abs(f.k))
+        fit = _icp(z, w_, tau, f.k, f.c, f.a, f.b, 60, full[2] is not None, 200 * abs(f.k))
         residuals[_name(fit)] = fit.rms_residual
         if fit.rms_residual * SIMPLER_TOLERANCE < best.rms_residual:
             best = fit
