@@ -29,7 +29,6 @@ from labkit.vision.curves import (
 CIRCLE_MAX_ELLIPTICITY = 0.02  # below this an ellipse is reported as a circle
 SIMPLER_TOLERANCE = 1.12  # a simpler pattern wins unless a trochoid's residual is this much lower
 MIN_POINTS = 20
-ELLIPSE_ENOUGH = 0.01  # an ellipse fitting to 1 % of its major semi-axis needs no trochoid search
 MAX_TROCHOID_B = 1.05  # larger b means the fast term dominates: not a trochoid of Eq. 6.38
 
 
@@ -210,7 +209,6 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
     """Fit every candidate (ellipse, epitrochoids with 2-7 loops, hypotrochoids with 3-7 loops) on a
     subsample, refine the two best on up to ``max_points`` points, and pick the simplest pattern
     that explains the trace (a trochoid must beat the ellipse's residual by ``SIMPLER_TOLERANCE``).
-    Trochoids are not tried when the ellipse already fits to ``ELLIPSE_ENOUGH`` of its size.
     ``band`` (points, weights, times): every trace pixel; the ellipse is polished on it, because a
     thinned centre line ends half a line width short of the sharp tips of a flat ellipse."""
     pts = np.asarray(points, dtype=float)
@@ -230,8 +228,6 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
         z, w_, tau = _prepare(*full)
         ellipse = _icp(z, w_, tau, -1, polished.c, polished.a, polished.b, 0, False, 1440, polished.drift)
     residuals = {"ellipse": ellipse.rms_residual}
-    if ellipse.rms_residual < ELLIPSE_ENOUGH * ellipse.pattern.semi_axes[0]:
-        return Classification(ellipse, ellipse, residuals)
     screened: list[CurveFit] = []
     for kind, first in (("epitrochoid", 2), ("hypotrochoid", 3)):
         for loops in trochoid_loops:
