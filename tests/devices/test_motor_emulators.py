@@ -76,7 +76,8 @@ def test_vesc_duty_and_values_round_trip_through_the_emulator(duty, pole_pairs):
     # first-order plant from rest: duty x max speed x (1 - exp(-t/tau)) at t = 0.5 s
     speed_rad_s = duty * 2500.0 * (1 - math.exp(-0.5 / 0.4))
     speed_rpm = speed_rad_s * 60 / (2 * math.pi)
-    assert values.erpm == pytest.approx(speed_rpm * pole_pairs, abs=1.0)
+    # duty travels as int32 x 1e5 and ERPM as an integer
+    assert values.erpm == pytest.approx(speed_rpm * pole_pairs, abs=1.0 + 0.3 * pole_pairs)
     assert values.duty == pytest.approx(duty, abs=1e-3)
 
 
