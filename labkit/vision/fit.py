@@ -159,8 +159,10 @@ def _trochoid_starts(z: np.ndarray, w: np.ndarray, k: int, bs: tuple[float, ...]
         mom_c = np.sum(speed * np.abs(dc) ** power * np.exp(-1j * m * np.angle(dc)))
         s = rms / rms_c
         rho = (np.angle(mom_c) - np.angle(mom)) / m if abs(mom) > 0 else 0.0
-        e = complex(math.cos(rho), math.sin(rho))
-        yield cen - s * e * cen_c, s * e, s * b * e
+        # a limacon (m = 1) has no symmetry to lock on to: also try the other quadrants
+        for extra in ((0.0, 0.5 * math.pi, math.pi, 1.5 * math.pi) if m == 1 else (0.0,)):
+            e = complex(math.cos(rho + extra), math.sin(rho + extra))
+            yield cen - s * e * cen_c, s * e, s * b * e
 
 
 def fit_ellipse(points: np.ndarray, weights: np.ndarray | None = None, times: np.ndarray | None = None,
