@@ -50,7 +50,7 @@ void apply() {
   esc.writeMicroseconds(pulseFor(running));
 }
 
-void raise(byte bit) { errors |= (1u << bit); apply(); }
+void setError(byte bit) { errors |= (1u << bit); apply(); }
 
 void sendVariable(unsigned int value) { Serial.write(value & 0xFF); Serial.write(value >> 8); }
 
@@ -84,7 +84,7 @@ void execute() {
   } else if (cmd == 0x85 || cmd == 0x86) {
     int speed = packet[1] + 32 * packet[2];
     target = (cmd == 0x85) ? min(speed, 3200) : 0;
-    if (safeStart && target) raise(0); else apply();
+    if (safeStart && target) setError(0); else apply();
   } else if (cmd == 0x92) {
     target = 0; apply();
   } else if (cmd == 0xE0) {
@@ -113,9 +113,9 @@ void debugCommand(char *text) {
 
 void receive(byte b) {
   if (b & 0x80) {                       // a command byte starts a new packet
-    if (packetLen) raise(2);            // the previous one was cut short
+    if (packetLen) setError(2);            // the previous one was cut short
     need = dataLength(b);
-    if (need == 255) { packetLen = 0; raise(2); return; }
+    if (need == 255) { packetLen = 0; setError(2); return; }
     packet[0] = b; packetLen = 1;
   } else if (packetLen) {
     packet[packetLen++] = b;
@@ -128,8 +128,10 @@ void receive(byte b) {
 }
 
 void setup() {
+  // Zero throttle before the first pulse: the Servo constructor presets 1500 us (half
+  // throttle!) and attach() starts pulsing with whatever is stored, so store 1000 first.
+  esc.writeMicroseconds(1000);
   esc.attach(ESC_PIN, 1000, 2000);
-  esc.writeMicroseconds(1000);          // zero throttle before anything else
   byte mcusr = MCUSR; MCUSR = 0;
   if (mcusr & (1 << WDRF)) resetFlags = 0x24;
   else if (mcusr & (1 << EXTRF)) resetFlags = 0x04;
@@ -141,5 +143,5 @@ void setup() {
 
 void loop() {
   while (Serial.available()) receive(Serial.read());
-  if (!(errors & (1u << 3)) && millis() - lastCommandMs > TIMEOUT_MS) raise(3);
+  if (!(errors & (1u << 3)) && millis() - lastCommandMs > TIMEOUT_MS) setError(3);
 }

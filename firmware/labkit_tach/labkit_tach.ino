@@ -56,7 +56,8 @@ void printBanner() {
   Serial.print(F(" rate="));
   Serial.print(rateHz);
   Serial.print(F(" zto="));
-  Serial.println(ztoMs);   // println ends with CR LF; the host strips the CR
+  Serial.print(ztoMs);
+  Serial.print('\n');
 }
 
 void setup() {
