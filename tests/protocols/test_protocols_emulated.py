@@ -14,7 +14,7 @@ RIGS = Path(__file__).resolve().parents[2] / "rigs"
 
 def test_speed_sweep_recovers_the_emulated_exponent(tmp_path):
     prep = prepare_run(RIGS / "emulated-fig525.toml", "speed-sweep",
-                       ["speeds_rpm=6000:20000:2000", "record_s=1.0"], session_root=tmp_path)
+                       ["speeds_rpm=6000:20000:2000", "record_s=1.0", "zero=start"], session_root=tmp_path)
     outcome = execute(prep, tmp_path)
     assert outcome.status == "completed"
     results = json.loads((outcome.session / "results.json").read_text())
