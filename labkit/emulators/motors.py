@@ -310,7 +310,8 @@ class EscBridgeEmulator(PololuSmcEmulator):
         self._debug_line = bytearray()
 
     def apply(self, t: float) -> None:
-        speed = 0 if self.error_status() else max(0, self.target)
+        self.target = max(0, self.target)   # one direction: reverse is zero throttle
+        speed = 0 if self.error_status() else self.target
         self.running_speed = speed
         self.pulse_us = 1000 + speed * 1000 // 3200
         duty = (self.pulse_us - 1000) / 1000.0 if t >= self.armed_at else 0.0
