@@ -36,8 +36,18 @@ def main(args: argparse.Namespace) -> int:
         for path in export_csv(record.path):
             print(path)
         return 0
-    # RERUN HOOK: args.rerun (a RerunSpec) is stored for the stream engineer's run sink
-    result = replay_session(Path(args.session))
+    sinks = []
+    if getattr(args, "rerun", None) is not None:  # the same rerun sink as `labkit run`
+        from labkit.stream import run_sink
+
+        sinks.append(run_sink(args.rerun, None))
+    try:
+        result = replay_session(Path(args.session), sinks=sinks)
+    finally:
+        for sink in sinks:
+            close = getattr(sink, "close", None)
+            if callable(close):
+                close()
     out = result.outcome
     if out.status != "completed" and out.error is not None and result.recorded is None:
         print(f"labkit replay: {out.status}: {out.reason}", file=sys.stderr)
