@@ -162,8 +162,12 @@ def _try_reduced(scene: Scene) -> tuple[ReducedForm | None, str]:
     return None, "dipole or spin not confined to the field's plane"
 
 
-def compile_scene(scene: Scene) -> CompiledSystem:
-    """Compile ``scene`` (see module docstring); the result's ``report`` lists every decision."""
+def compile_scene(scene: Scene, reduce: bool = True) -> CompiledSystem:
+    """Compile ``scene`` (see module docstring); the result's ``report`` lists every decision.
+
+    ``reduce=False`` keeps the full rigid-body system even when a reduced form applies
+    (to cross-check the reduction or to benchmark it).
+    """
     report: list[dict] = []
 
     def note(item: str, action: str, reason: str) -> None:
@@ -171,7 +175,7 @@ def compile_scene(scene: Scene) -> CompiledSystem:
 
     omega = scene.drive_omega()
     period = scene.period()
-    reduced, why_not = _try_reduced(scene)
+    reduced, why_not = _try_reduced(scene) if reduce else (None, "switched off (reduce=False)")
     if reduced is not None:
         kind = "reduced_1dof" if reduced.form == 0 else "planar"
         note(

@@ -1,8 +1,9 @@
 """Small pure helpers for rotations (3x3 matrices, body -> lab).
 
-The paper's Euler convention is ZXZ: ``R_E = R_theta R_phi R_rho`` (Eq. 5.5-5.6), with
-``R_rho`` written as the *transpose* of a z rotation by rho (so rho = -theta removes spin,
-Eq. 5.7).
+The paper's Euler convention is ZXZ: ``R_E = R_theta R_phi R_rho`` (Eq. 5.6). Eq. 5.5 prints
+``R_rho`` as the transpose of a z rotation, but the product printed in Eq. 5.6 and the conical
+motion of Eq. 5.7 (``theta = wt``, ``rho = -wt``) both need ``R_rho = rot_z(rho)``; we follow
+Eq. 5.6-5.7.
 """
 
 from __future__ import annotations
@@ -25,8 +26,8 @@ def rot_z(angle: float) -> np.ndarray:
 
 
 def euler_zxz(theta: float, phi: float, rho: float) -> np.ndarray:
-    """The paper's ``R_E = R_theta R_phi R_rho`` (Eq. 5.6); ``R_rho = rot_z(-rho)`` as printed."""
-    return rot_z(theta) @ rot_x(phi) @ rot_z(-rho)
+    """The paper's ``R_E = R_theta R_phi R_rho`` (Eq. 5.6) with ``R_rho = rot_z(rho)``."""
+    return rot_z(theta) @ rot_x(phi) @ rot_z(rho)
 
 
 def axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:

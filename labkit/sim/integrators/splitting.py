@@ -51,7 +51,7 @@ def _yoshida_triple(order_weights: list[float], order: int) -> list[float]:
 
 
 _P = 1.0 / (4.0 - 4.0 ** (1.0 / 3.0))
-_Y6 = [0.784513610477560, 0.235573213359357, -1.17767998417887]
+_Y6 = [0.784513610477560, 0.235573213359357, -1.17767998417887]  # Yoshida (1990) solution A: w3, w2, w1
 _Y6_0 = 1.0 - 2.0 * sum(_Y6)
 
 #: name -> (stage weights of the symmetric base method, order)
@@ -59,7 +59,7 @@ COMPOSITIONS: dict[str, tuple[np.ndarray, int]] = {
     "strang": (np.array([1.0]), 2),
     "yoshida4": (np.array(_yoshida_triple([1.0], 2)), 4),
     "suzuki4": (np.array([_P, _P, 1.0 - 4.0 * _P, _P, _P]), 4),
-    "yoshida6": (np.array([_Y6[2], _Y6[1], _Y6[0], _Y6_0, _Y6[0], _Y6[1], _Y6[2]]), 6),
+    "yoshida6": (np.array([_Y6[0], _Y6[1], _Y6[2], _Y6_0, _Y6[2], _Y6[1], _Y6[0]]), 6),
 }
 
 

@@ -1,0 +1,151 @@
+"""Integrators against closed forms, each other and the conservation laws.
+
+* Sec. 5.1 conical motion: the exact solution is Eq. 5.7 with phi from Eq. 5.24.
+* Observed order of the compositions (4 for Suzuki/Yoshida-4, 2 for Strang, 6 for Yoshida-6).
+* Splitting vs scipy DOP853 (independent method) on a scene with translation and forces.
+* Jacobi constant (driven) and E, P, J (two free bodies).
+* Scale invariance (NUMERICS S2): a 1e-12 kg m^2 body at 11 000 rad/s with the same
+  tau / (I omega^2) is the same ODE as S1.
+* Reduced forms: Eq. 5.56 reduced equals the full rigid-body run; Table 5.4 case 2 Fourier series.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+
+import numpy as np
+import pytest
+
+from labkit.sim import compile_scene, load_scene, simulate
+from labkit.sim.rotations import euler_zxz
+
+from .conftest import bundled_dict, make
+
+W = 80 * math.pi
+PHI = math.atan(1e-3 / (1e-7 * W**2 - 4.633e-3))  # Eq. 5.24
+
+
+def _conical_error(result) -> tuple[float, float]:
+    exact = np.array([euler_zxz(W * t, PHI, -W * t) for t in result.times_s])  # Eq. 5.7
+    dipole = result.rotations[:, 0, :, 2]
+    return float(np.abs(result.rotations[:, 0] - exact).max()), float(np.abs(dipole - exact[:, :, 2]).max())
+
+
+def test_conical_motion_follows_eq_5_7_and_converges_at_order_4(conical):
+    errors = [_conical_error(simulate(conical, cycles=200, steps_per_period=n)) for n in (32, 64)]
+    (r32, psi32), (r64, psi64) = errors
+    assert math.log2(r32 / r64) == pytest.approx(4.0, abs=0.3)
+    assert psi64 < 5e-6  # dipole direction after 200 cycles at the default N = 64
+    result = simulate(conical, cycles=200)
+    assert result.status == "ok"
+    assert result.qoi["bodies"]["floator"]["cone_angle_rad"]["mean"] == pytest.approx(PHI, abs=2e-6)
+    assert result.invariant == "jacobi" and result.invariant_drift < 1e-12
+    assert result.rotation_residual < 1e-12
+
+
+@pytest.mark.parametrize(
+    "name, order, steps",
+    [
+        ("splitting4", 4, (16, 32, 64)),
+        ("yoshida4", 4, (32, 64, 128)),
+        ("strang", 2, (128, 256, 512)),
+        ("yoshida6", 6, (16, 32, 64)),
+    ],
+)
+def test_observed_order(conical, name, order, steps):
+    scene = copy.deepcopy(conical)  # off the relative equilibrium: a generic orbit
+    scene.bodies[0].angular_velocity_rad_s = scene.bodies[0].angular_velocity_rad_s + np.array(
+        [5.0, -3.0, 2.0]
+    )
+    ref = simulate(scene, cycles=10, steps_per_period=2048, integrator="yoshida6").rotations[-1, 0]
+    errs = [
+        np.abs(simulate(scene, cycles=10, steps_per_period=n, integrator=name).rotations[-1, 0] - ref).max()
+        for n in steps
+    ]
+    assert math.log2(errs[1] / errs[2]) == pytest.approx(order, abs=0.3)
+
+
+def test_splitting_agrees_with_dop853_on_a_moving_floator():
+    d = bundled_dict("fig5_13")
+    d["body"][0]["pinned"] = False
+    scene = make(d)
+    a = simulate(scene, cycles=5, steps_per_period=256)
+    b = simulate(scene, cycles=5, integrator="dop853", rtol=1e-12)
+    assert a.status == b.status == "ok"
+    np.testing.assert_allclose(a.times_s, b.times_s, rtol=0, atol=1e-15)
+    assert np.abs(a.positions_m - b.positions_m).max() < 1e-10  # metres, over mm-scale motion
+    assert np.abs(a.rotations - b.rotations).max() < 1e-7
+    assert a.invariant_drift < 1e-9
+    assert a.n_force_evals > 0 and b.n_force_evals > 0
+
+
+def test_two_free_bodies_conserve_energy_momentum_and_angular_momentum():
+    result = simulate("mbs_fig6_1", cycles=100)
+    assert result.status == "ok", result.status_detail
+    assert result.invariant == "energy+momenta"
+    assert result.invariant_drift < 1e-8
+    assert result.momentum_drift < 1e-12 and result.angular_momentum_drift < 1e-12
+    d = result.qoi["distance_m"]
+    assert 0.020 < d["min"] < d["max"] < 0.030  # still bound near the paper's 24.5 mm
+
+
+def test_tiny_fast_body_is_the_same_ode_as_s1(conical):
+    """S2: I = 1e-12 kg m^2 at 11 000 rad/s with S1's tau / (I w^2) gives S1's motion in t * w."""
+    small = copy.deepcopy(conical)
+    scale = 1e-12 * 11000.0**2 / (1e-7 * W**2)
+    small.field.omega_rad_s = 11000.0
+    small.field.B_c_T *= scale
+    small.field.B_s_T *= scale
+    body = small.bodies[0]
+    body.inertia_kg_m2 = np.eye(3) * 1e-12
+    body.angular_velocity_rad_s = body.angular_velocity_rad_s * (11000.0 / W)
+    a = simulate(conical, cycles=50)
+    b = simulate(small, cycles=50)
+    np.testing.assert_allclose(b.times_s * 11000.0, a.times_s * W, rtol=1e-13)
+    assert np.abs(a.rotations - b.rotations).max() < 1e-10
+    # DOP853 with per-component atol (L ~ 1e-8 here) makes the same error at both scales
+    errs = []
+    for sc, w in ((small, 11000.0), (conical, W)):
+        c = simulate(sc, cycles=20, integrator="dop853", rtol=1e-10)
+        t_end = c.times_s[-1]
+        errs.append(np.abs(c.rotations[-1, 0] - euler_zxz(w * t_end, PHI, -w * t_end)).max())  # Eq. 5.7
+    assert errs[0] < 1e-5
+    assert errs[0] == pytest.approx(errs[1], rel=0.05)
+
+
+def test_planar_reduction_equals_the_full_rigid_body_run():
+    scene = load_scene("planar_5_56")
+    reduced = simulate(scene, cycles=20)
+    full = simulate(scene, cycles=20, system=compile_scene(scene, reduce=False))
+    assert full.compile["kind"] == "rigid" and reduced.compile["kind"] == "planar"
+    psi = full.rotations[:, 0, :, 2]
+    theta = np.unwrap(np.arctan2(psi[:, 0], -psi[:, 1]))  # Eq. 5.52
+    assert np.abs(theta - reduced.reduced_angle_rad).max() < 1e-10
+    assert reduced.invariant == "jacobi" and reduced.invariant_drift < 1e-6
+
+
+def test_table_5_4_case_2_fourier_series():
+    """theta = 0.2748 sin wt - 9.55e-3 sin 2wt + 4.3e-4 sin 3wt (Table 5.4, row 2). The paper's
+    coefficients have 3-4 digits and omit the b_i and higher terms (~1e-4), hence 3e-4."""
+    result = simulate("planar_5_56", cycles=1, samples_per_period=64)
+    t = result.times_s
+    w = 188.5
+    series = 0.2748 * np.sin(w * t) - 9.55e-3 * np.sin(2 * w * t) + 4.3e-4 * np.sin(3 * w * t)
+    assert np.abs(result.reduced_angle_rad - series).max() < 3e-4
+
+
+def test_reduced_eq_5_484_agrees_with_references():
+    scene = load_scene("pendulum_5_484")
+    a = simulate(scene, cycles=20, steps_per_period=256)
+    b = simulate(scene, cycles=20, integrator="dop853", rtol=1e-12)
+    assert a.compile["equation"] == "Eq. 5.484"
+    assert np.abs(a.reduced_angle_rad - b.reduced_angle_rad).max() < 1e-8
+    c = simulate(scene, cycles=2, integrator="lsoda", rtol=1e-10)
+    assert c.status == "ok"
+    assert np.abs(c.reduced_angle_rad - b.reduced_angle_rad[: len(c.times_s)]).max() < 1e-5
+
+
+def test_radau_reference_runs(conical):
+    result = simulate("planar_5_56", cycles=1, integrator="radau", rtol=1e-8)
+    assert result.status == "ok" and result.integrator == "radau"
