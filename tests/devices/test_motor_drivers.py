@@ -312,3 +312,21 @@ def test_slow_replies_within_the_timeout_are_fine_beyond_it_a_timeout(protocol, 
     slow, clock = open_motor(protocol, f"&faults=delay:{timeout_s * 1.5}")
     with pytest.raises(DeviceTimeout):
         slow.status()
+
+
+@pytest.mark.parametrize("protocol, powered_on_errors", [
+    ("pololu_smc", {"safe_start_violation"}), ("vesc", set())])
+def test_replugged_controller_is_in_its_power_on_state_and_stays_stopped(protocol, powered_on_errors):
+    motor, clock = open_motor(protocol, "&faults=disconnect_at:2,reconnect_after:1")
+    motor.enable()
+    motor.set_duty(0.5)
+    clock.sleep(2.5)
+    with pytest.raises(DeviceDisconnected):
+        motor.status()
+    motor.close()                      # quiet on the dead port
+    clock.sleep(1.0)                   # plugged back in
+    motor.port.open()                  # same emulator, power-cycled
+    again = driver_class("motor", protocol)(motor.port, clock, name="rotor_motor")
+    status = again.status()
+    assert status.errors == powered_on_errors and status.duty == 0.0
+    assert rotor_duty() == 0.0
