@@ -95,8 +95,10 @@ class SpeedLoop:
         if reading is None:
             return None
         value = reading.value
-        if not math.isfinite(value) or value < 0 or value > 2.0 * self.max_speed:
-            raise Tripped(f"tachometer {self.tach.name} implausible reading {value!r} rad/s")
+        if reading.overload or not math.isfinite(value) or value < 0 or value > 2.0 * self.max_speed:
+            raw = reading.raw.decode("latin-1", "replace").strip()
+            raise Tripped(f"tachometer {self.tach.name} implausible reading {value!r} rad/s "
+                          f"(overload={reading.overload}, raw {raw!r})")
         if value > self.overspeed:
             raise Tripped(f"over-speed on {self.name}: {value * 60 / (2 * math.pi):.0f} RPM > "
                           f"{self.overspeed * 60 / (2 * math.pi):.0f} RPM")

@@ -93,6 +93,20 @@ def test_tachometer_silent_too_long():
     opened.close()
 
 
+def test_implausible_tachometer_reading():
+    # a Lutron display showing over-range ("OL") instead of a number
+    text = RIG.replace('protocol = "labkit_tach"', 'protocol = "lutron16"').replace(
+        "sim://labkit_tach?seed=2&plant=fig525&role=rotor_tach&rate_hz=20",
+        "sim://lutron16?seed=2&plant=fig525&role=rotor_tach&rate_hz=20&faults=overload:1").replace(
+        "baudrate = 115200", "baudrate = 9600")
+    control, opened, events, plant, clock = start(text, 10000)
+    assert "implausible reading nan" in control.tripped and "OL" in control.tripped
+    first = opened.devices["rotor_tach"].readings_since(0.0)[0].t
+    assert control.tripped_at - first <= PERIOD + 1e-9
+    assert plant.motor("rotor").duty == 0.0
+    opened.close()
+
+
 def test_over_speed_from_a_wrong_feed_forward():
     # full_speed set to half the real one: feed-forward alone drives the rotor to twice the target
     text = RIG.replace("full_speed_rpm = 23873", "full_speed_rpm = 11000").replace(
