@@ -27,10 +27,12 @@ from collections import deque
 from dataclasses import dataclass
 from typing import Any
 
+import serial
+
 from labkit.devices.base import Reading, register_driver, register_parser_benchmark
 from labkit.devices.stream import LineFramer
 from labkit.devices.tachometer.streaming import StreamingTachometer, rpm_to_rad_s
-from labkit.errors import DeviceReplyError, DeviceTimeout
+from labkit.errors import DeviceDisconnected, DeviceReplyError, DeviceTimeout
 
 FLAG_NAMES = {"Z": "zero_speed", "O": "over_range", "N": "noisy"}
 #: relative disagreement allowed between rpm and 60e6/(period_us*ppr) (print rounding)
@@ -206,7 +208,6 @@ class LabkitTachometer(StreamingTachometer):
         if not consistent_with_ppr(sample, self.ppr):
             raise ValueError(f"rpm {sample.rpm} disagrees with period {sample.period_us} us, ppr {self.ppr}")
         with self._state_lock:
-            self._alive = True
             if self._last_seq is not None and sample.seq > self._last_seq + 1:
                 self.lines_lost += sample.seq - self._last_seq - 1
             self._last_seq = sample.seq
@@ -237,8 +238,7 @@ class LabkitTachometer(StreamingTachometer):
         label = data.decode().strip()
         for _attempt in range(3):
             self._replies.clear()
-            with self._write_lock:
-                self.port.write(data)
+            self.write(data, label)
             deadline = self.clock.now() + self.reply_timeout_s
             while not self._replies:
                 self.reader.check()
@@ -253,6 +253,14 @@ class LabkitTachometer(StreamingTachometer):
                 return reply
         raise DeviceTimeout(self.name, label, self.reader.last_bytes,
                             f"no reply in {self.reply_timeout_s} s")
+
+    def write(self, data: bytes, label: str) -> None:
+        """Write to the device; a dead port becomes DeviceDisconnected naming the command."""
+        try:
+            with self._write_lock:
+                self.port.write(data)
+        except (serial.SerialException, OSError) as exc:
+            raise DeviceDisconnected(self.name, label, self.reader.last_bytes, str(exc)) from exc
 
     def config_commands(self) -> list[tuple[str, int]]:
         commands = [("PPR", self.ppr)]

@@ -15,9 +15,11 @@ import threading
 from collections import deque
 from typing import Any
 
+import serial
+
 from labkit.devices.base import Reading, register_driver, register_parser_benchmark
 from labkit.devices.tachometer.streaming import StreamingTachometer, rpm_to_rad_s
-from labkit.errors import DeviceReplyError, DeviceTimeout
+from labkit.errors import DeviceDisconnected, DeviceReplyError, DeviceTimeout
 
 VALUE_LINE = re.compile(rb"^\s*([+-]?\d{1,9}(?:\.\d{1,6})?)\s*(?:RPM|rpm)?\s*$")
 
@@ -102,9 +104,12 @@ class MonarchTachometer(StreamingTachometer):
         return Reading(t, "angular_speed", rpm_to_rad_s(rpm), "rad/s", raw=frame, device=self.name)
 
     def send(self, name: str) -> None:
-        """Write ``@name`` without waiting for an answer."""
-        with self._write_lock:
-            self.port.write(format_command(name))
+        """Write ``@name`` without waiting for an answer (a dead port: DeviceDisconnected)."""
+        try:
+            with self._write_lock:
+                self.port.write(format_command(name))
+        except (serial.SerialException, OSError) as exc:
+            raise DeviceDisconnected(self.name, f"@{name}", self.reader.last_bytes, str(exc)) from exc
 
     def command(self, name: str, lines: int = 1) -> list[bytes]:
         """Send ``@name``; return its ``lines`` reply lines (``OK`` lines of earlier
