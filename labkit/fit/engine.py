@@ -31,6 +31,7 @@ from labkit.fit.result import FitResult, ParamEstimate
 CONDITION_WARN = 1e6          # scaled Jacobian condition number above which we warn
 CORRELATION_WARN = 0.995      # |correlation| between fitted parameters above which we warn
 SINGULAR_RATIO = 1e-12        # singular-value ratio below which the problem is singular
+MAX_NFEV_PER_PARAM = 150      # a well-posed problem converges in tens of evaluations
 
 
 @dataclass(frozen=True)
@@ -73,6 +74,7 @@ def solve(
     warnings: Sequence[str] = (),
     x_name: str = "x",
     y_name: str = "y",
+    hint: str = "",
 ) -> FitResult:
     """Fit and package the result.
 
@@ -80,6 +82,7 @@ def solve(
     the model there; residuals are ``(y_rs - model_rs(theta)) * weights`` (weights = 1/sigma
     in residual space, relative: the covariance is scaled by the residual variance).
     ``predict_with(theta, x)`` evaluates the model in data space (plots and overlays).
+    ``hint`` is added to the message when the solver does not converge.
     """
     y_rs = np.asarray(y_rs, dtype=float)
     w = np.ones_like(y_rs) if weights is None else np.asarray(weights, dtype=float)
@@ -99,9 +102,13 @@ def solve(
         raise FitError(f"{model}: the model is not finite at the starting point; check the data")
     with np.errstate(all="ignore"):
         sol = optimize.least_squares(residuals, theta0, method="lm", jac="3-point",
-                                     x_scale=1.0, xtol=1e-14, ftol=1e-14, gtol=1e-14,
-                                     max_nfev=2000 * (p + 1))
-    if sol.status <= 0 or not np.all(np.isfinite(sol.x)):
+                                     x_scale=1.0, xtol=1e-10, ftol=1e-12, gtol=1e-12,
+                                     max_nfev=MAX_NFEV_PER_PARAM * (p + 1))
+    if sol.status == 0:
+        raise FitError(f"{model}: no convergence after {sol.nfev} evaluations: the parameters "
+                       f"({', '.join(theta_names)}) wander along a flat valley, i.e. they are not "
+                       f"identifiable from these data{'; ' + hint if hint else ''}")
+    if sol.status < 0 or not np.all(np.isfinite(sol.x)):
         raise FitError(f"{model}: the solver did not converge ({sol.message})")
     theta = sol.x
     r = residuals(theta)

@@ -27,7 +27,8 @@ def fit_figure(report: FitReport, path: str | Path, *, overlays: Sequence[Overla
     """Data + fitted curve (top) and residuals (bottom) for every series of ``report``."""
     fig = Figure(figsize=(7.0, 6.5), dpi=110)
     FigureCanvasAgg(fig)
-    gs = fig.add_gridspec(2, 1, height_ratios=[3, 1.3], hspace=0.08)
+    gs = fig.add_gridspec(2, 1, height_ratios=[3, 1.3], hspace=0.08, left=0.14, right=0.97,
+                          top=0.94, bottom=0.08)
     ax = fig.add_subplot(gs[0])
     axr = fig.add_subplot(gs[1], sharex=ax)
     colors = ["tab:blue", "tab:red", "tab:green", "tab:purple", "tab:orange", "tab:brown"]
@@ -61,7 +62,7 @@ def fit_figure(report: FitReport, path: str | Path, *, overlays: Sequence[Overla
     ax.set_title(title or f"{report.model} fit", fontsize=11)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, bbox_inches="tight")
+    fig.savefig(path)  # fixed margins: "tight" would draw the figure twice
     return path
 
 

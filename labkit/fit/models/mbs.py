@@ -96,6 +96,8 @@ def fit_mbs_force(r, force, *, sigma=None, fixed: dict[str, float] | None = None
         theta0=[start[k] for k in free], theta_names=tuple(free), params=params, x=r, y=force,
         predict_with=lambda t, xs: f_scale * model_scaled(t, np.asarray(xs) / r0),
         residual_space=f"{y_name}/{f_scale:.3g}", weights=weights, x_name=x_name, y_name=y_name,
+        hint="fix an exponent (--fix d=3.8) or fit the repulsive and attractive parts separately "
+             "(columns repulsive_n, attractive_n)",
     )
     return _rescale_residuals(result, f_scale)
 
