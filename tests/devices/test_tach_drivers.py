@@ -316,3 +316,11 @@ def test_monarch_split_lines_and_unplug():
     clock.sleep(1.5)
     with pytest.raises(DeviceDisconnected):
         tach.latest()
+
+
+def test_command_to_an_unplugged_tach_names_the_command():
+    tach, clock = open_tach("labkit_tach", "&faults=disconnect_at:1")
+    clock.sleep(1.5)
+    with pytest.raises(DeviceDisconnected) as info:
+        tach.identify()
+    assert "'ID?'" in str(info.value) or "'stream'" in str(info.value)
