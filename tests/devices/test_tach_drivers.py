@@ -323,4 +323,4 @@ def test_command_to_an_unplugged_tach_names_the_command():
     clock.sleep(1.5)
     with pytest.raises(DeviceDisconnected) as info:
         tach.identify()
-    assert "'ID?'" in str(info.value) or "'stream'" in str(info.value)
+    assert "command 'ID?'" in str(info.value) and "disconnected" in str(info.value)
