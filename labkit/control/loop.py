@@ -145,6 +145,7 @@ class SpeedControl:
         self.tripped_at: float | None = None
         self.zero_requested = False
         self.zeroed_at: float | None = None
+        self.stopped = False
         self._lock = threading.RLock()
         self._job: Any = None
 
@@ -156,6 +157,7 @@ class SpeedControl:
     def stop(self, reason: str = "end of protocol") -> None:
         """Stop the job and command every motor to zero (normal end or any exit path)."""
         with self._lock:
+            self.stopped = True
             if self._job is not None:
                 self._job.cancel()
                 self._job = None
@@ -201,8 +203,8 @@ class SpeedControl:
     # ---- the control period ---------------------------------------------------------------
     def _tick(self, t: float) -> None:
         with self._lock:
-            if self.tripped is not None:
-                return
+            if self.tripped is not None or self.stopped:
+                return  # a tick that was already waiting when stop() ran must not touch the ports
             if self.zero_requested:
                 if self.zeroed_at is None:
                     for loop in self.loops.values():

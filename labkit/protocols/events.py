@@ -104,3 +104,7 @@ class ProgressSink:
         elif kind == "stop":
             self.progress.update(self.task, state=event["status"])
             self.progress.stop()
+            return
+        else:
+            return
+        self.progress.refresh()  # show each state change at once, not at the next auto-refresh
