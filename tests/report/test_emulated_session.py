@@ -1,0 +1,41 @@
+"""End to end through the real protocol code: an emulated Fig. 5.25 sweep, then fit and report."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from labkit.cli import main
+from labkit.protocols.launch import execute, prepare_run
+from labkit.rig import bundled_rig_path
+
+TRUE_EXPONENT = -1.9   # the emulated rig's balance force: y[g] = 224e6 x[rpm]^-1.9
+
+
+@pytest.fixture(scope="module")
+def emulated_sweep(tmp_path_factory) -> Path:
+    root = tmp_path_factory.mktemp("sessions")
+    prep = prepare_run(str(bundled_rig_path("emulated-fig525")), "speed-sweep",
+                       ["speeds_rpm=6000:20000:3500", "record_s=1"], clock="virtual", session_root=root)
+    outcome = execute(prep, root)
+    assert outcome.status == "completed", outcome
+    return Path(outcome.session)
+
+
+def test_fit_recovers_emulator_exponent(emulated_sweep: Path, capsys):
+    assert main(["fit", str(emulated_sweep), "--model", "power-law", "--json", "-"]) == 0
+    b = json.loads(capsys.readouterr().out)["series"]["all"]["params"]["b"]
+    assert abs(b["value"] - TRUE_EXPONENT) < 0.05
+
+
+def test_report_of_a_real_session(emulated_sweep: Path, tmp_path: Path):
+    assert main(["report", str(emulated_sweep), "--out", str(tmp_path / "r")]) == 0
+    text = (tmp_path / "r" / "report.md").read_text()
+    assert "| protocol | speed-sweep |" in text and "| rig | emulated-fig525 |" in text
+    assert "## Events" in text and "| setpoint |" in text
+    # the rig file's floator inertia gives K and tau_S, not the ratios
+    assert "| K |" in text and "| tau_S |" in text and "floator inertia (kg m^2) | 3e-07" in text
+    fits = json.loads((tmp_path / "r" / "fits.json").read_text())
+    assert set(fits) == {"power-law", "pfr-omega2", "pfr-force"}
