@@ -59,4 +59,9 @@ def main(args: argparse.Namespace) -> int:
     print(f"labkit replay: results differ from {args.session}/results.json:", file=sys.stderr)
     for line in result.differences[:20]:
         print(f"  {line}", file=sys.stderr)
+    if out.status != "completed":
+        print(f"  the replayed run ended {out.status}: {out.reason}", file=sys.stderr)
+    if load_session(args.session).meta.get("clock") == "real":
+        print("  (this session was recorded on a real clock: the order of commands depends on timing, "
+              "so only emulator sessions on the virtual clock replay exactly)", file=sys.stderr)
     return 1
