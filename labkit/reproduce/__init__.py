@@ -18,6 +18,8 @@ SUITES = [
     ("eq5.92", "labkit.reproduce.planar_rows"),
     ("eq5.485", "labkit.reproduce.one_dof_rows"),
     ("table5.3", "labkit.reproduce.cone_rows"),
+    ("fig5.6", "labkit.reproduce.tilted_rows"),
+    ("eq5.85", "labkit.reproduce.force_law_rows"),
     ("eq6.22", "labkit.reproduce.mbs_rows"),
     ("fig6.18", "labkit.reproduce.mbs_rows"),
 ]
