@@ -43,6 +43,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="exit with status 3 when any fit has a warning (for scripts and CI)")
     p.add_argument("--json", metavar="OUT", help="write the fit as JSON ('-' for stdout)")
     p.add_argument("--plot", metavar="OUT.png", help="write data, fit and residuals as a PNG")
+    p.add_argument("--overlay", action="append", default=[], metavar="CSV",
+                   help="draw curves from a CSV on the plot (first column x, others y, matched by "
+                   "column name; e.g. a simulation at the measured speeds); repeatable")
     p.set_defaults(func=run)
 
 
@@ -91,8 +94,10 @@ def run(args: argparse.Namespace) -> int:
             Path(args.json).parent.mkdir(parents=True, exist_ok=True)
             Path(args.json).write_text(text + "\n")
     if args.plot:
+        from labkit.fit.overlay import overlays_from_csv
         from labkit.report.figures import fit_figure
-        fit_figure(report, args.plot)
+        overlays = [ov for path in args.overlay for ov in overlays_from_csv(path)]
+        fit_figure(report, args.plot, overlays=overlays)
     if args.strict and any(r.warnings for r in report.series.values()):
         print("labkit fit: warnings present (--strict)", file=sys.stderr)
         return 3

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 
 from labkit.fit.models import MODELS
+from labkit.fit.overlay import overlays_from_csv
 from labkit.report.build import build_report
 
 
@@ -24,12 +25,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--y", help="y column for --model")
     p.add_argument("--inertia", type=float, metavar="KG_M2",
                    help="floator moment of inertia (default: from the session's rig.toml)")
+    p.add_argument("--overlay", action="append", default=[], metavar="CSV",
+                   help="draw curves from a CSV on the fit figures (first column x, others y, matched "
+                   "by column name); repeatable")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    overlays = tuple(ov for csv in args.overlay for ov in overlays_from_csv(csv))
     path = build_report(args.source, args.out, model=args.model, x=args.x, y=args.y,
-                        inertia=args.inertia)
+                        inertia=args.inertia, overlays=overlays)
     print(f"report written: {path}")
     print(f"figures and data next to it in {path.parent}")
     return 0

@@ -37,3 +37,22 @@ def overlay_from_function(label: str, fn: Callable[[float], float], x, series: s
     xs = np.asarray(x, dtype=float)
     ys = np.array([float(fn(float(v))) for v in xs])
     return Overlay(label, xs, ys, series, x_name, y_name)
+
+
+def overlays_from_csv(path) -> list[Overlay]:
+    """Overlays from a CSV (e.g. a simulator's output): the first column is x, every other
+    numeric column one curve, drawn on figures with the same x and y column names."""
+    from pathlib import Path
+
+    from labkit.errors import DataFileError
+    from labkit.fit.data import load_table
+
+    table = load_table(path)
+    names = list(table.numeric)
+    if len(names) < 2:
+        raise DataFileError(str(path), "", "an overlay CSV needs an x column and at least one y column")
+    x_name = names[0]
+    order = np.argsort(table.numeric[x_name], kind="stable")
+    stem = Path(path).stem
+    return [Overlay(f"{stem}: {y}", table.numeric[x_name][order], table.numeric[y][order],
+                    x_name=x_name, y_name=y) for y in names[1:]]

@@ -129,3 +129,17 @@ def test_overlay_only_on_figures_in_its_units(tmp_path: Path):
     assert ov.y[0] == pytest.approx(224e6 * 6000**-1.9)
     report = build_report(write_sweep_session(tmp_path / "s"), overlays=(ov,))
     assert (report.parent / "fig-power-law.png").exists()
+
+
+def test_overlay_csv_on_the_command_line(tmp_path: Path):
+    from labkit.fit.overlay import overlays_from_csv
+    sim = tmp_path / "sim.csv"
+    sim.write_text("speed_rpm,force_g,force_upper_g\n20000,1.5,1.6\n6000,14.8,15.0\n")
+    ovs = overlays_from_csv(sim)
+    assert [(o.x_name, o.y_name) for o in ovs] == [("speed_rpm", "force_g"), ("speed_rpm", "force_upper_g")]
+    assert ovs[0].x.tolist() == [6000.0, 20000.0] and ovs[0].y.tolist() == [14.8, 1.5]   # sorted by x
+    session = write_sweep_session(tmp_path / "s")
+    assert main(["report", str(session), "--overlay", str(sim)]) == 0
+    assert main(["fit", str(session), "--model", "power-law", "--overlay", str(sim),
+                 "--plot", str(tmp_path / "p.png")]) == 0
+    assert (tmp_path / "p.png").read_bytes()[:8] == PNG
