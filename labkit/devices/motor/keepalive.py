@@ -36,7 +36,8 @@ class KeepAliveMotor(MotorController):
 
     def __init__(self, port: serial.SerialBase, clock: Clock, name: str = "", **options: Any):
         super().__init__(port, clock, name, **options)
-        self.io_lock = threading.RLock()
+        self.io_lock = threading.RLock()      # one query (request + reply) at a time
+        self._write_lock = threading.Lock()   # one packet on the wire at a time
         self.enabled = False
         self.keepalive_count = 0
         self._job: PeriodicJob | None = None
@@ -45,8 +46,12 @@ class KeepAliveMotor(MotorController):
 
     # ---- byte I/O -----------------------------------------------------------------------
     def write(self, data: bytes, command: str) -> None:
-        """Write one command; a dead port becomes DeviceDisconnected naming the command."""
-        with self.io_lock:
+        """Write one whole packet; a dead port becomes DeviceDisconnected naming the command.
+
+        Only the write itself is locked, not a query's wait for its reply (``io_lock``), so
+        the keep-alive thread is never held up by a slow status read.
+        """
+        with self._write_lock:
             try:
                 self.port.write(data)
             except (serial.SerialException, OSError) as exc:
