@@ -1,0 +1,40 @@
+"""labkit.numerics: error against run time, stress cases, fast kernels and sweeps for labkit.sim.
+
+Public interface::
+
+    from labkit.numerics import work_precision, reference, run_stress_cases, Ladder
+    report = work_precision("conical_5_1", cycles=20, ladder=Ladder.quick())
+    verdicts = run_stress_cases(quick=True)          # S1-S11 of NUMERICS.md, each met / not met
+
+Sweeps (stability maps) live in :mod:`labkit.numerics.sweep`; the batch kernels in
+:mod:`labkit.numerics.kernels`. ``labkit bench sim`` and ``labkit sweep`` are the commands.
+"""
+
+from labkit.numerics.checks import NumericsError, check_horizon, check_rtol, check_steps
+from labkit.numerics.workprecision import (
+    TARGETS,
+    Ladder,
+    Point,
+    Reference,
+    SceneReport,
+    reference,
+    require_target,
+    speedup_at_equal_error,
+    work_precision,
+)
+
+__all__ = [
+    "TARGETS",
+    "Ladder",
+    "NumericsError",
+    "Point",
+    "Reference",
+    "SceneReport",
+    "check_horizon",
+    "check_rtol",
+    "check_steps",
+    "reference",
+    "require_target",
+    "speedup_at_equal_error",
+    "work_precision",
+]
