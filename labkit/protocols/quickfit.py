@@ -58,4 +58,4 @@ def fit_spin_critical_c(rotor_rad_s: list[float], spin_rad_s: list[float], w_ref
     stderr = float(math.sqrt(np.sum((y - c * x) ** 2) / dof / np.sum(x * x))) if dof > 0 else math.nan
     return {"model": "eq6.37", "formula": "-k w^2 = C (1 - w/w_ref), k = v/w - 1",
             "x": "rotor_rad_s", "y": "spin_rad_s",
-            "params": {"C": _param(c, stderr), "w_ref": _param(w_ref, 0.0)}, "n": int(len(w))}
+            "params": {"C": _param(c, stderr)}, "fixed": {"w_ref_rad_s": float(w_ref)}, "n": int(len(w))}

@@ -22,6 +22,7 @@ import statistics
 import sys
 from typing import Any
 
+from labkit.errors import LabkitError
 from labkit.protocols.params import ParamError
 from labkit.protocols.quickfit import fit_spin_critical_c
 from labkit.protocols.runner import ProtocolDef, RunContext, Step
@@ -101,7 +102,7 @@ class SpinCritical(ProtocolDef):
         start = ctx.now()
         while reading_force_n(ctx.read("balance")) < threshold:
             if ctx.now() - start > ctx.params["place_timeout_s"]:
-                raise ParamError(f"no floator held within {ctx.params['place_timeout_s']:.0f} s at "
+                raise LabkitError(f"no floator held within {ctx.params['place_timeout_s']:.0f} s at "
                                  f"{rad_s_to_rpm(ctx.control.snapshots()['rotor'].target_rad_s):.0f} RPM "
                                  "(is start_rpm high enough to trap it?)")
             ctx.sleep(ctx.control.period_s)
