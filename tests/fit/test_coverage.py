@@ -110,3 +110,32 @@ def test_recovered_values_are_close_to_truth_with_small_noise():
     assert res.params["b"].value == pytest.approx(-1.9, abs=1e-3)
     assert res.params["a"].value == pytest.approx(224e6, rel=0.01)
     assert res.warnings == ()
+
+
+def test_fitted_curves_are_the_closed_forms_of_labkit_model():
+    """The fits' internal, rescaled models agree with labkit.model's closed forms
+    (Eq. 5.24/5.68, 6.37, 5.85) at the fitted parameters."""
+    from labkit.fit.models import fit_mbs_force
+    from labkit.model.cone import cone_angle as eq524
+    from labkit.model.cone import cone_angle_spin as eq568
+    from labkit.model.mbs import mbs_force as eq585
+    from labkit.model.mbs import spin_for_speed as eq637
+    rng = np.random.default_rng(9)
+    omega = np.linspace(150, 500, 10)
+    phi = eq524(1e-3, 1e-4, 1e-7, omega) + rng.normal(0, 0.002, omega.size)
+    res = fit_cone_angle(omega, phi, inertia=1e-7)
+    tc, ts = res.params["tau_C"].value, res.params["tau_S"].value
+    assert np.allclose(res.predict(omega), eq524(tc, ts, 1e-7, omega), rtol=1e-9)
+    spin = 0.4 * omega
+    phi = eq568(1e-3, 1e-4, 1e-7, omega, spin / omega - 1) + rng.normal(0, 0.002, omega.size)
+    res = fit_cone_angle(omega, phi, inertia=1e-7, spin=spin)
+    fitted = eq568(res.params["tau_C"].value, res.params["tau_S"].value, 1e-7, omega, spin / omega - 1)
+    assert np.allclose(phi - fitted, res.residuals, atol=1e-9)
+    w = np.linspace(620, 1100, 9)
+    res = fit_spin_critical(w, eq637(w, 4.7e5) + rng.normal(0, 10, w.size))
+    assert np.allclose(res.predict(w), eq637(w, res.params["C"].value, 3000.0), rtol=1e-9)
+    r = np.linspace(0.018, 0.032, 15)
+    f = eq585(r, 1e-7 * 0.0245**3.7, 7.5, 1e-7, 3.8)
+    res = fit_mbs_force(r, f + rng.normal(0, 0.002 * np.abs(f).max(), r.size), fixed={"d": 3.8})
+    p = {k: res.params[k].value for k in "abcd"}
+    assert np.allclose(res.predict(r), eq585(r, **p), rtol=1e-7, atol=1e-12)

@@ -25,14 +25,19 @@ from labkit.fit.checks import (
 )
 from labkit.fit.engine import Param, solve
 from labkit.fit.result import FitResult
+from labkit.model.cone import cone_angle_spin
 
 MODEL = "cone-angle"
 
 
 def cone_angle(omega, tau_C: float, tau_S: float, I: float, spin=0.0) -> np.ndarray:
-    """Equilibrium cone angle phi (rad), Eq. 5.24 (spin 0) / Eq. 5.68 (spin v_S in rad/s)."""
+    """Equilibrium cone angle phi (rad), Eq. 5.24 (spin 0) / Eq. 5.68 (spin v_S in rad/s).
+
+    The closed form of :mod:`labkit.model` (``cone_angle_spin`` with k = v_S/omega - 1).
+    """
     omega = np.asarray(omega, dtype=float)
-    return np.arctan(tau_C / (I * omega * (omega - np.asarray(spin, dtype=float)) - tau_S))
+    k = np.asarray(spin, dtype=float) / omega - 1.0
+    return cone_angle_spin(tau_C, tau_S, I, omega, k)
 
 
 def fit_cone_angle(omega, phi, *, inertia: float | None = None, spin=None, sigma=None,

@@ -28,22 +28,13 @@ from labkit.fit.checks import (
 from labkit.fit.engine import Param, solve
 from labkit.fit.models.power_law import fit_power_law
 from labkit.fit.result import FitResult
+from labkit.model.mbs import equilibrium_distance, mbs_force
+
+__all__ = ["equilibrium_distance", "fit_mbs_distance", "fit_mbs_force", "fit_mbs_parts", "mbs_force"]
 
 FORCE_MODEL = "mbs-force"
 DISTANCE_MODEL = "mbs-distance"
 PAPER_B, PAPER_D = 7.5, 3.8
-
-
-def mbs_force(r, a: float, b: float, c: float, d: float) -> np.ndarray:
-    """F_z(r) = a r^-b - c r^-d (Eq. 5.85), r in m, F in N."""
-    r = np.asarray(r, dtype=float)
-    return a * r**-b - c * r**-d
-
-
-def equilibrium_distance(omega, a: float, b: float, c: float, d: float) -> np.ndarray:
-    """r(omega) = (a / (c omega^2))^(1/(b-d)) (Eq. 6.13), weightless floator."""
-    omega = np.asarray(omega, dtype=float)
-    return (a / (c * omega**2)) ** (1.0 / (b - d))
 
 
 def fit_mbs_force(r, force, *, sigma=None, fixed: dict[str, float] | None = None,

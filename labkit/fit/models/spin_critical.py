@@ -26,6 +26,7 @@ from labkit.fit.checks import (
 )
 from labkit.fit.engine import Param, solve
 from labkit.fit.result import FitResult
+from labkit.model.mbs import spin_for_speed
 
 MODEL = "spin-critical"
 PAPER_OMEGA_C = 3000.0  # rad/s, Eq. 6.37
@@ -34,10 +35,9 @@ PAPER_OMEGA_C = 3000.0  # rad/s, Eq. 6.37
 def critical_spin(omega: np.ndarray, C: float, omega_c: float = PAPER_OMEGA_C) -> np.ndarray:
     """Floator spin v_S (rad/s) at the critical equilibrium for rotor speed omega (Eq. 6.37).
 
-    ``omega_c = math.inf`` gives Eq. 5.69 (constant C).
+    ``omega_c = math.inf`` gives Eq. 5.69 (constant C). The closed form of :mod:`labkit.model`.
     """
-    omega = np.asarray(omega, dtype=float)
-    return omega - C * (1.0 / omega - 1.0 / omega_c)
+    return spin_for_speed(omega, C, omega_c)
 
 
 def fit_spin_critical(omega, spin, *, omega_c: float | str = PAPER_OMEGA_C, sigma=None,
