@@ -52,7 +52,8 @@ def record(name: str, out: Path) -> Path:
         rig = Path(tmp) / rig_name
         rig.write_text(text)
         prep = prepare_run(rig, protocol, sets, session_root=Path(tmp) / "s")
-        outcome = execute(prep, Path(tmp) / "s", notes=f"recordings/sessions/{name} (analysis/record_sessions.py)")
+        notes = f"recordings/sessions/{name} (analysis/record_sessions.py)"
+        outcome = execute(prep, Path(tmp) / "s", notes=notes)
         target = out / name
         if target.exists():
             shutil.rmtree(target)
