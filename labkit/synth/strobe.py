@@ -18,6 +18,8 @@ from dataclasses import asdict, dataclass
 import cv2
 import numpy as np
 
+from labkit.synth.laser import NoiseBank
+
 
 @dataclass
 class StrobeSpec:
@@ -84,8 +86,8 @@ def _draw(spec: StrobeSpec, psi: float) -> np.ndarray:
 
 def render_strobe(spec: StrobeSpec) -> Iterator[np.ndarray]:
     """Yield ``spec.frames`` BGR uint8 frames."""
-    rng = np.random.default_rng(spec.seed)
     w, h = spec.size
+    noise = NoiseBank(spec.size, spec.noise_sigma, np.random.default_rng(spec.seed))
     y, x = np.mgrid[0:h, 0:w].astype(np.float32)
     bg_level, body_level = (200.0, 35.0) if spec.dark_body else (30.0, 210.0)
     bg = bg_level + spec.gradient * (x / w - 0.5 + 0.5 * (y / h - 0.5))
@@ -104,6 +106,6 @@ def render_strobe(spec: StrobeSpec) -> Iterator[np.ndarray]:
                 acc += _draw(spec, psi_row + off)
             cover[r0:r1] = acc[r0:r1] / blur_n
         img = bg * (1 - cover) + body_level * cover
-        img = np.repeat(img[:, :, None], 3, axis=2)
-        img += rng.standard_normal((h, w, 3), dtype=np.float32) * spec.noise_sigma
-        yield np.clip(img + 0.5, 0, 255).astype(np.uint8)
+        img = cv2.merge([img, img, img])
+        noise.add_to(img)
+        yield cv2.convertScaleAbs(cv2.max(img, 0.0), alpha=1.0, beta=0.5)

@@ -205,7 +205,7 @@ def _subsample(n: int, keep: int, seed: int = 0) -> np.ndarray:
 
 
 def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.ndarray | None = None,
-             max_points: int = 2500, screen_points: int = 500,
+             max_points: int = 1500, screen_points: int = 350,
              trochoid_loops: range = range(2, 8),
              band: tuple[np.ndarray, np.ndarray | None, np.ndarray | None] | None = None) -> Classification:
     """Fit every candidate (ellipse, epitrochoids with 2-7 loops, hypotrochoids with 3-7 loops) on a
@@ -244,7 +244,7 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
     for f in screened[:2]:
         if not math.isfinite(f.rms_residual):
             continue
-        fit = _icp(z, w_, tau, f.k, f.c, f.a, f.b, 60, full[2] is not None, 200 * abs(f.k))
+        fit = _icp(z, w_, tau, f.k, f.c, f.a, f.b, 45, full[2] is not None, 200 * abs(f.k))
         residuals[_name(fit)] = fit.rms_residual
         if fit.rms_residual * SIMPLER_TOLERANCE < best.rms_residual:
             best = fit
