@@ -58,7 +58,7 @@ def build_report(source: str | Path, out: str | Path | None = None, *, model: st
     out = Path(out) if out is not None else default_out(source)
     if source.is_file() and source.suffix.lower() == ".json":
         doc = _read_json(source)
-        if isinstance(doc, dict) and "pattern" in doc and "points" not in doc:
+        if isinstance(doc, dict) and ("pattern" in doc or "point_pattern" in doc) and "points" not in doc:
             return _video_report(source, doc, out)
     table = load_table(source)
     if len(table) == 0:
@@ -212,13 +212,22 @@ def _comparison(done: list[tuple[str, FitReport]]) -> list[str]:
 
 def _video_report(source: Path, doc: dict, out: Path) -> Path:
     out.mkdir(parents=True, exist_ok=True)
-    pattern = doc.get("pattern") or {}
+    strobe = "point_pattern" in doc   # labkit analyse strobe; else analyse laser
+    pattern = (doc.get("point_pattern") if strobe else doc.get("pattern")) or {}
     lines = [f"# labkit report: {source.name}", "", f"Source: `{source}`  ",
-             f"Generated: {_now()} by labkit {__version__}", "", "## Video", ""]
-    rows = [[k, doc.get(k)] for k in ("source", "frames", "fps") if k in doc]
+             f"Generated: {_now()} by labkit {__version__}", "",
+             "## Video (" + ("stroboscope" if strobe else "laser trace") + ")", ""]
+    rows = [[k, doc.get(k)] for k in ("source", "frames", "fps", "apparent_hz", "phase_source") if k in doc]
     if doc.get("size"):
         rows.append(["size (px)", " x ".join(str(v) for v in doc["size"])])
-    lines += [md.table(["item", "value"], rows), "", "## Pattern", ""]
+    lines += [md.table(["item", "value"], rows), ""]
+    if strobe:
+        keys = ("tilt_amplitude_rad", "lateral_amplitude_px", "lateral_amplitude_mm", "rc_offset_px",
+                "rc_offset_mm", "rc_offset_direction")
+        motion = [[k, doc.get(k)] for k in keys if k in doc]
+        lines += ["## Motion (cone angle phi, lateral amplitude beta, RC offset delta, Eq. 5.97)", "",
+                  md.table(["quantity", "value"], motion), ""]
+    lines += ["## Pattern" + (" of the tracked body point" if strobe else ""), ""]
     prow = [[k, json.dumps(v) if isinstance(v, list | dict) else v] for k, v in pattern.items()]
     lines += [md.table(["quantity", "value"], prow), ""]
     tilt = doc.get("tilt_rad")

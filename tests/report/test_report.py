@@ -143,3 +143,21 @@ def test_overlay_csv_on_the_command_line(tmp_path: Path):
     assert main(["fit", str(session), "--model", "power-law", "--overlay", str(sim),
                  "--plot", str(tmp_path / "p.png")]) == 0
     assert (tmp_path / "p.png").read_bytes()[:8] == PNG
+
+
+def test_strobe_result_report(tmp_path: Path):
+    clip = tmp_path / "strobe.avi"
+    make_clip(clip)
+    result = tmp_path / "strobe.json"
+    result.write_text(json.dumps({
+        "source": str(clip), "frames": 12, "fps": 30.0, "apparent_hz": 0.5, "tilt_amplitude_rad": 0.213,
+        "lateral_amplitude_px": 4.1, "rc_offset_px": 18.7, "rc_offset_direction": "towards body top",
+        "phase_source": "signal",
+        "point_pattern": {"type": "ellipse", "center_px": [80, 60], "semi_axes_px": [30, 18],
+                          "rotation_deg": 0.0, "ellipticity": 0.4, "loops": 1, "trochoid": None,
+                          "rms_residual_px": 0.5},
+        "quality": {}}))
+    report = build_report(result, tmp_path / "strobe-report")
+    text = report.read_text()
+    assert "stroboscope" in text and "| tilt_amplitude_rad | 0.213 |" in text and "towards body top" in text
+    assert (report.parent / "contact-sheet.png").read_bytes()[:8] == PNG
