@@ -20,7 +20,7 @@ import numpy as np
 
 from labkit.errors import VideoError
 from labkit.vision.curves import a_for_k, ellipse_from_coefficients, trochoid_from_coefficients
-from labkit.vision.fit import CIRCLE_MAX_ELLIPTICITY, MAX_TROCHOID_B, SIMPLER_TOLERANCE
+from labkit.vision.fit import CIRCLE_MAX_ELLIPTICITY, MAX_TROCHOID_B, trochoid_beats
 from labkit.vision.frames import open_frames
 
 MIN_BODY_AREA_PX = 30
@@ -213,7 +213,7 @@ def phase_pattern(points: np.ndarray, phases: np.ndarray) -> dict:
     """Classify a body point's trajectory with known phase per sample: least squares of
     ``c + A e^{i s psi} + B e^{i s k psi}`` (s = +-1, the sense of rotation) for the ellipse
     (k = -1) and the trochoids of Eq. 6.38 (epitrochoid k = 2..7, hypotrochoid k = -2..-6); the
-    ellipse wins unless a trochoid lowers the residual by ``SIMPLER_TOLERANCE``. Same JSON layout as
+    ellipse wins unless :func:`labkit.vision.fit.trochoid_beats` it. Same JSON layout as
     the laser pattern."""
     z = points[:, 0] + 1j * points[:, 1]
     fits = []
@@ -227,7 +227,7 @@ def phase_pattern(points: np.ndarray, phases: np.ndarray) -> dict:
             fits.append((rms, k, s, coef))
     ellipse = min((f for f in fits if f[1] == -1), key=lambda f: f[0])
     best = min(fits, key=lambda f: f[0])
-    if best[1] == -1 or best[0] * SIMPLER_TOLERANCE >= ellipse[0]:
+    if best[1] == -1 or not trochoid_beats(best[0], abs(best[3][2]), ellipse[0]):
         best = ellipse
     rms, k, s, (c, a, b) = best
     # s = -1 is the same curve traversed backwards: c + A e^{-it} + B e^{-ikt} = c + A e^{it'} ...
