@@ -49,7 +49,8 @@ def rows(quick: bool = False, prefix: str = "") -> list[Row]:
         phi = cd.equilibrium_phi(body)
         note = "paper prints n/a" if phi_calc is None else ""
         if no == 3:
-            note = "rows 2 and 3 share tau_S/tau_C = 0.25 but differ in phi; row 3 fits ~0.23"
+            note = ("rows 2 and 3 print the same tau_S/tau_C = 0.25 but different phi; "
+                    "phi = 0.2069 needs tau_S/tau_C = 0.223")
         out.append(compare(f"table5.3/{no}/phi", "phi-calc (rad), Eq. 5.35", phi_calc, phi, 0.0,
                            note, abs_tol=6e-4))
         out.append(compare(f"table5.3/{no}/min_ratio", "min tau_S/tau_C, Eq. 5.46 with I_R", min_ratio,

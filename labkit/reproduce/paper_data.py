@@ -105,6 +105,10 @@ MISPRINTS = [
     "Table 5.2: the sign convention contradicts the listed initial conditions (read them as "
     "body-frame components)",
     "Eq. 5.5: R_rho has its sines transposed; Eq. 5.6/5.7 are consistent (used: Eq. 5.6)",
+    "Table 5.3 row 3: tau_S/tau_C = 0.25 (as row 2) does not give phi = 0.2069; 0.223 does",
+    "Fig. 5.6 row 13: R_X = 0.00645 breaks the table's own trend (R_X ~ 2 tau_S/tau_C); 0.0020 expected",
+    "Fig. 5.4 caption vs Fig. 5.5: minimum B_S/B_C quoted as 0.158 and 0.144; Eq. 5.46 with "
+    "I = 0.998e-7, tau_C = 1e-3, w = 60 pi gives 0.1439",
     "Table 5.7: F_av/A at omega >= 105 pi is 1-2 % high against a converged integration and "
     "Eq. 5.92 (quadrature error in the paper)",
 ]
