@@ -39,3 +39,20 @@ def test_report_of_a_real_session(emulated_sweep: Path, tmp_path: Path):
     assert "| K |" in text and "| tau_S |" in text and "floator inertia (kg m^2) | 3e-07" in text
     fits = json.loads((tmp_path / "r" / "fits.json").read_text())
     assert set(fits) == {"power-law", "pfr-omega2", "pfr-force"}
+
+
+def test_spin_critical_session_fit_and_report(tmp_path_factory):
+    """The emulated Fig. 6.18 rig breaks the bound state by Eq. 6.37 with C = 4.7e5."""
+    root = tmp_path_factory.mktemp("spin")
+    prep = prepare_run(str(bundled_rig_path("emulated-fig618")), "spin-critical", [], clock="virtual",
+                       session_root=root)
+    outcome = execute(prep, root)
+    assert outcome.status == "completed", outcome
+    session = Path(outcome.session)
+    out = tmp_path_factory.mktemp("spin-report")
+    assert main(["report", str(session), "--out", str(out)]) == 0
+    fits = json.loads((out / "fits.json").read_text())
+    C = fits["eq637"]["series"]["all"]["params"]["C"]["value"]
+    assert C == pytest.approx(4.7e5, rel=0.03)
+    comparison = (out / "report.md").read_text().split("## Model comparison")[1]
+    assert "Eq. 5.69 (no omega_c term)" in comparison
