@@ -17,6 +17,7 @@ SUITES = [
     ("table5.7", "labkit.reproduce.planar_rows"),
     ("eq5.92", "labkit.reproduce.planar_rows"),
     ("eq5.485", "labkit.reproduce.one_dof_rows"),
+    ("table5.5", "labkit.reproduce.pfr_rows"),
     ("table5.3", "labkit.reproduce.cone_rows"),
     ("fig5.6", "labkit.reproduce.tilted_rows"),
     ("eq5.85", "labkit.reproduce.force_law_rows"),
