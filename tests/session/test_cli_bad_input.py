@@ -66,3 +66,16 @@ def test_dry_run_prints_the_plan_and_moves_nothing(capsys, tmp_path):
     assert "2 steps" in out and "up 9000 RPM" in out
     assert not list(tmp_path.iterdir())
     assert shared_plant("fig525").motor("rotor").duty_changes == []
+
+
+def test_resuming_a_finished_session_is_refused(capsys, tmp_path):
+    done = REPO / "recordings" / "sessions" / "speed-sweep-clean"
+    argv = ["run", "--resume", str(done), "--sessions", str(tmp_path), "--no-progress"]
+    code, out, err = run_cli(argv, capsys)
+    assert code == 2 and "all 4 steps are already done" in err
+    assert not list(tmp_path.iterdir())
+
+
+def test_bundled_rig_by_name_after_a_plain_install(capsys):
+    code, out, err = run_cli(["run", "emulated-fig618", "spin-critical", "--dry-run"], capsys)
+    assert code == 0 and "spin-critical on emulated-fig618" in out
