@@ -31,6 +31,9 @@ def quick_rows():
     ("eq6.22/stiffness_1", 48.7, 0.01),
     ("eq6.22/stiffness_2", 61.9, 0.01),
     ("eq6.22/stiffness_3", 35.1, 0.01),
+    ("table5.5/1/b", 2.30, 0.01),           # 3 printed digits; fit method unstated
+    ("table5.5/5/b", 2.97, 0.01),
+    ("fig5.6/7/r_x", 0.186, 0.01),          # semi-axis of Fig. 5.4's orbit, 3 printed digits
 ])
 def test_rows_reproduce_the_paper(quick_rows, row_id, paper, tol):
     row = quick_rows[row_id]
@@ -61,6 +64,19 @@ def test_table_5_3_verdicts(quick_rows, no, paper):
     else:
         assert row.labkit == "stable"
         assert quick_rows[f"table5.3/{no}/verdict_time"].labkit == "stable"
+
+
+def test_mbs_force_law_exponents_within_the_papers_ranges(quick_rows):
+    """Eq. 5.85: b = 7.5 +- 0.4, d = 3.8 +- 0.4 (the paper's stated ranges)."""
+    assert abs(quick_rows["eq5.85/b"].labkit - 7.5) <= 0.4
+    assert abs(quick_rows["eq5.85/d"].labkit - 3.8) <= 0.4
+
+
+def test_fig_5_6_lambda_documents_its_spin(quick_rows):
+    """lambda = 0.8518 printed; the spin-free orbit gives ~0.873 (within 5 %, spin unstated)."""
+    row = quick_rows["fig5.6/7/lambda"]
+    assert row.labkit == pytest.approx(0.8518, rel=0.05)
+    assert "spin" in row.note
 
 
 def test_cli_json_and_only(tmp_path, capsys):
