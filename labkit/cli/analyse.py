@@ -125,7 +125,8 @@ def run_laser(args: argparse.Namespace) -> int:
 
 def _print_laser(r: dict) -> None:
     p = r["pattern"]
-    print(f"{r['source']}: {r['frames']} frames, {r['size'][0]}x{r['size'][1]}, {r['fps']:.3g} fps")
+    rate = f"{r['fps']:.3g} fps" if r["fps"] else "photo"
+    print(f"{r['source']}: {r['frames']} frames, {r['size'][0]}x{r['size'][1]}, {rate}")
     if p["type"] == "none":
         print(f"pattern: none ({p['reason']})")
         return
