@@ -288,6 +288,7 @@ class Runner:
         self.done_steps = set(done_steps or ())
         self.port_override = port_override
         self.stop_count = 0
+        self._saving = False
         self.control: SpeedControl | None = None
         self.steps = protocol.plan(rig, params)
         check_plan(protocol, rig, self.steps)
@@ -301,12 +302,14 @@ class Runner:
         2nd - interlock now (every motor zero) and KeyboardInterrupt."""
         self.stop_count += 1
         self.bus.emit({"type": "stop_request", "t": self.clock.now(), "count": self.stop_count})
-        if self.control is None:
-            return
+        if self._saving:
+            return  # motors are already at zero; let results.json and run.json be written whole
         if self.stop_count == 1:
-            self.control.request_zero()
+            if self.control is not None:
+                self.control.request_zero()
         else:
-            self.control.trip("Ctrl-C pressed twice")
+            if self.control is not None:
+                self.control.trip("Ctrl-C pressed twice")
             raise KeyboardInterrupt
 
     def _install_sigint(self) -> Any:
@@ -356,14 +359,21 @@ class Runner:
             if not (self.control is not None and self.control.tripped):
                 self.bus.emit({"type": "fault", "t": self.clock.now(), "reason": reason})
         finally:
+            self._saving = True  # from here on Ctrl-C only counts (QCoDeS' DelayedKeyboardInterrupt)
             if self.control is not None:
                 self.control.stop()
-            if ctx is not None:
-                ctx.log_tach_readings()
             if opened is not None:
                 opened.close()
+        try:
+            return self._save(status, reason, error, ctx, new_points)
+        finally:
             if previous_handler is not None:
                 signal.signal(signal.SIGINT, previous_handler)
+
+    def _save(self, status: str, reason: str | None, error: BaseException | None, ctx: RunContext | None,
+              new_points: list[dict[str, Any]]) -> RunOutcome:
+        if ctx is not None:
+            ctx.log_tach_readings()
         points = self.previous_points + new_points
         results = normalise({"protocol": self.protocol.name, "points": points, "fit": self._fit(points)})
         self.bus.emit({"type": "results", "t": self.clock.now(), "results": results})
