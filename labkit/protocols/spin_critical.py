@@ -98,19 +98,24 @@ class SpinCritical(ProtocolDef):
         ctx.emit({"type": "zero", "device": "balance", "value": before.value, "unit": before.unit})
         balance.zero()
 
-    def _wait_held(self, ctx: RunContext, threshold: float) -> None:
+    def _wait_held(self, ctx: RunContext, threshold: float, after_drop: bool) -> None:
+        """Wait for a newly held floator: after a drop, first for the balance to show it gone
+        (a balance's filter can lag the step), then for it to read the weight again."""
         start = ctx.now()
-        while reading_force_n(ctx.read("balance")) < threshold:
-            if ctx.now() - start > ctx.params["place_timeout_s"]:
-                raise LabkitError(f"no floator held within {ctx.params['place_timeout_s']:.0f} s at "
-                                 f"{rad_s_to_rpm(ctx.control.snapshots()['rotor'].target_rad_s):.0f} RPM "
-                                 "(is start_rpm high enough to trap it?)")
-            ctx.sleep(ctx.control.period_s)
+        phases = [False, True] if after_drop else [True]
+        for want_held in phases:
+            while (reading_force_n(ctx.read("balance")) >= threshold) != want_held:
+                if ctx.now() - start > ctx.params["place_timeout_s"]:
+                    raise LabkitError(
+                        f"no floator held within {ctx.params['place_timeout_s']:.0f} s at "
+                        f"{rad_s_to_rpm(ctx.control.snapshots()['rotor'].target_rad_s):.0f} RPM "
+                        "(is start_rpm high enough to trap it?)")
+                ctx.sleep(ctx.control.period_s)
 
-    def _trial(self, ctx: RunContext, threshold: float) -> dict[str, Any] | None:
+    def _trial(self, ctx: RunContext, threshold: float, after_drop: bool) -> dict[str, Any] | None:
         """Watch one held floator until it drops; None if it never does."""
         p = ctx.params
-        self._wait_held(ctx, threshold)
+        self._wait_held(ctx, threshold, after_drop)
         held_at = last_held = ctx.now()
         loss = rpm_to_rad_s(p["spin_loss_rpm"])
         spin_seen = False
@@ -131,11 +136,14 @@ class SpinCritical(ProtocolDef):
             if cause is None and not ctx.clock.is_virtual and operator_pressed_enter():
                 cause = "key"
             if cause is not None:
-                before = [r for r in ctx.tach_readings("floator_tach", held_at) if r.t <= last_held]
+                # the spin just before the drop: the last reading that still saw the floator
+                # (a slow balance reports the drop late, so readings after it can be zero)
+                spins = [r for r in ctx.tach_readings("floator_tach", held_at)
+                         if r.t <= last_held and math.isfinite(r.value) and r.value > loss]
                 rotor = [r.value for r in ctx.tach_readings("rotor_tach", held_at) if r.t <= last_held]
-                if not before or not rotor:
+                if not spins or not rotor:
                     return None
-                return {"rotor_rad_s": statistics.fmean(rotor), "spin_rad_s": before[-1].value,
+                return {"rotor_rad_s": statistics.fmean(rotor), "spin_rad_s": spins[-1].value,
                         "cause": cause, "hold_s": last_held - held_at}
             if ctx.now() - held_at > p["trial_timeout_s"]:
                 return None
@@ -150,7 +158,7 @@ class SpinCritical(ProtocolDef):
         consistent = False
         for trial_no in range(int(p["max_trials"])):
             ctx.checkpoint()
-            trial = self._trial(ctx, threshold)
+            trial = self._trial(ctx, threshold, after_drop=trial_no > 0)
             if trial is None:
                 break
             trials.append(trial)

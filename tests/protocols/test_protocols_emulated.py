@@ -70,3 +70,21 @@ def test_bad_plans_are_refused_before_anything_opens(rig, protocol, sets, error,
     with pytest.raises(error, match=None) as info:
         prepare_run(RIGS / rig, protocol, sets, session_root=None)
     assert message in str(info.value)
+
+
+def test_spin_critical_detects_the_drop_by_spin_loss_when_the_balance_is_slow(tmp_path):
+    # a balance answering 0.8 s late, a spin tachometer reporting zero 0.2 s after its target goes
+    text = (RIGS / "emulated-fig618.toml").read_text()
+    text = text.replace("role=balance", "role=balance&faults=delay:0.8")
+    text = text.replace("source=floator", "source=floator&zto_ms=200")
+    rig = tmp_path / "slow-balance.toml"
+    rig.write_text(text)
+    sets = ["start_rpm=6600", "stop_rpm=8000", "step_pct=15", "max_trials=2"]
+    prep = prepare_run(rig, "spin-critical", sets, session_root=tmp_path / "s")
+    outcome = execute(prep, tmp_path / "s")
+    assert outcome.status == "completed", outcome.reason
+    law = SpinCriticalLaw()
+    trials = [t for p in outcome.results["points"] for t in p["trials"]]
+    assert len(trials) == 4 and {t["cause"] for t in trials} == {"spin_loss"}
+    for t in trials:
+        assert t["spin_rad_s"] == pytest.approx(law.critical_spin(t["rotor_rad_s"]), rel=0.03, abs=15)
