@@ -37,8 +37,14 @@ def check_rtol(rtol: float, target_error: float | None = None) -> None:
         )
 
 
-def check_steps(steps_per_period: int, omega: float, omega_max: float, order: int = 4,
-                target_error: float | None = None, cycles: float = 1.0) -> None:
+def check_steps(
+    steps_per_period: int,
+    omega: float,
+    omega_max: float,
+    order: int = 4,
+    target_error: float | None = None,
+    cycles: float = 1.0,
+) -> None:
     """Refuse a step count that makes the splitting unstable (``h omega_max > 2``) or whose
     error bound ``C (h omega_max)^order`` per period, or round-off ``cycles N eps``, exceeds
     ``target_error`` (``C = 1`` is a rough, optimistic constant: it rejects only hopeless settings)."""
@@ -68,8 +74,9 @@ def check_steps(steps_per_period: int, omega: float, omega_max: float, order: in
         )
 
 
-def check_horizon(cycles: float, samples_per_period: int, bodies: int,
-                  limit_bytes: int = DEFAULT_MEMORY_BYTES) -> int:
+def check_horizon(
+    cycles: float, samples_per_period: int, bodies: int, limit_bytes: int = DEFAULT_MEMORY_BYTES
+) -> int:
     """Bytes the stored samples need; refuse a horizon that does not fit in ``limit_bytes``."""
     if not (cycles > 0 and math.isfinite(cycles)):
         raise NumericsError(f"horizon of {cycles!r} cycles must be a positive number")

@@ -282,8 +282,12 @@ def kernel_timings(spec: BatchSpec, periods: int, steps_per_period: int = 64, re
     """
     compile_s = compile_numba_kernel()
     steps = spec.size * periods * steps_per_period
-    out: dict = {"compile_s": compile_s, "batch": spec.size, "periods": periods,
-                 "steps_per_period": steps_per_period}
+    out: dict = {
+        "compile_s": compile_s,
+        "batch": spec.size,
+        "periods": periods,
+        "steps_per_period": steps_per_period,
+    }
     results = {}
     for name, fn in (("numba", run_batch_numba), ("numpy", run_batch_numpy)):
         best = math.inf

@@ -133,21 +133,42 @@ def _as_scene(scene: Scene | str) -> Scene:
 
 def timed_run(scene: Scene, system: CompiledSystem, cycles: float, integrator: str, **kw) -> SimResult:
     """One run for its errors; short runs are repeated and the fastest wall time kept."""
-    res = simulate(scene, cycles, integrator, system=system, drift_threshold=math.inf,
-                   rotation_threshold=math.inf, samples_per_period=1, **kw)
+    res = simulate(
+        scene,
+        cycles,
+        integrator,
+        system=system,
+        drift_threshold=math.inf,
+        rotation_threshold=math.inf,
+        samples_per_period=1,
+        **kw,
+    )
     best = res.wall_s
     repeats = 0
     while best < REPEAT_BELOW_S and repeats < REPEATS:
-        again = simulate(scene, cycles, integrator, system=system, drift_threshold=math.inf,
-                         rotation_threshold=math.inf, samples_per_period=1, **kw)
+        again = simulate(
+            scene,
+            cycles,
+            integrator,
+            system=system,
+            drift_threshold=math.inf,
+            rotation_threshold=math.inf,
+            samples_per_period=1,
+            **kw,
+        )
         best = min(best, again.wall_s)
         repeats += 1
     res.wall_s = best
     return res
 
 
-def reference(scene: Scene | str, cycles: float, steps: int = REFERENCE_STEPS,
-              rtol: float = REFERENCE_RTOL, with_dop853: bool = True) -> Reference:
+def reference(
+    scene: Scene | str,
+    cycles: float,
+    steps: int = REFERENCE_STEPS,
+    rtol: float = REFERENCE_RTOL,
+    with_dop853: bool = True,
+) -> Reference:
     """The reference: splitting4 at ``steps`` per period, cross-checked against yoshida6 at
     ``steps // 2`` (another composition, another truncation error: must agree to 1e-10) and,
     with ``with_dop853``, against scipy DOP853 at ``rtol`` (another state representation and
@@ -156,8 +177,12 @@ def reference(scene: Scene | str, cycles: float, steps: int = REFERENCE_STEPS,
     system = compile_scene(scene)
     check_horizon(cycles, 1, len(scene.bodies))
     check_rtol(rtol)
-    kw = {"samples_per_period": 1, "system": system, "drift_threshold": math.inf,
-          "rotation_threshold": math.inf}
+    kw = {
+        "samples_per_period": 1,
+        "system": system,
+        "drift_threshold": math.inf,
+        "rotation_threshold": math.inf,
+    }
     split = simulate(scene, cycles, "splitting4", steps_per_period=steps, **kw)
     other = simulate(scene, cycles, "yoshida6", steps_per_period=steps // 2, **kw)
     agreement = metrics.state_errors(other, split, system.length_scale, system.omega).linf
@@ -166,15 +191,24 @@ def reference(scene: Scene | str, cycles: float, steps: int = REFERENCE_STEPS,
         dop = simulate(scene, cycles, "dop853", rtol=rtol, **kw)
         dop_agreement = metrics.state_errors(dop, split, system.length_scale, system.omega).linf
     ok = split.status == "ok" and other.status == "ok" and agreement <= REFERENCE_AGREEMENT
-    text = (f"splitting4 N={steps} vs yoshida6 N={steps // 2} over {cycles:g} cycles: agree to "
-            f"{agreement:.2g}" + ("" if ok else f" (> {REFERENCE_AGREEMENT:g}: NOT cross-checked)"))
+    text = (
+        f"splitting4 N={steps} vs yoshida6 N={steps // 2} over {cycles:g} cycles: agree to "
+        f"{agreement:.2g}" + ("" if ok else f" (> {REFERENCE_AGREEMENT:g}: NOT cross-checked)")
+    )
     if dop is not None:
         text += f"; vs DOP853 rtol={rtol:g}: {dop_agreement:.2g}"
     return Reference(split, other, agreement, dop, dop_agreement, ok, text)
 
 
-def run_point(scene: Scene, system: CompiledSystem, ref: SimResult, cycles: float, integrator: str,
-              steps: int | None = None, rtol: float | None = None) -> Point:
+def run_point(
+    scene: Scene,
+    system: CompiledSystem,
+    ref: SimResult,
+    cycles: float,
+    integrator: str,
+    steps: int | None = None,
+    rtol: float | None = None,
+) -> Point:
     """Run one setting; any failure becomes a point with NaN errors and its status."""
     setting = f"N={steps}" if steps is not None else f"rtol={rtol:g}"
     kw = {"steps_per_period": steps} if steps is not None else {"rtol": rtol}
@@ -183,19 +217,44 @@ def run_point(scene: Scene, system: CompiledSystem, ref: SimResult, cycles: floa
             check_steps(steps, system.omega, system.omega_max, COMPOSITIONS[SPLITTINGS[integrator]][1])
         res = timed_run(scene, system, cycles, integrator, **kw)
     except Exception as exc:  # noqa: BLE001 - a failing setting is a result to show
-        return Point(scene.name, integrator, setting, "failed", math.nan, {}, math.nan, math.nan, 0,
-                     steps, rtol, f"{type(exc).__name__}: {exc}")
+        return Point(
+            scene.name,
+            integrator,
+            setting,
+            "failed",
+            math.nan,
+            {},
+            math.nan,
+            math.nan,
+            0,
+            steps,
+            rtol,
+            f"{type(exc).__name__}: {exc}",
+        )
     err = metrics.state_errors(res, ref, system.length_scale, system.omega)
     failed = res.status in ("nan", "blowup", "solver_failed")
     errors = {"final": err.final, "linf": err.linf, "l2": err.l2, **metrics.qoi_errors(res, ref)}
     if failed:
         errors = {k: math.nan for k in errors}
-    return Point(scene.name, integrator, setting, res.status, errors["final"], errors,
-                 res.invariant_drift, res.wall_s, res.n_force_evals, steps, rtol, res.status_detail)
+    return Point(
+        scene.name,
+        integrator,
+        setting,
+        res.status,
+        errors["final"],
+        errors,
+        res.invariant_drift,
+        res.wall_s,
+        res.n_force_evals,
+        steps,
+        rtol,
+        res.status_detail,
+    )
 
 
-def work_precision(scene: Scene | str, cycles: float, ladder: Ladder,
-                   ref: Reference | None = None, progress=None) -> SceneReport:
+def work_precision(
+    scene: Scene | str, cycles: float, ladder: Ladder, ref: Reference | None = None, progress=None
+) -> SceneReport:
     """The whole sweep for one scene: reference, points, observed orders, cost-to-reach."""
     scene = _as_scene(scene)
     system = compile_scene(scene)
@@ -229,8 +288,9 @@ def work_precision(scene: Scene | str, cycles: float, ladder: Ladder,
     return report
 
 
-def speedup_at_equal_error(points: list[Point], fast: str = "splitting4", slow: str = "dop853",
-                           targets: tuple[float, ...] = TARGETS) -> dict:
+def speedup_at_equal_error(
+    points: list[Point], fast: str = "splitting4", slow: str = "dop853", targets: tuple[float, ...] = TARGETS
+) -> dict:
     """Wall-time ratio slow/fast at each target error both reach (Pareto interpolation).
 
     ``headline`` is the smallest ratio over the common targets (the conservative figure); if no
@@ -255,8 +315,11 @@ def speedup_at_equal_error(points: list[Point], fast: str = "splitting4", slow: 
 
 def fixed_steps_errors(points: list[Point], integrator: str) -> list[tuple[int, float]]:
     """(N, final error) of a fixed-step integrator's points, by N."""
-    return sorted((p.steps_per_period, p.error) for p in points
-                  if p.integrator == integrator and p.steps_per_period is not None)
+    return sorted(
+        (p.steps_per_period, p.error)
+        for p in points
+        if p.integrator == integrator and p.steps_per_period is not None
+    )
 
 
 def require_target(report: SceneReport, target: float) -> dict:
