@@ -293,8 +293,12 @@ def _cone_angle_closed_form(scene: Scene, body) -> float | None:
     if not (np.allclose(inertia, np.diag(np.diag(inertia))) and math.isclose(inertia[0, 0], inertia[1, 1])):
         return None
     spin = float(np.linalg.norm(body.angular_velocity_rad_s))
-    if scene.field is None and not scene.rotators and any(
-        o is not body and float(np.linalg.norm(o.angular_velocity_rad_s)) < spin for o in scene.bodies
+    if (
+        scene.field is None
+        and not scene.rotators
+        and any(
+            o is not body and float(np.linalg.norm(o.angular_velocity_rad_s)) < spin for o in scene.bodies
+        )
     ):
         return None  # the faster-spinning body is the rotator, not a floator on a cone
     try:

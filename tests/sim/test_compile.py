@@ -80,3 +80,13 @@ def test_gravity_dropped_without_translation():
     system = compile_scene(make(d))
     assert _actions(system)["gravity"] == "dropped"
     assert system.summary()["kind"] == "rigid"
+
+
+def test_shifted_rotator_keeps_jacobi_and_ramp_drops_it():
+    d = bundled_dict("fig5_13")
+    d["rotator"][0]["shift_mm"] = [1.0, 0.0, 0.0]  # dipole off the axis, turning with the rotator
+    system = compile_scene(make(d))
+    assert system.invariant == "jacobi"
+    d["rotator"][0]["ramp_rad_s2"] = 10.0
+    system = compile_scene(make(d))
+    assert system.invariant == "none" and "ramped" in system.invariant_reason

@@ -149,3 +149,13 @@ def test_reduced_eq_5_484_agrees_with_references():
 def test_radau_reference_runs(conical):
     result = simulate("planar_5_56", cycles=1, integrator="radau", rtol=1e-8)
     assert result.status == "ok" and result.integrator == "radau"
+
+
+def test_invariant_has_no_secular_growth():
+    """Bounded error (NUMERICS T1): the max drift over 1000 cycles stays within 3x that over 100."""
+    scene = load_scene("mbs_fig6_1")
+    short = simulate(scene, cycles=100, samples_per_period=1)
+    long = simulate(scene, cycles=1000, samples_per_period=1)
+    assert long.status == "ok"
+    assert long.invariant_drift <= 3 * short.invariant_drift
+    assert long.angular_momentum_drift < 1e-12

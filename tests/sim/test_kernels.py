@@ -47,3 +47,18 @@ def test_pair_forces_conserve_momentum_and_angular_momentum():
     np.testing.assert_allclose(F[0], -F[1], rtol=1e-13)
     total = T.sum(axis=0) + np.cross(x[0], F[0]) + np.cross(x[1], F[1])
     assert np.linalg.norm(total) < 1e-12 * np.abs(T).max()
+
+
+def test_rotator_moment_and_shift_follow_eq_5_25():
+    src = np.zeros((1, K.SRC_WIDTH))
+    src[0, :5] = [2.0, 0.3, 100.0, 0.2, 4.0]  # moment, tilt, omega, phase, ramp
+    src[0, 5:8] = [1e-3, 2e-3, 0.5e-3]  # shift in the rotator frame
+    src[0, 8:11] = [0.0, 0.0, -0.01]
+    t = 0.013
+    th = 0.2 + 100.0 * t + 0.5 * 4.0 * t * t
+    state = np.array(K.source_state(src, 0, t))
+    expected_m = 2.0 * np.array([np.cos(0.3) * np.sin(th), -np.cos(0.3) * np.cos(th), np.sin(0.3)])
+    c, s = np.cos(th), np.sin(th)
+    expected_p = np.array([c * 1e-3 - s * 2e-3, s * 1e-3 + c * 2e-3, 0.5e-3 - 0.01])
+    np.testing.assert_allclose(state[:3], expected_m, rtol=1e-14)
+    np.testing.assert_allclose(state[3:], expected_p, rtol=1e-14, atol=1e-18)

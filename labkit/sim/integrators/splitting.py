@@ -63,9 +63,9 @@ COMPOSITIONS: dict[str, tuple[np.ndarray, int]] = {
 }
 
 
-@njit(cache=True)
-def _rotate_axis_angle(M, ax, ay, az, angle):
-    """Left-multiply the 3x3 matrix M in place by the rotation about unit (ax, ay, az)."""
+@njit(cache=True, _nrt=False)
+def _rotate_axis_angle(R, bb, ax, ay, az, angle):
+    """Left-multiply the 3x3 matrix M = R[bb] in place by the rotation about unit (ax, ay, az)."""
     c = math.cos(angle)
     s = math.sin(angle)
     t = 1.0 - c
@@ -79,68 +79,67 @@ def _rotate_axis_angle(M, ax, ay, az, angle):
     r21 = az * ay * t + ax * s
     r22 = c + az * az * t
     for j in range(3):
-        a0, a1, a2 = M[0, j], M[1, j], M[2, j]
-        M[0, j] = r00 * a0 + r01 * a1 + r02 * a2
-        M[1, j] = r10 * a0 + r11 * a1 + r12 * a2
-        M[2, j] = r20 * a0 + r21 * a1 + r22 * a2
+        a0, a1, a2 = R[bb, 0, j], R[bb, 1, j], R[bb, 2, j]
+        R[bb, 0, j] = r00 * a0 + r01 * a1 + r02 * a2
+        R[bb, 1, j] = r10 * a0 + r11 * a1 + r12 * a2
+        R[bb, 2, j] = r20 * a0 + r21 * a1 + r22 * a2
 
 
-@njit(cache=True)
-def _rotate_body_axis(M, pi, axis, angle):
-    """Right-multiply M by the rotation about body axis ``axis`` (Q), and pi <- Q^T pi."""
+@njit(cache=True, _nrt=False)
+def _rotate_body_axis(R, bb, pi, axis, angle):
+    """Right-multiply M = R[bb] by the rotation about body axis ``axis`` (Q), and pi <- Q^T pi."""
     c = math.cos(angle)
     s = math.sin(angle)
     i = (axis + 1) % 3
     j = (axis + 2) % 3
     for r in range(3):
-        a, b = M[r, i], M[r, j]
-        M[r, i] = c * a + s * b
-        M[r, j] = -s * a + c * b
+        a, b = R[bb, r, i], R[bb, r, j]
+        R[bb, r, i] = c * a + s * b
+        R[bb, r, j] = -s * a + c * b
     a, b = pi[i], pi[j]
     pi[i] = c * a + s * b
     pi[j] = -s * a + c * b
 
 
-@njit(cache=True)
-def _rotate_body_columns(M, axis, angle):
-    """Right-multiply M by the rotation about body axis ``axis``."""
+@njit(cache=True, _nrt=False)
+def _rotate_body_columns(R, bb, axis, angle):
+    """Right-multiply M = R[bb] by the rotation about body axis ``axis``."""
     c = math.cos(angle)
     s = math.sin(angle)
     i = (axis + 1) % 3
     j = (axis + 2) % 3
     for r in range(3):
-        a, b = M[r, i], M[r, j]
-        M[r, i] = c * a + s * b
-        M[r, j] = -s * a + c * b
+        a, b = R[bb, r, i], R[bb, r, j]
+        R[bb, r, i] = c * a + s * b
+        R[bb, r, j] = -s * a + c * b
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def free_rotation(R, L, bf, bi, b, h, pi):
     """Exact (symmetric top) or DLM (three unequal moments) free rotation of body ``b``."""
-    M = R[b]
     if bi[b, I_FREE] == 0:
         i_r = bf[b, B_I]
         i_a = bf[b, B_I + 2]
         lx, ly, lz = L[b, 0], L[b, 1], L[b, 2]
         ln = math.sqrt(lx * lx + ly * ly + lz * lz)
-        l3 = M[0, 2] * lx + M[1, 2] * ly + M[2, 2] * lz
+        l3 = R[b, 0, 2] * lx + R[b, 1, 2] * ly + R[b, 2, 2] * lz
         c = l3 * (1.0 / i_a - 1.0 / i_r)
         if c != 0.0:
             # right-multiply by rotation about body z by angle h c
-            _rotate_body_columns(M, 2, h * c)
+            _rotate_body_columns(R, b, 2, h * c)
         if ln > 0.0:
-            _rotate_axis_angle(M, lx / ln, ly / ln, lz / ln, h * ln / i_r)
+            _rotate_axis_angle(R, b, lx / ln, ly / ln, lz / ln, h * ln / i_r)
     else:
         for k in range(3):
-            pi[k] = M[0, k] * L[b, 0] + M[1, k] * L[b, 1] + M[2, k] * L[b, 2]
-        _rotate_body_axis(M, pi, 0, 0.5 * h * pi[0] / bf[b, B_I])
-        _rotate_body_axis(M, pi, 1, 0.5 * h * pi[1] / bf[b, B_I + 1])
-        _rotate_body_axis(M, pi, 2, h * pi[2] / bf[b, B_I + 2])
-        _rotate_body_axis(M, pi, 1, 0.5 * h * pi[1] / bf[b, B_I + 1])
-        _rotate_body_axis(M, pi, 0, 0.5 * h * pi[0] / bf[b, B_I])
+            pi[k] = R[b, 0, k] * L[b, 0] + R[b, 1, k] * L[b, 1] + R[b, 2, k] * L[b, 2]
+        _rotate_body_axis(R, b, pi, 0, 0.5 * h * pi[0] / bf[b, B_I])
+        _rotate_body_axis(R, b, pi, 1, 0.5 * h * pi[1] / bf[b, B_I + 1])
+        _rotate_body_axis(R, b, pi, 2, h * pi[2] / bf[b, B_I + 2])
+        _rotate_body_axis(R, b, pi, 1, 0.5 * h * pi[1] / bf[b, B_I + 1])
+        _rotate_body_axis(R, b, pi, 0, 0.5 * h * pi[0] / bf[b, B_I])
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def damping_flow(v, R, L, bf, bi, h, pi):
     """Exact flow of linear translational and rotational damping over ``h``."""
     for b in range(v.shape[0]):
@@ -156,7 +155,7 @@ def damping_flow(v, R, L, bf, bi, h, pi):
                 L[b, k] = R[b, k, 0] * pi[0] + R[b, k, 1] * pi[1] + R[b, k, 2] * pi[2]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _kick(v, L, F, T, bf, bi, flags, g, h, impulse):
     for b in range(v.shape[0]):
         if bi[b, I_TRANS]:
@@ -170,7 +169,7 @@ def _kick(v, L, F, T, bf, bi, flags, g, h, impulse):
             impulse[b, k] += h * F[b, k]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _gap(x, v, bf, bi, src, a, kind, other):
     """Gap (distance - contact radii) and its rate between body ``a`` and body/rotator ``other``."""
     if kind == 0:
@@ -191,7 +190,7 @@ def _gap(x, v, bf, bi, src, a, kind, other):
     return d - rad, (rx * vx + ry * vy + rz * vz) / d, d
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _events(x, v, bf, bi, src, r_escape):
     """(contact gap min, its pair, nearest-neighbour distance max) over translating bodies."""
     nb = x.shape[0]
@@ -219,7 +218,7 @@ def _events(x, v, bf, bi, src, r_escape):
     return gmin, ga, gk, go, far
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _hermite_root(t0, h, g0, d0, g1, d1):
     """Root in [0, 1] of the cubic Hermite interpolant of a gap (values g, rates d)."""
     lo, hi = 0.0, 1.0
@@ -358,7 +357,7 @@ def run_rigid(
     return status, steps_done, n_s, event_time, n_force
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def reduced_acceleration(form, y, t, jc, js, omega, phase):
     """Eq. 5.484 (form 0): ``-J_S sin y - J_C cos(wt) cos y``; Eq. 5.56 (form 1): ``J_C sin(y - wt)``."""
     th = omega * t + phase
