@@ -17,7 +17,7 @@ from .conftest import bundled_dict, make
 
 def test_every_bundled_scene_loads():
     names = bundled_scenes()
-    assert {"conical_5_1", "fig5_13", "mbs_fig6_1", "pendulum_5_484", "planar_5_56"} <= set(names)
+    assert {"conical_5_1", "fig5_13", "fig5_7", "mbs_fig6_1", "pendulum_5_484", "planar_5_56"} <= set(names)
     for name in names:
         assert load_scene(name).bodies
 
