@@ -31,6 +31,7 @@ from labkit.fit.result import FitResult, ParamEstimate
 CONDITION_WARN = 1e6          # scaled Jacobian condition number above which we warn
 CORRELATION_WARN = 0.995      # |correlation| between fitted parameters above which we warn
 SINGULAR_RATIO = 1e-12        # singular-value ratio below which the problem is singular
+OUT_OF_DOMAIN = 1e100         # residual where the model cannot be evaluated
 MAX_NFEV_PER_PARAM = 150      # a well-posed problem converges in tens of evaluations
 
 
@@ -88,7 +89,14 @@ def solve(
     w = np.ones_like(y_rs) if weights is None else np.asarray(weights, dtype=float)
 
     def residuals(t: np.ndarray) -> np.ndarray:
-        return (y_rs - model_rs(t)) * w
+        # Outside the model's domain (overflow, log of a negative) the residual is huge but
+        # finite, which steers the solver back; the solution itself is checked below.
+        try:
+            with np.errstate(all="ignore"):
+                r = (y_rs - model_rs(t)) * w
+        except (OverflowError, ZeroDivisionError, ValueError):
+            return np.full(len(y_rs), OUT_OF_DOMAIN)
+        return np.where(np.isfinite(r), r, OUT_OF_DOMAIN)
 
     theta0 = np.asarray(theta0, dtype=float)
     n, p = len(y), len(theta0)
@@ -98,7 +106,7 @@ def solve(
             f"need at least {p + 1} to estimate uncertainties"
         )
     r0 = residuals(theta0)
-    if not np.all(np.isfinite(r0)):
+    if np.any(np.abs(r0) >= OUT_OF_DOMAIN):
         raise FitError(f"{model}: the model is not finite at the starting point; check the data")
     with np.errstate(all="ignore"):
         sol = optimize.least_squares(residuals, theta0, method="lm", jac="3-point",
@@ -112,7 +120,7 @@ def solve(
         raise FitError(f"{model}: the solver did not converge ({sol.message})")
     theta = sol.x
     r = residuals(theta)
-    if not np.all(np.isfinite(r)):
+    if np.any(np.abs(r) >= OUT_OF_DOMAIN):
         raise FitError(f"{model}: the model is not finite at the solution; check the data range")
     jac = _jacobian(residuals, theta)
     dof = n - p
@@ -124,7 +132,12 @@ def solve(
     warns = list(warnings)
     estimates: dict[str, ParamEstimate] = {}
     for par in params:
-        estimates[par.name] = _estimate(par, theta, cov_theta, tq, warns, model)
+        try:
+            with np.errstate(all="ignore"):
+                estimates[par.name] = _estimate(par, theta, cov_theta, tq, warns, model)
+        except (OverflowError, ZeroDivisionError) as exc:
+            raise FitError(f"{model}: {par.name} cannot be computed from the fit ({exc}); "
+                           "it is not identifiable from these data") from None
 
     if cond > CONDITION_WARN:
         warns.append(

@@ -67,7 +67,8 @@ def fit_pfr_force(omega, force, *, sigma=None, inertia: float | None = None,
     def ln_model(t):
         return t[0] - np.log(w2 - w0sq(t))
 
-    theta0 = [float(np.mean(lf + np.log(w2)))]
+    with np.errstate(divide="ignore"):
+        theta0 = [float(np.mean(lf + np.log(w2)))]
     names = ["ln(K/I)"]
     if fixed_w0sq is None:
         theta0.append(0.0)
