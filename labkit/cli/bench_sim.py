@@ -1,0 +1,224 @@
+"""``labkit bench sim``: simulator error against run time, stress cases S1-S11, kernel speeds.
+
+Prints, per scene, a work-precision table of every integrator over a steps-per-period /
+tolerance sweep against a cross-checked reference (failures shown), the observed orders, the
+cost to reach 1e-4 ... 1e-10, then the stress cases with their criteria met or not met, the
+batch-kernel timings (numba vs numpy, compile apart) and the headline numbers. ``--json``
+writes ``{"scenes": [...], "headline": {...}}`` (plus ``stress``, ``orders``, ``cost_to_reach``,
+``kernels``, ``compile``, ``machine``); ``--plot`` draws time against error.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+
+QUICK_SCENES = ["conical_5_1"]
+FULL_SCENES = ["conical_5_1", "fig5_13", "mbs_fig6_1", "planar_5_56"]
+
+
+def register(benches: argparse._SubParsersAction) -> None:
+    p = benches.add_parser("sim", help="simulator: error vs run time, stress cases S1-S11, kernels")
+    p.add_argument("--scene", action="append", help="scene (bundled name or TOML); repeatable")
+    p.add_argument("--quick", action="store_true", help="short horizons and ladders (under a minute)")
+    p.add_argument("--cycles", type=float, help="work-precision horizon in drive cycles")
+    p.add_argument("--stress", default="all", help="stress cases to run: all, none or e.g. S1,S7")
+    p.add_argument("--target-error", type=float, help="also name the cheapest setting reaching this error")
+    p.add_argument("--json", metavar="OUT", help="write the report as JSON")
+    p.add_argument("--plot", metavar="OUT.png", help="plot wall time against error")
+    p.set_defaults(func=run)
+
+
+def _compile_times() -> dict:
+    from labkit.numerics import kernels
+    from labkit.sim import simulate
+
+    start = time.perf_counter()
+    first = simulate("conical_5_1", 1)
+    first_s = time.perf_counter() - start
+    start = time.perf_counter()
+    simulate("conical_5_1", 1)
+    again_s = time.perf_counter() - start
+    return {
+        "sim_first_call_s": first_s,
+        "sim_kernel_load_or_compile_s": first.compile_s,
+        "sim_second_call_s": again_s,
+        "batch_kernel_load_or_compile_s": kernels.compile_numba_kernel(),
+    }
+
+
+def _kernel_section(quick: bool) -> dict:
+    from labkit.numerics import kernels, stability_map
+    from labkit.numerics.stress import I_S1, OMEGA_S1, s1_like
+
+    points = stability_map.table5_3_rows()
+    spec, _ = stability_map.batch_spec(points)
+    out = kernels.kernel_timings(spec, 5 if quick else 20, 64, repeats=1 if quick else 2)
+    one = kernels.spec_from_scenes([s1_like(I_S1, OMEGA_S1)])
+    start = time.perf_counter()
+    kernels.run_batch_numba(one, 10_000, 64, 1)
+    out["one_body_1e4_cycles_batch_kernel_s"] = time.perf_counter() - start
+    return out
+
+
+def _headline(reports, verdicts, quick: bool) -> tuple[dict, dict]:
+    """The issue's headline keys and the notes that say how each was measured."""
+    from labkit.numerics.stress import I_S1, OMEGA_S1, _run, s1_like
+    from labkit.numerics.workprecision import speedup_at_equal_error
+
+    notes: dict = {}
+    by_id = {v.id: v for v in verdicts}
+    s1 = by_id.get("S1")
+    if s1 is not None and "wall_s_1e4_cycles" in s1.measured:
+        one_s, one_drift = s1.measured["wall_s_1e4_cycles"], s1.measured["invariant_drift"]
+    else:
+        res = _run(s1_like(I_S1, OMEGA_S1), 10_000, samples_per_period=1)
+        one_s, one_drift = res.wall_s, res.invariant_drift
+    s7 = by_id.get("S7")
+    if s7 is not None and "auto_wall_s" in s7.measured:
+        cycles7 = s7.cycles
+        two_s = s7.measured["auto_wall_s"] * 1e4 / cycles7
+        two_drift = max(s7.measured[f"auto_{k}_drift"] or 0.0 for k in "EPJ")
+    else:
+        cycles7 = 1000 if quick else 10_000
+        res = _run("mbs_fig6_1", cycles7)
+        two_s = res.wall_s * 1e4 / cycles7
+        two_drift = max(res.invariant_drift, res.momentum_drift or 0.0, res.angular_momentum_drift or 0.0)
+    if cycles7 < 1e4:
+        notes["two_body_1e4_cycles_s"] = f"measured over {cycles7:g} cycles, scaled x{1e4 / cycles7:g}"
+        notes["max_invariant_drift_1e4_cycles"] = f"two-body drift measured over {cycles7:g} cycles"
+    speed = {"headline": math.nan, "by_target": {}}
+    first = next((r for r in reports if r.scene == "conical_5_1"), reports[0] if reports else None)
+    if first is not None:
+        speed = speedup_at_equal_error(first.points)
+        default = [p for p in first.points if p.integrator == "splitting4" and p.steps_per_period == 64]
+        if default and math.isfinite(default[0].error):
+            at_default = speedup_at_equal_error(first.points, targets=(default[0].error,))
+            speed["at_default_setting_error"] = at_default["by_target"]
+        by_target = json.dumps({k: round(v, 1) for k, v in speed["by_target"].items()})
+        notes["speedup_vs_dop853_at_equal_error"] = (
+            f"{first.scene} over {first.cycles:g} cycles: smallest DOP853/splitting4 wall-time ratio "
+            f"over the targets both reach; by target {by_target}"
+        )
+    headline = {
+        "speedup_vs_dop853_at_equal_error": speed["headline"],
+        "max_invariant_drift_1e4_cycles": max(one_drift, two_drift),
+        "one_body_1e4_cycles_s": one_s,
+        "two_body_1e4_cycles_s": two_s,
+    }
+    notes["speedup_detail"] = speed
+    return headline, notes
+
+
+def run(args: argparse.Namespace) -> int:
+    from labkit.numerics import Ladder, require_target, work_precision
+    from labkit.numerics.checks import NumericsError, check_rtol
+    from labkit.numerics.report import fmt, machine, plot, scene_lines, verdict_lines
+    from labkit.numerics.stress import CASES, run_stress_cases
+
+    if args.target_error is not None:
+        check_rtol(max(args.target_error, 1e-14))
+        if args.target_error < 1e-13:
+            raise NumericsError(
+                f"target error {args.target_error:g} is below what double precision can deliver over a "
+                "run (~1e-13): ask for 1e-13 or more"
+            )
+    stress = (
+        [] if args.stress == "none" else (list(CASES) if args.stress == "all" else args.stress.split(","))
+    )
+    unknown = [s for s in stress if s not in CASES]
+    if unknown:
+        raise NumericsError(f"unknown stress case(s) {', '.join(unknown)} (choose from {', '.join(CASES)})")
+    quick = args.quick
+    scenes = args.scene or (QUICK_SCENES if quick else FULL_SCENES)
+    cycles = args.cycles or (10 if quick else 50)
+    ladder = Ladder.quick() if quick else Ladder.full()
+    started = time.perf_counter()
+
+    print(f"labkit bench sim ({'quick' if quick else 'full'}): {json.dumps(machine())}")
+    compile_info = _compile_times()
+    print(
+        "compile / cache load (not in any wall time below): "
+        + ", ".join(f"{k}={v:.3g}" for k, v in compile_info.items())
+    )
+
+    reports = []
+    for name in scenes:
+        rep = work_precision(name, cycles, ladder)
+        reports.append(rep)
+        print("\n".join(scene_lines(rep)))
+        if args.target_error is not None:
+            best = require_target(rep, args.target_error)
+            print(
+                f"  cheapest settings reaching {args.target_error:g}: "
+                + "; ".join(
+                    f"{k} {v['setting']} ({fmt(v['wall_s'], '.2g')} s)" for k, v in sorted(best.items())
+                )
+            )
+
+    verdicts = run_stress_cases(quick=quick, only=stress) if stress else []
+    if verdicts:
+        print("\n".join(verdict_lines(verdicts)))
+
+    kernel_info = _kernel_section(quick)
+    k = kernel_info
+    print(
+        f"batch kernels on Table 5.3's {k['batch']} rows x {k['periods']} periods x 64 steps: "
+        f"numba {k['numba_ns_per_trajectory_step']:.0f} ns/trajectory-step, numpy "
+        f"{k['numpy_ns_per_trajectory_step']:.0f} ns (numpy/numba = {k['numpy_over_numba']:.1f}); "
+        f"faster: {k['faster']}; results differ by {k['max_zenith_difference_rad']:.1e} rad; "
+        f"one body 1e4 cycles in the batch kernel: {k['one_body_1e4_cycles_batch_kernel_s']:.2f} s"
+    )
+
+    headline, notes = _headline(reports, verdicts, quick)
+    print("headline:")
+    for k, v in headline.items():
+        note = notes.get(k)
+        print(f"  {k} = {fmt(v, '.3g')}" + (f"  ({note})" if note else ""))
+    print(f"bench sim finished in {time.perf_counter() - started:.1f} s")
+
+    if args.json:
+        doc = {
+            "scenes": [p.row() for rep in reports for p in rep.points],
+            "headline": {
+                k: (v if isinstance(v, float) and math.isfinite(v) else None) for k, v in headline.items()
+            },
+            "headline_notes": {k: v for k, v in notes.items() if k != "speedup_detail"},
+            "speedup": notes["speedup_detail"],
+            "references": {
+                rep.scene: {
+                    "description": rep.reference.description,
+                    "agreement": rep.reference.agreement,
+                    "dop853_agreement": rep.reference.dop853_agreement,
+                    "cross_checked": rep.reference.cross_checked,
+                }
+                for rep in reports
+            },
+            "orders": {rep.scene: rep.orders for rep in reports},
+            "cost_to_reach": {rep.scene: rep.cost for rep in reports},
+            "stress": [v.to_json() for v in verdicts],
+            "kernels": kernel_info,
+            "compile": compile_info,
+            "machine": machine(),
+            "quick": quick,
+        }
+        with open(args.json, "w") as fh:
+            json.dump(_finite(doc), fh, indent=2)
+            fh.write("\n")
+    if args.plot and reports:
+        plot(reports, args.plot)
+    return 0
+
+
+def _finite(obj):
+    if isinstance(obj, dict):
+        return {str(k): _finite(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_finite(v) for v in obj]
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if hasattr(obj, "item"):
+        return _finite(obj.item())
+    return obj
