@@ -109,6 +109,8 @@ MISPRINTS = [
     "Fig. 5.6 row 13: R_X = 0.00645 breaks the table's own trend (R_X ~ 2 tau_S/tau_C); 0.0020 expected",
     "Fig. 5.4 caption vs Fig. 5.5: minimum B_S/B_C quoted as 0.158 and 0.144; Eq. 5.46 with "
     "I = 0.998e-7, tau_C = 1e-3, w = 60 pi gives 0.1439",
+    "Eq. 5.491: the particular solution of the linearised Eq. 5.484 is +J_C/(w^2 - J_S) cos wt "
+    "(the printed minus sign contradicts Eq. 5.485's positive a)",
     "Table 5.7: F_av/A at omega >= 105 pi is 1-2 % high against a converged integration and "
     "Eq. 5.92 (quadrature error in the paper)",
 ]
