@@ -94,3 +94,9 @@ def test_cli_unknown_prefix_is_one_line_exit_2(capsys):
     assert main(["reproduce", "--only", "table9.9"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "table9.9" in err[0]
+
+
+def test_json_rows_have_no_nan():
+    from labkit.reproduce import Row
+    row = Row("x/1", "q", 1.0, float("nan"), float("nan"), False, "")
+    assert json.loads(json.dumps(row.as_dict()))["labkit"] is None

@@ -39,7 +39,12 @@ class Row:
     note: str = ""
 
     def as_dict(self) -> dict:
-        return asdict(self)
+        """JSON-ready: non-finite numbers become None (JSON has no NaN)."""
+        out = asdict(self)
+        for key in ("paper", "labkit", "rel_diff"):
+            if isinstance(out[key], float) and not math.isfinite(out[key]):
+                out[key] = None
+        return out
 
 
 def compare(row_id: str, quantity: str, paper: float | None, labkit: float, rel_tol: float,
