@@ -176,6 +176,8 @@ class _Table:
         return default
 
     def number(self, k: str, default: float | None = None) -> float | None:
+        if k in self.data and self.data[k] is None:
+            raise self.error(k, "expected a number, got None")
         v = self.get(k, default)
         if v is None:
             return None
@@ -191,9 +193,12 @@ class _Table:
         units: dict[str, float],
         default: Any = None,
         required: bool = False,
-        shape: tuple[int, ...] | None = None,
+        shape: tuple[int, ...] | None = (),
     ) -> Any:
-        """Read ``base_<unit>`` for exactly one of ``units``; converted to SI."""
+        """Read ``base_<unit>`` for exactly one of ``units``; converted to SI.
+
+        ``shape`` is the required shape (``()`` a number, ``(3,)`` a vector); None accepts any.
+        """
         present = [u for u in units if f"{base}_{u}" in self.data]
         if len(present) > 1:
             names = " and ".join(f"{base}_{u}" for u in present)
@@ -209,11 +214,32 @@ class _Table:
             arr = np.asarray(raw, dtype=float) * units[present[0]]
         except (TypeError, ValueError):
             raise self.error(k, f"expected numbers, got {raw!r}") from None
-        if not np.all(np.isfinite(arr)):
-            raise self.error(k, "must be finite")
-        if shape is not None and arr.shape not in [shape, ()]:
-            raise self.error(k, f"expected shape {shape}, got {list(arr.shape)}")
+        if arr.dtype == object or not np.all(np.isfinite(arr)):
+            raise self.error(k, f"expected finite numbers, got {raw!r}")
+        if shape is not None and arr.shape != shape:
+            want = (
+                "a number" if shape == () else f"{shape[0]} numbers" if len(shape) == 1 else f"shape {shape}"
+            )
+            raise self.error(k, f"expected {want}, got {raw!r}")
         return float(arr) if arr.shape == () else arr
+
+    def string(self, k: str, default: str | None) -> str | None:
+        v = self.get(k, default)
+        if v is not None and not isinstance(v, str):
+            raise self.error(k, f"expected a string, got {v!r}")
+        return v
+
+    def boolean(self, k: str, default: bool) -> bool:
+        v = self.get(k, default)
+        if not isinstance(v, bool):
+            raise self.error(k, f"expected true or false, got {v!r}")
+        return v
+
+    def tables(self, k: str) -> list:
+        v = self.get(k, [])
+        if not isinstance(v, list) or not all(isinstance(x, dict) for x in v):
+            raise self.error(k, f"expected an array of tables ([[{k}]]), got {v!r}")
+        return v
 
     def sub(self, k: str) -> _Table | None:
         v = self.get(k)
@@ -230,13 +256,11 @@ def _vec3(t: _Table, base: str, units: dict[str, float], default: Any) -> np.nda
     v = t.quantity(base, units, default=None, shape=(3,))
     if v is None:
         return np.array(default, dtype=float)
-    if np.ndim(v) == 0:
-        raise t.error(f"{base}_{next(u for u in units if f'{base}_{u}' in t.data)}", "expected 3 numbers")
     return np.asarray(v, dtype=float)
 
 
 def _inertia(t: _Table) -> np.ndarray:
-    v = t.quantity("inertia", INERTIA_UNITS, required=True)
+    v = t.quantity("inertia", INERTIA_UNITS, required=True, shape=None)
     k = next(f"inertia_{u}" for u in INERTIA_UNITS if f"inertia_{u}" in t.data)
     arr = np.asarray(v, dtype=float)
     if arr.shape == ():
@@ -251,7 +275,7 @@ def _inertia(t: _Table) -> np.ndarray:
 def _shape(t: _Table | None) -> Shape:
     if t is None:
         return Shape()
-    kind = t.get("kind", "sphere")
+    kind = t.string("kind", "sphere")
     if kind not in ("sphere", "cylinder", "point"):
         raise t.error("kind", f"unknown shape {kind!r} (sphere, cylinder, point)")
     radius = t.quantity("radius", LENGTH_UNITS, default=0.0)
@@ -276,7 +300,7 @@ def _omega(t: _Table, required: bool) -> float | None:
 
 
 def _field(t: _Table, bodies_moment: float) -> UniformField:
-    kind = t.get("kind", "rotating")
+    kind = t.string("kind", "rotating")
     if kind not in ("rotating", "oscillating", "static"):
         raise t.error("kind", f"unknown field kind {kind!r} (rotating, oscillating, static)")
     omega = _omega(t, required=kind != "static") or 0.0
@@ -299,7 +323,7 @@ def _field(t: _Table, bodies_moment: float) -> UniformField:
 
 
 def _rotator(t: _Table, i: int) -> Rotator:
-    name = str(t.get("name", f"rotator{i}"))
+    name = t.string("name", f"rotator{i}")
     moment = t.number("moment_Am2")
     if moment is None:
         raise t.error("moment_Am2", "missing")
@@ -324,13 +348,13 @@ def _moment(t: _Table) -> np.ndarray:
 
 
 def _body(t: _Table, i: int) -> tuple[Body, _Table | None]:
-    name = str(t.get("name", f"body{i}"))
+    name = t.string("name", f"body{i}")
     mass = t.quantity("mass", MASS_UNITS, required=True)
     inertia = _inertia(t)
     moment = _moment(t)
     offset = _vec3(t, "dipole_offset", LENGTH_UNITS, [0, 0, 0])
     shape = _shape(t.sub("shape"))
-    pinned = bool(t.get("pinned", False))
+    pinned = t.boolean("pinned", False)
     damp = t.number("damping_N_s_m", 0.0)
     damp_rot = t.number("damping_rot_N_m_s", 0.0)
     init = t.sub("initial")
@@ -349,12 +373,20 @@ def _initial(body: Body, t: _Table, scene: Scene) -> None:
     if euler is not None:
         body.rotation = euler_zxz(*np.asarray(euler, dtype=float))
     elif matrix is not None:
-        r = np.asarray(matrix, dtype=float)
-        if r.shape != (3, 3) or not np.allclose(r.T @ r, np.eye(3), atol=1e-9) or np.linalg.det(r) < 0:
+        try:
+            r = np.asarray(matrix, dtype=float)
+        except (TypeError, ValueError):
+            raise t.error("rotation_matrix", f"expected a 3x3 matrix, got {matrix!r}") from None
+        if (
+            r.shape != (3, 3)
+            or not np.all(np.isfinite(r))
+            or not np.allclose(r.T @ r, np.eye(3), atol=1e-9)
+            or np.linalg.det(r) < 0
+        ):
             raise t.error("rotation_matrix", "not a proper rotation (R^T R = I, det R = +1)")
         body.rotation = r
     body.angular_velocity_rad_s = _vec3(t, "angular_velocity", {"rad_s": 1.0}, [0, 0, 0])
-    eq = t.get("equilibrium")
+    eq = t.string("equilibrium", None)
     spin_k = t.number("spin_k", -1.0)
     t.finish()
     if eq is None:
@@ -371,17 +403,17 @@ def scene_from_dict(data: dict, source: str = "<dict>") -> Scene:
     """Build and validate a scene from a parsed TOML document (see docs/simulator.md)."""
     top = _Table(data, "", source)
     meta = top.sub("scene") or _Table({}, "scene", source)
-    name = str(meta.get("name", Path(source).stem))
-    description = str(meta.get("description", ""))
+    name = meta.string("name", Path(source).stem)
+    description = meta.string("description", "")
     cycles = meta.get("cycles", 100)
-    if not isinstance(cycles, int) or cycles <= 0:
+    if isinstance(cycles, bool) or not isinstance(cycles, int) or cycles <= 0:
         raise meta.error("cycles", "must be a positive whole number")
     period = meta.number("period_s")
     escape = meta.quantity("escape_radius", LENGTH_UNITS)
     meta.finish()
 
-    raw_bodies = top.get("body", [])
-    if not isinstance(raw_bodies, list) or not raw_bodies:
+    raw_bodies = top.tables("body")
+    if not raw_bodies:
         raise SceneError(source, "body", "a scene needs at least one [[body]]")
     bodies, inits = [], []
     for i, raw in enumerate(raw_bodies):
@@ -389,8 +421,7 @@ def scene_from_dict(data: dict, source: str = "<dict>") -> Scene:
         bodies.append(b)
         inits.append(init)
     rotators = [
-        _rotator(_Table(raw, f"rotator[{i}]", source), i)
-        for i, raw in enumerate(top.get("rotator", []) or [])
+        _rotator(_Table(raw, f"rotator[{i}]", source), i) for i, raw in enumerate(top.tables("rotator"))
     ]
     moment = max((float(np.linalg.norm(b.moment_Am2)) for b in bodies), default=0.0)
     ftab = top.sub("field")
