@@ -34,3 +34,14 @@ def test_simulate_list_and_compile_only(capsys):
     assert main(["simulate", "pendulum_5_484", "--compile-only"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["kind"] == "reduced_1dof" and summary["equation"] == "Eq. 5.484"
+
+
+def test_horizon_too_long_for_memory_is_a_clear_error(capsys):
+    assert main(["simulate", "mbs_fig6_1", "--cycles", "1e9"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("labkit simulate: ") and "GiB" in err and "--cycles" in err
+
+
+def test_steps_must_be_a_multiple_of_samples(capsys):
+    assert main(["simulate", "conical_5_1", "--steps-per-period", "83"]) == 2
+    assert "multiple of the samples per period" in capsys.readouterr().err
