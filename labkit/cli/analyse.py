@@ -17,13 +17,11 @@ from pathlib import Path
 from labkit.errors import LabkitError, VideoError
 
 
-def _roi(text: str) -> tuple[int, int, int, int] | str:
-    if text == "auto":
-        return "auto"
+def _roi(text: str) -> tuple[int, int, int, int]:
     try:
         x, y, w, h = (int(v) for v in text.split(","))
     except ValueError:
-        raise argparse.ArgumentTypeError("expected x,y,w,h in pixels or 'auto'") from None
+        raise argparse.ArgumentTypeError("expected x,y,w,h in pixels") from None
     return x, y, w, h
 
 
@@ -44,7 +42,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     laser.add_argument("--screen-distance-mm", type=_positive, help="magnet-to-screen distance L")
     laser.add_argument("--mm-per-px", type=_positive, help="screen scale S")
     laser.add_argument("--stride", type=int, default=1, help="analyse every N-th frame (default 1)")
-    laser.add_argument("--roi", type=_roi, help="x,y,w,h region of interest in px, or 'auto'")
+    laser.add_argument("--roi", type=_roi, help="x,y,w,h region of interest in px (default: whole frame)")
     laser.add_argument("--no-subpixel", action="store_true", help="skip sub-pixel refinement")
     laser.add_argument("--chunks", type=int, default=8, help="time chunks for drift tracking (default 8)")
     laser.add_argument("--json", metavar="OUT", help="write the result as JSON ('-' for stdout)")

@@ -86,6 +86,37 @@ def _newton_parameters(z: np.ndarray, a: complex, b: complex, k: int, t: np.ndar
     return t
 
 
+TANGENTIAL_WEIGHT = 0.2  # share of the along-curve residual kept in the solve (stabilises it)
+
+
+def _solve_point_to_line(z: np.ndarray, sw: np.ndarray, tau: np.ndarray, k: int, a: complex, b: complex,
+                         t: np.ndarray, fit_drift: bool) -> np.ndarray:
+    """One linear solve for complex ``c, A, B (, v)`` with the curve parameters t fixed, minimising
+    the residual along each point's curve normal plus ``TANGENTIAL_WEIGHT`` times the residual
+    along the tangent (point-to-line ICP: it converges in a few steps where plain
+    point-to-point ICP slides slowly along the curve)."""
+    e1, ek = np.exp(1j * t), np.exp(1j * k * t)
+    tangent = 1j * (a * e1 + k * b * ek)
+    tangent = tangent / np.maximum(np.abs(tangent), 1e-12)
+    basis = [np.ones_like(z), e1, ek] + ([tau.astype(complex)] if fit_drift else [])
+    rows, rhs = [], []
+    for direction, weight in ((1j * tangent, 1.0), (tangent, TANGENTIAL_WEIGHT)):
+        # projection of (complex) x onto a unit direction d: Re(conj(d) x)
+        proj = np.conj(direction)
+        cols = []
+        for g in basis:  # unknown u = ur + i ui contributes Re(proj g) ur - Im(proj g) ui
+            pg = proj * g
+            cols += [pg.real, -pg.imag]
+        rows.append(np.column_stack(cols) * (sw * weight)[:, None])
+        rhs.append((proj * z).real * sw * weight)
+    m, y = np.vstack(rows), np.concatenate(rhs)
+    try:
+        x = np.linalg.solve(m.T @ m, m.T @ y)
+    except np.linalg.LinAlgError:
+        x, *_ = np.linalg.lstsq(m, y, rcond=None)
+    return x[0::2] + 1j * x[1::2]
+
+
 def _icp(z: np.ndarray, w: np.ndarray, tau: np.ndarray, k: int, c: complex, a: complex, b: complex,
          iterations: int, fit_drift: bool, samples: int, v: complex = 0j) -> CurveFit:
     sw = np.sqrt(w)
@@ -95,15 +126,7 @@ def _icp(z: np.ndarray, w: np.ndarray, tau: np.ndarray, k: int, c: complex, a: c
             t = _closest_parameters(z - c - v * tau, a, b, k, samples)
         else:
             t = _newton_parameters(z - c - v * tau, a, b, k, t, 2)
-        cols = [np.ones_like(z), np.exp(1j * t), np.exp(1j * k * t)]
-        if fit_drift:
-            cols.append(tau.astype(complex))
-        m = np.column_stack(cols) * sw[:, None]
-        mh = m.conj().T
-        try:  # normal equations: a 3x3 or 4x4 complex system
-            sol = np.linalg.solve(mh @ m, mh @ (z * sw))
-        except np.linalg.LinAlgError:
-            sol, *_ = np.linalg.lstsq(m, z * sw, rcond=None)
+        sol = _solve_point_to_line(z, sw, tau, k, a, b, t, fit_drift)
         new = (sol[0], sol[1], sol[2], sol[3] if fit_drift else 0j)
         if k != -1 and abs(new[2]) > MAX_TROCHOID_B * abs(new[1]):  # stay in the trochoid family
             new = (new[0], new[1], new[2] * MAX_TROCHOID_B * abs(new[1]) / abs(new[2]), new[3])
@@ -161,14 +184,15 @@ def _trochoid_starts(z: np.ndarray, w: np.ndarray, k: int, bs: tuple[float, ...]
         mom_c = np.sum(speed * np.abs(dc) ** power * np.exp(-1j * m * np.angle(dc)))
         s = rms / rms_c
         rho = (np.angle(mom_c) - np.angle(mom)) / m if abs(mom) > 0 else 0.0
-        # a limacon (m = 1) has no symmetry to lock on to: also try the other quadrants
-        for extra in ((0.0, 0.5 * math.pi, math.pi, 1.5 * math.pi) if m == 1 else (0.0,)):
+        # a limacon (m = 1) has no symmetry to lock on to: try four quadrants; otherwise the
+        # moment's phase and half a symmetry step from it (noise can flip the moment's sign)
+        for extra in ((0.0, 0.5 * math.pi, math.pi, 1.5 * math.pi) if m == 1 else (0.0, math.pi / m)):
             e = complex(math.cos(rho + extra), math.sin(rho + extra))
             yield cen - s * e * cen_c, s * e, s * b * e
 
 
 def fit_ellipse(points: np.ndarray, weights: np.ndarray | None = None, times: np.ndarray | None = None,
-                iterations: int = 30) -> CurveFit:
+                iterations: int = 18) -> CurveFit:
     """Geometric ellipse fit (major first; rotation of the major axis) with optional linear drift."""
     z, w, tau = _prepare(points, weights, times)
     c, a, b = _ellipse_start(z)
@@ -176,7 +200,7 @@ def fit_ellipse(points: np.ndarray, weights: np.ndarray | None = None, times: np
 
 
 def fit_trochoid(points: np.ndarray, kind: str, loops: int, weights: np.ndarray | None = None,
-                 times: np.ndarray | None = None, iterations: int = 90,
+                 times: np.ndarray | None = None, iterations: int = 30,
                  b_starts: tuple[float, ...] = (0.15, 0.45, 0.9)) -> CurveFit:
     """Fit an epitrochoid or hypotrochoid (Eq. 6.38) with ``loops`` loops; best of a few starts."""
     z, w, tau = _prepare(points, weights, times)
@@ -207,7 +231,7 @@ def _subsample(n: int, keep: int, seed: int = 0) -> np.ndarray:
 
 
 def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.ndarray | None = None,
-             max_points: int = 1500, screen_points: int = 350,
+             max_points: int = 1200, screen_points: int = 250,
              trochoid_loops: range = range(2, 8),
              band: tuple[np.ndarray, np.ndarray | None, np.ndarray | None] | None = None) -> Classification:
     """Fit every candidate (ellipse, epitrochoids with 2-7 loops, hypotrochoids with 3-7 loops) on a
@@ -226,7 +250,7 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
     screen = take(_subsample(len(pts), screen_points, seed=1))
     ellipse = fit_ellipse(*full)
     if band is not None and len(band[0]) >= MIN_POINTS:
-        idx = _subsample(len(band[0]), 3 * max_points, seed=2)
+        idx = _subsample(len(band[0]), 2 * max_points, seed=2)
         polished = polish(ellipse, *(None if a is None else np.asarray(a)[idx] for a in band))
         # its residual on the centre line, comparable with the trochoids'
         z, w_, tau = _prepare(*full)
@@ -237,7 +261,7 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
         for loops in trochoid_loops:
             if loops < first:
                 continue
-            screened.append(fit_trochoid(screen[0], kind, loops, screen[1], screen[2], iterations=18))
+            screened.append(fit_trochoid(screen[0], kind, loops, screen[1], screen[2], iterations=10))
     screened.sort(key=lambda f: f.rms_residual)
     for f in screened:
         residuals[_name(f)] = f.rms_residual
@@ -246,7 +270,7 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
     for f in screened[:2]:
         if not math.isfinite(f.rms_residual):
             continue
-        fit = _icp(z, w_, tau, f.k, f.c, f.a, f.b, 45, full[2] is not None, 200 * abs(f.k))
+        fit = _icp(z, w_, tau, f.k, f.c, f.a, f.b, 20, full[2] is not None, 200 * abs(f.k))
         residuals[_name(fit)] = fit.rms_residual
         if trochoid_beats(fit.rms_residual, abs(fit.b), best.rms_residual):
             best = fit
@@ -254,7 +278,7 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
 
 
 def polish(fit: CurveFit, points: np.ndarray, weights: np.ndarray | None = None,
-           times: np.ndarray | None = None, iterations: int = 20) -> CurveFit:
+           times: np.ndarray | None = None, iterations: int = 12) -> CurveFit:
     """Refit from ``fit`` on a different point set (e.g. every trace pixel instead of the thinned
     centre line, which ends half a line width short of sharp tips)."""
     z, w, tau = _prepare(points, weights, times)

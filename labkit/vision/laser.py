@@ -30,12 +30,12 @@ MAX_POINTS_PER_CHUNK = 4000
 
 @dataclass
 class LaserQuality:
-    """Speed/accuracy settings: analyse every ``stride``-th frame, inside ``roi`` (x, y, w, h),
-    ``"auto"`` (found from the first chunk) or None (whole frame), with or without sub-pixel
-    intensity weights, in ``chunks`` time chunks (drift resolution)."""
+    """Speed/accuracy settings: analyse every ``stride``-th frame, inside ``roi`` (x, y, w, h) or
+    the whole frame (None), with or without sub-pixel refinement, in ``chunks`` time chunks (the
+    resolution of the centre's drift)."""
 
     stride: int = 1
-    roi: tuple[int, int, int, int] | str | None = None
+    roi: tuple[int, int, int, int] | None = None
     subpixel: bool = True
     chunks: int = 8
 
@@ -62,21 +62,10 @@ def _clip_roi(roi: tuple[int, int, int, int], size: tuple[int, int]) -> tuple[in
     return x0, y0, x1 - x0, y1 - y0
 
 
-def _auto_roi(chunk: Chunk, size: tuple[int, int]) -> tuple[int, int, int, int] | None:
-    tp = trace_points(chunk.image, chunk.offset, subpixel=False)
-    if len(tp.points) < MIN_POINTS:
-        return None
-    (x0, y0), (x1, y1) = tp.points.min(axis=0), tp.points.max(axis=0)
-    margin = 0.3 * max(x1 - x0, y1 - y0) + 0.04 * max(size)
-    return _clip_roi((x0 - margin, y0 - margin, x1 - x0 + 2 * margin, y1 - y0 + 2 * margin), size)
-
-
 def accumulate(source: FrameSource, quality: LaserQuality, on_frame: FrameHook | None = None) -> list[Chunk]:
     """Running per-pixel maximum of the frames, one accumulator per time chunk."""
     per_chunk = (max(1, math.ceil(source.frame_count / quality.chunks)) if source.frame_count > 0 else 30)
-    roi = quality.roi if isinstance(quality.roi, tuple) else None
-    if roi is not None:
-        roi = _clip_roi(roi, source.size)
+    roi = _clip_roi(quality.roi, source.size) if quality.roi is not None else None
     chunks: list[Chunk] = []
     fps = source.fps or 1.0
     for index, frame in source.frames(quality.stride):
@@ -84,8 +73,6 @@ def accumulate(source: FrameSource, quality: LaserQuality, on_frame: FrameHook |
             on_frame(index, index / fps, frame)
         ci = index // per_chunk
         if not chunks or ci != chunks[-1].first // per_chunk:
-            if quality.roi == "auto" and roi is None and chunks:
-                roi = _auto_roi(chunks[0], source.size)
             x, y, w, h = roi if roi is not None else (0, 0, *source.size)
             chunks.append(Chunk(frame[y:y + h, x:x + w].copy(), (x, y), index, index))
             continue
@@ -150,6 +137,7 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
     t_start = time.perf_counter()
     source = open_frames(path)
     chunks = accumulate(source, quality, on_frame)
+    t_frames = time.perf_counter()
     _check_exposure(chunks, source.path)
     fps = source.fps or 0.0
     pts, wts, tms, bands = [], [], [], []
@@ -192,5 +180,6 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
                     "minor": tilt_from_semi_axis(minor, mm_per_px, screen_distance_mm)}
     qual["settings"] = asdict(quality)
     qual["elapsed_s"] = time.perf_counter() - t_start
+    qual["fit_s"] = time.perf_counter() - t_frames  # trace extraction + fit, after the frames
     return {"source": source.path, "frames": source.frames_read, "fps": fps, "size": list(source.size),
             "pattern": pattern, "tilt_rad": tilt, "quality": qual}

@@ -76,9 +76,16 @@ def trace_points(image: np.ndarray, offset: tuple[int, int] = (0, 0), subpixel: 
         return empty
     h, w = gray.shape
     r = max(5, int(round(0.01 * max(h, w))))
-    local = cv2.dilate(smooth, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1)))
+    ys, xs = np.nonzero(smooth >= floor)
+    if len(xs) == 0:
+        return empty
+    # only the bright region's bounding box matters (plus the window)
+    x0, y0 = max(0, int(xs.min()) - r - 2), max(0, int(ys.min()) - r - 2)
+    x1, y1 = min(w, int(xs.max()) + r + 3), min(h, int(ys.max()) + r + 3)
+    smooth, res = smooth[y0:y1, x0:x1], res[y0:y1, x0:x1]
+    local = cv2.dilate(smooth, np.ones((2 * r + 1, 2 * r + 1), np.uint8))  # square: separable, fast
     mask = (smooth >= 0.5 * local) & (local >= floor) & (smooth > 0)
-    return _centreline(mask, res, offset, subpixel, peak, noise)
+    return _centreline(mask, res, (offset[0] + x0, offset[1] + y0), subpixel, peak, noise)
 
 
 def _centreline(mask: np.ndarray, res: np.ndarray, offset: tuple[int, int], subpixel: bool,
