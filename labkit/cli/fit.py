@@ -18,6 +18,7 @@ from labkit.fit.data import load_table
 from labkit.fit.models import MODELS, PAPER_OMEGA_C
 from labkit.fit.table_fit import FitOptions, fit_table
 from labkit.fit.text import format_report
+from labkit.stream.core import add_rerun_argument
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -43,6 +44,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="exit with status 3 when any fit has a warning (for scripts and CI)")
     p.add_argument("--json", metavar="OUT", help="write the fit as JSON ('-' for stdout)")
     p.add_argument("--plot", metavar="OUT.png", help="write data, fit and residuals as a PNG")
+    add_rerun_argument(p)
     p.add_argument("--overlay", action="append", default=[], metavar="CSV",
                    help="draw curves from a CSV on the plot (first column x, others y, matched by "
                    "column name; e.g. a simulation at the measured speeds); repeatable")
@@ -98,6 +100,10 @@ def run(args: argparse.Namespace) -> int:
         from labkit.report.figures import fit_figure
         overlays = [ov for path in args.overlay for ov in overlays_from_csv(path)]
         fit_figure(report, args.plot, overlays=overlays)
+    if args.rerun is not None:
+        from labkit.stream.fit import stream_fit_report
+
+        stream_fit_report(args.rerun, report)
     if args.strict and any(r.warnings for r in report.series.values()):
         print("labkit fit: warnings present (--strict)", file=sys.stderr)
         return 3

@@ -27,3 +27,18 @@ def test_laser_analysis_streams_frames_and_fitted_ellipse(tmp_path, capsys):
     radii = np.linalg.norm(centred, axis=1)
     major, minor = result["pattern"]["semi_axes_px"]
     assert abs(radii.max() - major) < 0.01 * major and abs(radii.min() - minor) < 0.01 * major
+
+
+def test_strobe_analysis_streams_frames_and_the_point_pattern(tmp_path, capsys):
+    clip = tmp_path / "strobe.avi"
+    assert main(["synth", "strobe", str(clip), "--level", "easy", "--frames", "40", "--codec", "MJPG",
+                 "--rotor-hz", "240", "--strobe-hz", "239.5", "--seed", "2"]) == 0
+    rrd, out = tmp_path / "strobe.rrd", tmp_path / "strobe.json"
+    main(["analyse", "strobe", str(clip), "--rotor-hz", "240", "--strobe-hz", "239.5",
+          "--json", str(out), "--rerun", f"save:{rrd}"])
+    result = json.loads(out.read_text())
+    entities = entity_paths(rrd)
+    assert {"/video/frame", "/video/pattern"} <= entities
+    frames, _ = column(rrd, "/video/frame", "EncodedImage:blob", "frame")
+    assert len(frames) == result["frames"]
+    assert ("/video/frame/fit" in entities) == (result["point_pattern"]["type"] != "none")
