@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -56,16 +57,20 @@ def main(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     rows = run(only, quick=args.quick)
     elapsed = time.perf_counter() - start
-    print(format_rows(rows))
-    agree = sum(r.ok for r in rows)
-    print(f"\n{len(rows)} rows, {agree} agree, {len(rows) - agree} differ (see notes); {elapsed:.1f} s")
-    print("Known misprints in the paper (labkit uses the consistent value):")
-    for m in MISPRINTS:
-        print(f"  - {m}")
     if args.json:
         try:
             args.json.write_text(json.dumps([r.as_dict() for r in rows], indent=1) + "\n")
         except OSError as exc:
             raise LabkitError(f"{args.json}: cannot write ({exc.strerror})") from exc
         print(f"wrote {args.json}", file=sys.stderr)
+    agree = sum(r.ok for r in rows)
+    summary = f"{len(rows)} rows, {agree} agree, {len(rows) - agree} differ (see notes); {elapsed:.1f} s"
+    text = "\n".join([format_rows(rows), "", summary,
+                      "Known misprints in the paper (labkit uses the consistent value):"]
+                     + [f"  - {m}" for m in MISPRINTS])
+    try:
+        print(text)
+        sys.stdout.flush()
+    except BrokenPipeError:  # e.g. piped into head: not an error
+        sys.stdout = open(os.devnull, "w")  # noqa: SIM115
     return 0

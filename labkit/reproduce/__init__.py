@@ -21,6 +21,8 @@ SUITES = [
     ("table5.3", "labkit.reproduce.cone_rows"),
     ("fig5.6", "labkit.reproduce.tilted_rows"),
     ("eq5.85", "labkit.reproduce.force_law_rows"),
+    ("table5.6", "labkit.reproduce.force_law_rows"),
+    ("eq6.13", "labkit.reproduce.force_law_rows"),
     ("eq6.22", "labkit.reproduce.mbs_rows"),
     ("fig6.18", "labkit.reproduce.mbs_rows"),
 ]
