@@ -1,6 +1,6 @@
 """PFR force on a floator above a rotating dipole (paper Sec. 5.2, Eq. 5.70-5.81, 5.87-5.93).
 
-``M = mu0 m_R m_F / (4 pi)`` (N m^4 ... in SI: T m^3 A m^2 = N m^4), ``r`` the axial distance (m),
+``M = mu0 m_R m_F / (4 pi)`` (N m^4), ``r`` the axial distance (m),
 ``inertia`` the floator's moment of inertia (kg m^2), ``omega`` the rotation speed (rad/s),
 ``tau_s`` the static torque coefficient (N m). Forces in N.
 """
