@@ -38,3 +38,16 @@ def test_without_rerun_option_the_demo_still_saves_an_rrd_in_the_session(tmp_pat
     out = capsys.readouterr().out
     assert f"rerun {session / 'run.rrd'}" in out
     assert "/results/points" in entity_paths(session / "run.rrd")
+
+
+def test_replay_of_a_recorded_spin_critical_session_streams_its_pairs(tmp_path, capsys):
+    session = "recordings/sessions/spin-critical-clean"
+    rrd = tmp_path / "replay.rrd"
+    assert main(["replay", session, "--rerun", f"save:{rrd}"]) == 0
+    results = json.loads(open(f"{session}/results.json").read())
+    entities = entity_paths(rrd)
+    assert {"/results/points", "/events", "/rig/rotor/speed_rpm"} <= entities
+    assert any(e.startswith("/rig/floator_tach/") for e in entities)
+    _, points = column(rrd, "/results/points", "Points2D:positions", "step")
+    pairs = [p for p in results["points"] if p.get("rotor_rad_s") is not None]
+    assert len(points[-1]) == len(pairs)
