@@ -78,6 +78,7 @@ class CompiledSystem:
     r_escape: float = 0.0
     length_scale: float = 1e-3
     reduced: ReducedForm | None = None
+    wz: float = 0.0  # signed drive speed in the Jacobi constant K = E - wz J_z
 
     def summary(self) -> dict:
         """JSON-ready description of the compiled system."""
@@ -330,7 +331,7 @@ def compile_scene(scene: Scene, reduce: bool = True) -> CompiledSystem:
     inv, why, axis = _invariant(scene, fvec, gravity, damping, translating)
     note("invariant", "monitored" if inv != "none" else "none", why)
     r_escape = scene.escape_radius_m or (20.0 * max(seps) if seps and translating else 0.0)
-    return CompiledSystem(
+    system = CompiledSystem(
         scene,
         "rigid",
         report,
@@ -355,13 +356,34 @@ def compile_scene(scene: Scene, reduce: bool = True) -> CompiledSystem:
         r_escape,
         length,
     )
+    if inv.startswith("jacobi"):
+        system.wz = _drive_rate(fvec, src)
+    return system
+
+
+def _drive_rate(fvec: np.ndarray, src: np.ndarray) -> float:
+    """Signed drive speed w in K = E - w J_z."""
+    if fvec[0] == 1.0 and fvec[3] != 0.0:
+        return float(fvec[3])
+    return float(src[0, 2]) if src.shape[0] else 0.0
 
 
 def _invariant(
     scene: Scene, fvec: np.ndarray, gravity: bool, damping: bool, translating: bool
 ) -> tuple[str, str, np.ndarray]:
-    if damping:
-        return "none", "damping dissipates energy (energy-budget residual not yet monitored)", np.zeros(3)
+    """The scene's exact invariant; with damping, its budget (the invariant minus the exact
+    change caused by the damping sub-flows, which must stay constant)."""
+    inv, why, axis = _base_invariant(scene, fvec, gravity, translating)
+    if not damping or inv == "none":
+        return inv, why, axis
+    if inv == "jacobi":
+        return "jacobi-budget", why + "; minus the change made by damping (exact sub-flow)", axis
+    return "energy-budget", "energy E minus the change made by damping (exact sub-flow)", axis
+
+
+def _base_invariant(
+    scene: Scene, fvec: np.ndarray, gravity: bool, translating: bool
+) -> tuple[str, str, np.ndarray]:
     if gravity and np.any(np.abs(scene.gravity_m_s2[:2]) > 0):
         return "none", "gravity not along the drive axis breaks the rotational symmetry", np.zeros(3)
     rates = set()

@@ -43,6 +43,7 @@ class SimResult:
     compile_s: float = 0.0
     momentum_drift: float | None = None
     angular_momentum_drift: float | None = None
+    damping_change: np.ndarray | None = None  # (n,) damping's accumulated change of E - w J_z (J)
     reduced_angle_rad: np.ndarray | None = None
     reduced_rate_rad_s: np.ndarray | None = None
     spec: dict = field(default_factory=dict)
@@ -82,6 +83,7 @@ class SimResult:
             "momentum_drift": _num(self.momentum_drift),
             "angular_momentum_drift": _num(self.angular_momentum_drift),
             "rotation_residual": _num(self.rotation_residual),
+            "damping_change_J": _num(self.damping_change[-1]) if self.damping_change is not None else None,
             "qoi": _clean(self.qoi),
             "compile": _clean(self.compile),
             "wall_s": self.wall_s,

@@ -111,6 +111,7 @@ def assemble(
         event_time_s=event,
         momentum_drift=parts.get("p_drift"),
         angular_momentum_drift=parts.get("j_drift"),
+        damping_change=raw.budget if system.invariant.endswith("budget") else None,
         reduced_angle_rad=raw.y,
         reduced_rate_rad_s=raw.yd,
     )
@@ -196,12 +197,13 @@ def _rigid_parts(system: CompiledSystem, raw: RawRun) -> dict:
         system.axis,
     )
     kin, pot, jz = terms[:, 0], terms[:, 1], terms[:, 2]
-    if system.invariant == "jacobi":
-        inv = kin + pot - system.omega * _jacobi_sign(system) * jz
-        scale = abs(kin[0]) + abs(pot[0]) + abs(system.omega * jz[0])
+    budget = raw.budget if raw.budget is not None and system.invariant.endswith("budget") else 0.0
+    if system.invariant.startswith("jacobi"):
+        inv = kin + pot - system.wz * jz - budget
+        scale = abs(kin[0]) + abs(pot[0]) + abs(system.wz * jz[0])
         out.update(inv=inv, drift=_rel_drift(inv, scale or 1.0))
     elif system.invariant.startswith("energy"):
-        inv = kin + pot
+        inv = kin + pot - budget
         out.update(inv=inv, drift=_rel_drift(inv, (abs(kin[0]) + abs(pot[0])) or 1.0))
         if system.invariant == "energy+momenta":
             p, j = terms[:, 3:6], terms[:, 6:9]
@@ -217,16 +219,6 @@ def _rigid_parts(system: CompiledSystem, raw: RawRun) -> dict:
     else:
         out.update(inv=np.full(len(raw.t), math.nan), drift=None)
     return out
-
-
-def _jacobi_sign(system: CompiledSystem) -> float:
-    """The drive's rotation sense: K = E - omega_signed J_z."""
-    fld = system.fld
-    if fld[0] == 1.0 and fld[3] != 0.0:
-        return math.copysign(1.0, fld[3])
-    if system.src.shape[0]:
-        return math.copysign(1.0, system.src[0, 2])
-    return 1.0
 
 
 def _qoi(scene: Scene, system: CompiledSystem, raw: RawRun, parts: dict) -> dict:

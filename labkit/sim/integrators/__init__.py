@@ -52,6 +52,7 @@ class RawRun:
     y: np.ndarray | None = None  # reduced angle (n,)
     yd: np.ndarray | None = None  # reduced rate (n,)
     impulse: np.ndarray | None = None  # (nb, 3) time integral of magnetic force
+    budget: np.ndarray | None = None  # (n,) damping's accumulated change of E - wz J_z
     message: str = ""
     extra: dict = field(default_factory=dict)
 

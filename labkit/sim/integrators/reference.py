@@ -1,7 +1,9 @@
 """scipy ``solve_ivp`` references (DOP853, Radau, LSODA) with per-component tolerances.
 
 State per body: position, velocity, rotation matrix (9), lab angular momentum;
-``dR/dt = [Omega]x R`` with ``Omega = R I^-1 R^T L``. Absolute tolerances are ``rtol`` times
+``dR/dt = [Omega]x R`` with ``Omega = R I^-1 R^T L``. Appended: the time integral of each
+body's magnetic force (3 per body, for the cycle-averaged force) and the damping's share of
+``E - w J_z`` (1, for the energy or Jacobi budget). Absolute tolerances are ``rtol`` times
 a scale per component (length, length * omega, 1, I * omega), so tiny bodies at high speed are
 controlled as well as big slow ones (NUMERICS.md 3.1). Contact and escape are terminal events.
 These are validation paths: their invariants drift (no geometric structure), which the result
@@ -24,7 +26,7 @@ STRIDE = 18
 
 
 def _unpack(y: np.ndarray, nb: int):
-    s = y.reshape(nb, STRIDE)
+    s = y[: nb * STRIDE].reshape(nb, STRIDE)
     return s[:, 0:3], s[:, 3:6], s[:, 6:15].reshape(nb, 3, 3), s[:, 15:18]
 
 
@@ -36,6 +38,7 @@ def _rigid_rhs(system: CompiledSystem, counter: list[int]):
     T = np.zeros((nb, 3))
     trans = bi[:, 0].astype(bool)
     work = workspace(nb)
+    wz, axis = system.wz, system.axis
 
     def rhs(t: float, y: np.ndarray) -> np.ndarray:
         counter[0] += 1
@@ -53,7 +56,13 @@ def _rigid_rhs(system: CompiledSystem, counter: list[int]):
         wx[:, 1, 0], wx[:, 2, 0], wx[:, 2, 1] = omega[:, 2], -omega[:, 1], omega[:, 0]
         dy[:, 6:15] = np.einsum("bij,bjk->bik", wx, R).reshape(nb, 9)
         dy[:, 15:18] = T - bf[:, 11:12] * omega
-        return dy.ravel()
+        # damping's share of E - wz J_z: power -c v^2 - c_rot |Omega|^2, torque about the axis
+        c_lin = np.where(trans, bf[:, 10], 0.0)
+        rel = x - axis
+        jz_rate = -c_lin * (rel[:, 0] * v[:, 1] - rel[:, 1] * v[:, 0]) - bf[:, 11] * omega[:, 2]
+        power = -c_lin * np.sum(v * v, axis=1) - bf[:, 11] * np.sum(omega * omega, axis=1)
+        budget = np.sum(power) - wz * np.sum(jz_rate)
+        return np.concatenate([dy.ravel(), F.ravel(), [budget]])
 
     return rhs
 
@@ -65,7 +74,7 @@ def _events(system: CompiledSystem):
     points = [(b, None) for b in range(nb)] + [(None, s) for s in range(src.shape[0])]
 
     def pairs(y):
-        x = y.reshape(nb, STRIDE)[:, 0:3]
+        x = y[: nb * STRIDE].reshape(nb, STRIDE)[:, 0:3]
         for a in movers:
             for b, s in points:
                 if b == a:
@@ -123,7 +132,8 @@ def run(
         )
     nb = system.bf.shape[0]
     check_memory(n + 2, nb)
-    y0 = np.concatenate([system.x0, system.v0, system.R0.reshape(nb, 9), system.L0], axis=1).ravel()
+    state0 = np.concatenate([system.x0, system.v0, system.R0.reshape(nb, 9), system.L0], axis=1).ravel()
+    y0 = np.concatenate([state0, np.zeros(3 * nb + 1)])
     i_max = system.bf[:, 1:4].max(axis=1, keepdims=True)
     length = system.length_scale
     scale = np.concatenate(
@@ -135,6 +145,8 @@ def run(
         ],
         axis=1,
     ).ravel()
+    # extras: impulse and budget are outputs, not steered: loose absolute tolerances
+    scale = np.concatenate([scale, np.full(3 * nb + 1, np.inf)])
     events = _events(system) if system.r_escape or np.any(system.bi[:, 0]) else []
     if not system.r_escape and events:
         events = events[:1]
@@ -148,19 +160,21 @@ def run(
         atol=rtol * scale,
         events=events or None,
     )
-    ys = sol.y.T.reshape(-1, nb, STRIDE)
+    full = sol.y.T
     status, event_time = (0 if sol.success else 5), math.nan
     if sol.status == 1 and sol.t_events is not None:
         for code, times, states in zip((3, 4), sol.t_events, sol.y_events, strict=False):
             if len(times):
                 status, event_time = code, float(times[0])
-                ys = np.concatenate([ys, states[:1].reshape(1, nb, STRIDE)])
+                full = np.concatenate([full, states[:1]])
                 sol_t = np.concatenate([sol.t, times[:1]])
                 break
         else:
             sol_t = sol.t
     else:
         sol_t = sol.t
+    ys = full[:, : nb * STRIDE].reshape(-1, nb, STRIDE)
+    impulse = full[-1, nb * STRIDE : nb * STRIDE + 3 * nb].reshape(nb, 3)
     if not np.all(np.isfinite(ys)):
         status = 1
     x, v, R, L = ys[..., 0:3], ys[..., 3:6], ys[..., 6:15].reshape(-1, nb, 3, 3), ys[..., 15:18]
@@ -175,5 +189,7 @@ def run(
         v=v.copy(),
         R=R.copy(),
         L=L.copy(),
+        impulse=impulse.copy(),
+        budget=full[:, -1].copy(),
         message=sol.message,
     )

@@ -140,19 +140,45 @@ def free_rotation(R, L, bf, bi, b, h, pi):
 
 
 @njit(cache=True, _nrt=False)
-def damping_flow(v, R, L, bf, bi, h, pi):
-    """Exact flow of linear translational and rotational damping over ``h``."""
+def _kinetic_jz(x, v, R, L, bf, bi, b, axis, pi):
+    """(kinetic energy, J_z about the vertical line through ``axis``) of body ``b``."""
+    e = 0.0
+    jz = L[b, 2]
+    if bi[b, I_TRANS]:
+        m = bf[b, B_MASS]
+        e += 0.5 * m * (v[b, 0] ** 2 + v[b, 1] ** 2 + v[b, 2] ** 2)
+        jz += m * ((x[b, 0] - axis[0]) * v[b, 1] - (x[b, 1] - axis[1]) * v[b, 0])
+    for k in range(3):
+        pi[k] = R[b, 0, k] * L[b, 0] + R[b, 1, k] * L[b, 1] + R[b, 2, k] * L[b, 2]
+        e += 0.5 * pi[k] * pi[k] / bf[b, B_I + k]
+    return e, jz
+
+
+@njit(cache=True, _nrt=False)
+def damping_flow(x, v, R, L, bf, bi, h, pi, wz, axis, acc):
+    """Exact flow of linear translational and rotational damping over ``h``.
+
+    ``acc[0]`` accumulates the change of ``E_kin - wz J_z`` it causes: the damping's share of
+    the energy (``wz = 0``) or Jacobi budget, so that ``K - acc`` stays constant.
+    """
     for b in range(v.shape[0]):
-        if bi[b, I_TRANS] and bf[b, B_CLIN] > 0.0:
+        lin = bi[b, I_TRANS] and bf[b, B_CLIN] > 0.0
+        rot = bf[b, B_CROT] > 0.0
+        if not (lin or rot):
+            continue
+        e0, j0 = _kinetic_jz(x, v, R, L, bf, bi, b, axis, pi)
+        if lin:
             f = math.exp(-bf[b, B_CLIN] * h / bf[b, B_MASS])
             for k in range(3):
                 v[b, k] *= f
-        if bf[b, B_CROT] > 0.0:
+        if rot:
             for k in range(3):
                 pi[k] = R[b, 0, k] * L[b, 0] + R[b, 1, k] * L[b, 1] + R[b, 2, k] * L[b, 2]
                 pi[k] *= math.exp(-bf[b, B_CROT] * h / bf[b, B_I + k])
             for k in range(3):
                 L[b, k] = R[b, k, 0] * pi[0] + R[b, k, 1] * pi[1] + R[b, k, 2] * pi[2]
+        e1, j1 = _kinetic_jz(x, v, R, L, bf, bi, b, axis, pi)
+        acc[0] += (e1 - e0) - wz * (j1 - j0)
 
 
 @njit(cache=True, _nrt=False)
@@ -261,10 +287,14 @@ def run_rigid(
     out_R,
     out_L,
     impulse,
+    wz,
+    axis,
+    out_acc,
 ):
     """Integrate ``n_steps`` steps of size ``h`` from ``t0``; state arrays are updated in place.
 
-    Samples every ``sample_every`` steps (and the first and final states) go to ``out_*``.
+    Samples every ``sample_every`` steps (and the first and final states) go to ``out_*``;
+    ``out_acc`` gets the damping's accumulated share of ``E - wz J_z`` (see :func:`damping_flow`).
     Returns ``(status, steps_done, n_samples, event_time, n_force_evaluations)``.
     """
     nb = x.shape[0]
@@ -284,6 +314,8 @@ def run_rigid(
     out_v[0] = v
     out_R[0] = R
     out_L[0] = L
+    acc = np.zeros(1)
+    out_acc[0] = 0.0
     n_s = 1
     status = 0
     event_time = math.nan
@@ -295,7 +327,7 @@ def run_rigid(
         for w in weights:
             hw = w * h
             if use_damping:
-                damping_flow(v, R, L, bf, bi, 0.5 * hw, pi)
+                damping_flow(x, v, R, L, bf, bi, 0.5 * hw, pi, wz, axis, acc)
             _kick(v, L, F, T, bf, bi, flags, g, 0.5 * hw, impulse)
             for b in range(nb):
                 if bi[b, I_TRANS]:
@@ -307,7 +339,7 @@ def run_rigid(
             n_force += 1
             _kick(v, L, F, T, bf, bi, flags, g, 0.5 * hw, impulse)
             if use_damping:
-                damping_flow(v, R, L, bf, bi, 0.5 * hw, pi)
+                damping_flow(x, v, R, L, bf, bi, 0.5 * hw, pi, wz, axis, acc)
         t = t0 + (step + 1) * h
         steps_done = step + 1
         # health: non-finite or runaway state
@@ -346,6 +378,7 @@ def run_rigid(
             out_v[n_s] = v
             out_R[n_s] = R
             out_L[n_s] = L
+            out_acc[n_s] = acc[0]
             n_s += 1
     if status != 0 or steps_done % sample_every != 0:
         out_t[n_s] = t
@@ -353,6 +386,7 @@ def run_rigid(
         out_v[n_s] = v
         out_R[n_s] = R
         out_L[n_s] = L
+        out_acc[n_s] = acc[0]
         n_s += 1
     return status, steps_done, n_s, event_time, n_force
 

@@ -79,6 +79,7 @@ def run(
     out_x, out_v, out_L = np.empty((n_out, nb, 3)), np.empty((n_out, nb, 3)), np.empty((n_out, nb, 3))
     out_R = np.empty((n_out, nb, 3, 3))
     impulse = np.zeros((nb, 3))
+    out_acc = np.zeros(n_out)
     check_events = bool(system.bi[:, 0].any())
     compile_s = _warm_up(system, weights, check_events)
     status, _, n_s, event_time, n_force = run_rigid(
@@ -105,6 +106,9 @@ def run(
         out_R,
         out_L,
         impulse,
+        float(system.wz),
+        system.axis,
+        out_acc,
     )
     return RawRun(
         name,
@@ -118,6 +122,7 @@ def run(
         R=out_R[:n_s].copy(),
         L=out_L[:n_s].copy(),
         impulse=impulse,
+        budget=out_acc[:n_s].copy(),
         extra={"compile_s": compile_s},
     )
 
@@ -160,6 +165,9 @@ def _warm_up(system: CompiledSystem, weights: np.ndarray, check_events: bool) ->
         oR,
         o3.copy(),
         np.zeros((nb, 3)),
+        0.0,
+        np.zeros(3),
+        np.zeros(2),
     )
     _WARM.add(key)
     return time.perf_counter() - start
