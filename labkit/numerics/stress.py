@@ -2,7 +2,7 @@
 (splitting4, automatic step) and judged by its pass criterion, printed as met or not met.
 
 A case that raises is a verdict with ``met = False`` and the error as its detail: a failing
-case is shown, never dropped. Horizons are shorter with ``quick``; where a criterion is stated
+case is shown, never dropped. Horizons are shorter with ``quick`` (and ``smoke``); where a criterion is stated
 "after 1e4 cycles" and the run is shorter, the measured error is extrapolated linearly (the
 growth of a phase error under a symplectic splitting, Hairer 1997) and the text says so.
 """
@@ -41,6 +41,9 @@ class Verdict:
     cycles: float = 0.0
     wall_s: float = 0.0
     detail: str = ""
+
+    def __post_init__(self) -> None:
+        self.met = bool(self.met)
 
     def to_json(self) -> dict:
         return {
@@ -145,9 +148,18 @@ def _stroboscopic_drift(res: SimResult) -> float:
 
 # --------------------------------------------------------------------------- cases
 
+LEVELS = ("smoke", "quick", "full")
 
-def s1(quick: bool) -> Verdict:
-    cycles = 10_000
+
+def horizon(level: str, quick: int, full: int) -> int:
+    """Cycles for a level: ``full``, ``quick``, or ``smoke`` (a twentieth of quick, >= 2: for tests)."""
+    if level not in LEVELS:
+        raise ValueError(f"unknown level {level!r} (choose from {', '.join(LEVELS)})")
+    return {"full": full, "quick": quick, "smoke": max(2, quick // 20)}[level]
+
+
+def s1(level: str) -> Verdict:
+    cycles = 500 if level == "smoke" else 10_000
     base = _run(s1_like(I_S1, OMEGA_S1, name="S1"), cycles, samples_per_period=1)
     # exact mirror 2 I w^2 - tau_S = 8.0001e-3 (the paper's rounded 8e-3 moves phi by 2.4e-5 rad)
     mirror_tau_s = 2.0 * I_S1 * OMEGA_S1**2 - TAU_S_S1
@@ -167,7 +179,7 @@ def s1(quick: bool) -> Verdict:
         "drift_growth": metrics.drift_growth(base.invariant_values),
     }
     detail = "the error is a bounded offset (reached in the first cycles), not a secular growth"
-    if not quick:
+    if level == "full":
         fine = _run(
             s1_like(I_S1, OMEGA_S1, name="S1-2N"), cycles, samples_per_period=1, steps_per_period=2 * n
         )
@@ -223,8 +235,8 @@ def scale_invariance(cycles: int, inertias=(1e-12, 1e-9, 1e-6), omegas=(100.0, 1
     return out
 
 
-def s2(quick: bool) -> Verdict:
-    cycles = 100 if quick else 1000
+def s2(level: str) -> Verdict:
+    cycles = horizon(level, 100, 1000)
     start = time.perf_counter()
     tiny = _run(s1_like(1e-12, 11_000.0, name="S2"), cycles, steps_per_period=64, samples_per_period=8)
     ref = _run(s1_like(I_S1, OMEGA_S1, name="S1"), cycles, steps_per_period=64, samples_per_period=8)
@@ -252,8 +264,8 @@ def signed_cone_angle(res: SimResult, omega: float, phase: float = 0.0) -> np.nd
     return np.arctan2(-along, u[:, 2])
 
 
-def s3(quick: bool) -> Verdict:
-    cycles = 200 if quick else 2000
+def s3(level: str) -> Verdict:
+    cycles = horizon(level, 200, 2000)
     i_w2 = I_S1 * OMEGA_S1**2
     measured: dict = {}
     start = time.perf_counter()
@@ -290,12 +302,12 @@ def s3(quick: bool) -> Verdict:
     )
 
 
-def s4(quick: bool) -> Verdict:
+def s4(level: str) -> Verdict:
     measured: dict = {}
     met = True
     start = time.perf_counter()
-    horizon = {10: 100 if quick else 1000, 100: 10 if quick else 100}
-    for ratio, cycles in horizon.items():
+    cycles_for = {10: horizon(level, 100, 1000), 100: horizon(level, 10, 100)}
+    for ratio, cycles in cycles_for.items():
         tau_s = ratio**2 * I_S1 * OMEGA_S1**2
         res = _run(conical_scene(I_S1, OMEGA_S1, TAU_C_S1, tau_s, f"S4-{ratio}"), cycles)
         err = _stroboscopic_drift(res)
@@ -311,7 +323,7 @@ def s4(quick: bool) -> Verdict:
         "automatic N keeps the psi error within 2x of S1's target (2e-6 after 1e4 cycles)",
         met,
         measured,
-        max(horizon.values()),
+        max(cycles_for.values()),
         time.perf_counter() - start,
         "errors scaled linearly from the horizons listed to 1e4 cycles",
     )
@@ -348,7 +360,7 @@ def azimuth_acceleration(res: SimResult) -> float:
     return float(2.0 * np.polyfit(res.times_s[idx], az, 2)[0])
 
 
-def s5(quick: bool) -> Verdict:
+def s5(level: str) -> Verdict:
     scene = fig5_7_scene()
     cycles = 45  # 1.5 s, as the paper's 1.492 s run
     start = time.perf_counter()
@@ -375,12 +387,12 @@ def s5(quick: bool) -> Verdict:
     )
 
 
-def s6(quick: bool) -> Verdict:
+def s6(level: str) -> Verdict:
     from labkit.model import conical_dynamics as cd
     from labkit.model import tilted_cone as tc
 
     inertia, omega, tau_c, ratio = 0.998e-7, 60 * math.pi, 1e-3, 0.0944
-    cycles = 500 if quick else 10_000
+    cycles = horizon(level, 500, 10_000)
     start = time.perf_counter()
     body = cd.RotatingFieldBody.from_si(tau_c, ratio * tau_c, inertia, inertia, omega)
     orbit, spin = tc.spin_free_orbit(body, tc.tilted_guess(body, 0.85, 0.2), -0.028)
@@ -416,8 +428,8 @@ def s6(quick: bool) -> Verdict:
     )
 
 
-def s7(quick: bool) -> Verdict:
-    cycles = 1000 if quick else 10_000
+def s7(level: str) -> Verdict:
+    cycles = horizon(level, 1000, 10_000)
     start = time.perf_counter()
     measured: dict = {}
     met_at = {}
@@ -446,7 +458,7 @@ def s7(quick: bool) -> Verdict:
     )
 
 
-def s8(quick: bool) -> Verdict:
+def s8(level: str) -> Verdict:
     scene = scene_from_dict(fig5_13_dict(20.0, -1.0), source="<S8>")
     start = time.perf_counter()
     a = _run(scene, 5)
@@ -476,7 +488,7 @@ def s8(quick: bool) -> Verdict:
     )
 
 
-def s9(quick: bool) -> Verdict:
+def s9(level: str) -> Verdict:
     r_max = 0.1
     scene = scene_from_dict(fig5_13_dict(60.0, 2.0, escape_mm=r_max * 1e3), source="<S9>")
     start = time.perf_counter()
@@ -506,8 +518,8 @@ def s9(quick: bool) -> Verdict:
     )
 
 
-def s10(quick: bool) -> Verdict:
-    cycles = 200 if quick else 1000
+def s10(level: str) -> Verdict:
+    cycles = horizon(level, 200, 1000)
     start = time.perf_counter()
     per = {}
     for w in (100.0, 1000.0, 11_000.0):
@@ -545,8 +557,8 @@ def energy_budget_residual(
     return float(np.max(np.abs(energy - energy[0] - work)) / scale)
 
 
-def s11(quick: bool) -> Verdict:
-    cycles = 10 if quick else 40
+def s11(level: str) -> Verdict:
+    cycles = horizon(level, 10, 40)
     start = time.perf_counter()
     n = 256
     measured: dict = {"steps_per_period": n}
@@ -597,12 +609,12 @@ CASES: dict[str, Callable[[bool], Verdict]] = {
 }
 
 
-def run_case(case_id: str, quick: bool = True) -> Verdict:
+def run_case(case_id: str, level: str = "quick") -> Verdict:
     """Run one case; an exception becomes a not-met verdict that says what went wrong."""
     fn = CASES[case_id]
     start = time.perf_counter()
     try:
-        return fn(quick)
+        return fn(level)
     except Exception as exc:  # noqa: BLE001 - a failing case is shown, never dropped
         return Verdict(
             case_id,
@@ -616,13 +628,20 @@ def run_case(case_id: str, quick: bool = True) -> Verdict:
         )
 
 
-def run_stress_cases(quick: bool = True, only: list[str] | None = None, progress=None) -> list[Verdict]:
-    """Every case of S1-S11 (or ``only`` those), in order; one verdict each."""
+def run_stress_cases(
+    quick: bool = True, only: list[str] | None = None, progress=None, level: str | None = None
+) -> list[Verdict]:
+    """Every case of S1-S11 (or ``only`` those), in order; one verdict each.
+
+    ``level`` (``smoke``, ``quick``, ``full``) overrides ``quick``; ``smoke`` is for tests: the
+    same cases and criteria on very short horizons.
+    """
+    level = level or ("quick" if quick else "full")
     out = []
     for case_id in CASES:
         if only and case_id not in only:
             continue
-        out.append(run_case(case_id, quick))
+        out.append(run_case(case_id, level))
         if progress is not None:
             progress(out[-1])
     return out

@@ -189,7 +189,7 @@ def _execute(chunks, evaluate: Evaluate, workers: int, scheduler: str | None, ti
             from distributed import as_completed as dask_completed
 
             futures = [client.submit(_evaluate_keyed, evaluate, c, pure=False) for c in chunks]
-            for fut in dask_completed(futures):
+            for fut in dask_completed(futures, loop=client.loop):
                 yield fut.result()
         finally:
             client.close()
