@@ -86,6 +86,7 @@ def _newton_parameters(z: np.ndarray, a: complex, b: complex, k: int, t: np.ndar
     return t
 
 
+PROBE_ITERATIONS = 4  # every start gets this many steps; only the best one is carried on
 TANGENTIAL_WEIGHT = 0.2  # share of the along-curve residual kept in the solve (stabilises it)
 
 
@@ -134,7 +135,10 @@ def _icp(z: np.ndarray, w: np.ndarray, tau: np.ndarray, k: int, c: complex, a: c
         c, a, b, v = new
         if moved < 1e-3 and it % 6 == 5:
             break
-    t = _closest_parameters(z - c - v * tau, a, b, k, samples)
+    if t is None or iterations < 3:
+        t = _closest_parameters(z - c - v * tau, a, b, k, samples)
+    else:  # warm: the last parameters are close, a Newton refinement is enough
+        t = _newton_parameters(z - c - v * tau, a, b, k, t, 2)
     r = np.abs(_curve(c, a, b, k, t) + v * tau - z)
     rms = float(np.sqrt(np.sum(w * r * r) / np.sum(w)))
     if k != -1 and not abs(b) < 0.999 * MAX_TROCHOID_B * abs(a):
@@ -202,16 +206,19 @@ def fit_ellipse(points: np.ndarray, weights: np.ndarray | None = None, times: np
 def fit_trochoid(points: np.ndarray, kind: str, loops: int, weights: np.ndarray | None = None,
                  times: np.ndarray | None = None, iterations: int = 30,
                  b_starts: tuple[float, ...] = (0.15, 0.45, 0.9)) -> CurveFit:
-    """Fit an epitrochoid or hypotrochoid (Eq. 6.38) with ``loops`` loops; best of a few starts."""
+    """Fit an epitrochoid or hypotrochoid (Eq. 6.38) with ``loops`` loops: a few steps from each
+    start (:func:`_trochoid_starts`), then the best one to ``iterations`` steps."""
     z, w, tau = _prepare(points, weights, times)
     k = k_for(kind, loops)
     samples = 200 * abs(k)
-    best = None
-    for c, a, b in _trochoid_starts(z, w, k, b_starts):
-        fit = _icp(z, w, tau, k, c, a, b, iterations, times is not None, samples)
-        if best is None or fit.rms_residual < best.rms_residual:
-            best = fit
-    return best
+    drift = times is not None
+    probes = [_icp(z, w, tau, k, c, a, b, PROBE_ITERATIONS, drift, samples)
+              for c, a, b in _trochoid_starts(z, w, k, b_starts)]
+    best = min(probes, key=lambda f: f.rms_residual)
+    if not math.isfinite(best.rms_residual):  # every start degenerated; keep the least bad
+        best = min(probes, key=lambda f: abs(f.b) / max(abs(f.a), 1e-12))
+    return _icp(z, w, tau, k, best.c, best.a, best.b, max(0, iterations - PROBE_ITERATIONS), drift, samples,
+                best.drift)
 
 
 def _prepare(points, weights, times):

@@ -7,6 +7,8 @@ is reported through :attr:`FrameSource.truncated` after reading.
 
 from __future__ import annotations
 
+import queue
+import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -33,13 +35,28 @@ class FrameSource:
     frames_read: int = 0
     truncated: str | None = None
 
-    def frames(self, stride: int = 1) -> Iterator[tuple[int, np.ndarray]]:
+    def frames(self, stride: int = 1, prefetch: int = 0) -> Iterator[tuple[int, np.ndarray]]:
         """Yield ``(index, bgr_frame)`` for every ``stride``-th frame; skipped frames are only grabbed
-        (demuxed and decoded, not converted), which is cheaper than reading them."""
+        (demuxed and decoded, not converted), which is cheaper than reading them.
+
+        ``prefetch > 0`` decodes in a background thread up to that many frames ahead (OpenCV
+        releases the GIL while decoding, so decoding overlaps the caller's work); every frame is
+        then a fresh array. Without it the same buffer is reused: copy a frame to keep it."""
         if self._photo is not None:
             self.frames_read = 1
             yield 0, self._photo
             return
+        if prefetch > 0:
+            yield from self._prefetched(stride, prefetch)
+        else:
+            yield from self._decode(stride, reuse=True)
+        if self.frames_read == 0:
+            raise VideoError(self.path, "no frame could be decoded (empty or corrupt video)")
+        if self.frame_count > 0 and self.frames_read < self.frame_count - 1:
+            self.truncated = (f"decoded {self.frames_read} of {self.frame_count} advertised frames "
+                              "(truncated file?)")
+
+    def _decode(self, stride: int, reuse: bool) -> Iterator[tuple[int, np.ndarray]]:
         cap, index, buf = self._cap, 0, None
         try:
             while True:
@@ -47,18 +64,48 @@ class FrameSource:
                     if not cap.grab():
                         break
                 else:
-                    ok, buf = cap.read(buf)
+                    ok, frame = cap.read(buf) if reuse else cap.read()
                     if not ok:
                         break
-                    yield index, buf
+                    buf = frame if reuse else None
+                    yield index, frame
                 index += 1
         finally:
             cap.release()
-        self.frames_read = index
-        if index == 0:
-            raise VideoError(self.path, "no frame could be decoded (empty or corrupt video)")
-        if self.frame_count > 0 and index < self.frame_count - 1:
-            self.truncated = f"decoded {index} of {self.frame_count} advertised frames (truncated file?)"
+            self.frames_read = index
+
+    def _prefetched(self, stride: int, depth: int) -> Iterator[tuple[int, np.ndarray]]:
+        q: queue.Queue = queue.Queue(maxsize=depth)
+        stop = threading.Event()
+        done = object()
+
+        def work() -> None:
+            try:
+                for item in self._decode(stride, reuse=False):
+                    while not stop.is_set():
+                        try:
+                            q.put(item, timeout=0.1)
+                            break
+                        except queue.Full:
+                            continue
+                    if stop.is_set():
+                        return
+            finally:
+                q.put(done)
+
+        thread = threading.Thread(target=work, name="labkit-decode", daemon=True)
+        thread.start()
+        try:
+            while (item := q.get()) is not done:
+                yield item
+        finally:
+            stop.set()
+            while thread.is_alive():  # unblock a producer waiting on a full queue
+                try:
+                    q.get(timeout=0.05)
+                except queue.Empty:
+                    pass
+            thread.join()
 
     def decode_only(self) -> int:
         """Read every frame and do nothing else (the benchmark's reference); returns the count."""

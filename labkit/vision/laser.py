@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import asdict, dataclass
 
 import cv2
@@ -26,6 +27,7 @@ from labkit.vision.trace import trace_points
 
 FrameHook = Callable[[int, float, np.ndarray], None]
 MAX_POINTS_PER_CHUNK = 4000
+MIN_FRAMES_PER_CHUNK = 12
 
 
 @dataclass
@@ -62,17 +64,25 @@ def _clip_roi(roi: tuple[int, int, int, int], size: tuple[int, int]) -> tuple[in
     return x0, y0, x1 - x0, y1 - y0
 
 
-def accumulate(source: FrameSource, quality: LaserQuality, on_frame: FrameHook | None = None) -> list[Chunk]:
-    """Running per-pixel maximum of the frames, one accumulator per time chunk."""
-    per_chunk = (max(1, math.ceil(source.frame_count / quality.chunks)) if source.frame_count > 0 else 30)
+def accumulate(source: FrameSource, quality: LaserQuality, on_frame: FrameHook | None = None,
+               on_chunk: Callable[[Chunk], None] | None = None, prefetch: int = 4) -> list[Chunk]:
+    """Running per-pixel maximum of the frames, one accumulator per time chunk (at least
+    ``MIN_FRAMES_PER_CHUNK`` analysed frames each, so every chunk covers the pattern).
+    ``on_chunk`` gets each chunk as soon as it is complete; decoding runs ``prefetch`` frames
+    ahead in a thread."""
+    per_chunk = MIN_FRAMES_PER_CHUNK * quality.stride
+    if source.frame_count > 0:
+        per_chunk = max(per_chunk, math.ceil(source.frame_count / quality.chunks))
     roi = _clip_roi(quality.roi, source.size) if quality.roi is not None else None
     chunks: list[Chunk] = []
     fps = source.fps or 1.0
-    for index, frame in source.frames(quality.stride):
+    for index, frame in source.frames(quality.stride, prefetch=prefetch):
         if on_frame is not None:
             on_frame(index, index / fps, frame)
         ci = index // per_chunk
         if not chunks or ci != chunks[-1].first // per_chunk:
+            if chunks and on_chunk is not None:
+                on_chunk(chunks[-1])
             x, y, w, h = roi if roi is not None else (0, 0, *source.size)
             chunks.append(Chunk(frame[y:y + h, x:x + w].copy(), (x, y), index, index))
             continue
@@ -81,6 +91,8 @@ def accumulate(source: FrameSource, quality: LaserQuality, on_frame: FrameHook |
         h, w = c.image.shape[:2]
         cv2.max(c.image, frame[y:y + h, x:x + w], dst=c.image)
         c.last = index
+    if chunks and on_chunk is not None:
+        on_chunk(chunks[-1])
     return chunks
 
 
@@ -136,15 +148,19 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
     quality = quality or LaserQuality()
     t_start = time.perf_counter()
     source = open_frames(path)
-    chunks = accumulate(source, quality, on_frame)
-    t_frames = time.perf_counter()
-    _check_exposure(chunks, source.path)
+    with ThreadPoolExecutor(max_workers=1) as pool:  # trace extraction overlaps decoding
+        futures: dict[int, Future] = {}
+        chunks = accumulate(source, quality, on_frame,
+                            on_chunk=lambda c: futures.setdefault(
+                                id(c), pool.submit(trace_points, c.image, c.offset, quality.subpixel)))
+        t_frames = time.perf_counter()
+        _check_exposure(chunks, source.path)
+        traces = [futures[id(c)].result() for c in chunks]
     fps = source.fps or 0.0
     pts, wts, tms, bands = [], [], [], []
     peak = noise = 0.0
     rng = np.random.default_rng(0)
-    for c in chunks:
-        tp = trace_points(c.image, c.offset, quality.subpixel)
+    for c, tp in zip(chunks, traces, strict=True):
         peak, noise = max(peak, tp.peak), max(noise, tp.noise)
         if len(tp.points) > MAX_POINTS_PER_CHUNK:
             keep = rng.choice(len(tp.points), MAX_POINTS_PER_CHUNK, replace=False)
@@ -180,6 +196,6 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
                     "minor": tilt_from_semi_axis(minor, mm_per_px, screen_distance_mm)}
     qual["settings"] = asdict(quality)
     qual["elapsed_s"] = time.perf_counter() - t_start
-    qual["fit_s"] = time.perf_counter() - t_frames  # trace extraction + fit, after the frames
+    qual["fit_s"] = time.perf_counter() - t_frames  # work left after the last frame: mostly the fit
     return {"source": source.path, "frames": source.frames_read, "fps": fps, "size": list(source.size),
             "pattern": pattern, "tilt_rad": tilt, "quality": qual}
