@@ -138,4 +138,5 @@ def apply_conical(body: Body, scene: Scene, spin_k: float = -1.0) -> float:
         rotation = rotation @ rot_x(math.pi)
     body.rotation = rotation
     body.angular_velocity_rad_s = conical_angular_velocity(omega, phi, phase, spin_k)
+    body.spin_k = spin_k
     return phi

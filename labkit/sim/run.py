@@ -280,7 +280,7 @@ def _main_pair(scene: Scene):
 
 
 def _cone_angle_closed_form(scene: Scene, body) -> float | None:
-    """Eq. 5.35 (5.24 if isotropic) at the body's initial position, when the scene has one drive."""
+    """Eq. 5.64 with the body's spin k (Eq. 5.35 / 5.24 for k = -1) at its initial position."""
     inertia = np.asarray(body.inertia_kg_m2, float)
     if not (np.allclose(inertia, np.diag(np.diag(inertia))) and math.isclose(inertia[0, 0], inertia[1, 1])):
         return None
@@ -295,6 +295,8 @@ def _cone_angle_closed_form(scene: Scene, body) -> float | None:
         return None  # the faster-spinning body is the rotator, not a floator on a cone
     try:
         omega, _, tau_c, tau_s = equilibrium._drive(body, scene)
-        return equilibrium.cone_angle_axisymmetric(omega, tau_c, tau_s, inertia[0, 0], inertia[2, 2])
+        return equilibrium.cone_angle_axisymmetric(
+            omega, tau_c, tau_s, inertia[0, 0], inertia[2, 2], body.spin_k
+        )
     except ValueError:
         return None

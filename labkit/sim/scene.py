@@ -89,6 +89,7 @@ class Body:
     velocity_m_s: np.ndarray = field(default_factory=lambda: np.zeros(3))
     rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
     angular_velocity_rad_s: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    spin_k: float = -1.0  # spin parameter of Eq. 5.62 (-1: no spin), set by the conical helper
 
 
 @dataclass

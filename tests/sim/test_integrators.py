@@ -159,3 +159,23 @@ def test_invariant_has_no_secular_growth():
     assert long.status == "ok"
     assert long.invariant_drift <= 3 * short.invariant_drift
     assert long.angular_momentum_drift < 1e-12
+
+
+def test_spinning_body_keeps_the_cone_of_eq_5_68():
+    """Fig. 5.11(a): I = 8.1e-8, omega = 80 pi, tau_C = 1e-3, tau_S = 0, spin q = -0.5 (k = -1.5).
+    Eq. 5.68 gives phi = 0.1296 rad (the caption: 0.12962) and Eq. 5.62 v_y = 48.71 rad/s (the
+    caption: 48.71); the cone is kept without a static field."""
+    d = bundled_dict("conical_5_1")
+    d["field"]["tau_s_Nm"] = 0.0
+    d["body"][0]["inertia_kg_m2"] = 8.1e-8
+    d["body"][0]["initial"]["spin_k"] = -1.5
+    scene = make(d)
+    assert scene.bodies[0].angular_velocity_rad_s[1] == pytest.approx(48.71, abs=0.01)
+    result = simulate(scene, cycles=200)
+    cone = result.qoi["bodies"]["floator"]["cone_angle_rad"]
+    assert result.status == "ok"
+    assert cone["mean"] == pytest.approx(0.12962, abs=1e-4)
+    assert cone["max"] - cone["min"] < 1e-6
+    assert result.qoi["bodies"]["floator"]["cone_angle_closed_form_rad"] == pytest.approx(
+        cone["mean"], abs=1e-6
+    )
