@@ -133,7 +133,7 @@ def run(args: argparse.Namespace) -> int:
         raise NumericsError(f"unknown stress case(s) {', '.join(unknown)} (choose from {', '.join(CASES)})")
     quick = args.quick
     scenes = args.scene or (QUICK_SCENES if quick else FULL_SCENES)
-    cycles = args.cycles or (10 if quick else 50)
+    cycles = args.cycles or (10 if quick else 20)
     ladder = Ladder.quick() if quick else Ladder.full()
     started = time.perf_counter()
 

@@ -199,10 +199,9 @@ def s1(level: str) -> Verdict:
 
 
 def _nondim_state(res: SimResult, inertia: float, omega: float) -> np.ndarray:
+    """Dipole direction and angular velocity / omega (what Eq. 5.7 describes; see metrics)."""
     n = len(res.times_s)
-    return np.concatenate(
-        [res.rotations.reshape(n, -1), res.angular_velocities_rad_s.reshape(n, -1) / omega], 1
-    )
+    return np.concatenate([res.dipole_directions(), res.angular_velocities_rad_s.reshape(n, -1) / omega], 1)
 
 
 def scale_invariance(cycles: int, inertias=(1e-12, 1e-9, 1e-6), omegas=(100.0, 11_000.0)) -> dict:
