@@ -25,6 +25,9 @@ SUITES = [
     ("eq6.13", "labkit.reproduce.force_law_rows"),
     ("eq6.22", "labkit.reproduce.mbs_rows"),
     ("fig6.18", "labkit.reproduce.mbs_rows"),
+    ("fig6.18", "labkit.reproduce.measured_rows"),
+    ("fig5.25", "labkit.reproduce.measured_rows"),
+    ("fig5.26", "labkit.reproduce.measured_rows"),
 ]
 
 
