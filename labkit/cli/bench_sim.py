@@ -60,6 +60,9 @@ def _kernel_section(quick: bool) -> dict:
     start = time.perf_counter()
     kernels.run_batch_numba(one, 10_000, 64, 1)
     out["one_body_1e4_cycles_batch_kernel_s"] = time.perf_counter() - start
+    # a map-sized batch: numpy's per-call overhead is spread over 1000+ trajectories
+    big, _ = stability_map.batch_spec(stability_map.map_points([0.05 * k for k in range(13)] * 8))
+    out["large_batch"] = kernels.kernel_timings(big, 1 if quick else 4, 64, repeats=1)
     return out
 
 
@@ -170,6 +173,13 @@ def run(args: argparse.Namespace) -> int:
         f"{k['numpy_ns_per_trajectory_step']:.0f} ns (numpy/numba = {k['numpy_over_numba']:.1f}); "
         f"faster: {k['faster']}; results differ by {k['max_zenith_difference_rad']:.1e} rad; "
         f"one body 1e4 cycles in the batch kernel: {k['one_body_1e4_cycles_batch_kernel_s']:.2f} s"
+    )
+    big = k["large_batch"]
+    print(
+        f"batch of {big['batch']} map points: numba {big['numba_ns_per_trajectory_step']:.0f} "
+        "ns/trajectory-step, "
+        f"numpy {big['numpy_ns_per_trajectory_step']:.0f} ns (numpy/numba = {big['numpy_over_numba']:.1f}); "
+        "sweeps use the faster (numba)"
     )
 
     headline, notes = _headline(reports, verdicts, quick)
