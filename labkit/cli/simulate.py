@@ -53,7 +53,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--json", metavar="OUT", help="write the result summary as JSON")
     p.add_argument("--series", action="store_true", help="include the sampled series in --json")
-    p.add_argument("--rerun", metavar="SPEC", help="stream poses to rerun (spawn, connect URL or .rrd file)")
+    p.add_argument(
+        "--rerun", metavar="SPEC", help="stream poses to rerun: spawn, connect[:ADDR] or save:FILE"
+    )
     p.add_argument("--list", action="store_true", help="list bundled scenes and exit")
     p.add_argument("--compile-only", action="store_true", help="print what the scene compiles to and exit")
     p.set_defaults(func=run)
@@ -134,7 +136,7 @@ def format_summary(result) -> str:
             eq = q.get("cone_angle_closed_form_rad")
             lines.append(
                 f"{name:10s} cone angle mean {ca['mean']:.6g} rad (min {ca['min']:.6g}, max {ca['max']:.6g})"
-                + (f"; Eq. 5.35 at start {eq:.6g} rad" if eq is not None else "")
+                + (f"; closed form (Eq. 5.35/5.64) {eq:.6g} rad" if eq is not None else "")
             )
         if "mean_force_N" in q:
             f = q["mean_force_N"]

@@ -9,13 +9,14 @@ from labkit.cli import main
 
 def test_simulate_writes_json(tmp_path, capsys):
     out = tmp_path / "r.json"
-    rc = main(["simulate", "conical_5_1", "--cycles", "20", "--json", str(out), "--rerun", "spawn"])
+    rrd = tmp_path / "sim.rrd"
+    rc = main(["simulate", "conical_5_1", "--cycles", "20", "--json", str(out), "--rerun", f"save:{rrd}"])
     assert rc == 0
     text = capsys.readouterr().out
     assert "status     ok" in text and "cone angle mean 0.53598" in text
     data = json.loads(out.read_text())
     assert data["status"] == "ok" and data["integrator"] == "splitting4"
-    assert data["spec"] == {"rerun": "spawn"}
+    assert data["spec"] == {"rerun": f"save:{rrd}"}
     assert data["compile"]["kind"] == "rigid" and data["invariant"] == "jacobi"
     assert abs(data["qoi"]["bodies"]["floator"]["cone_angle_rad"]["mean"] - 0.535984) < 1e-5
 
