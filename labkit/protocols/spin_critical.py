@@ -23,6 +23,7 @@ import sys
 from typing import Any
 
 from labkit.errors import LabkitError
+from labkit.protocols.drop_spin import drop_instant, fresh_samples, line_spacing, spin_at
 from labkit.protocols.params import ParamError
 from labkit.protocols.quickfit import fit_spin_critical_c
 from labkit.protocols.runner import ProtocolDef, RunContext, Step
@@ -136,18 +137,29 @@ class SpinCritical(ProtocolDef):
             if cause is None and not ctx.clock.is_virtual and operator_pressed_enter():
                 cause = "key"
             if cause is not None:
-                # the spin just before the drop: the last reading that still saw the floator
-                # (a slow balance reports the drop late, so readings after it can be zero)
-                spins = [r for r in ctx.tach_readings("floator_tach", held_at)
-                         if r.t <= last_held and math.isfinite(r.value) and r.value > loss]
-                rotor = [r.value for r in ctx.tach_readings("rotor_tach", held_at) if r.t <= last_held]
-                if not spins or not rotor:
-                    return None
-                return {"rotor_rad_s": statistics.fmean(rotor), "spin_rad_s": spins[-1].value,
-                        "cause": cause, "hold_s": last_held - held_at}
+                gone_t = reading.t if cause == "balance" else (ctx.now() if cause == "key" else None)
+                return self._pair(ctx, held_at, last_held, gone_t, loss, cause)
             if ctx.now() - held_at > p["trial_timeout_s"]:
                 return None
             ctx.sleep(ctx.control.period_s)
+
+    def _pair(self, ctx: RunContext, held_at: float, last_held: float, gone_t: float | None,
+              loss: float, cause: str) -> dict[str, Any] | None:
+        """The registered (rotor speed, spin at the drop) of one trial; None without readings.
+
+        The spin is extrapolated to the drop instant from the window-mean tachometer lines
+        (:mod:`labkit.protocols.drop_spin`), not the last line, which lags a spinning-up
+        floator and biased Eq. 6.37's C high by 1-1.5 %."""
+        spins = fresh_samples([(r.t, r.value) for r in ctx.tach_readings("floator_tach", held_at)
+                               if r.t <= ctx.now()], loss)
+        rotor = [r.value for r in ctx.tach_readings("rotor_tach", held_at) if r.t <= last_held]
+        if not spins or not rotor:
+            return None
+        spacing = line_spacing([t for t, _ in spins])
+        t_drop = drop_instant(last_held, gone_t, spins[-1][0], spacing)
+        spins = [s for s in spins if s[0] <= t_drop + spacing]
+        return {"rotor_rad_s": statistics.fmean(rotor), "spin_rad_s": spin_at(spins, t_drop),
+                "cause": cause, "hold_s": t_drop - held_at}
 
     def run_step(self, ctx: RunContext, step: Step) -> dict[str, Any]:
         p = ctx.params

@@ -41,11 +41,13 @@ def test_spin_critical_pairs_follow_the_plant_law(tmp_path):
     for p in points:
         assert not p["no_drop"]
         expected = law.critical_spin(p["rotor_rad_s"])
-        # 1 % plant noise (3 sigma) plus the tachometer's 0.1 s averaging window while spinning up
+        # the plant draws the drop spin with 1 % noise: 3 sigma
         assert p["spin_rad_s"] == pytest.approx(expected, rel=0.03, abs=15), p
         assert p["k"] == pytest.approx(p["spin_rad_s"] / p["rotor_rad_s"] - 1)
     c = outcome.results["fit"]["params"]["C"]
-    assert c["value"] == pytest.approx(4.7e5, rel=0.03)
+    # no bias: the plant's C lies inside the fit's 95 % interval (registering the last
+    # tachometer line before the drop put it 3 stderr above)
+    assert abs(c["value"] - 4.7e5) <= 2 * c["stderr"], c
     drops = [json.loads(line) for line in (outcome.session / "events.jsonl").read_text().splitlines()]
     assert any(e["type"] == "drop" and e["cause"] == "balance" for e in drops)
 
