@@ -16,7 +16,7 @@ import math
 import time
 
 QUICK_SCENES = ["conical_5_1"]
-FULL_SCENES = ["conical_5_1", "fig5_13", "mbs_fig6_1", "planar_5_56"]
+FULL_SCENES = ["conical_5_1", "fig5_7", "fig5_13", "mbs_fig6_1", "planar_5_56"]
 
 
 def register(benches: argparse._SubParsersAction) -> None:

@@ -18,15 +18,13 @@ import numpy as np
 from scipy.integrate import cumulative_simpson, simpson
 
 from labkit.numerics import kernels, metrics
-from labkit.sim import scene_from_dict, simulate
+from labkit.sim import load_scene, scene_from_dict, simulate
 from labkit.sim.equilibrium import cone_angle_isotropic
 from labkit.sim.result import SimResult
 from labkit.sim.rotations import axis_angle
 
 # S1 (paper Sec. 5.1, NUMERICS.md 2.3)
 I_S1, OMEGA_S1, TAU_C_S1, TAU_S_S1 = 1e-7, 80 * math.pi, 1e-3, 4.633e-3
-# S5 Fig. 5.7 ellipsoid
-I_FIG57 = (1.123736e-7, 6.623701e-8, 1.3780954e-7)
 
 
 @dataclass
@@ -329,26 +327,9 @@ def s4(level: str) -> Verdict:
 
 
 def fig5_7_scene():
-    """Fig. 5.7 ellipsoid; the caption's signs of phi0 and v0 flipped (NUMERICS.md 2.4)."""
-    return scene_from_dict(
-        {
-            "scene": {"name": "S5-fig5_7", "cycles": 45},
-            "field": {"kind": "rotating", "omega_rad_s": 60 * math.pi, "tau_c_Nm": 1e-3, "tau_s_Nm": 2.4e-4},
-            "body": [
-                {
-                    "name": "ellipsoid",
-                    "mass_g": 6.385,
-                    "inertia_kg_m2": list(I_FIG57),
-                    "moment_Am2": 1.0,
-                    "initial": {
-                        "euler_zxz_rad": [0.0, 0.254, 0.0],
-                        "angular_velocity_rad_s": [0.002, 80.95, 6.858],
-                    },
-                }
-            ],
-        },
-        source="<S5>",
-    )
+    """The bundled Fig. 5.7 ellipsoid scene (``fig5_7``: the caption's signs of phi0 and v0 read
+    in the convention of Eq. 5.21, NUMERICS.md 2.4)."""
+    return load_scene("fig5_7")
 
 
 def azimuth_acceleration(res: SimResult) -> float:
