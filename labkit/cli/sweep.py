@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 
 from labkit.numerics.checks import NumericsError
 
@@ -78,17 +79,25 @@ def run(args: argparse.Namespace) -> int:
         points = stability_map.map_points(parse_ratios(args.ratios), bias_y=args.bias)
     for p in points:  # the horizon is part of a point's identity in the store
         p["cycles"], p["steps_per_period"] = args.cycles, args.steps
-    res = run_sweep(
-        points,
-        stability_map.Evaluator(args.cycles, args.steps),
-        store=args.out,
-        chunk=args.chunk,
-        workers=args.workers,
-        scheduler=args.scheduler,
-        timeout_s=args.timeout,
-        progress=not args.no_progress,
-        description=f"table5.3 {len(points)} points",
-    )
+    try:
+        res = run_sweep(
+            points,
+            stability_map.Evaluator(args.cycles, args.steps),
+            store=args.out,
+            chunk=args.chunk,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            timeout_s=args.timeout,
+            progress=not args.no_progress,
+            description=f"table5.3 {len(points)} points",
+        )
+    except KeyboardInterrupt:
+        if args.out:
+            saved = f"finished chunks are saved in {args.out}; run the same command to resume"
+        else:
+            saved = "nothing was saved: give --out RESULTS.jsonl to make a sweep resumable"
+        print(f"labkit sweep: interrupted; {saved}", file=sys.stderr)
+        return 130
     print(
         f"{len(res.results)} points: {res.computed} computed now, {res.reused} reused from "
         f"{args.out or 'nothing'}; {args.cycles} cycles at {args.steps} steps per period each"
@@ -117,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
             row = "".join("S" if verdicts.get(x) == "stable" else "u" for x in ratios)
             first = next((x for x in ratios if verdicts.get(x) == "stable"), math.nan)
             print(
-                f"({i_a:.3g}, {i_r:.3g}, {w:.4g}, {tau_c:.3g})".ljust(60) + f" {row}   {first:>8.3g}"
+                f"({i_a:.4g}, {i_r:.4g}, {w:.4g}, {tau_c:.3g})".ljust(60) + f" {row}   {first:>8.3g}"
                 f"   {float(min_static_ratio(tau_c, i_r, w)):>8.3g}"
             )
     if args.json:
