@@ -33,8 +33,12 @@ def _positive(text: str) -> float:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    parser = sub.add_parser("analyse", help="analyse laser-trace or stroboscope video",
-                            description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = sub.add_parser(
+        "analyse",
+        help="analyse laser-trace or stroboscope video",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     kinds = parser.add_subparsers(dest="kind", metavar="KIND")
 
     laser = kinds.add_parser("laser", help="circle/ellipse/trochoid pattern of a reflected laser beam")
@@ -44,7 +48,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     laser.add_argument("--stride", type=int, default=1, help="analyse every N-th frame (default 1)")
     laser.add_argument("--roi", type=_roi, help="x,y,w,h region of interest in px (default: whole frame)")
     laser.add_argument("--no-subpixel", action="store_true", help="skip sub-pixel refinement")
-    laser.add_argument("--chunks", type=int, default=8, help="time chunks for drift tracking (default 8)")
+    laser.add_argument("--chunk-s", type=float, default=0.5,
+                       help="seconds of video per accumulation chunk: time resolution of drift (default 0.5)")
     laser.add_argument("--json", metavar="OUT", help="write the result as JSON ('-' for stdout)")
     laser.add_argument("--rerun", metavar="SPEC", help="stream frames and overlays to rerun")
     laser.set_defaults(func=run_laser)
@@ -55,8 +60,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     strobe.add_argument("--strobe-hz", type=_positive, help="flash rate, one flash per frame")
     strobe.add_argument("--apparent-hz", type=_positive, help="apparent frequency at the file's frame rate")
     strobe.add_argument("--mm-per-px", type=_positive, help="scale for mm outputs")
-    strobe.add_argument("--point", choices=["tip", "bottom", "centroid"], default="tip",
-                        help="body point whose trajectory is classified (default tip)")
+    strobe.add_argument(
+        "--point",
+        choices=["tip", "bottom", "centroid"],
+        default="tip",
+        help="body point whose trajectory is classified (default tip)",
+    )
     strobe.add_argument("--json", metavar="OUT", help="write the result as JSON ('-' for stdout)")
     strobe.add_argument("--rerun", metavar="SPEC", help="stream frames and overlays to rerun")
     strobe.set_defaults(func=run_strobe)
@@ -71,8 +80,10 @@ def open_stream(spec: str | None, kind: str):
     try:
         from labkit.stream.vision import open_vision_stream  # provided by the streams work
     except ImportError:
-        print("labkit analyse: rerun streaming of vision results is not available yet; "
-              "continuing without it", file=sys.stderr)
+        print(
+            "labkit analyse: rerun streaming of vision results is not available yet; continuing without it",
+            file=sys.stderr,
+        )
         return None
     return open_vision_stream(spec, kind)
 
@@ -97,17 +108,23 @@ def _fmt(v, digits: int = 2) -> str:
 def run_laser(args: argparse.Namespace) -> int:
     from labkit.vision.laser import LaserQuality, analyse_laser
 
-    if args.stride < 1 or args.chunks < 1:
-        raise VideoError(args.path, "--stride and --chunks must be at least 1")
+    if args.stride < 1 or not args.chunk_s > 0:
+        raise VideoError(args.path, "--stride must be at least 1 and --chunk-s positive")
     if (args.screen_distance_mm is None) != (args.mm_per_px is None):
         print("labkit analyse laser: tilt needs both --screen-distance-mm and --mm-per-px", file=sys.stderr)
-    quality = LaserQuality(stride=args.stride, roi=args.roi, subpixel=not args.no_subpixel,
-                           chunks=args.chunks)
+    quality = LaserQuality(
+        stride=args.stride, roi=args.roi, subpixel=not args.no_subpixel, chunk_s=args.chunk_s
+    )
     stream = open_stream(args.rerun, "laser")
     try:
         try:
-            result = analyse_laser(args.path, args.screen_distance_mm, args.mm_per_px, quality,
-                                   on_frame=stream.frame if stream else None)
+            result = analyse_laser(
+                args.path,
+                args.screen_distance_mm,
+                args.mm_per_px,
+                quality,
+                on_frame=stream.frame if stream else None,
+            )
         except ValueError as exc:
             raise VideoError(args.path, str(exc)) from None
         if stream:
@@ -130,17 +147,23 @@ def _print_laser(r: dict) -> None:
         return
     cx, cy = p["center_px"]
     major, minor = p["semi_axes_px"]
-    print(f"pattern: {p['type']}  centre ({cx:.2f}, {cy:.2f}) px  semi-axes {major:.2f} / {minor:.2f} px  "
-          f"rotation {p['rotation_deg']:.2f} deg  ellipticity {_fmt(p['ellipticity'], 3)}  "
-          f"rms residual {p['rms_residual_px']:.2f} px")
+    print(
+        f"pattern: {p['type']}  centre ({cx:.2f}, {cy:.2f}) px  semi-axes {major:.2f} / {minor:.2f} px  "
+        f"rotation {p['rotation_deg']:.2f} deg  ellipticity {_fmt(p['ellipticity'], 3)}  "
+        f"rms residual {p['rms_residual_px']:.2f} px"
+    )
     if p["trochoid"]:
         t = p["trochoid"]
-        print(f"trochoid (Eq. 6.38): loops {p['loops']}  a {t['a']:.4f}  b {t['b']:.3f}  "
-              f"scale {t['scale_px']:.2f} px  rotation {t['rotation_deg']:.2f} deg")
+        print(
+            f"trochoid (Eq. 6.38): loops {p['loops']}  a {t['a']:.4f}  b {t['b']:.3f}  "
+            f"scale {t['scale_px']:.2f} px  rotation {t['rotation_deg']:.2f} deg"
+        )
     if r["tilt_rad"]:
         t = r["tilt_rad"]
-        print(f"tilt amplitude: major {t['major']:.5f} rad ({math.degrees(t['major']):.3f} deg), "
-              f"minor {t['minor']:.5f} rad ({math.degrees(t['minor']):.3f} deg)")
+        print(
+            f"tilt amplitude: major {t['major']:.5f} rad ({math.degrees(t['major']):.3f} deg), "
+            f"minor {t['minor']:.5f} rad ({math.degrees(t['minor']):.3f} deg)"
+        )
     if r["quality"].get("truncated"):
         print(f"warning: {r['quality']['truncated']}")
 
@@ -152,8 +175,15 @@ def run_strobe(args: argparse.Namespace) -> int:
         raise LabkitError("labkit analyse strobe: give --rotor-hz and --strobe-hz together")
     stream = open_stream(args.rerun, "strobe")
     try:
-        result = analyse_strobe(args.path, args.rotor_hz, args.strobe_hz, args.apparent_hz, args.mm_per_px,
-                                args.point, on_frame=stream.frame if stream else None)
+        result = analyse_strobe(
+            args.path,
+            args.rotor_hz,
+            args.strobe_hz,
+            args.apparent_hz,
+            args.mm_per_px,
+            args.point,
+            on_frame=stream.frame if stream else None,
+        )
         if stream:
             stream.result(result)
     finally:
@@ -162,12 +192,16 @@ def run_strobe(args: argparse.Namespace) -> int:
     _write_json(result, args.json)
     if args.json != "-":
         r = result
-        print(f"{r['source']}: {r['frames']} frames ({r['quality']['frames_with_body']} with a body), "
-              f"phase from {r['phase_source']}")
-        print(f"apparent frequency {r['apparent_hz']:.4f} Hz  "
-              f"tilt amplitude {r['tilt_amplitude_rad']:.4f} rad "
-              f"({math.degrees(r['tilt_amplitude_rad']):.2f} deg)  lateral amplitude "
-              f"{r['lateral_amplitude_px']:.2f} px  RC offset (Eq. 5.97) {_fmt(r['rc_offset_px'])} px "
-              f"{r['rc_offset_direction'] or ''}")
+        print(
+            f"{r['source']}: {r['frames']} frames ({r['quality']['frames_with_body']} with a body), "
+            f"phase from {r['phase_source']}"
+        )
+        print(
+            f"apparent frequency {r['apparent_hz']:.4f} Hz  "
+            f"tilt amplitude {r['tilt_amplitude_rad']:.4f} rad "
+            f"({math.degrees(r['tilt_amplitude_rad']):.2f} deg)  lateral amplitude "
+            f"{r['lateral_amplitude_px']:.2f} px  RC offset (Eq. 5.97) {_fmt(r['rc_offset_px'])} px "
+            f"{r['rc_offset_direction'] or ''}"
+        )
         print(f"{r['quality']['point']} trajectory: {r['point_pattern']['type']}")
     return 0

@@ -27,19 +27,19 @@ from labkit.vision.trace import trace_points
 
 FrameHook = Callable[[int, float, np.ndarray], None]
 MAX_POINTS_PER_CHUNK = 4000
-MIN_FRAMES_PER_CHUNK = 12
+MIN_FRAMES_PER_CHUNK = 4
 
 
 @dataclass
 class LaserQuality:
     """Speed/accuracy settings: analyse every ``stride``-th frame, inside ``roi`` (x, y, w, h) or
-    the whole frame (None), with or without sub-pixel refinement, in ``chunks`` time chunks (the
-    resolution of the centre's drift)."""
+    the whole frame (None), with or without sub-pixel refinement, accumulating ``chunk_s`` seconds
+    of video per chunk (the time resolution of the centre's drift)."""
 
     stride: int = 1
     roi: tuple[int, int, int, int] | None = None
     subpixel: bool = True
-    chunks: int = 8
+    chunk_s: float = 0.5
 
 
 @dataclass
@@ -66,16 +66,14 @@ def _clip_roi(roi: tuple[int, int, int, int], size: tuple[int, int]) -> tuple[in
 
 def accumulate(source: FrameSource, quality: LaserQuality, on_frame: FrameHook | None = None,
                on_chunk: Callable[[Chunk], None] | None = None, prefetch: int = 4) -> list[Chunk]:
-    """Running per-pixel maximum of the frames, one accumulator per time chunk (at least
-    ``MIN_FRAMES_PER_CHUNK`` analysed frames each, so every chunk covers the pattern).
+    """Running per-pixel maximum of the frames, one accumulator per ``quality.chunk_s`` of video
+    (and at least ``MIN_FRAMES_PER_CHUNK`` analysed frames).
     ``on_chunk`` gets each chunk as soon as it is complete; decoding runs ``prefetch`` frames
     ahead in a thread."""
-    per_chunk = MIN_FRAMES_PER_CHUNK * quality.stride
-    if source.frame_count > 0:
-        per_chunk = max(per_chunk, math.ceil(source.frame_count / quality.chunks))
+    fps = source.fps or 30.0
+    per_chunk = max(MIN_FRAMES_PER_CHUNK * quality.stride, round(quality.chunk_s * fps))
     roi = _clip_roi(quality.roi, source.size) if quality.roi is not None else None
     chunks: list[Chunk] = []
-    fps = source.fps or 1.0
     for index, frame in source.frames(quality.stride, prefetch=prefetch):
         if on_frame is not None:
             on_frame(index, index / fps, frame)
@@ -150,9 +148,12 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
     source = open_frames(path)
     with ThreadPoolExecutor(max_workers=1) as pool:  # trace extraction overlaps decoding
         futures: dict[int, Future] = {}
-        chunks = accumulate(source, quality, on_frame,
-                            on_chunk=lambda c: futures.setdefault(
-                                id(c), pool.submit(trace_points, c.image, c.offset, quality.subpixel)))
+
+        def extract(c: Chunk) -> None:
+            futures[id(c)] = pool.submit(trace_points, c.image, c.offset, quality.subpixel,
+                                         frame_px=max(source.size))
+
+        chunks = accumulate(source, quality, on_frame, on_chunk=extract)
         t_frames = time.perf_counter()
         _check_exposure(chunks, source.path)
         traces = [futures[id(c)].result() for c in chunks]

@@ -36,14 +36,15 @@ def brightness(image: np.ndarray) -> np.ndarray:
     return cv2.max(cv2.max(b, g), r)
 
 
-def background(gray: np.ndarray) -> np.ndarray:
+def background(gray: np.ndarray, frame_px: int | None = None) -> np.ndarray:
     """Smooth background (screen light, gradients, lamps) as float32: a grey-scale opening with a
     disc of ~1/10 of the image size on a 4x reduced copy removes every bright structure narrower
     than that (trace lines, their halo, small loops) and keeps broad light and the dark hole."""
     h, w = gray.shape
     sw, sh = max(1, w // 4), max(1, h // 4)
     small = cv2.resize(gray, (sw, sh), interpolation=cv2.INTER_AREA)
-    k = max(3, int(0.1 * max(sw, sh)) | 1)
+    k = max(3, int(0.1 * (frame_px or max(h, w)) / 4) | 1)
+    k = min(k, max(3, (min(sw, sh) - 1) | 1))
     disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
     opened = cv2.morphologyEx(small, cv2.MORPH_OPEN, disc, borderType=cv2.BORDER_REPLICATE)
     opened = cv2.blur(opened, (max(1, k // 2), max(1, k // 2)))
@@ -58,15 +59,17 @@ def robust_noise(residual: np.ndarray) -> float:
 
 
 def trace_points(image: np.ndarray, offset: tuple[int, int] = (0, 0), subpixel: bool = True,
-                 snr: float = 8.0, relative_floor: float = 0.12) -> TracePoints:
-    """Pixels that belong to the light trace in ``image`` (BGR or grey).
+                 snr: float = 8.0, relative_floor: float = 0.12, frame_px: int | None = None) -> TracePoints:
+    """Centre-line points of the light trace in ``image`` (BGR or grey), plus every trace pixel.
 
-    A pixel is kept when its smoothed residual above background is >= half of the local maximum
-    within ``r`` px (r ~ 1 % of the image size) and that local maximum exceeds ``snr`` times the
-    noise and ``relative_floor`` times the global peak. Weights are residuals (sub-pixel) or 1.
+    A pixel belongs to the trace when its smoothed residual above background is >= half of the
+    local maximum within ``r`` px (r ~ 1 % of the frame size) and that local maximum exceeds
+    ``snr`` times the noise and ``relative_floor`` times the global peak. The band is thinned to its
+    centre line (:func:`_centreline`). Weights are residuals (sub-pixel) or 1. ``frame_px`` is the
+    long side of the full frame when ``image`` is a region of interest (window sizes scale with it).
     """
     gray = brightness(image)
-    res = gray.astype(np.float32) - background(gray)
+    res = gray.astype(np.float32) - background(gray, frame_px)
     noise = robust_noise(res)
     smooth = cv2.GaussianBlur(res, (0, 0), 1.0)
     peak = float(smooth.max())
@@ -75,7 +78,7 @@ def trace_points(image: np.ndarray, offset: tuple[int, int] = (0, 0), subpixel: 
     if peak <= snr * noise:
         return empty
     h, w = gray.shape
-    r = max(5, int(round(0.01 * max(h, w))))
+    r = max(5, int(round(0.01 * (frame_px or max(h, w)))))
     ys, xs = np.nonzero(smooth >= floor)
     if len(xs) == 0:
         return empty
