@@ -239,6 +239,19 @@ def _check_port_url(sec: _Section, url: str) -> None:
     scheme = urllib.parse.urlsplit(url).scheme
     if scheme == "" and not url.startswith("/") and not url.upper().startswith("COM"):
         raise sec.error("port", f"{url!r} is neither a device path nor a URL (sim://, socket://, ...)")
+    if scheme == "sim":
+        # an emulated device is checked whole here (emulator, seed, fault names), before any
+        # port opens, so a typo is a file:key error and not a failed, "resumable" session
+        from labkit.emulators.base import emulator_class
+        from labkit.errors import PortURLError
+        from labkit.io.urls import parse_sim_url
+
+        try:
+            emulator_class(parse_sim_url(url).protocol)
+        except PortURLError as exc:
+            raise sec.error("port", exc.reason) from None
+        except KeyError as exc:
+            raise sec.error("port", str(exc.args[0])) from None
 
 
 def _device(file: str, role: str, table: Any, check_protocols: bool) -> DeviceConfig:

@@ -35,12 +35,28 @@ COMMON_FAULTS = {
     "wrong_baud": "1: the host's bytes are received as if at the wrong baud (all garbled)",
 }
 
+#: protocol-specific fault knobs (documented on each emulator module); with COMMON_FAULTS
+#: the only names :func:`parse_faults` accepts, so a typo cannot silently test nothing
+PROTOCOL_FAULTS = {
+    "overload": "balances, tachometers, motor controllers: over-range / over-temperature",
+    "underload": "balances: probability per weight reply of an underload reply",
+    "unstable": "balances: probability a reply is forced dynamic",
+    "error_reply": "balances, labkit-tach: probability a command gets an error reply",
+    "reset_at": "s after open of a device reset (power-on state)",
+    "mid_frame": "the first bytes after open are the tail of a frame/line",
+    "noisy": "labkit-tach: probability per line of a rejected glitch",
+    "low_vin": "Pololu SMC: low-VIN error",
+    "fault_code": "VESC: report this fault code and refuse to run",
+}
+KNOWN_FAULTS = frozenset(COMMON_FAULTS) | frozenset(PROTOCOL_FAULTS)
+
 
 def parse_faults(text: str | None) -> dict[str, float]:
     """Parse ``"garbage:0.1,disconnect_at:5"`` (also ``=`` or ``;``) into a dict of floats.
 
     A bare name means 1 (``"overload"`` -> ``{"overload": 1.0}``). Raises ValueError naming
-    the bad item.
+    the bad item, also for a name outside :data:`KNOWN_FAULTS` (a mistyped fault would
+    otherwise run a clean emulator).
     """
     out: dict[str, float] = {}
     if not text:
@@ -50,10 +66,9 @@ def parse_faults(text: str | None) -> dict[str, float]:
         if not item:
             continue
         sep = ":" if ":" in item else ("=" if "=" in item else None)
-        if sep is None:
-            out[item] = 1.0
-            continue
-        name, _, value = item.partition(sep)
+        name, _, value = item.partition(sep) if sep else (item, "", "1")
+        if name.strip() not in KNOWN_FAULTS:
+            raise ValueError(f"unknown fault {name.strip()!r}; known: {', '.join(sorted(KNOWN_FAULTS))}")
         try:
             out[name.strip()] = float(value)
         except ValueError:

@@ -69,6 +69,16 @@ class _MotorEmulator(Emulator):
     def check_timeout(self, t: float) -> None:
         """Controller-side command timeouts (subclasses)."""
 
+    def watchdog_deadline(self) -> float | None:
+        """When the command timeout will stop the motor if no command comes (None: never)."""
+        return None
+
+    def receive(self, data: bytes, t: float) -> None:
+        super().receive(data, t)
+        # hand the timeout to the plant, so it stops the motor on time even if this port
+        # is not used again (the tachometer's port still sees the speed fall)
+        self.plant.motor(self.motor_name).watchdog_at = self.watchdog_deadline()
+
 
 # ------------------------------------------------------------------------------------------
 # Pololu Simple Motor Controller G2
@@ -156,6 +166,11 @@ class PololuSmcEmulator(_MotorEmulator):
         """Drive the plant from target and errors (any error stops the motor)."""
         self.running_speed = 0 if self.error_status() else self.target
         self.drive(self.running_speed / 3200.0, t)
+
+    def watchdog_deadline(self) -> float | None:
+        if self.command_timeout_ms <= 0 or self.latched & (1 << BIT_TIMEOUT):
+            return None
+        return self.last_command_t + self.command_timeout_ms / 1000.0
 
     def check_timeout(self, t: float) -> None:
         if self.command_timeout_ms <= 0 or self.latched & (1 << BIT_TIMEOUT):
@@ -400,6 +415,11 @@ class VescEmulator(_MotorEmulator):
         self.power_on(t)
         self.silent_until = t + self.reboot_s
         self.fault = 10  # booting from watchdog reset
+
+    def watchdog_deadline(self) -> float | None:
+        if self.mode is None or self.timed_out or self.timeout_ms <= 0:
+            return None
+        return self.last_command_t + self.timeout_ms / 1000.0
 
     def check_timeout(self, t: float) -> None:
         if self.mode is None or self.timed_out or self.timeout_ms <= 0:

@@ -47,7 +47,19 @@ class MotorPlant:
     #: (time, duty) of every change of commanded duty, newest last (bounded); for tests and logs
     duty_changes: list[tuple[float, float]] = field(default_factory=list)
 
+    #: clock time at which the controller's own command timeout will zero the duty unless a
+    #: command re-arms it (set by motor emulators): the timeout then acts even while nobody
+    #: talks to the controller's port (an emulator only runs when its port is used)
+    watchdog_at: float | None = None
+
     def advance(self, t: float) -> None:
+        if self.watchdog_at is not None and t >= self.watchdog_at:
+            at = max(self.watchdog_at, self.t)
+            self.watchdog_at = None
+            self.set_duty(0.0, at)
+        self._relax(t)
+
+    def _relax(self, t: float) -> None:
         if t <= self.t:
             return
         target = self.duty * self.max_speed_rad_s

@@ -45,6 +45,21 @@ def operator_pressed_enter() -> bool:
     return False
 
 
+def discard_pending_keys() -> None:
+    """Throw away lines typed before now on an interactive stdin (never blocks).
+
+    An Enter pressed while the rotor was still settling would otherwise sit in the terminal
+    buffer and end the next trial the moment it starts, before any spin was seen."""
+    try:
+        if not sys.stdin.isatty():
+            return
+        while select.select([sys.stdin], [], [], 0)[0]:
+            if not sys.stdin.readline():
+                return
+    except (OSError, ValueError):
+        pass
+
+
 class SpinCritical(ProtocolDef):
     name = "spin-critical"
     summary = "rotor speed and floator spin at the drop (Fig. 6.18, Eq. 6.37)"
@@ -117,6 +132,8 @@ class SpinCritical(ProtocolDef):
         """Watch one held floator until it drops; None if it never does."""
         p = ctx.params
         self._wait_held(ctx, threshold, after_drop)
+        if not ctx.clock.is_virtual:
+            discard_pending_keys()   # only a key pressed while watching this floator counts
         held_at = last_held = ctx.now()
         loss = rpm_to_rad_s(p["spin_loss_rpm"])
         spin_seen = False

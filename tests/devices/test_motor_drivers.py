@@ -330,3 +330,29 @@ def test_replugged_controller_is_in_its_power_on_state_and_stays_stopped(protoco
     status = again.status()
     assert status.errors == powered_on_errors and status.duty == 0.0
     assert rotor_duty() == 0.0
+
+
+@pytest.mark.parametrize("protocol, query, timeout_s", [("pololu_smc", "&command_timeout_ms=200", 0.2),
+                                                        ("vesc", "", 1.0)])
+def test_a_controller_timeout_stops_the_motor_even_if_its_port_is_never_used_again(
+        protocol, query, timeout_s):
+    # only the tachometer is read after the host hangs: the controller's timeout must still
+    # act on time (an emulator only runs when its own port is used)
+    motor, clock = open_motor(protocol, query)
+    tach_port = open_port("sim://labkit_tach?plant=m&rate_hz=20", clock=clock, timeout=0,
+                          **driver_class("tach", "labkit_tach").default_serial)
+    tach = driver_class("tach", "labkit_tach")(tach_port, clock, name="rotor_tach")
+    motor.enable()
+    motor.set_duty(0.5)
+    clock.sleep(3.0)
+    running = tach.latest().value
+    assert running > 0.4 * MAX_SPEED
+    hung_at = clock.now()
+    motor._job.cancel()               # host hangs: no more commands, nobody reads the motor port
+    clock.sleep(3.0)
+    assert tach.latest().value < 0.02 * running
+    when, duty = shared_plant("m").motor("rotor").duty_changes[-1]
+    assert duty == 0.0
+    assert hung_at < when <= hung_at + timeout_s
+    tach.close()
+    tach_port.close()

@@ -117,6 +117,11 @@ def test_bad_sim_urls_name_the_url_and_problem():
         open_port("sim://test_echo?seed=x", clock=VirtualClock())
     with pytest.raises(PortURLError, match="'abc' is not a number"):
         open_port("sim://test_echo?faults=delay:abc", clock=VirtualClock())
+    # a mistyped fault would otherwise run a clean emulator and the fault test would test nothing
+    with pytest.raises(PortURLError, match="unknown fault 'garbge'; known: delay, "):
+        open_port("sim://test_echo?faults=garbge:0.1", clock=VirtualClock())
+    with pytest.raises(PortURLError, match="unknown fault 'unplug'"):
+        open_port("sim://test_echo?faults=unplug", clock=VirtualClock())
 
 
 def test_native_urls_still_open():

@@ -82,6 +82,12 @@ settle_hold_s = 2
     (('port = "sim://pololu_smc?plant=t"', "port = 7"), "devices.rotor_motor.port", "must be str"),
     (('port = "sim://pololu_smc?plant=t"', 'port = "ttyUSB0"'), "devices.rotor_motor.port", "neither"),
     (('name = "t"', 'name = "t"\nauthor = "me"'), "rig.author", "unknown key"),
+    (("sim://labkit_tach?plant=t", "sim://labkit_tac?plant=t"), "devices.rotor_tach.port",
+     "no emulator 'labkit_tac'"),
+    (("sim://labkit_tach?plant=t", "sim://labkit_tach?plant=t&faults=garbge:0.1"),
+     "devices.rotor_tach.port", "unknown fault 'garbge'"),
+    (("sim://labkit_tach?plant=t", "sim://labkit_tach?plant=t&seed=one"), "devices.rotor_tach.port",
+     "seed='one' is not an integer"),
 ])
 def test_bad_rig_files_name_file_key_and_reason(change, key, reason):
     old, new = change

@@ -1,0 +1,83 @@
+"""spin-critical: the operator's Enter key registers a drop (real clock, stdin a terminal).
+
+The key is read from stdin only when it is a TTY; a pseudo-terminal gives the run a real
+one, and the test types Enter on its master side while a held floator is being watched.
+"""
+
+import os
+import sys
+import threading
+from pathlib import Path
+
+import pytest
+
+from labkit.emulators.plant import shared_plant
+from labkit.protocols.launch import execute, prepare_run
+from labkit.protocols.spin_critical import discard_pending_keys, operator_pressed_enter
+
+RIGS = Path(__file__).resolve().parents[2] / "rigs"
+
+
+class Operator:
+    """Presses Enter every 0.5 s once the rotor has settled (a sink sees the events)."""
+
+    def __init__(self, master: int) -> None:
+        self.master, self.settled, self.stop = master, threading.Event(), threading.Event()
+        self.spins_at_press: list[float] = []
+
+    def on_event(self, event: dict) -> None:
+        if event["type"] == "settled":
+            self.settled.set()
+
+    def run(self) -> None:
+        self.settled.wait(timeout=60)
+        while not self.stop.wait(0.5):
+            self.spins_at_press.append(shared_plant("fig618").floator.spin_rad_s)
+            os.write(self.master, b"\n")
+
+
+def test_a_key_typed_before_the_trial_is_ignored(tmp_path, monkeypatch):
+    master, slave = os.openpty()
+    terminal = os.fdopen(slave, "r", buffering=1)
+    monkeypatch.setattr(sys, "stdin", terminal)
+    os.write(master, b"\n\n")             # typed while nothing was being watched
+    try:
+        discard_pending_keys()
+        assert not operator_pressed_enter()
+        os.write(master, b"\n")
+        assert operator_pressed_enter()
+        assert not operator_pressed_enter()
+    finally:
+        terminal.close()
+        os.close(master)
+
+
+def test_enter_on_the_terminal_registers_the_drop(tmp_path, monkeypatch):
+    master, slave = os.openpty()
+    terminal = os.fdopen(slave, "r", buffering=1)
+    monkeypatch.setattr(sys, "stdin", terminal)
+    # 9000 RPM: the plant would drop the floator only after ~7 s of spin-up, so the key comes first
+    operator = Operator(master)
+    prep = prepare_run(RIGS / "emulated-fig618.toml", "spin-critical",
+                       ["start_rpm=9000", "stop_rpm=9000", "max_trials=1"], clock="real",
+                       session_root=tmp_path, sinks=[operator])
+    typing = threading.Thread(target=operator.run, daemon=True)
+    typing.start()
+    try:
+        outcome = execute(prep, tmp_path)
+    finally:
+        operator.stop.set()
+        operator.settled.set()
+        typing.join(timeout=5)
+        terminal.close()
+        os.close(master)
+    assert outcome.status == "completed", outcome.reason
+    assert operator.spins_at_press, "Enter was never pressed"
+    [point] = outcome.results["points"]
+    [trial] = point["trials"]
+    assert trial["cause"] == "key"
+    assert shared_plant("fig618").floator.drops == 0        # the plant itself never dropped it
+    # the pair is the spin when Enter was pressed (the floator spins up ~100 rad/s per s):
+    # the first press after the trial began, not one typed while the rotor settled
+    assert any(abs(trial["spin_rad_s"] - spin) < 30.0 for spin in operator.spins_at_press)
+    assert point["rotor_rpm"] == pytest.approx(9000, rel=0.02)
