@@ -89,6 +89,19 @@ def _headline(reports, verdicts, quick: bool) -> tuple[dict, dict]:
         res = _run("mbs_fig6_1", cycles7)
         two_s = res.wall_s * 1e4 / cycles7
         two_drift = max(res.invariant_drift, res.momentum_drift or 0.0, res.angular_momentum_drift or 0.0)
+    growth = [
+        g
+        for g in (
+            s1.measured.get("drift_growth") if s1 else None,
+            s7.measured.get("auto_E_drift_growth") if s7 else None,
+        )
+        if g is not None
+    ]
+    if growth:
+        notes["secular_growth"] = (
+            f"max |dK| over the run / over its first 10 %: {max(growth):.3g} "
+            "(bounded error ~1, linear drift ~10)"
+        )
     if cycles7 < 1e4:
         notes["two_body_1e4_cycles_s"] = f"measured over {cycles7:g} cycles, scaled x{1e4 / cycles7:g}"
         notes["max_invariant_drift_1e4_cycles"] = f"two-body drift measured over {cycles7:g} cycles"

@@ -81,28 +81,40 @@ def _short(x) -> str:
     return fmt(float(x), ".3g")
 
 
+PLOT_METRICS = (
+    ("final state error at t = kT (dimensionless)", lambda p: p.error),
+    ("invariant drift (relative)", lambda p: p.invariant_drift),
+    ("cone-angle error (rad)", lambda p: p.errors.get("cone_angle", math.nan)),
+)
+
+
 def plot(reports: list[SceneReport], path: str) -> None:
-    """Wall time against final state error, one panel per scene, one line per integrator."""
+    """Wall time against each error metric (rows) for every scene (columns), one line per
+    integrator; failed runs are drawn as red crosses at the right edge."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, len(reports), figsize=(5.5 * len(reports), 4.5), squeeze=False)
-    for ax, rep in zip(axes[0], reports, strict=True):
-        for name in dict.fromkeys(p.integrator for p in rep.points):
-            pts = [(p.error, p.wall_s) for p in rep.points if p.integrator == name]
-            ok = [(e, w) for e, w in pts if math.isfinite(e) and e > 0 and math.isfinite(w)]
-            if ok:
-                ax.loglog(*zip(*ok, strict=True), "o-", label=name)
-            bad = [w for e, w in pts if not (math.isfinite(e) and e > 0) and math.isfinite(w)]
-            if bad:
-                ax.loglog([1.0] * len(bad), bad, "x", color="red", label=f"{name} failed")
-        ax.set_xlabel("final state error at t = kT (dimensionless)")
-        ax.set_ylabel("wall time (s), compile excluded")
-        ax.set_title(f"{rep.scene} ({rep.cycles:g} cycles)")
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=8)
+    rows, cols = len(PLOT_METRICS), len(reports)
+    fig, axes = plt.subplots(rows, cols, figsize=(5.0 * cols, 3.8 * rows), squeeze=False)
+    for c, rep in enumerate(reports):
+        for r, (label, metric) in enumerate(PLOT_METRICS):
+            ax = axes[r][c]
+            for name in dict.fromkeys(p.integrator for p in rep.points):
+                pts = [(metric(p), p.wall_s) for p in rep.points if p.integrator == name]
+                ok = [(e, w) for e, w in pts if math.isfinite(e) and e > 0 and math.isfinite(w)]
+                if ok:
+                    ax.loglog(*zip(*ok, strict=True), "o-", label=name, markersize=4)
+                failed = [p for p in rep.points if p.integrator == name and p.status == "failed"]
+                if failed:
+                    ax.plot([], [], "x", color="red", label=f"{name}: {len(failed)} failed")
+            ax.set_xlabel(label)
+            ax.set_ylabel("wall time (s), compile excluded")
+            if r == 0:
+                ax.set_title(f"{rep.scene} ({rep.cycles:g} cycles)")
+            ax.grid(True, which="both", alpha=0.3)
+            ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=100)
     plt.close(fig)
