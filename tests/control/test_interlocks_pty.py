@@ -73,3 +73,37 @@ def test_tachometer_unplugged_over_ptys():
     zeroed = motor.zeroed_since(interlock[0]["t"] - SLACK)
     assert zeroed is not None and abs(zeroed - interlock[0]["t"]) <= SLACK
     assert motor.duty == 0.0
+
+
+@pytest.mark.timeout(60)
+def test_sigint_over_ptys():
+    outcome, marks, sink, motor, _ = run_on_ptys(RIG, sigint_in_step=0)
+    assert outcome.status == "interrupted"
+    zeroed = motor.zeroed_since(marks["signalled_at"])
+    assert zeroed is not None and zeroed - marks["signalled_at"] <= SLACK
+
+
+@pytest.mark.timeout(60)
+def test_over_speed_over_ptys():
+    # feed-forward calibrated for half the real full speed: the rotor overshoots to ~2x target
+    text = RIG.replace("full_speed_rpm = 23873", "full_speed_rpm = 11000").replace(
+        "max_speed_rpm = 24000", "max_speed_rpm = 12000")
+    outcome, marks, sink, motor, _ = run_on_ptys(text, speed_rpm=11500.0, hold_s=6.0)
+    assert outcome.status == "failed"
+    interlock = sink.of_type("interlock")
+    assert interlock and interlock[0]["reason"].startswith("over-speed")
+    zeroed = motor.zeroed_since(interlock[0]["t"] - SLACK)
+    assert zeroed is not None and abs(zeroed - interlock[0]["t"]) <= SLACK
+
+
+@pytest.mark.timeout(60)
+def test_controller_error_over_ptys():
+    # the controller resets 1.5 s after open (mid-run): it re-arms safe start, an error flag
+    text = RIG.replace("role=rotor_motor", "role=rotor_motor&faults=reset_at:1.5")
+    outcome, marks, sink, motor, _ = run_on_ptys(text, hold_s=6.0)
+    assert outcome.status == "failed"
+    interlock = sink.of_type("interlock")
+    assert interlock and "reports errors" in interlock[0]["reason"], interlock
+    zeroed = motor.zeroed_since(interlock[0]["t"] - SLACK)
+    assert zeroed is not None and abs(zeroed - interlock[0]["t"]) <= SLACK
+    assert motor.duty == 0.0
