@@ -79,12 +79,13 @@ def trace_points(image: np.ndarray, offset: tuple[int, int] = (0, 0), subpixel: 
         return empty
     h, w = gray.shape
     r = max(5, int(round(0.01 * (frame_px or max(h, w)))))
-    ys, xs = np.nonzero(smooth >= floor)
-    if len(xs) == 0:
+    _, bright = cv2.threshold(smooth, floor, 255, cv2.THRESH_BINARY)
+    bx, by, bw, bh = cv2.boundingRect(bright.astype(np.uint8))
+    if bw == 0 or bh == 0:
         return empty
     # only the bright region's bounding box matters (plus the window)
-    x0, y0 = max(0, int(xs.min()) - r - 2), max(0, int(ys.min()) - r - 2)
-    x1, y1 = min(w, int(xs.max()) + r + 3), min(h, int(ys.max()) + r + 3)
+    x0, y0 = max(0, bx - r - 2), max(0, by - r - 2)
+    x1, y1 = min(w, bx + bw + r + 2), min(h, by + bh + r + 2)
     smooth, res = smooth[y0:y1, x0:x1], res[y0:y1, x0:x1]
     local = cv2.dilate(smooth, np.ones((2 * r + 1, 2 * r + 1), np.uint8))  # square: separable, fast
     mask = (smooth >= 0.5 * local) & (local >= floor) & (smooth > 0)
@@ -96,13 +97,13 @@ def _centreline(mask: np.ndarray, res: np.ndarray, offset: tuple[int, int], subp
     """Thin the trace band to its centre line: ridge of the distance transform (the medial axis,
     insensitive to a saturated flat top), then optionally move each ridge pixel to the intensity
     centroid of a window as wide as the band (sub-pixel refinement)."""
-    ys0, xs0 = np.nonzero(mask)
-    if len(xs0) == 0:
+    bx, by, bw, bh = cv2.boundingRect(mask.astype(np.uint8))
+    if bw == 0 or bh == 0:
         return TracePoints(np.zeros((0, 2)), np.zeros(0), peak, noise)
     # work inside the trace's bounding box (plus a margin for the windows)
     pad = 14
-    x0, y0 = max(0, xs0.min() - pad), max(0, ys0.min() - pad)
-    x1, y1 = min(mask.shape[1], xs0.max() + pad + 1), min(mask.shape[0], ys0.max() + pad + 1)
+    x0, y0 = max(0, bx - pad), max(0, by - pad)
+    x1, y1 = min(mask.shape[1], bx + bw + pad), min(mask.shape[0], by + bh + pad)
     mask, res = mask[y0:y1, x0:x1], res[y0:y1, x0:x1]
     offset = (offset[0] + x0, offset[1] + y0)
     m8 = mask.astype(np.uint8)
