@@ -12,7 +12,7 @@ the rows), motion blur (phase span of the exposure), noise, background gradient,
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass
 
 import cv2
@@ -64,9 +64,24 @@ def strobe_truth(spec: StrobeSpec) -> dict:
             "phase_per_frame": phases}
 
 
-def body_polygon(spec: StrobeSpec, psi: float) -> np.ndarray:
-    """Corners (4, 2) of the body at rotor phase psi (image coordinates, y down)."""
-    theta = spec.tilt_amplitude_rad * math.sin(psi)
+def tilt_from_angles(times_s: np.ndarray, tilt_rad: np.ndarray) -> Callable[[float], float]:
+    """A tilt track from a simulator run (angle in the image plane over time), linearly
+    interpolated and repeated with the run's period, for ``render_strobe(spec, tilt_of_time=...)``."""
+    t = np.asarray(times_s, float)
+    a = np.asarray(tilt_rad, float)
+    period = t[-1] - t[0]
+
+    def tilt(time_s: float) -> float:
+        return float(np.interp(t[0] + (time_s - t[0]) % period, t, a))
+
+    return tilt
+
+
+def body_polygon(spec: StrobeSpec, psi: float, theta: float | None = None) -> np.ndarray:
+    """Corners (4, 2) of the body at rotor phase psi, or at tilt ``theta`` if given (image
+    coordinates, y down)."""
+    if theta is None:
+        theta = spec.tilt_amplitude_rad * math.sin(psi)
     cx = spec.center_px[0] - spec.rc_offset_px * math.tan(theta)
     cy = spec.center_px[1]
     u = np.array([math.sin(theta), -math.cos(theta)])  # along the axis, up
@@ -76,16 +91,22 @@ def body_polygon(spec: StrobeSpec, psi: float) -> np.ndarray:
     return np.array([c + hl * u + hw * n, c + hl * u - hw * n, c - hl * u - hw * n, c - hl * u + hw * n])
 
 
-def _draw(spec: StrobeSpec, psi: float) -> np.ndarray:
+def _draw(spec: StrobeSpec, psi: float, tilt_of_time: Callable[[float], float] | None) -> np.ndarray:
     w, h = spec.size
     img = np.zeros((h, w), np.uint8)
-    pts = np.round(body_polygon(spec, psi) * 16).astype(np.int32)
+    theta = None
+    if tilt_of_time is not None:  # rotor phase -> time since the first flash
+        theta = tilt_of_time((psi - spec.phase0_rad) / (2 * math.pi * spec.rotor_hz))
+    pts = np.round(body_polygon(spec, psi, theta) * 16).astype(np.int32)
     cv2.fillPoly(img, [pts], 255, lineType=cv2.LINE_AA, shift=4)
     return img.astype(np.float32) / 255.0
 
 
-def render_strobe(spec: StrobeSpec) -> Iterator[np.ndarray]:
-    """Yield ``spec.frames`` BGR uint8 frames."""
+def render_strobe(spec: StrobeSpec, tilt_of_time: Callable[[float], float] | None = None
+                  ) -> Iterator[np.ndarray]:
+    """Yield ``spec.frames`` BGR uint8 frames. ``tilt_of_time(t_s)`` (e.g. from a simulator via
+    :func:`tilt_from_angles`) replaces the sinusoidal tilt ``phi sin(psi)``; frame k is flashed at
+    ``t = k / strobe_hz`` and rows or blur samples at the matching rotor phase."""
     w, h = spec.size
     noise = NoiseBank(spec.size, spec.noise_sigma, np.random.default_rng(spec.seed))
     y, x = np.mgrid[0:h, 0:w].astype(np.float32)
@@ -103,7 +124,7 @@ def render_strobe(spec: StrobeSpec) -> Iterator[np.ndarray]:
             acc = np.zeros((h, w), np.float32)
             for j in range(blur_n):
                 off = spec.blur_rad * ((j + 0.5) / blur_n - 0.5)
-                acc += _draw(spec, psi_row + off)
+                acc += _draw(spec, psi_row + off, tilt_of_time)
             cover[r0:r1] = acc[r0:r1] / blur_n
         img = bg * (1 - cover) + body_level * cover
         img = cv2.merge([img, img, img])
