@@ -54,13 +54,20 @@ def _versions() -> dict[str, str]:
 
 
 def _git_commit() -> str | None:
-    here = Path(__file__).resolve().parent
+    """labkit's own commit when it runs from a git checkout; None otherwise (an installed
+    labkit inside some other repository, e.g. a venv in the user's project, is not that
+    repository's commit)."""
+    here = Path(__file__).resolve()
     try:
-        out = subprocess.run(["git", "-C", str(here), "rev-parse", "HEAD"], capture_output=True,
-                             text=True, timeout=5, check=False)
+        out = subprocess.run(["git", "-C", str(here.parent), "rev-parse", "--show-toplevel", "HEAD"],
+                             capture_output=True, text=True, timeout=5, check=False)
     except (OSError, subprocess.SubprocessError):
         return None
-    return out.stdout.strip() or None if out.returncode == 0 else None
+    lines = out.stdout.split()
+    if out.returncode != 0 or len(lines) != 2:
+        return None
+    top, commit = Path(lines[0]).resolve(), lines[1]
+    return commit if here == top / "labkit" / "session" / "writer.py" else None
 
 
 def _json_default(obj: Any) -> Any:
