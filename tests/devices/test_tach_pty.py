@@ -67,6 +67,20 @@ def test_lutron_over_a_pty_with_garbage():
     assert all(r.value == pytest.approx(expected, abs=0.05 * RAD_S_PER_RPM) for r in readings)
 
 
+def test_monarch_over_a_pty_identifies_and_streams():
+    clock = RealClock()
+    expected = settled_rotor(clock, 8000.0)
+    emulator = build_emulator("sim://monarch_at?plant=pty&faults=split:0.5")
+    with PtyHost(emulator, clock=clock) as host:
+        with open_on_pty(host, "monarch_at", clock) as tach:
+            assert tach.identify() == {"model": "ACT-3X", "firmware": "1.00"}
+            first = tach.wait_reading(timeout=3.0)
+            second = tach.wait_reading(timeout=3.0)
+    assert second.t > first.t
+    for r in (first, second):        # the display rate is 2 per second, 0.1 RPM resolution
+        assert r.value == pytest.approx(expected, abs=0.06 * RAD_S_PER_RPM + 1e-3 * expected)
+
+
 def test_unplug_is_detected_by_real_io_and_the_device_comes_back_under_a_new_path():
     clock = RealClock()
     expected = settled_rotor(clock, 9000.0)
