@@ -73,6 +73,7 @@ def run(args: argparse.Namespace) -> int:
     if args.cycles <= 0:
         raise NumericsError(f"--cycles {args.cycles}: must be positive")
     check_steps(args.steps, 1.0, 1.0, 4)
+    stability_map.check_chunk(max(1, args.chunk), args.cycles)
     if args.rows:
         points = stability_map.table5_3_rows()
     else:

@@ -15,6 +15,7 @@ import math
 import numpy as np
 
 from labkit.numerics import kernels
+from labkit.numerics.checks import DEFAULT_MEMORY_BYTES, NumericsError
 from labkit.sim.equilibrium import cone_angle_axisymmetric, conical_angular_velocity, conical_orientation
 
 EARLY_FRACTION = 0.02  # the deviation in the first 2 % of the run sets the scale of the kick
@@ -108,8 +109,30 @@ def verdicts(zenith: np.ndarray, phi: np.ndarray) -> list[dict]:
     return out
 
 
+def sample_bytes(points: int, cycles: int) -> int:
+    """Memory the stroboscopic samples of a chunk need (zenith and Jacobi arrays)."""
+    return 2 * 8 * points * (cycles * SAMPLES_PER_PERIOD + 1)
+
+
+def check_chunk(points: int, cycles: int, limit_bytes: int = DEFAULT_MEMORY_BYTES) -> None:
+    """Refuse a chunk whose samples do not fit in ``limit_bytes``."""
+    size = sample_bytes(points, cycles)
+    if size <= limit_bytes:
+        return
+    fit = limit_bytes // sample_bytes(1, cycles)
+    if fit >= 1:
+        advice = f"use --chunk {fit} or fewer cycles"
+    else:
+        advice = f"use at most {limit_bytes // (16 * SAMPLES_PER_PERIOD)} cycles"
+    raise NumericsError(
+        f"{points} points x {cycles} cycles need {size / 2**30:.1f} GiB of samples per chunk "
+        f"(limit {limit_bytes / 2**30:.1f} GiB): {advice}"
+    )
+
+
 def evaluate(points: list[dict], cycles: int = 100, steps_per_period: int = 64) -> list[dict]:
     """Run a chunk of points with the numba batch kernel; one verdict dict per point."""
+    check_chunk(len(points), int(cycles))
     spec, phi = batch_spec(points)
     res = kernels.run_batch_numba(spec, int(cycles), steps_per_period, SAMPLES_PER_PERIOD)
     out = verdicts(res.zenith, phi)

@@ -266,6 +266,7 @@ def work_precision(
 ) -> SceneReport:
     """The whole sweep for one scene: reference, points, observed orders, cost-to-reach."""
     scene = _as_scene(scene)
+    check_horizon(cycles, 1, len(scene.bodies))
     system = compile_scene(scene)
     ref = ref or reference(scene, cycles)
     points: list[Point] = []

@@ -60,3 +60,6 @@ def test_sweep_rows_and_unreachable_scheduler(tmp_path, capsys):
     assert code == 2 and "did not answer within 1 s" in err and len(err.strip().splitlines()) == 1
     assert main(["sweep", "table5.3", "--ratios", "a:b", "--no-progress"]) == 2
     assert main(["sweep", "table5.3", "--steps", "3", "--no-progress"]) == 2
+    capsys.readouterr()
+    assert main(["sweep", "table5.3", "--cycles", "100000000", "--no-progress"]) == 2
+    assert "GiB of samples per chunk" in capsys.readouterr().err
