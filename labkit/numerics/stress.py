@@ -564,7 +564,7 @@ def s11(level: str) -> Verdict:
         samples_per_period=n,
     )
     residual = energy_budget_residual(res, I_S1, c_liquid, OMEGA_S1, TAU_C_S1, TAU_S_S1, 1.0)
-    measured.update(budget_residual=residual, status=res.status)
+    measured.update(budget_residual=residual, status=res.status, simulator_budget_drift=res.invariant_drift)
     c_stiff = 100.0 * OMEGA_S1 * I_S1  # c / I = 100 w: overdamped, stiff against the step
     stiff = _run(conical_scene(I_S1, OMEGA_S1, TAU_C_S1, TAU_S_S1, "S11-stiff", damping_rot=c_stiff), cycles)
     finite = bool(np.all(np.isfinite(stiff.angular_velocities_rad_s)))

@@ -104,7 +104,7 @@ def connect(scheduler: str, timeout_s: float = 10.0):
         from distributed import Client
     except ImportError:  # pragma: no cover - optional dependency
         raise SweepError(
-            "a scheduler address needs dask.distributed: pip install 'labkit[dask]' (dask[distributed])"
+            "a scheduler address needs dask.distributed: pip install 'labkit[cluster]' (dask[distributed])"
         ) from None
     try:
         return Client(scheduler, timeout=f"{timeout_s}s", set_as_default=False)
