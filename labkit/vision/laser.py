@@ -23,7 +23,7 @@ from labkit.errors import VideoError
 from labkit.vision.curves import a_for_k
 from labkit.vision.fit import MIN_POINTS, classify, pattern_kind
 from labkit.vision.frames import FrameSource, open_frames
-from labkit.vision.trace import trace_points
+from labkit.vision.trace import TracePoints, trace_points
 
 FrameHook = Callable[[int, float, np.ndarray], None]
 MAX_POINTS_PER_CHUNK = 4000
@@ -94,6 +94,55 @@ def accumulate(source: FrameSource, quality: LaserQuality, on_frame: FrameHook |
     return chunks
 
 
+class TraceTracker:
+    """Trace extraction chunk after chunk, looking only inside the box where the earlier chunks'
+    traces were (the pattern drifts slowly) plus a margin of ``margin`` x the frame size. A trace
+    that reaches the edge of that box, or has less than half the previous chunk's points, is
+    extracted again from the whole chunk."""
+
+    def __init__(self, frame_px: int, subpixel: bool, margin: float = 0.12) -> None:
+        self.frame_px, self.subpixel = frame_px, subpixel
+        self.pad = max(40, int(margin * frame_px))
+        self.box: tuple[int, int, int, int] | None = None  # x0, y0, x1, y1 in frame px
+        self.cropped = 0
+        self.last_count = 0
+
+    def extract(self, c: Chunk) -> TracePoints:
+        tp = None
+        if self.box is not None:
+            ox, oy = c.offset
+            h, w = c.image.shape[:2]
+            x0, y0 = max(0, self.box[0] - ox), max(0, self.box[1] - oy)
+            x1, y1 = min(w, self.box[2] - ox), min(h, self.box[3] - oy)
+            if x1 - x0 > 16 and y1 - y0 > 16:
+                tp = trace_points(c.image[y0:y1, x0:x1], (ox + x0, oy + y0), self.subpixel,
+                                  frame_px=self.frame_px)
+                inner = (ox + x0 + 3, oy + y0 + 3, ox + x1 - 4, oy + y1 - 4)
+                edge = (x0 > 0, y0 > 0, x1 < w, y1 < h)
+                if len(tp.points) < 0.5 * self.last_count or _touches(tp.points, inner, edge):
+                    tp = None  # light may lie outside the box: look at the whole chunk
+                else:
+                    self.cropped += 1
+        if tp is None:
+            tp = trace_points(c.image, c.offset, self.subpixel, frame_px=self.frame_px)
+        if len(tp.points):
+            (px0, py0), (px1, py1) = tp.points.min(axis=0), tp.points.max(axis=0)
+            box = (int(px0) - self.pad, int(py0) - self.pad, int(px1) + self.pad + 1, int(py1) + self.pad + 1)
+            if self.box is not None:  # grow only: spots of one chunk may not span the whole pattern
+                box = (min(box[0], self.box[0]), min(box[1], self.box[1]),
+                       max(box[2], self.box[2]), max(box[3], self.box[3]))
+            self.box = box
+            self.last_count = len(tp.points)
+        return tp
+
+
+def _touches(points: np.ndarray, inner: tuple[float, float, float, float], edge: tuple[bool, ...]) -> bool:
+    """Whether points reach a side of the box that is a crop (not the frame's own border)."""
+    x, y = points[:, 0], points[:, 1]
+    return bool((edge[0] and x.min() < inner[0]) or (edge[1] and y.min() < inner[1])
+                or (edge[2] and x.max() > inner[2]) or (edge[3] and y.max() > inner[3]))
+
+
 def _check_exposure(chunks: list[Chunk], name: str) -> None:
     levels = np.concatenate([c.image.ravel()[:: max(1, c.image.size // 200000)] for c in chunks])
     if levels.max() < 16:
@@ -148,10 +197,10 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
     source = open_frames(path)
     with ThreadPoolExecutor(max_workers=1) as pool:  # trace extraction overlaps decoding
         futures: dict[int, Future] = {}
+        tracker = TraceTracker(max(source.size), quality.subpixel)  # one worker: chunks in order
 
         def extract(c: Chunk) -> None:
-            futures[id(c)] = pool.submit(trace_points, c.image, c.offset, quality.subpixel,
-                                         frame_px=max(source.size))
+            futures[id(c)] = pool.submit(tracker.extract, c)
 
         chunks = accumulate(source, quality, on_frame, on_chunk=extract)
         t_frames = time.perf_counter()
@@ -178,7 +227,8 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
     qual = {"frames_analysed": len(range(0, source.frames_read, quality.stride)),
             "stride": quality.stride, "roi": list(chunks[-1].offset) + list(chunks[-1].image.shape[1::-1]),
             "subpixel": quality.subpixel, "chunks": len(chunks), "trace_points": int(len(points)),
-            "peak_level": peak, "noise_level": noise, "truncated": source.truncated}
+            "peak_level": peak, "noise_level": noise, "truncated": source.truncated,
+            "chunks_searched_near_previous_trace": tracker.cropped}
     if len(points) < MIN_POINTS:
         reason = ("no light above the background noise" if len(points) == 0
                   else f"only {len(points)} trace pixels found")
