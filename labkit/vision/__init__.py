@@ -1,1 +1,12 @@
-"""labkit.vision (see ARCHITECTURE.md)."""
+"""labkit.vision: laser-trace and stroboscope video analysis with OpenCV (issue 6).
+
+Frame source -> detections -> trace -> pattern fit, pure functions where possible; no devices, no
+rerun (live streams hook in through ``on_frame`` callbacks, see ``labkit.stream.vision``).
+
+* :mod:`~labkit.vision.frames`: videos and photos, with :class:`labkit.errors.VideoError` reasons
+* :mod:`~labkit.vision.trace`: laser light -> centre-line trace points; per-frame spot detection
+* :mod:`~labkit.vision.curves`: circle, ellipse and the trochoids of Eq. 6.38 as ``c + A e^{it} + B e^{ikt}``
+* :mod:`~labkit.vision.fit`: geometric fits with drift and classification
+* :mod:`~labkit.vision.laser`: ``analyse_laser`` (the ``labkit analyse laser`` JSON)
+* :mod:`~labkit.vision.strobe`: ``analyse_strobe`` (tilt, lateral amplitude, RC offset, Eq. 5.97)
+"""

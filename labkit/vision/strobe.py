@@ -115,17 +115,14 @@ def estimate_cycles_per_frame(k: np.ndarray, series: list[np.ndarray]) -> float:
     grid = np.linspace(0.5 / n, 0.5, 8 * n)
     best = float(grid[int(np.argmax([power(f) for f in grid]))])
     step = grid[1] - grid[0]
-    for _ in range(30):  # golden-section refinement around the grid maximum
-        a, b = max(1e-6, best - step), min(0.5, best + step)
-        for _ in range(40):
-            c1, c2 = b - 0.618 * (b - a), a + 0.618 * (b - a)
-            if power(c1) > power(c2):
-                b = c2
-            else:
-                a = c1
-        best = 0.5 * (a + b)
-        break
-    return best
+    a, b = max(1e-6, best - step), min(0.5, best + step)
+    for _ in range(40):  # golden-section refinement around the grid maximum
+        c1, c2 = b - 0.618 * (b - a), a + 0.618 * (b - a)
+        if power(c1) > power(c2):
+            b = c2
+        else:
+            a = c1
+    return 0.5 * (a + b)
 
 
 def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | None = None,
@@ -182,7 +179,7 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
         phi = abs(in_phase)
         offset = math.atan2(cx[2], cx[1]) + (math.pi if in_phase < 0 else 0.0)
         # x = x0 - delta tan(theta): x in antiphase with the tilt means the centre is towards the top
-        direction = "towards body top" if in_phase * 1.0 < 0 else "towards body bottom"
+        direction = "towards body top" if in_phase < 0 else "towards body bottom"
     else:
         phi, quad = float(math.hypot(ct[1], ct[2])), 0.0
         offset, direction = math.atan2(ct[2], ct[1]), None
