@@ -52,8 +52,12 @@ def _size(text: str) -> tuple[int, int]:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    parser = sub.add_parser("vision", help="video analysis: accuracy vs time, throughput vs decode-only",
-                            description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = sub.add_parser(
+        "vision",
+        help="video analysis: accuracy vs time, throughput vs decode-only",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("--size", type=_size, default=(1280, 720), help="WxH (default 1280x720)")
     parser.add_argument("--frames", type=int, default=300, help="clip length (default 300 = 10 s)")
     parser.add_argument("--pattern", choices=["ellipse", "epitrochoid", "hypotrochoid"], default="ellipse")
@@ -91,28 +95,37 @@ def _errors(result: dict, truth: dict) -> str:
 def run(args: argparse.Namespace) -> int:
     w, h = args.size
     kw = {"ellipticity": 0.3, "rotation_deg": 35} if args.pattern == "ellipse" else {"loops": 4, "b": 0.3}
-    spec = replace(laser_preset(args.level, args.size, seed=42), frames=args.frames,
-                   pattern=laser_pattern(args.pattern, args.size, **kw))
+    spec = replace(
+        laser_preset(args.level, args.size, seed=42),
+        frames=args.frames,
+        pattern=laser_pattern(args.pattern, args.size, **kw),
+    )
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(args.keep) if args.keep else Path(tmp)
         path = folder / f"bench-{args.pattern}-{args.level}-{w}x{h}.mp4"
         t0 = time.perf_counter()
         write_clip(path, render_laser(spec), spec.fps, "mp4v", laser_truth(spec))
-        print(f"clip: {path.name}, {args.frames} frames {w}x{h} mp4v, {args.level} footage "
-              f"(rendered and written in {time.perf_counter() - t0:.1f} s)")
+        print(
+            f"clip: {path.name}, {args.frames} frames {w}x{h} mp4v, {args.level} footage "
+            f"(rendered and written in {time.perf_counter() - t0:.1f} s)"
+        )
         truth = laser_truth(spec)
         t_dec, n = _best(lambda: open_frames(path).decode_only(), args.repeats)
         print(f"decode only (VideoCapture.read): {t_dec:.3f} s, {n / t_dec:.0f} fps")
         t_loop, _ = _best(lambda: accumulate(open_frames(path), LaserQuality()), args.repeats)
-        print(f"per-frame work only (decode + accumulate, stride 1): {t_loop:.3f} s, {n / t_loop:.0f} fps, "
-              f"ratio to decode {t_dec / t_loop:.2f}x")
+        print(
+            f"per-frame work only (decode + accumulate, stride 1): {t_loop:.3f} s, {n / t_loop:.0f} fps, "
+            f"ratio to decode {t_dec / t_loop:.2f}x"
+        )
         print()
         print(f"{'setting':42s} {'time s':>7s} {'fps':>6s} {'ratio':>6s} {'fixed s':>7s}  accuracy")
         for name, quality in settings(pattern_roi(truth, args.size)):
             t_all, result = _best(lambda q=quality: analyse_laser(str(path), quality=q), args.repeats)
             loop = t_all - _fixed_cost(result)
-            print(f"{name:42s} {t_all:7.3f} {n / t_all:6.0f} {t_dec / t_all:5.2f}x {t_all - loop:7.3f}  "
-                  f"{_errors(result, truth)}")
+            print(
+                f"{name:42s} {t_all:7.3f} {n / t_all:6.0f} {t_dec / t_all:5.2f}x {t_all - loop:7.3f}  "
+                f"{_errors(result, truth)}"
+            )
         print()
         print("ratio = decode-only time / analysis time on the same file (>= 0.8 is the target);")
         print("fixed = trace extraction + fit after the frames are read (does not grow with clip length)")

@@ -29,21 +29,31 @@ def _size(text: str) -> tuple[int, int]:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    parser = sub.add_parser("synth", help="synthetic laser-screen and stroboscope footage with ground truth",
-                            description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = sub.add_parser(
+        "synth",
+        help="synthetic laser-screen and stroboscope footage with ground truth",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     kinds = parser.add_subparsers(dest="kind", metavar="KIND")
 
     laser = kinds.add_parser("laser", help="laser trace on a screen")
     laser.add_argument("out", help="output .mp4/.avi/.mkv video or .png/.jpg photo")
-    laser.add_argument("--pattern", choices=["circle", "ellipse", "epitrochoid", "hypotrochoid"],
-                       default="circle")
-    laser.add_argument("--level", choices=["easy", "medium", "hard"], default="medium",
-                       help="footage impairments (default medium)")
+    laser.add_argument(
+        "--pattern", choices=["circle", "ellipse", "epitrochoid", "hypotrochoid"], default="circle"
+    )
+    laser.add_argument(
+        "--level",
+        choices=["easy", "medium", "hard"],
+        default="medium",
+        help="footage impairments (default medium)",
+    )
     laser.add_argument("--size", type=_size, default=(640, 480))
     laser.add_argument("--frames", type=int, default=60)
     laser.add_argument("--fps", type=float, default=30.0)
-    laser.add_argument("--radius-px", type=float,
-                       help="major semi-axis / outer radius (default 30%% of height)")
+    laser.add_argument(
+        "--radius-px", type=float, help="major semi-axis / outer radius (default 30%% of height)"
+    )
     laser.add_argument("--ellipticity", type=float, default=0.3, help="ellipse: 1 - minor/major")
     laser.add_argument("--loops", type=int, default=3, help="trochoid loops (2-7; hypotrochoid 3-7)")
     laser.add_argument("--b", type=float, default=0.5, help="trochoid b of Eq. 6.38")
@@ -112,11 +122,13 @@ def run_laser(args: argparse.Namespace) -> int:
         kw.update(loops=args.loops, b=args.b)
     pattern = laser_pattern(args.pattern, args.size, rotation_deg=args.rotation_deg, **kw)
     if args.radius_px:
-        f = args.radius_px / (pattern.semi_axes[0] if pattern.kind in ("circle", "ellipse")
-                              else pattern.scale * (1 + pattern.b))
+        f = args.radius_px / (
+            pattern.semi_axes[0] if pattern.kind in ("circle", "ellipse") else pattern.scale * (1 + pattern.b)
+        )
         pattern = replace(pattern, semi_axes=tuple(a * f for a in pattern.semi_axes), scale=pattern.scale * f)
-    spec = replace(spec, pattern=pattern, frames=args.frames, fps=args.fps, cycle_hz=args.cycle_hz,
-                   codec=args.codec)
+    spec = replace(
+        spec, pattern=pattern, frames=args.frames, fps=args.fps, cycle_hz=args.cycle_hz, codec=args.codec
+    )
     if args.exposure_ms is not None:
         spec = replace(spec, exposure_s=args.exposure_ms / 1000)
     position, truth = None, None
@@ -125,10 +137,15 @@ def run_laser(args: argparse.Namespace) -> int:
         centre = (args.size[0] / 2, args.size[1] / 2)
         spec = replace(spec, pattern=replace(pattern, center=centre))
         position = positions_from_angles(t, tx, ty, args.screen_distance_mm, args.mm_per_px, centre)
-        truth = {"kind": "laser", "spec": spec.to_dict(), "angles": args.angles,
-                 "screen_distance_mm": args.screen_distance_mm, "mm_per_px": args.mm_per_px,
-                 "tilt_rad": {"x_max": float(np.abs(tx).max()), "y_max": float(np.abs(ty).max())},
-                 "pattern": None}
+        truth = {
+            "kind": "laser",
+            "spec": spec.to_dict(),
+            "angles": args.angles,
+            "screen_distance_mm": args.screen_distance_mm,
+            "mm_per_px": args.mm_per_px,
+            "tilt_rad": {"x_max": float(np.abs(tx).max()), "y_max": float(np.abs(ty).max())},
+            "pattern": None,
+        }
     truth = truth or laser_truth(spec)
     path = write_clip(args.out, render_laser(spec, position), spec.fps, spec.codec, truth)
     w, h = spec.size
@@ -140,9 +157,15 @@ def run_strobe(args: argparse.Namespace) -> int:
     from labkit.synth import render_strobe, strobe_truth, write_clip
     from labkit.synth.presets import strobe_preset
 
-    spec = replace(strobe_preset(args.level, args.seed), frames=args.frames, rotor_hz=args.rotor_hz,
-                   strobe_hz=args.strobe_hz, tilt_amplitude_rad=args.tilt_rad, rc_offset_px=args.rc_offset_px,
-                   codec=args.codec)
+    spec = replace(
+        strobe_preset(args.level, args.seed),
+        frames=args.frames,
+        rotor_hz=args.rotor_hz,
+        strobe_hz=args.strobe_hz,
+        tilt_amplitude_rad=args.tilt_rad,
+        rc_offset_px=args.rc_offset_px,
+        codec=args.codec,
+    )
     if not 0 < spec.tilt_amplitude_rad < math.pi / 2:
         raise VideoError(args.out, "--tilt-rad must lie in (0, pi/2)")
     path = write_clip(args.out, render_strobe(spec), spec.strobe_hz, spec.codec, strobe_truth(spec))
@@ -155,7 +178,8 @@ def run_testset(args: argparse.Namespace) -> int:
     from labkit.synth.presets import laser_test_set
 
     for name, spec in laser_test_set():
-        path = write_clip(Path(args.folder) / f"{name}.mp4", render_laser(spec), spec.fps, spec.codec,
-                          laser_truth(spec))
+        path = write_clip(
+            Path(args.folder) / f"{name}.mp4", render_laser(spec), spec.fps, spec.codec, laser_truth(spec)
+        )
         print(path)
     return 0
