@@ -13,6 +13,7 @@ import numpy as np
 from labkit.errors import VideoError
 
 PHOTO_SUFFIXES = {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp"}
+VIDEO_SUFFIXES = {".mp4", ".avi", ".mkv", ".mov", ".m4v"}
 
 
 def truth_path(path: str | Path) -> Path:
@@ -38,6 +39,9 @@ def write_clip(path: str | Path, frames: Iterable[np.ndarray], fps: float, codec
     Raises :class:`VideoError` if OpenCV cannot open a writer for this codec and container or a
     frame is rejected."""
     p = Path(path)
+    if p.suffix.lower() not in PHOTO_SUFFIXES | VIDEO_SUFFIXES:
+        kinds = ", ".join(sorted(VIDEO_SUFFIXES | PHOTO_SUFFIXES))
+        raise VideoError(str(p), f"unknown output type {p.suffix or '(none)'}; use one of {kinds}")
     p.parent.mkdir(parents=True, exist_ok=True)
     if p.suffix.lower() in PHOTO_SUFFIXES:
         if not cv2.imwrite(str(p), _photo(frames)):
