@@ -18,6 +18,8 @@ import sys
 from labkit.numerics.checks import NumericsError
 
 DEFAULT_RATIOS = "0:0.6:13"
+FIG_5_12_RATIOS = "-4:5:19"
+FIG_5_12_KS = "-1.5:0.25:15"
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -27,10 +29,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("problem", choices=["table5.3"], help="what to sweep")
+    p.add_argument("problem", choices=["table5.3", "fig5.12"], help="what to sweep")
     p.add_argument("--rows", action="store_true", help="the 36 rows of Table 5.3 instead of a map")
     p.add_argument(
-        "--ratios", default=DEFAULT_RATIOS, help=f"tau_S/tau_C grid START:STOP:COUNT ({DEFAULT_RATIOS})"
+        "--ratios",
+        help=f"tau_S/tau_C grid START:STOP:COUNT (table5.3: {DEFAULT_RATIOS}; fig5.12: {FIG_5_12_RATIOS})",
+    )
+    p.add_argument(
+        "--k", default=FIG_5_12_KS, help=f"fig5.12: spin parameter grid START:STOP:COUNT ({FIG_5_12_KS})"
     )
     p.add_argument(
         "--bias", type=float, default=0.5, help="initial kick on the y angular velocity, rad/s (map)"
@@ -74,10 +80,14 @@ def run(args: argparse.Namespace) -> int:
         raise NumericsError(f"--cycles {args.cycles}: must be positive")
     check_steps(args.steps, 1.0, 1.0, 4)
     stability_map.check_chunk(max(1, args.chunk), args.cycles)
-    if args.rows:
+    if args.problem == "fig5.12":
+        points = stability_map.fig5_12_points(
+            parse_ratios(args.k), parse_ratios(args.ratios or FIG_5_12_RATIOS), bias_y=args.bias
+        )
+    elif args.rows:
         points = stability_map.table5_3_rows()
     else:
-        points = stability_map.map_points(parse_ratios(args.ratios), bias_y=args.bias)
+        points = stability_map.map_points(parse_ratios(args.ratios or DEFAULT_RATIOS), bias_y=args.bias)
     for p in points:  # the horizon is part of a point's identity in the store
         p["cycles"], p["steps_per_period"] = args.cycles, args.steps
     try:
@@ -90,7 +100,7 @@ def run(args: argparse.Namespace) -> int:
             scheduler=args.scheduler,
             timeout_s=args.timeout,
             progress=not args.no_progress,
-            description=f"table5.3 {len(points)} points",
+            description=f"{args.problem} {len(points)} points",
         )
     except KeyboardInterrupt:
         if args.out:
@@ -103,7 +113,9 @@ def run(args: argparse.Namespace) -> int:
         f"{len(res.results)} points: {res.computed} computed now, {res.reused} reused from "
         f"{args.out or 'nothing'}; {args.cycles} cycles at {args.steps} steps per period each"
     )
-    if args.rows:
+    if args.problem == "fig5.12":
+        print_fig5_12(res.results)
+    elif args.rows:
         agree = 0
         print(f"{'row':>3} {'tau_S/tau_C':>11} {'labkit':>8} {'paper':>8} {'max dev rad':>11}")
         for r in res.results:
@@ -130,8 +142,29 @@ def run(args: argparse.Namespace) -> int:
                 f"({i_a:.4g}, {i_r:.4g}, {w:.4g}, {tau_c:.3g})".ljust(60) + f" {row}   {first:>8.3g}"
                 f"   {float(min_static_ratio(tau_c, i_r, w)):>8.3g}"
             )
-    if args.json:
-        with open(args.json, "w") as fh:
+    _write_json(args.json, res)
+    return 0
+
+
+def print_fig5_12(results: list[dict]) -> None:
+    """Rows by spin parameter k (q = k + 1), columns by tau_S / tau_C: S/u on the PFR (anti-phase,
+    phi > 0) branch Fig. 5.12 covers, s/x (stable/unstable) where the cone is in phase (phi < 0)."""
+    ratios = sorted({r["ratio"] for r in results})
+    print(
+        f"Fig. 5.12 map: rows k (q = k + 1), columns tau_S/tau_C {ratios[0]:g}..{ratios[-1]:g}; "
+        "S/u stable/unstable in anti-phase (PFR), s/x in phase"
+    )
+    rows: dict = {}
+    for r in results:
+        stable = r["verdict"] == "stable"
+        mark = ("S" if stable else "u") if r["phi_rad"] > 0 else ("s" if stable else "x")
+        rows.setdefault(r["spin_k"], {})[r["ratio"]] = mark
+    for k in sorted(rows, reverse=True):
+        print(f"  k = {k:+6.3f} (q = {k + 1:+6.3f})  " + "".join(rows[k].get(x, " ") for x in ratios))
+
+
+def _write_json(path: str | None, res) -> None:
+    if path:
+        with open(path, "w") as fh:
             json.dump({"points": res.results, "computed": res.computed, "reused": res.reused}, fh, indent=2)
             fh.write("\n")
-    return 0

@@ -62,8 +62,21 @@ def map_points(ratios: list[float], configs: list[dict] | None = None, bias_y: f
     ]
 
 
+FIG_5_12 = {"i_a": 1e-7, "i_r": 1e-7, "omega": 80 * math.pi, "tau_c": 1e-3}
+
+
+def fig5_12_points(ks: list[float], ratios: list[float], bias_y: float = 0.5) -> list[dict]:
+    """Fig. 5.12's map: a spinning isotropic body (I = 1e-7, omega = 80 pi, tau_C = 1e-3) over
+    the spin parameter ``k`` (spin ratio q = v_S / omega = k + 1, Eq. 5.65-5.66) and
+    ``tau_S / tau_C``, started on the spinning cone of Eq. 5.67/5.68."""
+    return [{**FIG_5_12, "spin_k": float(k), "ratio": float(r), "bias_y": bias_y} for k in ks for r in ratios]
+
+
 def batch_spec(points: list[dict]) -> tuple[kernels.BatchSpec, np.ndarray]:
-    """Nondimensional batch (and the cone angles phi) for the points' initial conditions."""
+    """Nondimensional batch (and the cone angles phi) for the points' initial conditions.
+
+    A point may carry ``spin_k`` (default -1, no spin: Eq. 5.12/5.35; otherwise Eq. 5.62/5.64).
+    """
     n = len(points)
     jc, js, a, R, l0, phi = (
         np.empty(n),
@@ -76,9 +89,12 @@ def batch_spec(points: list[dict]) -> tuple[kernels.BatchSpec, np.ndarray]:
     for k, p in enumerate(points):
         tau_s = p["ratio"] * p["tau_c"]
         w, i_r, i_a = p["omega"], p["i_r"], p["i_a"]
-        phi[k] = cone_angle_axisymmetric(w, p["tau_c"], tau_s, i_r, i_a)
+        spin_k = p.get("spin_k", -1.0)
+        phi[k] = cone_angle_axisymmetric(w, p["tau_c"], tau_s, i_r, i_a, spin_k)
         R[k] = conical_orientation(phi[k], 0.0)
-        omega_vec = conical_angular_velocity(w, phi[k], 0.0) + np.array([0.0, p.get("bias_y", 0.0), 0.0])
+        omega_vec = conical_angular_velocity(w, phi[k], 0.0, spin_k) + np.array(
+            [0.0, p.get("bias_y", 0.0), 0.0]
+        )
         inertia_lab = R[k] @ np.diag([i_r, i_r, i_a]) @ R[k].T
         l0[k] = inertia_lab @ omega_vec / (i_r * w)
         jc[k] = p["tau_c"] / (i_r * w * w)

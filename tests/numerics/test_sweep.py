@@ -74,3 +74,11 @@ def test_a_scheduler_that_does_not_answer_is_a_clear_error(points):
             timeout_s=1,
             progress=False,
         )
+
+
+def test_fig5_12_map_without_spin_follows_eq5_46_and_the_papers_upper_line():
+    """k = -1 (no spin): tau_S = 0 is unstable (Eq. 5.46 needs tau_S/tau_C >= 0.08 here), 2 is
+    stable, and 5.5 lies beyond Fig. 5.12's upper line tau_S + k w^2 I < -1.6e-3 (ratio 4.7)."""
+    points = stability_map.fig5_12_points([-1.0], [0.0, 2.0, 5.5])
+    res = run_sweep(points, stability_map.Evaluator(100), progress=False)
+    assert [r["verdict"] for r in res.results] == ["unstable", "stable", "unstable"]
