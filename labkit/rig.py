@@ -285,6 +285,13 @@ def _device(file: str, role: str, table: Any, check_protocols: bool) -> DeviceCo
     if "baudrate" in serial and serial["baudrate"] <= 0:
         raise ssec.error("baudrate", f"must be > 0, got {serial['baudrate']}")
     options = dict(sec.raw("options", dict, default={}))
+    if check_protocols:
+        from labkit.devices.base import driver_class, unknown_options, unknown_options_message
+
+        cls = driver_class(kind, protocol)
+        unknown = unknown_options(cls, options)
+        if unknown:
+            raise sec.error(f"options.{unknown[0]}", unknown_options_message(cls, unknown))
     sec.finish()
     return DeviceConfig(role, kind, protocol, port, serial, options)
 

@@ -82,6 +82,19 @@ class MotorStatus:
         }
 
 
+def unknown_options(cls: type[Device], options: dict[str, Any]) -> list[str]:
+    """The names in ``options`` that driver class ``cls`` does not read (a typo would
+    otherwise be ignored silently, e.g. a pulses-per-revolution that never reaches it)."""
+    if cls.option_names is None:
+        return []
+    return sorted(set(options) - cls.option_names)
+
+
+def unknown_options_message(cls: type[Device], unknown: list[str]) -> str:
+    known = ", ".join(sorted(cls.option_names or ())) or "none"
+    return f"unknown option {', '.join(repr(u) for u in unknown)} for {cls.protocol}; known: {known}"
+
+
 class Device(ABC):
     """Common part of every driver."""
 
@@ -90,7 +103,14 @@ class Device(ABC):
     #: serial settings the real device ships with (e.g. A&D: 2400 7E1)
     default_serial: ClassVar[dict[str, Any]] = {"baudrate": 9600}
 
+    #: the option names the driver understands (rig file ``options``, ``labkit probe -o``);
+    #: None: not declared, anything is accepted
+    option_names: ClassVar[frozenset[str] | None] = None
+
     def __init__(self, port: serial.SerialBase, clock: Clock, name: str = "", **options: Any):
+        unknown = unknown_options(type(self), options)
+        if unknown:
+            raise ValueError(unknown_options_message(type(self), unknown))
         self.port = port
         self.clock = clock
         self.name = name or self.protocol

@@ -88,6 +88,10 @@ settle_hold_s = 2
      "devices.rotor_tach.port", "unknown fault 'garbge'"),
     (("sim://labkit_tach?plant=t", "sim://labkit_tach?plant=t&seed=one"), "devices.rotor_tach.port",
      "seed='one' is not an integer"),
+    # a mistyped driver option would be ignored: a 2-pulse wheel read as 1 pulse doubles the speed
+    (('port = "sim://labkit_tach?plant=t"',
+      'port = "sim://labkit_tach?plant=t"\noptions = { pulses_per_rev = 2 }'),
+     "devices.rotor_tach.options.pulses_per_rev", "unknown option 'pulses_per_rev' for labkit_tach; known: "),
 ])
 def test_bad_rig_files_name_file_key_and_reason(change, key, reason):
     old, new = change

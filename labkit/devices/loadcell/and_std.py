@@ -151,6 +151,7 @@ class AndStdBalance(ContinuousMixin, Balance):
     """
 
     protocol = "and_std"
+    option_names = frozenset({"ack", "command_timeout_s", "eol", "mode", "settle_s"})
     default_serial = {"baudrate": 2400, "bytesize": 7, "parity": "E", "stopbits": 1}
 
     def __init__(self, port: serial.SerialBase, clock: Clock, name: str = "", **options: Any):

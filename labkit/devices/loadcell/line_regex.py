@@ -137,6 +137,8 @@ class LineRegexBalance(ContinuousMixin, Balance):
     """
 
     protocol = "line_regex"
+    option_names = frozenset({"capacity", "eol", "offset", "pattern", "preset", "scale", "stable_std",
+                              "stable_window", "tare_command", "tare_reply", "tare_settle_s", "unit"})
     default_serial = {"baudrate": 57600, "bytesize": 8, "parity": "N", "stopbits": 1}
 
     def __init__(self, port: serial.SerialBase, clock: Clock, name: str = "", **options: Any):

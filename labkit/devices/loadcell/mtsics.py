@@ -160,6 +160,7 @@ class MtSicsBalance(ContinuousMixin, Balance):
     """
 
     protocol = "mtsics"
+    option_names = frozenset({"command_timeout_s", "eol"})
     default_serial = {"baudrate": 9600, "bytesize": 8, "parity": "N", "stopbits": 1}
 
     def __init__(self, port: serial.SerialBase, clock: Clock, name: str = "", **options: Any):

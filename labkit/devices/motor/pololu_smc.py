@@ -145,6 +145,7 @@ class PololuSmc(KeepAliveMotor):
     """
 
     protocol = "pololu_smc"
+    option_names = frozenset({"autobaud", "crc", "device_number", "quiet_s", "reply_timeout_s"})
     default_serial = {"baudrate": 9600, "bytesize": 8, "parity": "N", "stopbits": 1}
     #: variables read by status()
     status_variables: ClassVar[tuple[int, ...]] = (

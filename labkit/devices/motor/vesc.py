@@ -239,6 +239,7 @@ class Vesc(KeepAliveMotor):
     """
 
     protocol = "vesc"
+    option_names = frozenset({"brake_current_a", "pole_pairs", "reply_timeout_s"})
     default_serial = {"baudrate": 115200, "bytesize": 8, "parity": "N", "stopbits": 1}
     supports_speed_command = True
 

@@ -152,6 +152,7 @@ class LabkitTachometer(StreamingTachometer):
     """
 
     protocol = "labkit_tach"
+    option_names = frozenset({"boot_timeout_s", "ppr", "rate_hz", "reply_timeout_s", "zto_ms"})
     default_serial = {"baudrate": 115200, "bytesize": 8, "parity": "N", "stopbits": 1}
 
     def __init__(self, port: Any, clock: Any, name: str = "", **options: Any):

@@ -132,6 +132,7 @@ class Lutron16Tachometer(StreamingTachometer):
     """
 
     protocol = "lutron16"
+    option_names = frozenset({"display", "rpm_code", "unit"})
     default_serial = {"baudrate": 9600, "bytesize": 8, "parity": "N", "stopbits": 1}
 
     def __init__(self, port: Any, clock: Any, name: str = "", **options: Any):

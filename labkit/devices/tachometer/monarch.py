@@ -74,6 +74,7 @@ class MonarchTachometer(StreamingTachometer):
     """
 
     protocol = "monarch_at"
+    option_names = frozenset({"reply_timeout_s"})
     default_serial = {"baudrate": 9600, "bytesize": 8, "parity": "N", "stopbits": 1}
 
     def __init__(self, port: Any, clock: Any, name: str = "", **options: Any):
