@@ -114,7 +114,8 @@ def plot(reports: list[SceneReport], path: str) -> None:
             if r == 0:
                 ax.set_title(f"{rep.scene} ({rep.cycles:g} cycles)")
             ax.grid(True, which="both", alpha=0.3)
-            ax.legend(fontsize=7)
+            if ax.get_legend_handles_labels()[0]:
+                ax.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)

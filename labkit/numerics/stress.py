@@ -513,13 +513,15 @@ def s9(level: str) -> Verdict:
 
 
 def s10(level: str) -> Verdict:
-    cycles = horizon(level, 200, 1000)
+    cycles = horizon(level, 1000, 3000)
     start = time.perf_counter()
-    per = {}
-    for w in (100.0, 1000.0, 11_000.0):
-        scene = s1_like(I_S1, w, name=f"S10-{w:g}")
-        best = min(_run(scene, cycles, samples_per_period=1).wall_s for _ in range(3))
-        per[f"wall_s_per_1e3_cycles_at_{w:g}"] = best * 1e3 / cycles
+    omegas = (100.0, 1000.0, 11_000.0)
+    scenes = {w: s1_like(I_S1, w, name=f"S10-{w:g}") for w in omegas}
+    best = {w: math.inf for w in omegas}
+    for _ in range(5):  # interleaved rounds: a burst of load on the shared machine hits all speeds
+        for w in omegas:
+            best[w] = min(best[w], _run(scenes[w], cycles, samples_per_period=1).wall_s)
+    per = {f"wall_s_per_1e3_cycles_at_{w:g}": best[w] * 1e3 / cycles for w in omegas}
     ratio = max(per.values()) / min(per.values())
     return Verdict(
         "S10",
@@ -529,7 +531,7 @@ def s10(level: str) -> Verdict:
         {**per, "max_over_min": ratio},
         cycles,
         time.perf_counter() - start,
-        "best of 3 runs each; the machine is shared, so timing noise can fail this case",
+        "best of 5 interleaved runs each; the machine is shared, so timing noise can still fail this case",
     )
 
 
