@@ -16,6 +16,25 @@ import math
 import time
 
 QUICK_SCENES = ["conical_5_1"]
+#: the issue's acceptance targets for the headline: (key, comparison, bound)
+TARGETS = {
+    "speedup_vs_dop853_at_equal_error": (">=", 30.0),
+    "max_invariant_drift_1e4_cycles": ("<=", 1e-10),
+    "one_body_1e4_cycles_s": ("<=", 1.0),
+    "two_body_1e4_cycles_s": ("<=", 5.0),
+}
+
+
+def target_verdicts(headline: dict) -> dict:
+    """Met / not met for each headline number against its acceptance target."""
+    out = {}
+    for key, (op, bound) in TARGETS.items():
+        v = headline.get(key)
+        ok = v is not None and math.isfinite(v) and (v >= bound if op == ">=" else v <= bound)
+        out[key] = {"target": f"{op} {bound:g}", "met": bool(ok)}
+    return out
+
+
 FULL_SCENES = ["conical_5_1", "fig5_7", "fig5_13", "mbs_fig6_1", "planar_5_56"]
 
 
@@ -204,10 +223,14 @@ def run(args: argparse.Namespace) -> int:
     )
 
     headline, notes = _headline(reports, verdicts, quick)
+    targets = target_verdicts(headline)
     print("headline:")
     for k, v in headline.items():
         note = notes.get(k)
-        print(f"  {k} = {fmt(v, '.3g')}" + (f"  ({note})" if note else ""))
+        mark = f"[{'met' if targets[k]['met'] else 'NOT MET'}: target {targets[k]['target']}]"
+        print(f"  {k} = {fmt(v, '.3g')}  {mark}" + (f"  ({note})" if note else ""))
+    if "secular_growth" in notes:
+        print(f"  secular growth: {notes['secular_growth']}")
     print(f"bench sim finished in {time.perf_counter() - started:.1f} s")
 
     if args.json:
@@ -217,6 +240,7 @@ def run(args: argparse.Namespace) -> int:
                 k: (v if isinstance(v, float) and math.isfinite(v) else None) for k, v in headline.items()
             },
             "headline_notes": {k: v for k, v in notes.items() if k != "speedup_detail"},
+            "headline_targets": targets,
             "speedup": notes["speedup_detail"],
             "references": {
                 rep.scene: {

@@ -9,6 +9,7 @@ from labkit.cli import main
 
 def test_bench_sim_json_follows_the_issue_schema(tmp_path, capsys):
     out = tmp_path / "bench.json"
+    png = tmp_path / "bench.png"
     code = main(
         [
             "bench",
@@ -22,6 +23,8 @@ def test_bench_sim_json_follows_the_issue_schema(tmp_path, capsys):
             "S9",
             "--json",
             str(out),
+            "--plot",
+            str(png),
         ]
     )
     assert code == 0
@@ -38,6 +41,8 @@ def test_bench_sim_json_follows_the_issue_schema(tmp_path, capsys):
     )
     assert {r["integrator"] for r in doc["scenes"]} >= {"splitting4", "dop853"}
     assert [s["id"] for s in doc["stress"]] == ["S9"]
+    assert set(doc["headline_targets"]) == set(doc["headline"])
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     text = capsys.readouterr().out
     assert "S9" in text and ("met" in text) and "headline:" in text
 
