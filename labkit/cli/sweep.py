@@ -1,4 +1,4 @@
-"""``labkit sweep table5.3``: Table 5.3-style stability maps of the conical motion.
+"""``labkit sweep table5.3 | fig5.12``: stability maps of the conical motion (paper Sec. 5.1.3, 5.1.6).
 
 ``--rows`` runs the 36 rows of Table 5.3 and compares each verdict with the paper's; otherwise
 every body/drive configuration of Table 5.3 is run over ``--ratios START:STOP:COUNT`` of
@@ -6,6 +6,9 @@ every body/drive configuration of Table 5.3 is run over ``--ratios START:STOP:CO
 minimum ratio. Points run in chunks with the batch kernel, in this process (default), a local
 process pool (``--workers``) or on a Dask cluster (``--scheduler tcp://host:8786``); with
 ``--out results.jsonl`` every finished chunk is saved at once and a rerun resumes from it.
+
+``fig5.12`` maps the spinning body of Fig. 5.12 over the spin parameter ``--k`` and the ratio.
+Grids that start with a minus sign are given with ``=``: ``--k=-1.5:0.25:15``.
 """
 
 from __future__ import annotations
@@ -36,7 +39,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         help=f"tau_S/tau_C grid START:STOP:COUNT (table5.3: {DEFAULT_RATIOS}; fig5.12: {FIG_5_12_RATIOS})",
     )
     p.add_argument(
-        "--k", default=FIG_5_12_KS, help=f"fig5.12: spin parameter grid START:STOP:COUNT ({FIG_5_12_KS})"
+        "--k",
+        default=FIG_5_12_KS,
+        help=f"fig5.12: spin parameter grid START:STOP:COUNT, written --k={FIG_5_12_KS} (the default)",
     )
     p.add_argument(
         "--bias", type=float, default=0.5, help="initial kick on the y angular velocity, rad/s (map)"
