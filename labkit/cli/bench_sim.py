@@ -153,7 +153,7 @@ def _headline(reports, verdicts, quick: bool) -> tuple[dict, dict]:
 
 def run(args: argparse.Namespace) -> int:
     from labkit.numerics import Ladder, require_target, work_precision
-    from labkit.numerics.checks import NumericsError, check_rtol
+    from labkit.numerics.checks import NumericsError, check_horizon, check_rtol
     from labkit.numerics.report import fmt, machine, plot, scene_lines, verdict_lines
     from labkit.numerics.stress import CASES, run_stress_cases
 
@@ -174,6 +174,7 @@ def run(args: argparse.Namespace) -> int:
     scenes = args.scene or (QUICK_SCENES if quick else FULL_SCENES)
     cycles = args.cycles or (10 if quick else 20)
     ladder = Ladder.quick() if quick else Ladder.full()
+    check_horizon(cycles, 1, 2)  # before any work: a horizon whose samples cannot fit ends here
     started = time.perf_counter()
 
     print(f"labkit bench sim ({'quick' if quick else 'full'}): {json.dumps(machine())}")

@@ -52,6 +52,8 @@ def test_bench_sim_bad_input_exits_2_with_one_line(capsys):
     assert "unknown stress case(s) S12" in capsys.readouterr().err
     assert main(["bench", "sim", "--quick", "--target-error", "1e-15"]) == 2
     assert "below what double precision" in capsys.readouterr().err
+    assert main(["bench", "sim", "--quick", "--cycles", "1e10"]) == 2
+    assert "GiB for the samples" in capsys.readouterr().err
 
 
 def test_sweep_rows_and_unreachable_scheduler(tmp_path, capsys):
