@@ -50,6 +50,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     laser.add_argument("--no-subpixel", action="store_true", help="skip sub-pixel refinement")
     laser.add_argument("--chunk-s", type=float, default=0.5,
                        help="seconds of video per accumulation chunk: time resolution of drift (default 0.5)")
+    laser.add_argument("--max-chunks", type=int, default=16,
+                       help="at most this many chunks; long clips get longer ones (default 16)")
     laser.add_argument("--json", metavar="OUT", help="write the result as JSON ('-' for stdout)")
     laser.add_argument("--rerun", metavar="SPEC", help="stream frames and overlays to rerun")
     laser.set_defaults(func=run_laser)
@@ -108,12 +110,13 @@ def _fmt(v, digits: int = 2) -> str:
 def run_laser(args: argparse.Namespace) -> int:
     from labkit.vision.laser import LaserQuality, analyse_laser
 
-    if args.stride < 1 or not args.chunk_s > 0:
-        raise VideoError(args.path, "--stride must be at least 1 and --chunk-s positive")
+    if args.stride < 1 or args.max_chunks < 1 or not args.chunk_s > 0:
+        raise VideoError(args.path, "--stride and --max-chunks must be at least 1, --chunk-s positive")
     if (args.screen_distance_mm is None) != (args.mm_per_px is None):
         print("labkit analyse laser: tilt needs both --screen-distance-mm and --mm-per-px", file=sys.stderr)
     quality = LaserQuality(
-        stride=args.stride, roi=args.roi, subpixel=not args.no_subpixel, chunk_s=args.chunk_s
+        stride=args.stride, roi=args.roi, subpixel=not args.no_subpixel, chunk_s=args.chunk_s,
+        max_chunks=args.max_chunks,
     )
     stream = open_stream(args.rerun, "laser")
     try:

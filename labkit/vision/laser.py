@@ -34,12 +34,14 @@ MIN_FRAMES_PER_CHUNK = 4
 class LaserQuality:
     """Speed/accuracy settings: analyse every ``stride``-th frame, inside ``roi`` (x, y, w, h) or
     the whole frame (None), with or without sub-pixel refinement, accumulating ``chunk_s`` seconds
-    of video per chunk (the time resolution of the centre's drift)."""
+    of video per chunk (the time resolution of the centre's drift) but at most ``max_chunks``
+    chunks (fewer chunks: faster; more: follows a fast drift better)."""
 
     stride: int = 1
     roi: tuple[int, int, int, int] | None = None
     subpixel: bool = True
     chunk_s: float = 0.5
+    max_chunks: int = 16  # long clips get longer chunks: trace extraction per chunk costs ~15-40 ms
 
 
 @dataclass
@@ -67,11 +69,12 @@ def _clip_roi(roi: tuple[int, int, int, int], size: tuple[int, int]) -> tuple[in
 def accumulate(source: FrameSource, quality: LaserQuality, on_frame: FrameHook | None = None,
                on_chunk: Callable[[Chunk], None] | None = None, prefetch: int = 4) -> list[Chunk]:
     """Running per-pixel maximum of the frames, one accumulator per ``quality.chunk_s`` of video
-    (and at least ``MIN_FRAMES_PER_CHUNK`` analysed frames).
+    (at least ``MIN_FRAMES_PER_CHUNK`` analysed frames, at most ``quality.max_chunks`` chunks).
     ``on_chunk`` gets each chunk as soon as it is complete; decoding runs ``prefetch`` frames
     ahead in a thread."""
     fps = source.fps or 30.0
-    per_chunk = max(MIN_FRAMES_PER_CHUNK * quality.stride, round(quality.chunk_s * fps))
+    per_chunk = max(MIN_FRAMES_PER_CHUNK * quality.stride, round(quality.chunk_s * fps),
+                    math.ceil(source.frame_count / max(1, quality.max_chunks)))
     roi = _clip_roi(quality.roi, source.size) if quality.roi is not None else None
     chunks: list[Chunk] = []
     for index, frame in source.frames(quality.stride, prefetch=prefetch):
