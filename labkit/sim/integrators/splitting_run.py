@@ -22,7 +22,9 @@ def run(
     """Integrate ``cycles`` drive periods with ``h = T / steps_per_period`` (automatic if None)."""
     weights, order = COMPOSITIONS[composition]
     if steps_per_period is None:
-        steps_per_period = auto_steps_per_period(system.omega, system.omega_max, order, samples_per_period)
+        body_pairs = system.kind == "rigid" and system.flags is not None and bool(system.flags[2])
+        steps_per_period = auto_steps_per_period(system.omega, system.omega_max, order, samples_per_period,
+                                                 body_pairs=body_pairs)
     if steps_per_period <= 0 or samples_per_period <= 0:
         raise SimulationError("steps and samples per period must be positive")
     if steps_per_period % samples_per_period:
