@@ -12,7 +12,7 @@ point). Pure functions: no I/O.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
@@ -55,6 +55,7 @@ class Classification:
     best: CurveFit
     ellipse: CurveFit
     residuals: dict[str, float] = field(default_factory=dict)
+    t_ref: float = 0.0  # the time the centres refer to (mean time of the points fitted)
 
 
 def _curve(c: complex, a: complex, b: complex, k: int, t: np.ndarray) -> np.ndarray:
@@ -240,12 +241,15 @@ def _subsample(n: int, keep: int, seed: int = 0) -> np.ndarray:
 def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.ndarray | None = None,
              max_points: int = 1200, screen_points: int = 250,
              trochoid_loops: range = range(2, 8),
-             band: tuple[np.ndarray, np.ndarray | None, np.ndarray | None] | None = None) -> Classification:
+             band: tuple[np.ndarray, np.ndarray | None, np.ndarray | None] | None = None,
+             prior: Classification | None = None) -> Classification:
     """Fit every candidate (ellipse, epitrochoids with 2-7 loops, hypotrochoids with 3-7 loops) on a
     subsample, refine the two best on up to ``max_points`` points, and pick the simplest pattern
     that explains the trace (a trochoid must beat the ellipse's residual by ``SIMPLER_TOLERANCE``).
     ``band`` (points, weights, times): every trace pixel; the ellipse is polished on it, because a
-    thinned centre line ends half a line width short of the sharp tips of a flat ellipse."""
+    thinned centre line ends half a line width short of the sharp tips of a flat ellipse.
+    ``prior``: a classification of part of the same trace (e.g. the first half of a video, done
+    while the rest was decoding); its choice is kept and only refined, with no new screening."""
     pts = np.asarray(points, dtype=float)
     w = None if weights is None else np.asarray(weights, dtype=float)
     tm = None if times is None else np.asarray(times, dtype=float)
@@ -262,26 +266,31 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
         # its residual on the centre line, comparable with the trochoids'
         z, w_, tau = _prepare(*full)
         ellipse = _icp(z, w_, tau, -1, polished.c, polished.a, polished.b, 0, False, 1440, polished.drift)
+    t_ref = float(np.mean(full[2])) if full[2] is not None else 0.0
     residuals = {"ellipse": ellipse.rms_residual}
-    screened: list[CurveFit] = []
-    for kind, first in (("epitrochoid", 2), ("hypotrochoid", 3)):
-        for loops in trochoid_loops:
-            if loops < first:
-                continue
-            screened.append(fit_trochoid(screen[0], kind, loops, screen[1], screen[2], iterations=10))
-    screened.sort(key=lambda f: f.rms_residual)
-    for f in screened:
-        residuals[_name(f)] = f.rms_residual
+    if prior is not None:
+        residuals.update({f"{k} (first part)": v for k, v in prior.residuals.items()})
+        f = prior.best
+        shortlist = [] if f.k == -1 else [replace(f, c=f.c + f.drift * (t_ref - prior.t_ref))]
+    else:
+        screened: list[CurveFit] = []
+        for kind, first in (("epitrochoid", 2), ("hypotrochoid", 3)):
+            for loops in trochoid_loops:
+                if loops < first:
+                    continue
+                screened.append(fit_trochoid(screen[0], kind, loops, screen[1], screen[2], iterations=10))
+        screened.sort(key=lambda f: f.rms_residual)
+        for f in screened:
+            residuals[_name(f)] = f.rms_residual
+        shortlist = [f for f in screened[:2] if math.isfinite(f.rms_residual)]
     best = ellipse
     z, w_, tau = _prepare(*full)
-    for f in screened[:2]:
-        if not math.isfinite(f.rms_residual):
-            continue
-        fit = _icp(z, w_, tau, f.k, f.c, f.a, f.b, 20, full[2] is not None, 200 * abs(f.k))
+    for f in shortlist:
+        fit = _icp(z, w_, tau, f.k, f.c, f.a, f.b, 20, full[2] is not None, 200 * abs(f.k), f.drift)
         residuals[_name(fit)] = fit.rms_residual
         if trochoid_beats(fit.rms_residual, abs(fit.b), best.rms_residual):
             best = fit
-    return Classification(best, ellipse, residuals)
+    return Classification(best, ellipse, residuals, t_ref)
 
 
 def polish(fit: CurveFit, points: np.ndarray, weights: np.ndarray | None = None,

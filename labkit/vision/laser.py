@@ -21,7 +21,7 @@ import numpy as np
 
 from labkit.errors import VideoError
 from labkit.vision.curves import a_for_k
-from labkit.vision.fit import MIN_POINTS, classify, pattern_kind
+from labkit.vision.fit import MIN_POINTS, Classification, classify, pattern_kind
 from labkit.vision.frames import FrameSource, open_frames
 from labkit.vision.trace import TracePoints, trace_points
 
@@ -66,15 +66,22 @@ def _clip_roi(roi: tuple[int, int, int, int], size: tuple[int, int]) -> tuple[in
     return x0, y0, x1 - x0, y1 - y0
 
 
+def chunk_length(source: FrameSource, quality: LaserQuality) -> int:
+    """Frames per chunk: ``chunk_s`` of video, at least ``MIN_FRAMES_PER_CHUNK`` analysed frames,
+    at most ``max_chunks`` chunks."""
+    fps = source.fps or 30.0
+    return max(MIN_FRAMES_PER_CHUNK * quality.stride, round(quality.chunk_s * fps),
+               math.ceil(source.frame_count / max(1, quality.max_chunks)))
+
+
 def accumulate(source: FrameSource, quality: LaserQuality, on_frame: FrameHook | None = None,
                on_chunk: Callable[[Chunk], None] | None = None, prefetch: int = 4) -> list[Chunk]:
     """Running per-pixel maximum of the frames, one accumulator per ``quality.chunk_s`` of video
     (at least ``MIN_FRAMES_PER_CHUNK`` analysed frames, at most ``quality.max_chunks`` chunks).
     ``on_chunk`` gets each chunk as soon as it is complete; decoding runs ``prefetch`` frames
     ahead in a thread."""
-    fps = source.fps or 30.0
-    per_chunk = max(MIN_FRAMES_PER_CHUNK * quality.stride, round(quality.chunk_s * fps),
-                    math.ceil(source.frame_count / max(1, quality.max_chunks)))
+    per_chunk = chunk_length(source, quality)
+    fps = source.fps or 1.0
     roi = _clip_roi(quality.roi, source.size) if quality.roi is not None else None
     chunks: list[Chunk] = []
     for index, frame in source.frames(quality.stride, prefetch=prefetch):
@@ -161,9 +168,9 @@ def _none(reason: str) -> dict:
 
 
 def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | None,
-                 band: tuple | None = None) -> tuple[dict, dict]:
+                 band: tuple | None = None, prior: Classification | None = None) -> tuple[dict, dict]:
     """Classify and fit a trace; returns the JSON ``pattern`` object and fit diagnostics."""
-    cls = classify(points, weights, times, band=band)
+    cls = classify(points, weights, times, band=band, prior=prior)
     best, ell = cls.best, cls.ellipse.pattern
     major, minor = ell.semi_axes
     kind = pattern_kind(cls.best)
@@ -187,6 +194,39 @@ def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | No
     return pattern, diag
 
 
+def gather(chunks: list[Chunk], traces: list[TracePoints], fps: float):
+    """Trace points of all chunks, stamped with their chunk's mid time: ``(points, weights,
+    times, band, peak, noise)``; ``band`` is ``(pixels, weights, times)`` or None. Seeded
+    subsampling keeps at most ``MAX_POINTS_PER_CHUNK`` centre-line points per chunk."""
+    pts, wts, tms, bands = [], [], [], []
+    peak = noise = 0.0
+    rng = np.random.default_rng(0)
+    for c, tp in zip(chunks, traces, strict=True):
+        peak, noise = max(peak, tp.peak), max(noise, tp.noise)
+        points, weights = tp.points, tp.weights
+        if len(points) > MAX_POINTS_PER_CHUNK:
+            keep = rng.choice(len(points), MAX_POINTS_PER_CHUNK, replace=False)
+            points, weights = points[keep], weights[keep]
+        t_mid = 0.5 * (c.first + c.last) / fps if fps else 0.0
+        pts.append(points)
+        wts.append(weights)
+        tms.append(np.full(len(points), t_mid))
+        if tp.band is not None and len(tp.band):
+            keep = rng.choice(len(tp.band), min(len(tp.band), 2 * MAX_POINTS_PER_CHUNK), replace=False)
+            bands.append((tp.band[keep], tp.band_weights[keep], np.full(len(keep), t_mid)))
+    points = np.concatenate(pts) if pts else np.zeros((0, 2))
+    band = tuple(np.concatenate(parts) for parts in zip(*bands, strict=True)) if bands else None
+    return points, np.concatenate(wts), np.concatenate(tms), band, peak, noise
+
+
+def _preliminary(chunks: list[Chunk], futures: list[Future], fps: float) -> Classification | None:
+    """Classification of the first chunks (runs in the worker while later frames decode)."""
+    points, weights, times, _, _, _ = gather(chunks, [f.result() for f in futures], fps)
+    if len(points) < 10 * MIN_POINTS or not fps:
+        return None
+    return classify(points, weights, times)
+
+
 def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px: float | None = None,
                   quality: LaserQuality | None = None, on_frame: FrameHook | None = None) -> dict:
     """Analyse a laser-trace video or long-exposure photo; returns the ``labkit analyse laser`` JSON.
@@ -198,35 +238,28 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
     quality = quality or LaserQuality()
     t_start = time.perf_counter()
     source = open_frames(path)
+    fps = source.fps or 0.0
+    per_chunk = chunk_length(source, quality)
+    expected = math.ceil(source.frame_count / per_chunk) if source.frame_count > 0 else 0
     with ThreadPoolExecutor(max_workers=1) as pool:  # trace extraction overlaps decoding
         futures: dict[int, Future] = {}
         tracker = TraceTracker(max(source.size), quality.subpixel)  # one worker: chunks in order
+        done: list[Chunk] = []
+        prior: dict[str, Future] = {}
 
         def extract(c: Chunk) -> None:
             futures[id(c)] = pool.submit(tracker.extract, c)
+            done.append(c)
+            if expected >= 4 and len(done) == expected // 2:
+                # classify the first half while the second half decodes; the end only refines
+                prior["fit"] = pool.submit(_preliminary, list(done), [futures[id(d)] for d in done], fps)
 
         chunks = accumulate(source, quality, on_frame, on_chunk=extract)
         t_frames = time.perf_counter()
         _check_exposure(chunks, source.path)
         traces = [futures[id(c)].result() for c in chunks]
-    fps = source.fps or 0.0
-    pts, wts, tms, bands = [], [], [], []
-    peak = noise = 0.0
-    rng = np.random.default_rng(0)
-    for c, tp in zip(chunks, traces, strict=True):
-        peak, noise = max(peak, tp.peak), max(noise, tp.noise)
-        if len(tp.points) > MAX_POINTS_PER_CHUNK:
-            keep = rng.choice(len(tp.points), MAX_POINTS_PER_CHUNK, replace=False)
-            tp.points, tp.weights = tp.points[keep], tp.weights[keep]
-        pts.append(tp.points)
-        wts.append(tp.weights)
-        t_mid = 0.5 * (c.first + c.last) / fps if fps else 0.0
-        tms.append(np.full(len(tp.points), t_mid))
-        if tp.band is not None and len(tp.band):
-            keep = rng.choice(len(tp.band), min(len(tp.band), 2 * MAX_POINTS_PER_CHUNK), replace=False)
-            bands.append((tp.band[keep], tp.band_weights[keep], np.full(len(keep), t_mid)))
-    points = np.concatenate(pts) if pts else np.zeros((0, 2))
-    weights, times = np.concatenate(wts), np.concatenate(tms)
+        preliminary = prior["fit"].result() if "fit" in prior else None
+    points, weights, times, band, peak, noise = gather(chunks, traces, fps)
     qual = {"frames_analysed": len(range(0, source.frames_read, quality.stride)),
             "stride": quality.stride, "roi": list(chunks[-1].offset) + list(chunks[-1].image.shape[1::-1]),
             "subpixel": quality.subpixel, "chunks": len(chunks), "trace_points": int(len(points)),
@@ -238,10 +271,9 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
         pattern, tilt = _none(reason), None
     else:
         drift = len(chunks) > 1 and fps
-        band = tuple(np.concatenate(parts) for parts in zip(*bands, strict=True)) if bands else None
         if band is not None and not drift:
             band = (band[0], band[1], None)
-        pattern, diag = pattern_dict(points, weights, times if drift else None, band)
+        pattern, diag = pattern_dict(points, weights, times if drift else None, band, preliminary)
         qual.update(diag)
         tilt = None
         if screen_distance_mm and mm_per_px:

@@ -70,3 +70,24 @@ def test_frame_hook_sees_every_analysed_frame(laser_clips):
     assert [i for i, _, _ in seen] == list(range(0, truth["frames"], 3))
     assert seen[1][1] == pytest.approx(3 / truth["fps"])
     assert seen[0][2] == (truth["size"][1], truth["size"][0], 3)
+
+
+def test_long_clip_is_classified_from_its_first_half_and_refined(tmp_path):
+    """With >= 4 chunks the first half is classified while the rest decodes; the end only refines."""
+    from dataclasses import replace
+
+    from labkit.synth import laser_truth, render_laser, write_clip
+    from labkit.synth.presets import laser_pattern, laser_preset
+
+    size = (320, 240)
+    spec = replace(laser_preset("hard", size, seed=5), frames=150,
+                   pattern=laser_pattern("hypotrochoid", size, loops=5, b=0.45, rotation_deg=12))
+    truth = laser_truth(spec)
+    path = write_clip(tmp_path / "long.mp4", render_laser(spec), spec.fps, "mp4v", truth)
+    result = analyse_laser(str(path))
+    got, want = result["pattern"], truth["pattern"]
+    assert result["quality"]["chunks"] >= 4
+    assert any(k.endswith("(first part)") for k in result["quality"]["candidate_residuals_px"])
+    assert got["type"] == "hypotrochoid" and got["loops"] == 5
+    assert abs(got["trochoid"]["b"] - 0.45) < 0.05
+    assert math.dist(got["center_px"], want["center_px"]) < 1.0
