@@ -11,26 +11,44 @@ import argparse
 import sys
 from typing import Any
 
-from labkit.cli.run import add_common, attach_rerun, rerun_text, sinks_for
+from labkit.cli.run import add_common, attach_rerun, close_sinks, rerun_text, sinks_for
 from labkit.protocols.launch import execute, prepare_run
 from labkit.rig import bundled_rig_path
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("demo", help="run the Fig. 5.25 sweep on the emulated rig (about 10 s)",
-                       description=__doc__.split("\n\n")[1] if __doc__ else None)
-    p.add_argument("--set", dest="sets", action="append", default=[], metavar="KEY=VALUE",
-                   help="speed-sweep parameter, e.g. speeds_rpm=6000:20000:2000")
+    p = sub.add_parser(
+        "demo",
+        help="run the Fig. 5.25 sweep on the emulated rig (about 10 s)",
+        description=__doc__.split("\n\n")[1] if __doc__ else None,
+    )
+    p.add_argument(
+        "--set",
+        dest="sets",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="speed-sweep parameter, e.g. speeds_rpm=6000:20000:2000",
+    )
     add_common(p)
     p.set_defaults(func=main)
 
 
 def main(args: argparse.Namespace) -> int:
     rig = bundled_rig_path("emulated-fig525")
-    prep = prepare_run(str(rig), "speed-sweep", args.sets, clock=args.clock, session_root=args.sessions,
-                       sinks=sinks_for(args))
-    print(f"labkit demo: speed-sweep on {prep.rig.name} ({len(prep.runner.steps)} speeds, "
-          f"{'virtual' if prep.clock.is_virtual else 'real'} clock)")
+    prep = prepare_run(
+        str(rig),
+        "speed-sweep",
+        args.sets,
+        clock=args.clock,
+        session_root=args.sessions,
+        sinks=sinks_for(args),
+    )
+    print(
+        f"labkit demo: speed-sweep on {prep.rig.name} ({len(prep.runner.steps)} speeds, "
+        f"{'virtual' if prep.clock.is_virtual else 'real'} clock)"
+    )
+
     def on_session(runner: Any, session: Any) -> None:
         # RERUN HOOK: the demo saves SESSION/run.rrd once the rerun sink is wired
         if args.rerun is None:
@@ -46,10 +64,7 @@ def main(args: argparse.Namespace) -> int:
     try:
         outcome = execute(prep, args.sessions, notes=args.notes or "labkit demo", on_session=on_session)
     finally:
-        for sink in sinks:
-            close = getattr(sink, "close", None)
-            if callable(close):
-                close()
+        close_sinks(sinks, "demo")
     if outcome.status != "completed":
         print(f"labkit demo: {outcome.status}: {outcome.reason}", file=sys.stderr)
         return 2
@@ -59,8 +74,10 @@ def main(args: argparse.Namespace) -> int:
     for name in ("results.json", "events.jsonl", "readings", "cassettes"):
         print(f"  {outcome.session / name}")
     if b:
-        print(f"fitted power law y = a x^b: b = {b['value']:.3f} +/- {b['stderr']:.3f} "
-              "(emulator: -1.9; paper Fig. 5.25: -1.9)")
+        print(
+            f"fitted power law y = a x^b: b = {b['value']:.3f} +/- {b['stderr']:.3f} "
+            "(emulator: -1.9; paper Fig. 5.25: -1.9)"
+        )
     rrd = outcome.session / "run.rrd"
     if rrd.exists():
         print(f"viewer: rerun {rrd}")

@@ -12,13 +12,17 @@ import argparse
 import sys
 from pathlib import Path
 
+from labkit.cli.run import close_sinks
 from labkit.protocols.launch import replay_session
 from labkit.session import export_csv, load_session
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("replay", help="re-run a session against its cassettes and check its results",
-                       description=__doc__.split("\n\n")[1] if __doc__ else None)
+    p = sub.add_parser(
+        "replay",
+        help="re-run a session against its cassettes and check its results",
+        description=__doc__.split("\n\n")[1] if __doc__ else None,
+    )
     p.add_argument("session", help="session directory")
     p.add_argument("--export-csv", action="store_true", help="only export readings/*.jsonl to CSV")
     try:
@@ -44,10 +48,7 @@ def main(args: argparse.Namespace) -> int:
     try:
         result = replay_session(Path(args.session), sinks=sinks)
     finally:
-        for sink in sinks:
-            close = getattr(sink, "close", None)
-            if callable(close):
-                close()
+        close_sinks(sinks, "replay")
     out = result.outcome
     if out.status != "completed" and out.error is not None and result.recorded is None:
         print(f"labkit replay: {out.status}: {out.reason}", file=sys.stderr)
@@ -62,6 +63,9 @@ def main(args: argparse.Namespace) -> int:
     if out.status != "completed":
         print(f"  the replayed run ended {out.status}: {out.reason}", file=sys.stderr)
     if load_session(args.session).meta.get("clock") == "real":
-        print("  (this session was recorded on a real clock: the order of commands depends on timing, "
-              "so only emulator sessions on the virtual clock replay exactly)", file=sys.stderr)
+        print(
+            "  (this session was recorded on a real clock: the order of commands depends on timing, "
+            "so only emulator sessions on the virtual clock replay exactly)",
+            file=sys.stderr,
+        )
     return 1

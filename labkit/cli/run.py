@@ -17,10 +17,18 @@ from labkit.protocols.launch import execute, prepare_run
 
 
 def add_common(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--sessions", default="sessions", metavar="DIR",
-                   help="folder for session directories (default: ./sessions)")
-    p.add_argument("--clock", choices=("auto", "real", "virtual"), default="auto",
-                   help="auto (default): virtual when every device is emulated (sim://), else real")
+    p.add_argument(
+        "--sessions",
+        default="sessions",
+        metavar="DIR",
+        help="folder for session directories (default: ./sessions)",
+    )
+    p.add_argument(
+        "--clock",
+        choices=("auto", "real", "virtual"),
+        default="auto",
+        help="auto (default): virtual when every device is emulated (sim://), else real",
+    )
     p.add_argument("--notes", default="", help="operator notes stored in run.json")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     try:
@@ -32,14 +40,24 @@ def add_common(p: argparse.ArgumentParser) -> None:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("run", help="run a measurement protocol on a rig (speed-sweep, spin-critical)",
-                       description=__doc__.split("\n\n")[1] if __doc__ else None)
+    p = sub.add_parser(
+        "run",
+        help="run a measurement protocol on a rig (speed-sweep, spin-critical)",
+        description=__doc__.split("\n\n")[1] if __doc__ else None,
+    )
     p.add_argument("rig", nargs="?", help="rig file (rigs/*.toml) or a bundled rig name")
     p.add_argument("protocol", nargs="?", help=f"one of: {', '.join(sorted(PROTOCOLS))}")
-    p.add_argument("--set", dest="sets", action="append", default=[], metavar="KEY=VALUE",
-                   help="protocol parameter, e.g. speeds_rpm=6000:20000:1000 (repeatable)")
-    p.add_argument("--dry-run", action="store_true",
-                   help="print the planned steps and check limits; no motion")
+    p.add_argument(
+        "--set",
+        dest="sets",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="protocol parameter, e.g. speeds_rpm=6000:20000:1000 (repeatable)",
+    )
+    p.add_argument(
+        "--dry-run", action="store_true", help="print the planned steps and check limits; no motion"
+    )
     p.add_argument("--resume", metavar="SESSION", help="continue the remaining steps of SESSION as a new run")
     add_common(p)
     p.set_defaults(func=main)
@@ -80,11 +98,27 @@ def attach_rerun(args: argparse.Namespace, runner: Any, session_path: Any) -> An
     return sink
 
 
+def close_sinks(sinks: list[Any], command: str) -> None:
+    """Close live sinks (rerun) at the end of a run; a viewer that was never reached is one
+    line on stderr, never a hang or a traceback (the session on disk is complete)."""
+    for sink in sinks:
+        close = getattr(sink, "close", None)
+        if callable(close):
+            close()
+        problem = getattr(sink, "flush_error", None)
+        if problem:
+            print(f"labkit {command}: rerun viewer not reached, live view incomplete ({problem})",
+                  file=sys.stderr)
+
+
 def report(outcome: Any) -> int:
     where = f" (session {outcome.session})" if outcome.session else ""
     fit = (outcome.results or {}).get("fit") or {}
-    params = ", ".join(f"{k} = {v['value']:.4g} +/- {v['stderr']:.2g}"
-                       for k, v in fit.get("params", {}).items() if v.get("stderr") is not None)
+    params = ", ".join(
+        f"{k} = {v['value']:.4g} +/- {v['stderr']:.2g}"
+        for k, v in fit.get("params", {}).items()
+        if v.get("stderr") is not None
+    )
     if outcome.status == "completed":
         print(f"completed {len((outcome.results or {}).get('points', []))} points{where}")
         if params:
@@ -97,9 +131,15 @@ def report(outcome: Any) -> int:
 
 
 def main(args: argparse.Namespace) -> int:
-    prep = prepare_run(args.rig, args.protocol, args.sets, clock=args.clock,
-                       session_root=None if args.dry_run else args.sessions, resume=args.resume,
-                       sinks=[] if args.dry_run else sinks_for(args))
+    prep = prepare_run(
+        args.rig,
+        args.protocol,
+        args.sets,
+        clock=args.clock,
+        session_root=None if args.dry_run else args.sessions,
+        resume=args.resume,
+        sinks=[] if args.dry_run else sinks_for(args),
+    )
     if args.dry_run:
         print(prep.runner.dry_run())
         return 0
@@ -114,8 +154,5 @@ def main(args: argparse.Namespace) -> int:
     try:
         outcome = execute(prep, args.sessions, notes=args.notes, on_session=on_session)
     finally:
-        for sink in sinks:
-            close = getattr(sink, "close", None)
-            if callable(close):
-                close()
+        close_sinks(sinks, "run")
     return report(outcome)

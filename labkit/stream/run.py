@@ -54,6 +54,10 @@ def run_blueprint(loops: list[str], devices: list[str]) -> Any:
     )
 
 
+#: longest wait for the viewer at the end of a run (s)
+FLUSH_TIMEOUT_S = 5.0
+
+
 class RerunRunSink:
     """Event sink streaming a run to rerun. ``close()`` flushes and writes the .rrd footer."""
 
@@ -67,6 +71,7 @@ class RerunRunSink:
         self.protocol = ""
         self.points: list[tuple[float, float]] = []
         self._styled: set[str] = set()
+        self.flush_error: str | None = None
 
     # ---- helpers ------------------------------------------------------------------------
     def _time(self, event: dict[str, Any]) -> None:
@@ -158,8 +163,13 @@ class RerunRunSink:
             self.rec.log("/results/fit", self.rr.LineStrips2D([curve], colors=[220, 60, 30]))
 
     def close(self) -> None:
+        """Flush (at most ``FLUSH_TIMEOUT_S``) and disconnect. A viewer that cannot be
+        reached (``--rerun connect`` with none running) must not hang the end of a run whose
+        session is already saved: the flush gives up and ``flush_error`` says why."""
         try:
-            self.rec.flush()
+            self.rec.flush(timeout_sec=FLUSH_TIMEOUT_S)
+        except RuntimeError as exc:   # rerun: "gRPC has been unable to connect for ..."
+            self.flush_error = str(exc)
         finally:
             self.rec.disconnect()
 
