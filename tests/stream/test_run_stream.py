@@ -51,3 +51,19 @@ def test_replay_of_a_recorded_spin_critical_session_streams_its_pairs(tmp_path, 
     _, points = column(rrd, "/results/points", "Points2D:positions", "step")
     pairs = [p for p in results["points"] if p.get("rotor_rad_s") is not None]
     assert len(points[-1]) == len(pairs)
+
+
+def test_run_spin_critical_with_rerun_logs_both_tachometers_and_the_pairs(tmp_path, capsys):
+    rrd = tmp_path / "run.rrd"
+    code = main(["run", "rigs/emulated-fig618.toml", "spin-critical", "--sessions", str(tmp_path / "s"),
+                 "--no-progress", "--set", "start_rpm=6600", "--set", "stop_rpm=8000",
+                 "--set", "step_pct=15", "--rerun", f"save:{rrd}"])
+    assert code == 0, capsys.readouterr().err
+    entities = entity_paths(rrd)
+    assert {"/rig/rotor/speed_rpm", "/results/points", "/events"} <= entities
+    assert any(e.startswith("/rig/floator_tach/") for e in entities)
+    session = next((tmp_path / "s").iterdir())
+    results = json.loads((session / "results.json").read_text())
+    pairs = [p for p in results["points"] if p.get("rotor_rad_s") is not None]
+    _, points = column(rrd, "/results/points", "Points2D:positions", "step")
+    assert pairs and len(points[-1]) == len(pairs)
