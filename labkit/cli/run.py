@@ -79,21 +79,22 @@ def sinks_for(args: argparse.Namespace) -> list[Any]:
 
 
 def attach_rerun(args: argparse.Namespace, runner: Any, session_path: Any) -> Any:
-    """RERUN HOOK: the stream engineer wires a rerun sink here (labkit.stream).
+    """Add the rerun sink (``labkit.stream.run_sink``) for ``args.rerun`` to the run's event bus.
 
-    ``args.rerun`` is a parsed ``RerunSpec`` (or None). When ``labkit.stream`` offers
-    ``run_sink(spec, session_path) -> Sink`` it is added to the run's event bus; until
-    then the spec is stored in run.json and nothing is streamed.
+    The blueprint gets one speed view per control loop and one view per balance/tachometer
+    role of the rig, so a two-tachometer rig shows the floator spin beside the rotor speed.
     """
     spec = getattr(args, "rerun", None)
     if spec is None:
         return None
-    try:
-        from labkit.stream import run_sink  # type: ignore[attr-defined]
-    except ImportError:
-        print("labkit: rerun streaming of runs is not wired yet; --rerun stored in run.json", file=sys.stderr)
-        return None
-    sink = run_sink(spec, session_path)
+    from labkit.stream import run_sink
+
+    rig = runner.rig
+    loops = [loop.name for loop in rig.control.loops]
+    loop_tachs = {loop.tach for loop in rig.control.loops}
+    devices = [role for role, dev in rig.devices.items()
+               if dev.kind == "balance" or (dev.kind == "tach" and role not in loop_tachs)]
+    sink = run_sink(spec, session_path, loops=loops or None, devices=devices or None)
     runner.bus.add(sink)
     return sink
 
