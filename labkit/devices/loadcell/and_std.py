@@ -17,7 +17,7 @@ import serial
 
 from labkit.devices.base import Balance, Reading, register_driver, register_parser_benchmark
 from labkit.devices.loadcell.continuous import ContinuousMixin
-from labkit.devices.loadcell.linkio import FrameError, LineLink, eol_bytes
+from labkit.devices.loadcell.linkio import FrameError, LineLink, LinkTailMixin, eol_bytes
 from labkit.devices.loadcell.units import UnitError, to_si
 from labkit.errors import DeviceReplyError
 from labkit.io.clock import Clock
@@ -138,7 +138,7 @@ register_parser_benchmark("and_std", b"ST,+00012.34  g\r\n", parse_line)
 
 
 @register_driver
-class AndStdBalance(ContinuousMixin, Balance):
+class AndStdBalance(ContinuousMixin, LinkTailMixin, Balance):
     """A&D balance in command mode (default) or stream mode.
 
     Options: ``eol`` (``"CRLF"``/``"CR"``, the balance's command terminator), ``ack``
@@ -173,15 +173,6 @@ class AndStdBalance(ContinuousMixin, Balance):
             pass
         if self.mode == "command":
             self._control("C", acks=1, timeout=self.command_timeout)
-
-    @property
-    def last_bytes(self) -> bytes:  # type: ignore[override]
-        """The tail of what the device sent (the link keeps it), for error messages."""
-        return self.link.last_bytes if hasattr(self, "link") else b""
-
-    @last_bytes.setter
-    def last_bytes(self, value: bytes) -> None:
-        pass  # the link keeps the tail
 
     # ---- helpers ----------------------------------------------------------------------
     def _accept(self, command: str, want: type):

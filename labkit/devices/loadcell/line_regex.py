@@ -26,7 +26,7 @@ import serial
 
 from labkit.devices.base import Balance, Reading, register_driver, register_parser_benchmark
 from labkit.devices.loadcell.continuous import ContinuousMixin
-from labkit.devices.loadcell.linkio import FrameError, LineLink, eol_bytes
+from labkit.devices.loadcell.linkio import FrameError, LineLink, LinkTailMixin, eol_bytes
 from labkit.devices.loadcell.units import UnitError, to_si
 from labkit.errors import DeviceReplyError
 from labkit.io.clock import Clock
@@ -125,7 +125,7 @@ register_parser_benchmark("line_regex", b"Load_cell output val: 12.34\r\n",
 
 
 @register_driver
-class LineRegexBalance(ContinuousMixin, Balance):
+class LineRegexBalance(ContinuousMixin, LinkTailMixin, Balance):
     """A load cell behind a third-party Arduino sketch that prints one value per line.
 
     Options: ``preset`` (``hx711_adc`` default, ``bogde``, ``bare_float``), ``pattern``
@@ -171,15 +171,6 @@ class LineRegexBalance(ContinuousMixin, Balance):
                 to_si(1.0, self.unit)
             except UnitError as exc:
                 raise ValueError(str(exc)) from None
-
-    @property
-    def last_bytes(self) -> bytes:  # type: ignore[override]
-        """The tail of what the device sent (the link keeps it), for error messages."""
-        return self.link.last_bytes if hasattr(self, "link") else b""
-
-    @last_bytes.setter
-    def last_bytes(self, value: bytes) -> None:
-        pass  # the link keeps the tail
 
     @classmethod
     def serial_defaults(cls, options: dict[str, Any]) -> dict[str, Any]:

@@ -48,6 +48,22 @@ def port_settings(port: serial.SerialBase) -> dict[str, Any]:
     }
 
 
+class LinkTailMixin:
+    """For drivers that talk through a :class:`LineLink` kept as ``self.link``: their
+    ``last_bytes`` (for error messages) is the link's tail, before the link exists ``b""``.
+    Setting it is ignored (the base driver's ``__init__`` sets it; the link keeps the tail).
+    """
+
+    @property
+    def last_bytes(self) -> bytes:
+        link = getattr(self, "link", None)
+        return link.last_bytes if link is not None else b""
+
+    @last_bytes.setter
+    def last_bytes(self, value: bytes) -> None:
+        pass
+
+
 def eol_bytes(eol: str) -> bytes:
     """Rig-file spelling of a line end (``"CRLF"``, ``"CR"``, ``"LF"``) -> bytes."""
     table = {"CRLF": b"\r\n", "CR": b"\r", "LF": b"\n"}

@@ -17,7 +17,7 @@ import serial
 
 from labkit.devices.base import Balance, Reading, register_driver, register_parser_benchmark
 from labkit.devices.loadcell.continuous import ContinuousMixin
-from labkit.devices.loadcell.linkio import FrameError, LineLink, eol_bytes
+from labkit.devices.loadcell.linkio import FrameError, LineLink, LinkTailMixin, eol_bytes
 from labkit.devices.loadcell.units import UnitError, to_si
 from labkit.errors import DeviceReplyError
 from labkit.io.clock import Clock
@@ -148,7 +148,7 @@ register_parser_benchmark("mtsics", b"S S      12.34 g\r\n", parse_weight)
 
 
 @register_driver
-class MtSicsBalance(ContinuousMixin, Balance):
+class MtSicsBalance(ContinuousMixin, LinkTailMixin, Balance):
     """MT-SICS balance (Mettler Toledo, labkit HX711 sketch).
 
     Options (rig file ``[devices.balance.options]``): ``eol`` (``"CRLF"`` default, ``"CR"``,
@@ -186,15 +186,6 @@ class MtSicsBalance(ContinuousMixin, Balance):
         self.resets_seen = 0  # the power-on banner before our @ is not a reset during use
 
     # ---- helpers ----------------------------------------------------------------------
-    @property
-    def last_bytes(self) -> bytes:  # type: ignore[override]
-        """The tail of what the device sent (the link keeps it), for error messages."""
-        return self.link.last_bytes if hasattr(self, "link") else b""
-
-    @last_bytes.setter
-    def last_bytes(self, value: bytes) -> None:
-        pass  # the link keeps the tail
-
     def _unsolicited(self, t: float, line: bytes) -> None:
         # the power-on / reset banner, maybe behind power-on junk: tare and zero are gone
         at = line.find(b'I4 A "')
