@@ -12,6 +12,18 @@ from serial.serialutil import SerialBase
 
 from labkit.io.clock import Clock, current_clock
 
+#: the settings a wire carries (a port opened with others talks to the device wrongly)
+LINE_SETTINGS = ("baudrate", "bytesize", "parity", "stopbits")
+#: virtual-clock step while a read waits for something the clock cannot foresee
+VIRTUAL_POLL_S = 0.005
+#: real-clock polling interval while a read waits
+REAL_POLL_S = 0.001
+
+
+def poll_step(period: float, now: float, deadline: float | None) -> float:
+    """How long a waiting read sleeps: ``period``, cut short at the read's ``deadline``."""
+    return period if deadline is None else max(0.0, min(period, deadline - now))
+
 
 class ClockedSerial(SerialBase):
     """Common plumbing: the clock, no-op modem lines, a clock-based ``read_until``."""
@@ -28,6 +40,13 @@ class ClockedSerial(SerialBase):
     def _require_open(self) -> None:
         if not self.is_open:
             raise serial.PortNotOpenError()
+
+    def _require_openable(self) -> None:
+        """pyserial's checks at the start of ``open()``."""
+        if self.is_open:
+            raise serial.SerialException("Port is already open.")
+        if self._port is None:
+            raise serial.SerialException("Port must be configured before it can be used.")
 
     # -- modem lines and buffers that have no meaning without a wire ------------------
     def _reconfigure_port(self) -> None:

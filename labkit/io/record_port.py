@@ -87,10 +87,7 @@ class RecordSerial(ClockedSerial):
 
     # -- life cycle ---------------------------------------------------------------------
     def open(self) -> None:
-        if self.is_open:
-            raise serial.SerialException("Port is already open.")
-        if self._port is None:
-            raise serial.SerialException("Port must be configured before it can be used.")
+        self._require_openable()
         from labkit.io.ports import open_port
 
         spec = parse_record_url(self.portstr)

@@ -29,13 +29,9 @@ from serial.serialutil import to_bytes
 
 from labkit.errors import ReplayMismatch
 from labkit.io.cassette import Cassette, load_cassette
-from labkit.io.clocked import ClockedSerial
+from labkit.io.clocked import LINE_SETTINGS, REAL_POLL_S, VIRTUAL_POLL_S, ClockedSerial, poll_step
 from labkit.io.urls import parse_replay_url
 
-LINE_SETTINGS = ("baudrate", "bytesize", "parity", "stopbits")
-#: virtual-clock step while a read waits for a write another job may make
-VIRTUAL_POLL_S = 0.005
-REAL_POLL_S = 0.001
 #: recorded times are compared with this tolerance (float sums of clock offsets)
 TIME_EPS = 1e-9
 
@@ -176,10 +172,7 @@ class ReplaySerial(ClockedSerial):
 
     # -- life cycle ---------------------------------------------------------------------
     def open(self) -> None:
-        if self.is_open:
-            raise serial.SerialException("Port is already open.")
-        if self._port is None:
-            raise serial.SerialException("Port must be configured before it can be used.")
+        self._require_openable()
         clock = self._resolve_clock()
         if self.cassette is None:
             spec = parse_replay_url(self.portstr)
@@ -356,11 +349,9 @@ class ReplaySerial(ClockedSerial):
             if self._current() is None and deadline is not None:
                 clock.sleep_until(deadline)  # nothing more recorded: a plain timeout
             else:  # awaiting a write that a clock job may make while we sleep
-                step = VIRTUAL_POLL_S if deadline is None else min(VIRTUAL_POLL_S, deadline - now)
-                clock.sleep(step)
+                clock.sleep(poll_step(VIRTUAL_POLL_S, now, deadline))
         else:
-            step = REAL_POLL_S if deadline is None else min(REAL_POLL_S, deadline - now)
-            clock.sleep(max(step, 0.0))
+            clock.sleep(poll_step(REAL_POLL_S, now, deadline))
 
     def _deliver(self, item: DeviceItem, size: int, clock) -> bytes:
         if item.kind == "error":

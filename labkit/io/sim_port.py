@@ -28,14 +28,8 @@ from serial.serialutil import to_bytes
 from labkit.emulators.base import DISCONNECT_MESSAGE, Emulator, emulator_class
 from labkit.emulators.plant import shared_plant
 from labkit.errors import PortURLError
-from labkit.io.clocked import ClockedSerial
+from labkit.io.clocked import LINE_SETTINGS, REAL_POLL_S, VIRTUAL_POLL_S, ClockedSerial, poll_step
 from labkit.io.urls import parse_sim_url
-
-#: virtual-clock step when an emulator cannot tell when its next output is due
-VIRTUAL_POLL_S = 0.005
-#: real-clock polling interval while a read waits
-REAL_POLL_S = 0.001
-LINE_SETTINGS = ("baudrate", "bytesize", "parity", "stopbits")
 
 
 def build_emulator(url: str) -> Emulator:
@@ -101,10 +95,7 @@ class SimSerial(ClockedSerial):
 
     # -- life cycle ---------------------------------------------------------------------
     def open(self) -> None:
-        if self.is_open:
-            raise serial.SerialException("Port is already open.")
-        if self._port is None:
-            raise serial.SerialException("Port must be configured before it can be used.")
+        self._require_openable()
         clock = self._resolve_clock()
         now = clock.now()
         with self._lock:
@@ -193,8 +184,7 @@ class SimSerial(ClockedSerial):
                     target = min(target, deadline)
                 clock.sleep_until(target)
             else:
-                step = REAL_POLL_S if deadline is None else min(REAL_POLL_S, deadline - now)
-                clock.sleep(step)
+                clock.sleep(poll_step(REAL_POLL_S, now, deadline))
         with self._lock:
             out = bytes(self._rx[:size])
             del self._rx[:size]
