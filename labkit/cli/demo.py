@@ -11,9 +11,17 @@ import argparse
 import sys
 from typing import Any
 
-from labkit.cli.run import add_common, attach_rerun, close_sinks, rerun_text, sinks_for
+from labkit.cli.run import (
+    add_common,
+    add_set_argument,
+    close_sinks,
+    rerun_text,
+    sinks_for,
+    stream_session_to_rerun,
+)
 from labkit.protocols.launch import execute, prepare_run
 from labkit.rig import bundled_rig_path
+from labkit.stream import parse_rerun_spec
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -22,14 +30,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="run the Fig. 5.25 sweep on the emulated rig (about 10 s)",
         description=__doc__.split("\n\n")[1] if __doc__ else None,
     )
-    p.add_argument(
-        "--set",
-        dest="sets",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="speed-sweep parameter, e.g. speeds_rpm=6000:20000:2000",
-    )
+    add_set_argument(p, "speed-sweep parameter, e.g. speeds_rpm=6000:20000:2000")
     add_common(p)
     p.set_defaults(func=main)
 
@@ -50,15 +51,9 @@ def main(args: argparse.Namespace) -> int:
     )
 
     def on_session(runner: Any, session: Any) -> None:
-        # RERUN HOOK: the demo saves SESSION/run.rrd once the rerun sink is wired
-        if args.rerun is None:
-            from labkit.stream import parse_rerun_spec
-
+        if args.rerun is None:  # the demo always saves SESSION/run.rrd
             args.rerun = parse_rerun_spec(f"save:{session.path / 'run.rrd'}")
-        session.update_meta(rerun=rerun_text(args.rerun))
-        sink = attach_rerun(args, runner, session.path)
-        if sink is not None:
-            sinks.append(sink)
+        stream_session_to_rerun(args, runner, session, sinks)
 
     sinks: list[Any] = []
     try:
@@ -82,6 +77,6 @@ def main(args: argparse.Namespace) -> int:
     if rrd.exists():
         print(f"viewer: rerun {rrd}")
     else:
-        print("viewer: the .rrd of the run will be written here once the rerun sink lands")
+        print(f"viewer: the run was streamed to --rerun {rerun_text(args.rerun)} (no run.rrd)")
     print(f"replay offline: labkit replay {outcome.session}")
     return 0

@@ -15,6 +15,7 @@ from pathlib import Path
 from labkit.cli.run import close_sinks
 from labkit.protocols.launch import replay_session
 from labkit.session import export_csv, load_session
+from labkit.stream import add_rerun_argument, run_sink
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -25,12 +26,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("session", help="session directory")
     p.add_argument("--export-csv", action="store_true", help="only export readings/*.jsonl to CSV")
-    try:
-        from labkit.stream import add_rerun_argument
-
-        add_rerun_argument(p)
-    except ImportError:  # pragma: no cover
-        p.add_argument("--rerun", default=None, metavar="SPEC")
+    add_rerun_argument(p)
     p.set_defaults(func=main)
 
 
@@ -41,9 +37,7 @@ def main(args: argparse.Namespace) -> int:
             print(path)
         return 0
     sinks = []
-    if getattr(args, "rerun", None) is not None:  # the same rerun sink as `labkit run`
-        from labkit.stream import run_sink
-
+    if args.rerun is not None:  # the same rerun sink as `labkit run`
         sinks.append(run_sink(args.rerun, None))
     try:
         result = replay_session(Path(args.session), sinks=sinks)

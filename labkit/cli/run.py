@@ -14,6 +14,7 @@ from typing import Any
 
 from labkit.protocols import PROTOCOLS, ProgressSink
 from labkit.protocols.launch import execute, prepare_run
+from labkit.stream import add_rerun_argument
 
 
 def add_common(p: argparse.ArgumentParser) -> None:
@@ -31,12 +32,12 @@ def add_common(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--notes", default="", help="operator notes stored in run.json")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    try:
-        from labkit.stream import add_rerun_argument
+    add_rerun_argument(p)
 
-        add_rerun_argument(p)
-    except ImportError:  # pragma: no cover - the stream package is part of labkit
-        p.add_argument("--rerun", default=None, metavar="SPEC", help="spawn | connect[:ADDR] | save:FILE")
+
+def add_set_argument(p: argparse.ArgumentParser, help: str) -> None:
+    """The repeatable ``--set KEY=VALUE`` protocol parameter (collected in ``args.sets``)."""
+    p.add_argument("--set", dest="sets", action="append", default=[], metavar="KEY=VALUE", help=help)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -47,14 +48,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("rig", nargs="?", help="rig file (rigs/*.toml) or a bundled rig name")
     p.add_argument("protocol", nargs="?", help=f"one of: {', '.join(sorted(PROTOCOLS))}")
-    p.add_argument(
-        "--set",
-        dest="sets",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="protocol parameter, e.g. speeds_rpm=6000:20000:1000 (repeatable)",
-    )
+    add_set_argument(p, "protocol parameter, e.g. speeds_rpm=6000:20000:1000 (repeatable)")
     p.add_argument(
         "--dry-run", action="store_true", help="print the planned steps and check limits; no motion"
     )
@@ -97,6 +91,15 @@ def attach_rerun(args: argparse.Namespace, runner: Any, session_path: Any) -> An
     sink = run_sink(spec, session_path, loops=loops or None, devices=devices or None)
     runner.bus.add(sink)
     return sink
+
+
+def stream_session_to_rerun(args: argparse.Namespace, runner: Any, session: Any, sinks: list[Any]) -> None:
+    """Once the session exists: note ``args.rerun`` in run.json and attach its sink to the run
+    (appended to ``sinks``, which the caller closes with :func:`close_sinks`)."""
+    session.update_meta(rerun=rerun_text(args.rerun))
+    sink = attach_rerun(args, runner, session.path)
+    if sink is not None:
+        sinks.append(sink)
 
 
 def close_sinks(sinks: list[Any], command: str) -> None:
@@ -147,10 +150,7 @@ def main(args: argparse.Namespace) -> int:
     sinks: list[Any] = []
 
     def on_session(runner: Any, session: Any) -> None:
-        session.update_meta(rerun=rerun_text(args.rerun))
-        sink = attach_rerun(args, runner, session.path)
-        if sink is not None:
-            sinks.append(sink)
+        stream_session_to_rerun(args, runner, session, sinks)
 
     try:
         outcome = execute(prep, args.sessions, notes=args.notes, on_session=on_session)
