@@ -319,6 +319,12 @@ def _body(file: str, name: str, table: Any) -> Body:
     return body
 
 
+def parse_body(file: str, name: str, table: Any) -> Body:
+    """Validate one ``[bodies.NAME]`` table on its own (``labkit predict`` reads only the
+    bodies of a rig file). Raises RigFileError as ``file:bodies.NAME.key: reason``."""
+    return _body(file, name, table)
+
+
 def _control(file: str, table: Any, devices: dict[str, DeviceConfig]) -> ControlSettings:
     sec = _Section(file, "control", table)
     d = ControlSettings()

@@ -120,3 +120,20 @@ def power_law_exponent(r: np.ndarray, force: np.ndarray) -> tuple[float, float]:
     """Fit |F| = k r^-n by least squares in log-log; returns (k, n)."""
     slope, intercept = np.polyfit(np.log(r), np.log(np.abs(force)), 1)
     return float(np.exp(intercept)), float(-slope)
+
+
+def lab_initial_state(setup: FloatorSetup, state: FloatorState) -> dict[str, np.ndarray]:
+    """The steady state as lab-frame initial conditions at t = 0 (rotator phase 0, Eq. 5.25).
+
+    Returns ``position`` (m), ``velocity`` (m/s, the co-rotating circle: omega e_z x position),
+    ``dipole_axis`` (unit psi) and ``angular_velocity`` (rad/s, lab frame; Eq. 5.62 with the
+    setup's spin k). Point-inverting all of it (position and velocity negated, psi and the
+    angular velocity kept) gives the same motion beneath the rotator: a point dipole's field is
+    even in the displacement.
+    """
+    psi, ell, pos = _unpack(state.x, state.r)
+    psi = psi / np.linalg.norm(psi)
+    a1 = setup.i_radial / setup.i_axial - 1.0
+    omega_b = ell + a1 * np.dot(ell, psi) * psi
+    return {"position": pos, "velocity": setup.omega * np.cross(EZ, pos), "dipole_axis": psi,
+            "angular_velocity": setup.omega * omega_b}

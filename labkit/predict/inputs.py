@@ -1,0 +1,105 @@
+"""Where a prediction's magnets come from: a rig file's ``[bodies]`` or command-line specs.
+
+Rig-file problems are :class:`labkit.errors.RigFileError` (``file:key: reason``); bad options
+are :class:`PredictInputError` naming the option.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+
+from labkit.errors import LabkitError, RigFileError
+from labkit.predict.magnets import (
+    Magnet,
+    MagnetSpecError,
+    build_magnet,
+    parse_magnet_spec,
+    remanence_for_grade,
+)
+from labkit.rig import Body, bundled_rig_path, parse_body
+
+
+class PredictInputError(LabkitError):
+    """A bad ``labkit predict`` option (the message names it)."""
+
+
+def magnet_from_body(body: Body, remanence_t: float | None = None) -> Magnet:
+    """A :class:`Magnet` from a rig file's body (sizes by shape: sphere diameter; cylinder
+    diameter and length; cube length; block width, diameter as depth, length along the dipole).
+    Raises ValueError naming what is missing."""
+    sizes = {
+        "sphere": (body.diameter_m,),
+        "cylinder": (body.diameter_m, body.length_m),
+        "cube": (body.length_m or body.width_m or body.diameter_m,),
+        "block": (body.width_m, body.diameter_m, body.length_m),
+    }.get(body.shape)
+    if sizes is None:
+        raise ValueError(f"shape {body.shape!r} is not supported here (sphere, cylinder, cube, block)")
+    if any(s is None for s in sizes):
+        need = {"sphere": "diameter_mm", "cylinder": "diameter_mm and length_mm", "cube": "length_mm",
+                "block": "width_mm, diameter_mm (depth) and length_mm (along the dipole)"}[body.shape]
+        raise ValueError(f"a {body.shape} needs {need} for a prediction")
+    return build_magnet(body.shape, sizes, remanence_t=remanence_t, mass_kg=body.mass_kg,
+                        moment_a_m2=body.dipole_moment_a_m2, inertia_axial_kg_m2=body.inertia_axial_kg_m2,
+                        inertia_radial_kg_m2=body.inertia_radial_kg_m2, grade=body.grade)
+
+
+def magnets_from_rig(path: str | Path, remanence_t: float | None = None) -> tuple[Magnet, Magnet, float]:
+    """(rotator, floator, rotator tilt in rad) from the ``[bodies]`` of a rig file (or a bundled
+    rig's name). Only the bodies are read, so a rig still being planned needs no devices."""
+    p = Path(path)
+    if not p.exists():
+        bundled = bundled_rig_path(str(path))
+        if bundled is None:
+            raise RigFileError(str(path), "(file)", "no such rig file")
+        p = bundled
+    file = str(path)
+    try:
+        data = tomllib.loads(p.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise RigFileError(file, "(syntax)", str(exc)) from None
+    except OSError as exc:
+        raise RigFileError(file, "(file)", exc.strerror or str(exc)) from None
+    tables = data.get("bodies")
+    if not isinstance(tables, dict):
+        raise RigFileError(file, "bodies",
+                           "missing: a prediction needs [bodies.rotator] and [bodies.floator]")
+    magnets: dict[str, Magnet] = {}
+    tilt = 0.0
+    for name in ("rotator", "floator"):
+        if name not in tables:
+            raise RigFileError(file, f"bodies.{name}", "missing (required for a prediction)")
+        body = parse_body(file, name, tables[name])
+        try:
+            magnets[name] = magnet_from_body(body, remanence_t)
+        except (ValueError, MagnetSpecError) as exc:
+            raise RigFileError(file, f"bodies.{name}", str(exc)) from None
+        if name == "rotator":
+            tilt = body.tilt_rad
+    return magnets["rotator"], magnets["floator"], tilt
+
+
+def magnet_option(option: str, spec: str, remanence_t: float | None, grade: str) -> Magnet:
+    """Parse ``--rotator``/``--floator``; errors name the option."""
+    try:
+        return parse_magnet_spec(spec, remanence_t=remanence_t, grade=grade)
+    except MagnetSpecError as exc:
+        raise PredictInputError(f"{option}: {exc}") from None
+
+
+def check_remanence(remanence_t: float | None, grade: str | None) -> float | None:
+    """The remanence to use (T) from ``--remanence-t`` or ``--grade`` (None: per magnet / N42)."""
+    if remanence_t is not None and grade:
+        raise PredictInputError("give --grade or --remanence-t, not both")
+    if remanence_t is not None:
+        if not (math.isfinite(remanence_t) and 0 < remanence_t < 2):
+            raise PredictInputError(f"--remanence-t: must be between 0 and 2 T, got {remanence_t}")
+        return remanence_t
+    if grade:
+        try:
+            return remanence_for_grade(grade)
+        except MagnetSpecError as exc:
+            raise PredictInputError(f"--grade: {exc}") from None
+    return None

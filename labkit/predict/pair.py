@@ -1,0 +1,206 @@
+"""A rotator / floator pair in the point-dipole model: axial force, bound state, speed limits.
+
+The floator hangs beneath the rotator on its spin axis (the paper's set-ups, Sec. 6.0.6 case
+(3)) or sits above it. The cycle-averaged axial force at a distance r comes from the
+co-rotating steady state of :func:`labkit.model.floator_equilibrium.steady_state` (cone plus
+lateral circle, split into the PFR of the cyclic moment and the attraction of the static one,
+Eq. 5.84-5.85). For a point dipole the force along the axis is mirror-symmetric, so "beneath"
+only changes the sign of the weight: the load pushing the floator away is +m g beneath and
+-m g above (Eq. 6.19).
+
+Speeds: the PFR falls as omega^-2 (Eq. 5.81) while the attraction hardly changes, so
+
+* above a **maximum speed** the equilibrium would sit closer than contact (the magnets touch);
+* below a **minimum speed** the net attraction at the stiffness limit (below Eq. 6.22) no longer
+  carries the weight, and the floator falls.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import brentq, minimize_scalar
+
+from labkit.model.floator_equilibrium import FloatorSetup, FloatorState, steady_state
+from labkit.predict.axial import AxialBoundState, axial_bound_state
+from labkit.predict.magnets import Magnet
+
+G0 = 9.80665
+K_M = 1e-7  # mu0 / 4 pi
+MAX_RESIDUAL = 1e-9
+MAX_CONE_RAD = math.pi / 4  # beyond this the "steady state" is not the small-cone branch
+
+
+@dataclass(frozen=True)
+class Pair:
+    """Rotator and floator magnets, rotator tilt gamma (rad, Eq. 5.25) and where the floator is."""
+
+    rotator: Magnet
+    floator: Magnet
+    gamma: float
+    placement: str = "beneath"  # or "above"
+    gravity: float = G0
+
+    def setup(self, omega: float) -> FloatorSetup:
+        f = self.floator
+        return FloatorSetup(self.rotator.moment_a_m2, f.moment_a_m2, f.mass_kg,
+                            f.inertia_radial_kg_m2, f.inertia_axial_kg_m2, omega, self.gamma)
+
+    @property
+    def contact_distance(self) -> float:
+        """Centre distance at which the magnets touch along the axis."""
+        return self.rotator.axial_half_extent_m + self.floator.axial_half_extent_m
+
+    @property
+    def load(self) -> float:
+        """External axial force pushing the floator away from the rotator: its weight, signed."""
+        w = self.floator.mass_kg * self.gravity
+        return w if self.placement == "beneath" else -w
+
+    @property
+    def dipole_constant(self) -> float:
+        """M = mu0 m_R m_F / 4 pi (Eq. 5.71)."""
+        return K_M * self.rotator.moment_a_m2 * self.floator.moment_a_m2
+
+    def torques(self, r: float) -> tuple[float, float]:
+        """(tau_C, tau_S) on the floator at distance r on the axis (Eq. 5.28)."""
+        m = self.dipole_constant / r**3
+        return m * math.cos(self.gamma), 2 * m * math.sin(self.gamma)
+
+
+@dataclass
+class ForceCurve:
+    """Cycle-averaged axial force F(r) (N, positive away from the rotator) at one speed, cached."""
+
+    pair: Pair
+    omega: float
+    states: dict[float, FloatorState | None] = field(default_factory=dict)
+    evaluations: int = 0
+
+    def state(self, r: float) -> FloatorState | None:
+        if r not in self.states:
+            self.evaluations += 1
+            try:
+                with np.errstate(all="ignore"):
+                    self.states[r] = steady_state(self.pair.setup(self.omega), r)
+            except (OverflowError, ValueError, FloatingPointError, np.linalg.LinAlgError):
+                self.states[r] = None
+        st = self.states[r]
+        if st is None or not math.isfinite(st.force_z) or st.residual > MAX_RESIDUAL or st.phi > MAX_CONE_RAD:
+            return None
+        return st
+
+    def __call__(self, r: float) -> float:
+        st = self.state(float(r))
+        return math.nan if st is None else st.force_z
+
+    def search_range(self) -> tuple[float, float]:
+        r0 = self.pair.contact_distance
+        return r0, 40.0 * r0
+
+    def stiffness_limit(self, xtol: float, guess: float | None = None) -> tuple[float, float]:
+        """(r, largest net attraction) over the search range: a log-spaced scan (narrow around
+        ``guess`` when given), then Brent to ``xtol``."""
+        lo, hi = self.search_range()
+        if guess is not None:
+            grid = np.geomspace(max(lo, guess / 1.4), min(hi, guess * 1.4), 7)
+            values = self._scan(grid)
+            i = int(np.argmin(values))
+            if 0 < i < len(grid) - 1 or (i == 0 and grid[0] == lo):
+                return self._refine(grid, values, i, xtol)
+        grid = np.geomspace(lo, hi, 25)
+        values = self._scan(grid)
+        i = int(np.argmin(values))
+        if not np.isfinite(values[i]):
+            return lo, -math.inf
+        return self._refine(grid, values, i, xtol)
+
+    def _scan(self, grid: np.ndarray) -> np.ndarray:
+        values = np.array([self(r) for r in grid])
+        return np.where(np.isfinite(values), values, np.inf)
+
+    def _refine(self, grid: np.ndarray, values: np.ndarray, i: int, xtol: float) -> tuple[float, float]:
+        a, b = grid[max(i - 1, 0)], grid[min(i + 1, len(grid) - 1)]
+
+        def f(r: float) -> float:
+            v = self(r)
+            return v if math.isfinite(v) else math.inf
+
+        res = minimize_scalar(f, bounds=(a, b), method="bounded", options={"xatol": xtol})
+        if res.fun <= values[i]:
+            return float(res.x), -float(res.fun)
+        return float(grid[i]), -float(values[i])
+
+    def bound_state(self, xtol: float = 1e-9) -> AxialBoundState:
+        lo, hi = self.search_range()
+        lim = self.stiffness_limit(xtol)
+        return axial_bound_state(self, self.pair.load, lo, hi, xtol=xtol, r_limit=lim)
+
+
+def _log_root(fn, omega0: float, increasing: bool, rtol: float, first_step: float = 0.05,
+              max_steps: int = 9) -> float:
+    """Root in omega of ``fn`` (monotone in omega; NaN counts as the low side): bracketed from
+    ``omega0`` by steps in log(omega) that double from ``first_step``, then Brent in log(omega)."""
+    def g(log_w: float) -> float:
+        v = fn(math.exp(log_w))
+        if not math.isfinite(v):
+            return -1.0 if increasing else 1.0
+        return v
+
+    x0 = math.log(omega0)
+    v0 = g(x0)
+    sign_up = (v0 < 0) == increasing  # the root lies above omega0
+    a, step = x0, first_step
+    for _ in range(max_steps):
+        b = a + step if sign_up else a - step
+        if (g(b) > 0) != (v0 > 0):
+            lo, hi = (a, b) if a < b else (b, a)
+            return math.exp(brentq(g, lo, hi, xtol=rtol / 4, rtol=1e-15))
+        a, step = b, step * 2
+    return math.nan
+
+
+def speed_for_distance(pair: Pair, r: float, omega0: float, rtol: float = 1e-5) -> float:
+    """Speed (rad/s) at which the equilibrium sits at distance r: F(r; omega) + load = 0.
+
+    With r the contact distance this is the largest speed of the bound state."""
+    return _log_root(lambda w: ForceCurve(pair, w)(r) + pair.load, omega0, increasing=False, rtol=rtol)
+
+
+def scaled_min_speed_guess(curve: ForceCurve) -> float:
+    """First guess of the minimum speed from the force split already solved at one speed: the
+    PFR part scaled as omega^-2 (Eq. 5.81), the static attraction held fixed (it hardly depends
+    on omega), maximised over the distances in the cache. rad/s; NaN when there is none."""
+    states = [st for r in sorted(curve.states) if (st := curve.state(r)) is not None]
+    if len(states) < 3:
+        return math.nan
+    f_c = np.array([st.force_cyclic_z for st in states])
+    f_s = np.array([st.force_static_z for st in states])
+
+    def margin(log_w: float) -> float:
+        scale = (curve.omega / math.exp(log_w)) ** 2
+        return float(np.max(-(f_c * scale + f_s))) - curve.pair.load
+
+    lo, hi = math.log(curve.omega) - 8.0, math.log(curve.omega) + 8.0
+    if margin(lo) >= 0 or margin(hi) <= 0:
+        return math.nan
+    return math.exp(brentq(margin, lo, hi, xtol=1e-6))
+
+
+def min_speed(pair: Pair, omega0: float, rtol: float = 1e-4, xtol: float = 1e-7,
+              guess: float | None = None) -> float:
+    """Lowest speed (rad/s) whose largest net attraction still carries the load (Eq. 6.19 with
+    the stiffness limit below Eq. 6.22). ``guess`` (e.g. :func:`scaled_min_speed_guess`)
+    starts the bracket close to the root."""
+    last: dict[str, float] = {}
+
+    def margin(w: float) -> float:
+        r, attraction = ForceCurve(pair, w).stiffness_limit(xtol, last.get("r"))
+        if math.isfinite(attraction):
+            last["r"] = r
+        return attraction - pair.load
+
+    start = guess if guess is not None and math.isfinite(guess) and guess > 0 else omega0
+    return _log_root(margin, start, increasing=True, rtol=rtol)

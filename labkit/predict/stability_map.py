@@ -1,0 +1,124 @@
+"""Stability map of a rotator / floator pair over a grid (tilt, speed, ...), through
+:func:`labkit.numerics.sweep.run_sweep`: local, on a process pool or on a Dask cluster, and
+resumable from its JSON-lines store.
+
+Axes are ``tilt_deg`` and ``speed_rpm`` (any one or both); each point is a plain dict holding
+the axes and the two magnets, so a store written for other magnets is never reused.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from itertools import product
+
+import numpy as np
+
+from labkit.predict.magnets import Magnet
+from labkit.predict.pair import Pair
+
+AXES = ("tilt_deg", "speed_rpm")
+
+
+class MapSpecError(ValueError):
+    """A ``--map`` axis that cannot be read."""
+
+
+def parse_axis(text: str) -> tuple[str, np.ndarray]:
+    """``tilt_deg=2:8:7`` -> ("tilt_deg", 7 values from 2 to 8 inclusive); ``speed_rpm=20000``
+    is a single value."""
+    name, sep, spec = text.partition("=")
+    name = name.strip()
+    if not sep or name not in AXES:
+        raise MapSpecError(f"{text!r}: expected AXIS=START:STOP:COUNT with AXIS one of {', '.join(AXES)}")
+    parts = spec.split(":")
+    try:
+        nums = [float(p) for p in parts]
+    except ValueError:
+        raise MapSpecError(f"{text!r}: START, STOP and COUNT must be numbers") from None
+    if len(nums) == 1:
+        values = np.array(nums)
+    elif len(nums) == 3 and nums[2] >= 1 and nums[2] == int(nums[2]):
+        values = np.linspace(nums[0], nums[1], int(nums[2]))
+    else:
+        raise MapSpecError(f"{text!r}: expected START:STOP:COUNT (COUNT a whole number >= 1) or one value")
+    if name == "speed_rpm" and np.any(values <= 0):
+        raise MapSpecError(f"{text!r}: speeds must be positive")
+    if name == "tilt_deg" and np.any(np.abs(values) >= 90):
+        raise MapSpecError(f"{text!r}: tilts must be below 90 degrees")
+    return name, values
+
+
+def grid_points(axes: dict[str, np.ndarray], pair: Pair, speed_rpm: float | None) -> list[dict]:
+    """Sweep points: every combination of the axes; a missing axis takes the pair's tilt or
+    ``speed_rpm``."""
+    tilts = axes.get("tilt_deg", np.array([math.degrees(pair.gamma)]))
+    if "speed_rpm" in axes:
+        speeds = axes["speed_rpm"]
+    elif speed_rpm is not None:
+        speeds = np.array([speed_rpm])
+    else:
+        raise MapSpecError("the map needs speeds: a speed_rpm axis or --speed-rpm")
+    base = {"rotator": _magnet_dict(pair.rotator), "floator": _magnet_dict(pair.floator),
+            "placement": pair.placement, "gravity_m_s2": pair.gravity}
+    return [{"tilt_deg": float(t), "speed_rpm": float(s), **base} for t, s in product(tilts, speeds)]
+
+
+def _magnet_dict(m: Magnet) -> dict:
+    return {"shape": m.shape, "sizes_m": list(m.sizes_m), "mass_kg": m.mass_kg,
+            "inertia_axial_kg_m2": m.inertia_axial_kg_m2, "inertia_radial_kg_m2": m.inertia_radial_kg_m2,
+            "moment_a_m2": m.moment_a_m2, "axial_half_extent_m": m.axial_half_extent_m, "size_m": m.size_m}
+
+
+def _magnet(d: dict) -> Magnet:
+    return Magnet(**{**d, "sizes_m": tuple(d["sizes_m"])})
+
+
+def evaluate_points(points: list[dict]) -> list[dict]:
+    """Sweep ``evaluate``: the bound state and the cone's linear stability at each point (no
+    time-domain run: that is the single-point check)."""
+    from labkit.predict.predictor import predict
+
+    rows = []
+    for p in points:
+        t0 = time.perf_counter()
+        pair = Pair(_magnet(p["rotator"]), _magnet(p["floator"]), math.radians(p["tilt_deg"]),
+                    p["placement"], p["gravity_m_s2"])
+        pred = predict(pair, p["speed_rpm"] * 2 * math.pi / 60, run_verify=False, speed_limits=False,
+                       scaling=False, xtol=1e-8)
+        rows.append({
+            "bound": pred.bound, "stable": pred.stable,
+            "r_eq_mm": _num(pred.value("r_eq_mm")),
+            "axial_stiffness_N_m": _num(pred.value("axial_stiffness_N_m")),
+            "cone_angle_deg": _num(pred.value("cone_angle_deg")),
+            "growth_rate_1_s": _num(pred.value("growth_rate_1_s")),
+            "max_load_N": _num(pred.value("max_load_N")),
+            "wall_s": time.perf_counter() - t0,
+        })
+    return rows
+
+
+def _num(v) -> float:
+    return math.nan if v is None else float(v)
+
+
+def map_symbol(row: dict) -> str:
+    """``S`` bound and stable, ``U`` bound but unstable, ``.`` no bound state."""
+    if not row.get("bound"):
+        return "."
+    return "S" if row.get("stable") else "U"
+
+
+def render_map(rows: list[dict]) -> str:
+    """Text map: one line per tilt, one column per speed."""
+    tilts = sorted({r["tilt_deg"] for r in rows})
+    speeds = sorted({r["speed_rpm"] for r in rows})
+    cell = {(r["tilt_deg"], r["speed_rpm"]): map_symbol(r) for r in rows}
+    width = max(7, max(len(f"{s:.0f}") for s in speeds) + 1)
+    lines = ["tilt_deg \\ speed_rpm " + "".join(f"{s:>{width}.0f}" for s in speeds)]
+    for t in tilts:
+        lines.append(f"{t:>20.3g} " + "".join(f"{cell.get((t, s), '?'):>{width}}" for s in speeds))
+    lines.append("S bound and stable, U bound but unstable, . no bound state (point dipoles)")
+    return "\n".join(lines)
+
+
