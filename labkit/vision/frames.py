@@ -34,10 +34,16 @@ class FrameSource:
     _photo: np.ndarray | None = None
     frames_read: int = 0
     truncated: str | None = None
+    levels: tuple[float, float] = (0.0, 255.0)  # grey levels of black and white in the frames yielded
 
-    def frames(self, stride: int = 1, prefetch: int = 0) -> Iterator[tuple[int, np.ndarray]]:
+    def frames(self, stride: int = 1, prefetch: int = 0,
+               luma: bool = False) -> Iterator[tuple[int, np.ndarray]]:
         """Yield ``(index, bgr_frame)`` for every ``stride``-th frame; skipped frames are only grabbed
         (demuxed and decoded, not converted), which is cheaper than reading them.
+
+        ``luma=True`` yields the decoder's own luma plane (H, W) instead, skipping the YUV -> BGR
+        conversion (~15 % of the decode cost at 720p) when the codec delivers planar YUV
+        (mp4v, MJPG, VP9, H.264 ...); otherwise, and for photos, it yields BGR frames as usual.
 
         ``prefetch > 0`` decodes in a background thread up to that many frames ahead (OpenCV
         releases the GIL while decoding, so decoding overlaps the caller's work); every frame is
@@ -47,17 +53,23 @@ class FrameSource:
             yield 0, self._photo
             return
         if prefetch > 0:
-            yield from self._prefetched(stride, prefetch)
+            yield from self._prefetched(stride, prefetch, luma)
         else:
-            yield from self._decode(stride, reuse=True)
+            yield from self._decode(stride, reuse=True, luma=luma)
         if self.frames_read == 0:
             raise VideoError(self.path, "no frame could be decoded (empty or corrupt video)")
         if self.frame_count > 0 and self.frames_read < self.frame_count - 1:
             self.truncated = (f"decoded {self.frames_read} of {self.frame_count} advertised frames "
                               "(truncated file?)")
 
-    def _decode(self, stride: int, reuse: bool) -> Iterator[tuple[int, np.ndarray]]:
+    def _decode(self, stride: int, reuse: bool, luma: bool = False) -> Iterator[tuple[int, np.ndarray]]:
         cap, index, buf = self._cap, 0, None
+        luma = luma and self._luma_plane_available()
+        level = cv2.utils.logging.getLogLevel()
+        if luma:
+            cap.set(cv2.CAP_PROP_CONVERT_RGB, 0)
+            # FFMPEG warns on every unconverted planar-YUV frame; that is what we asked for
+            cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
         try:
             while True:
                 if index % stride:
@@ -71,17 +83,48 @@ class FrameSource:
                     yield index, frame
                 index += 1
         finally:
+            if luma:
+                cv2.utils.logging.setLogLevel(level)
             cap.release()
             self.frames_read = index
 
-    def _prefetched(self, stride: int, depth: int) -> Iterator[tuple[int, np.ndarray]]:
+    def _luma_plane_available(self) -> bool:
+        """Whether this file's decoder hands out a planar luma plane (H, W) when conversion is off,
+        checked on the first frame (packed or RGB pixel formats fail it). Also sets
+        :attr:`levels` from that frame: studio range (16, 235) or full range (0, 255), whichever
+        maps the converted frame's luma onto the plane better."""
+        if self._cap is None or self._cap.getBackendName() != "FFMPEG":
+            return False
+        level = cv2.utils.logging.getLogLevel()
+        cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
+        plane = cv2.VideoCapture(self.path, cv2.CAP_FFMPEG)
+        converted = cv2.VideoCapture(self.path, cv2.CAP_FFMPEG)
+        try:
+            plane.set(cv2.CAP_PROP_CONVERT_RGB, 0)
+            ok, first = plane.read()
+            ok_bgr, bgr = converted.read()
+        finally:
+            plane.release()
+            converted.release()
+            cv2.utils.logging.setLogLevel(level)
+        w, h = self.size
+        if not (ok and ok_bgr and first.shape == (h, w) and first.dtype == np.uint8):
+            return False
+        y = first[::4, ::4].astype(np.float32)
+        gray = cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY)[::4, ::4].astype(np.float32)
+        ranges = [(0.0, 255.0), (16.0, 235.0)]
+        errors = [float(np.mean(np.abs(y - (lo + gray * (hi - lo) / 255.0)))) for lo, hi in ranges]
+        self.levels = ranges[int(np.argmin(errors))]
+        return True
+
+    def _prefetched(self, stride: int, depth: int, luma: bool = False) -> Iterator[tuple[int, np.ndarray]]:
         q: queue.Queue = queue.Queue(maxsize=depth)
         stop = threading.Event()
         done = object()
 
         def work() -> None:
             try:
-                for item in self._decode(stride, reuse=False):
+                for item in self._decode(stride, reuse=False, luma=luma):
                     while not stop.is_set():
                         try:
                             q.put(item, timeout=0.1)
@@ -107,9 +150,9 @@ class FrameSource:
                     pass
             thread.join()
 
-    def decode_only(self) -> int:
+    def decode_only(self, luma: bool = False) -> int:
         """Read every frame and do nothing else (the benchmark's reference); returns the count."""
-        return sum(1 for _ in self.frames())
+        return sum(1 for _ in self.frames(luma=luma))
 
 
 def open_frames(path: str | Path) -> FrameSource:

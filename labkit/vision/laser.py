@@ -35,13 +35,16 @@ class LaserQuality:
     """Speed/accuracy settings: analyse every ``stride``-th frame, inside ``roi`` (x, y, w, h) or
     the whole frame (None), with or without sub-pixel refinement, accumulating ``chunk_s`` seconds
     of video per chunk (the time resolution of the centre's drift) but at most ``max_chunks``
-    chunks (fewer chunks: faster; more: follows a fast drift better)."""
+    chunks (fewer chunks: faster; more: follows a fast drift better). ``luma``: accumulate the
+    decoder's own luma plane where the codec has one (skips the colour conversion; a live-stream
+    hook still gets BGR frames); False: the brightest colour channel of BGR frames."""
 
     stride: int = 1
     roi: tuple[int, int, int, int] | None = None
     subpixel: bool = True
     chunk_s: float = 0.5
     max_chunks: int = 16  # long clips get longer chunks: trace extraction per chunk costs ~15-40 ms
+    luma: bool = True
 
 
 @dataclass
@@ -84,7 +87,8 @@ def accumulate(source: FrameSource, quality: LaserQuality, on_frame: FrameHook |
     fps = source.fps or 1.0
     roi = _clip_roi(quality.roi, source.size) if quality.roi is not None else None
     chunks: list[Chunk] = []
-    for index, frame in source.frames(quality.stride, prefetch=prefetch):
+    luma = quality.luma and on_frame is None
+    for index, frame in source.frames(quality.stride, prefetch=prefetch, luma=luma):
         if on_frame is not None:
             on_frame(index, index / fps, frame)
         ci = index // per_chunk
@@ -153,8 +157,12 @@ def _touches(points: np.ndarray, inner: tuple[float, float, float, float], edge:
                 or (edge[2] and x.max() > inner[2]) or (edge[3] and y.max() > inner[3]))
 
 
-def _check_exposure(chunks: list[Chunk], name: str) -> None:
+def _check_exposure(chunks: list[Chunk], name: str, black_white: tuple[float, float] = (0.0, 255.0)) -> None:
+    """Refuse all-black or all-white footage; ``black_white``: the frames' black and white levels
+    (16, 235 for a studio-range luma plane), mapped to 0-255 first."""
     levels = np.concatenate([c.image.ravel()[:: max(1, c.image.size // 200000)] for c in chunks])
+    black, white = black_white
+    levels = (levels.astype(np.float32) - black) * (255.0 / (white - black))
     if levels.max() < 16:
         raise VideoError(name, f"all frames are black (brightest grey level {int(levels.max())})")
     if np.percentile(levels, 5) > 245:
@@ -256,7 +264,7 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
 
         chunks = accumulate(source, quality, on_frame, on_chunk=extract)
         t_frames = time.perf_counter()
-        _check_exposure(chunks, source.path)
+        _check_exposure(chunks, source.path, source.levels)
         traces = [futures[id(c)].result() for c in chunks]
         preliminary = prior["fit"].result() if "fit" in prior else None
     points, weights, times, band, peak, noise = gather(chunks, traces, fps)

@@ -1,0 +1,71 @@
+"""The luma fast path of frame reading: the decoder's own Y plane instead of converted BGR frames.
+
+Independent reference: BT.601 luma of the converted frame (cv2.cvtColor BGR2GRAY), in studio range
+(16-235) for MPEG-4 part 2 and full range (0-255) for motion JPEG.
+"""
+
+import math
+from dataclasses import replace
+
+import cv2
+import numpy as np
+import pytest
+
+from labkit.synth import laser_truth, render_laser, write_clip
+from labkit.synth.presets import laser_pattern, laser_preset
+from labkit.vision.frames import open_frames
+from labkit.vision.laser import LaserQuality, analyse_laser
+
+
+def clip(folder, codec, ext, level="medium", frames=6, size=(320, 240), **pattern):
+    spec = replace(laser_preset(level, size, seed=3), frames=frames)
+    if pattern:
+        spec = replace(spec, pattern=laser_pattern("ellipse", size, **pattern))
+    truth = laser_truth(spec)
+    return write_clip(folder / f"clip-{codec}{ext}", render_laser(spec), spec.fps, codec, truth), truth
+
+
+@pytest.mark.parametrize("codec,ext,levels",
+                         [("mp4v", ".mp4", (16.0, 235.0)), ("MJPG", ".avi", (0.0, 255.0))])
+def test_luma_plane_is_the_bt601_luma_of_the_converted_frame(tmp_path, codec, ext, levels):
+    path, _ = clip(tmp_path, codec, ext)
+    bgr = [f for _, f in open_frames(path).frames()]
+    source = open_frames(path)
+    planes = [f for _, f in source.frames(luma=True)]
+    assert source.levels == levels
+    assert len(planes) == len(bgr) == source.frames_read
+    lo, hi = levels
+    for plane, frame in zip(planes, bgr, strict=True):
+        assert plane.shape == frame.shape[:2] and plane.dtype == np.uint8
+        expected = lo + cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY).astype(float) * (hi - lo) / 255
+        assert np.mean(np.abs(plane - expected)) < 2.0  # rounding of the YUV -> BGR conversion
+
+
+def test_luma_falls_back_to_bgr_without_a_planar_luma(tmp_path):
+    path, _ = clip(tmp_path, "FFV1", ".mkv", frames=3)
+    source = open_frames(path)
+    frames = [f for _, f in source.frames(luma=True, prefetch=2)]
+    assert len(frames) == 3 and all(f.ndim == 3 for f in frames)
+    assert source.levels == (0.0, 255.0)
+
+
+def test_luma_stride_and_prefetch_give_the_same_frames(tmp_path):
+    path, _ = clip(tmp_path, "mp4v", ".mp4", frames=9)
+    plain = [(i, f.copy()) for i, f in open_frames(path).frames(stride=3, luma=True)]
+    ahead = list(open_frames(path).frames(stride=3, prefetch=2, luma=True))
+    assert [i for i, _ in plain] == [i for i, _ in ahead] == [0, 3, 6]
+    assert all(np.array_equal(a, b) for (_, a), (_, b) in zip(plain, ahead, strict=True))
+
+
+@pytest.mark.parametrize("codec,ext", [("mp4v", ".mp4"), ("MJPG", ".avi")])
+def test_luma_and_colour_analyses_both_meet_the_acceptance_bounds(tmp_path, codec, ext):
+    path, truth = clip(tmp_path, codec, ext, level="hard", frames=40, size=(640, 480),
+                       ellipticity=0.4, rotation_deg=62)
+    t = truth["pattern"]
+    for luma in (True, False):
+        p = analyse_laser(str(path), quality=LaserQuality(luma=luma))["pattern"]
+        assert p["type"] == "ellipse"
+        assert math.dist(p["center_px"], t["center_px"]) < 1.0
+        for got, want in zip(p["semi_axes_px"], t["semi_axes_px"], strict=True):
+            assert abs(got / want - 1) < 0.02
+        assert abs((p["rotation_deg"] - t["rotation_deg"] + 90) % 180 - 90) < 2.0
