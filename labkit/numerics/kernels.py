@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from labkit.sim.integrators.splitting import COMPOSITIONS
+from labkit.sim.integrators.splitting import COMPOSITIONS, rotate_axis_angle, rotate_body_columns
 
 
 @dataclass
@@ -115,31 +115,10 @@ def _one(R, l, a, jc, js, phase, n_periods, n_steps, every, weights, zen, jac):
                 l3 = R[0, 2] * l[0] + R[1, 2] * l[1] + R[2, 2] * l[2]
                 c = hw * l3 * inv_a1
                 if c != 0.0:
-                    cc, sc = math.cos(c), math.sin(c)
-                    for r in range(3):
-                        p, q = R[r, 0], R[r, 1]
-                        R[r, 0] = cc * p + sc * q
-                        R[r, 1] = -sc * p + cc * q
+                    rotate_body_columns(R, 2, c)
                 ln = math.sqrt(l[0] * l[0] + l[1] * l[1] + l[2] * l[2])
                 if ln > 0.0:
-                    ax, ay, az = l[0] / ln, l[1] / ln, l[2] / ln
-                    ang = hw * ln
-                    co, si = math.cos(ang), math.sin(ang)
-                    t1 = 1.0 - co
-                    r00 = co + ax * ax * t1
-                    r01 = ax * ay * t1 - az * si
-                    r02 = ax * az * t1 + ay * si
-                    r10 = ay * ax * t1 + az * si
-                    r11 = co + ay * ay * t1
-                    r12 = ay * az * t1 - ax * si
-                    r20 = az * ax * t1 - ay * si
-                    r21 = az * ay * t1 + ax * si
-                    r22 = co + az * az * t1
-                    for j in range(3):
-                        p0, p1, p2 = R[0, j], R[1, j], R[2, j]
-                        R[0, j] = r00 * p0 + r01 * p1 + r02 * p2
-                        R[1, j] = r10 * p0 + r11 * p1 + r12 * p2
-                        R[2, j] = r20 * p0 + r21 * p1 + r22 * p2
+                    rotate_axis_angle(R, l[0] / ln, l[1] / ln, l[2] / ln, hw * ln)
                 s += hw
                 tx, ty, tz = _torque_nb(R, jc, js, s + phase)
                 l[0] += 0.5 * hw * tx

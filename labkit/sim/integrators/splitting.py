@@ -64,8 +64,8 @@ COMPOSITIONS: dict[str, tuple[np.ndarray, int]] = {
 
 
 @njit(cache=True, _nrt=False)
-def _rotate_axis_angle(R, bb, ax, ay, az, angle):
-    """Left-multiply the 3x3 matrix M = R[bb] in place by the rotation about unit (ax, ay, az)."""
+def rotate_axis_angle(M, ax, ay, az, angle):
+    """Left-multiply the 3x3 matrix ``M`` in place by the rotation about unit (ax, ay, az)."""
     c = math.cos(angle)
     s = math.sin(angle)
     t = 1.0 - c
@@ -79,64 +79,69 @@ def _rotate_axis_angle(R, bb, ax, ay, az, angle):
     r21 = az * ay * t + ax * s
     r22 = c + az * az * t
     for j in range(3):
-        a0, a1, a2 = R[bb, 0, j], R[bb, 1, j], R[bb, 2, j]
-        R[bb, 0, j] = r00 * a0 + r01 * a1 + r02 * a2
-        R[bb, 1, j] = r10 * a0 + r11 * a1 + r12 * a2
-        R[bb, 2, j] = r20 * a0 + r21 * a1 + r22 * a2
+        a0, a1, a2 = M[0, j], M[1, j], M[2, j]
+        M[0, j] = r00 * a0 + r01 * a1 + r02 * a2
+        M[1, j] = r10 * a0 + r11 * a1 + r12 * a2
+        M[2, j] = r20 * a0 + r21 * a1 + r22 * a2
 
 
 @njit(cache=True, _nrt=False)
-def _rotate_body_axis(R, bb, pi, axis, angle):
-    """Right-multiply M = R[bb] by the rotation about body axis ``axis`` (Q), and pi <- Q^T pi."""
+def rotate_body_columns(M, axis, angle):
+    """Right-multiply the 3x3 matrix ``M`` in place by the rotation about body axis ``axis``.
+
+    Returns ``(cos, sin)`` of ``angle`` for turning body-frame vectors along with it.
+    """
     c = math.cos(angle)
     s = math.sin(angle)
     i = (axis + 1) % 3
     j = (axis + 2) % 3
     for r in range(3):
-        a, b = R[bb, r, i], R[bb, r, j]
-        R[bb, r, i] = c * a + s * b
-        R[bb, r, j] = -s * a + c * b
+        a, b = M[r, i], M[r, j]
+        M[r, i] = c * a + s * b
+        M[r, j] = -s * a + c * b
+    return c, s
+
+
+@njit(cache=True, _nrt=False)
+def _rotate_body_axis(M, pi, axis, angle):
+    """:func:`rotate_body_columns` on ``M`` (Q), and the body-frame momentum pi <- Q^T pi."""
+    c, s = rotate_body_columns(M, axis, angle)
+    i = (axis + 1) % 3
+    j = (axis + 2) % 3
     a, b = pi[i], pi[j]
     pi[i] = c * a + s * b
     pi[j] = -s * a + c * b
 
 
 @njit(cache=True, _nrt=False)
-def _rotate_body_columns(R, bb, axis, angle):
-    """Right-multiply M = R[bb] by the rotation about body axis ``axis``."""
-    c = math.cos(angle)
-    s = math.sin(angle)
-    i = (axis + 1) % 3
-    j = (axis + 2) % 3
-    for r in range(3):
-        a, b = R[bb, r, i], R[bb, r, j]
-        R[bb, r, i] = c * a + s * b
-        R[bb, r, j] = -s * a + c * b
+def _body_momentum(R, L, b, pi):
+    """pi <- R[b]^T L[b]: body ``b``'s angular momentum in its principal frame."""
+    for k in range(3):
+        pi[k] = R[b, 0, k] * L[b, 0] + R[b, 1, k] * L[b, 1] + R[b, 2, k] * L[b, 2]
 
 
 @njit(cache=True, _nrt=False)
 def free_rotation(R, L, bf, bi, b, h, pi):
     """Exact (symmetric top) or DLM (three unequal moments) free rotation of body ``b``."""
+    M = R[b]
     if bi[b, I_FREE] == 0:
         i_r = bf[b, B_I]
         i_a = bf[b, B_I + 2]
         lx, ly, lz = L[b, 0], L[b, 1], L[b, 2]
         ln = math.sqrt(lx * lx + ly * ly + lz * lz)
-        l3 = R[b, 0, 2] * lx + R[b, 1, 2] * ly + R[b, 2, 2] * lz
+        l3 = M[0, 2] * lx + M[1, 2] * ly + M[2, 2] * lz
         c = l3 * (1.0 / i_a - 1.0 / i_r)
         if c != 0.0:
-            # right-multiply by rotation about body z by angle h c
-            _rotate_body_columns(R, b, 2, h * c)
+            rotate_body_columns(M, 2, h * c)  # about body z by angle h c
         if ln > 0.0:
-            _rotate_axis_angle(R, b, lx / ln, ly / ln, lz / ln, h * ln / i_r)
+            rotate_axis_angle(M, lx / ln, ly / ln, lz / ln, h * ln / i_r)
     else:
-        for k in range(3):
-            pi[k] = R[b, 0, k] * L[b, 0] + R[b, 1, k] * L[b, 1] + R[b, 2, k] * L[b, 2]
-        _rotate_body_axis(R, b, pi, 0, 0.5 * h * pi[0] / bf[b, B_I])
-        _rotate_body_axis(R, b, pi, 1, 0.5 * h * pi[1] / bf[b, B_I + 1])
-        _rotate_body_axis(R, b, pi, 2, h * pi[2] / bf[b, B_I + 2])
-        _rotate_body_axis(R, b, pi, 1, 0.5 * h * pi[1] / bf[b, B_I + 1])
-        _rotate_body_axis(R, b, pi, 0, 0.5 * h * pi[0] / bf[b, B_I])
+        _body_momentum(R, L, b, pi)
+        _rotate_body_axis(M, pi, 0, 0.5 * h * pi[0] / bf[b, B_I])
+        _rotate_body_axis(M, pi, 1, 0.5 * h * pi[1] / bf[b, B_I + 1])
+        _rotate_body_axis(M, pi, 2, h * pi[2] / bf[b, B_I + 2])
+        _rotate_body_axis(M, pi, 1, 0.5 * h * pi[1] / bf[b, B_I + 1])
+        _rotate_body_axis(M, pi, 0, 0.5 * h * pi[0] / bf[b, B_I])
 
 
 @njit(cache=True, _nrt=False)
@@ -148,8 +153,8 @@ def _kinetic_jz(x, v, R, L, bf, bi, b, axis, pi):
         m = bf[b, B_MASS]
         e += 0.5 * m * (v[b, 0] ** 2 + v[b, 1] ** 2 + v[b, 2] ** 2)
         jz += m * ((x[b, 0] - axis[0]) * v[b, 1] - (x[b, 1] - axis[1]) * v[b, 0])
+    _body_momentum(R, L, b, pi)
     for k in range(3):
-        pi[k] = R[b, 0, k] * L[b, 0] + R[b, 1, k] * L[b, 1] + R[b, 2, k] * L[b, 2]
         e += 0.5 * pi[k] * pi[k] / bf[b, B_I + k]
     return e, jz
 
@@ -172,8 +177,8 @@ def damping_flow(x, v, R, L, bf, bi, h, pi, wz, axis, acc):
             for k in range(3):
                 v[b, k] *= f
         if rot:
+            _body_momentum(R, L, b, pi)
             for k in range(3):
-                pi[k] = R[b, 0, k] * L[b, 0] + R[b, 1, k] * L[b, 1] + R[b, 2, k] * L[b, 2]
                 pi[k] *= math.exp(-bf[b, B_CROT] * h / bf[b, B_I + k])
             for k in range(3):
                 L[b, k] = R[b, k, 0] * pi[0] + R[b, k, 1] * pi[1] + R[b, k, 2] * pi[2]
@@ -263,6 +268,18 @@ def _hermite_root(t0, h, g0, d0, g1, d1):
 
 
 @njit(cache=True)
+def _store_sample(n, t, x, v, R, L, budget, out_t, out_x, out_v, out_R, out_L, out_acc):
+    """Copy the state at time ``t`` into sample row ``n``; returns ``n + 1``."""
+    out_t[n] = t
+    out_x[n] = x
+    out_v[n] = v
+    out_R[n] = R
+    out_L[n] = L
+    out_acc[n] = budget
+    return n + 1
+
+
+@njit(cache=True)
 def run_rigid(
     x,
     v,
@@ -309,14 +326,8 @@ def run_rigid(
     n_force = 0
     compute_forces(t, x, R, bf, bi, src, fld, flags, F, T, work)
     n_force += 1
-    out_t[0] = t
-    out_x[0] = x
-    out_v[0] = v
-    out_R[0] = R
-    out_L[0] = L
     acc = np.zeros(1)
-    out_acc[0] = 0.0
-    n_s = 1
+    n_s = _store_sample(0, t, x, v, R, L, 0.0, out_t, out_x, out_v, out_R, out_L, out_acc)
     status = 0
     event_time = math.nan
     steps_done = 0
@@ -373,21 +384,9 @@ def run_rigid(
                 event_time = t
                 break
         if (step + 1) % sample_every == 0:
-            out_t[n_s] = t
-            out_x[n_s] = x
-            out_v[n_s] = v
-            out_R[n_s] = R
-            out_L[n_s] = L
-            out_acc[n_s] = acc[0]
-            n_s += 1
+            n_s = _store_sample(n_s, t, x, v, R, L, acc[0], out_t, out_x, out_v, out_R, out_L, out_acc)
     if status != 0 or steps_done % sample_every != 0:
-        out_t[n_s] = t
-        out_x[n_s] = x
-        out_v[n_s] = v
-        out_R[n_s] = R
-        out_L[n_s] = L
-        out_acc[n_s] = acc[0]
-        n_s += 1
+        n_s = _store_sample(n_s, t, x, v, R, L, acc[0], out_t, out_x, out_v, out_R, out_L, out_acc)
     return status, steps_done, n_s, event_time, n_force
 
 

@@ -74,16 +74,41 @@ def run(
             y=out_y[:n_s].copy(),
             yd=out_yd[:n_s].copy(),
         )
+    check_memory(n_out, system.x0.shape[0])
+    check_events = bool(system.bi[:, 0].any())
+    compile_s = _warm_up(system, weights, check_events)
+    status, event_time, n_force, t, samples = _integrate_rigid(
+        system, weights, check_events, t0, h, n_steps, sample_every, n_out,
+        float(system.r_escape), float(system.wz), system.axis,
+    )
+    return RawRun(name, setting, status, event_time, n_force, t, **samples, extra={"compile_s": compile_s})
+
+
+def _integrate_rigid(
+    system: CompiledSystem,
+    weights: np.ndarray,
+    check_events: bool,
+    t0: float,
+    h: float,
+    n_steps: int,
+    sample_every: int,
+    n_out: int,
+    r_escape: float,
+    wz: float,
+    axis: np.ndarray,
+) -> tuple[int, float, int, np.ndarray, dict[str, np.ndarray]]:
+    """Run :func:`run_rigid` from the system's initial state into ``n_out`` sample rows.
+
+    Returns ``(status, event_time, n_force, t, samples)``, ``samples`` holding the sampled
+    ``x, v, R, L``, the damping ``budget`` and the magnetic ``impulse``.
+    """
     nb = system.x0.shape[0]
-    check_memory(n_out, nb)
     x, v, R, L = (a.copy() for a in (system.x0, system.v0, system.R0, system.L0))
     out_t = np.empty(n_out)
     out_x, out_v, out_L = np.empty((n_out, nb, 3)), np.empty((n_out, nb, 3)), np.empty((n_out, nb, 3))
     out_R = np.empty((n_out, nb, 3, 3))
     impulse = np.zeros((nb, 3))
     out_acc = np.zeros(n_out)
-    check_events = bool(system.bi[:, 0].any())
-    compile_s = _warm_up(system, weights, check_events)
     status, _, n_s, event_time, n_force = run_rigid(
         x,
         v,
@@ -100,7 +125,7 @@ def run(
         system.fld,
         system.flags,
         system.g,
-        float(system.r_escape),
+        r_escape,
         check_events,
         out_t,
         out_x,
@@ -108,25 +133,19 @@ def run(
         out_R,
         out_L,
         impulse,
-        float(system.wz),
-        system.axis,
+        wz,
+        axis,
         out_acc,
     )
-    return RawRun(
-        name,
-        setting,
-        int(status),
-        float(event_time),
-        int(n_force),
-        out_t[:n_s].copy(),
-        x=out_x[:n_s].copy(),
-        v=out_v[:n_s].copy(),
-        R=out_R[:n_s].copy(),
-        L=out_L[:n_s].copy(),
-        impulse=impulse,
-        budget=out_acc[:n_s].copy(),
-        extra={"compile_s": compile_s},
-    )
+    samples = {
+        "x": out_x[:n_s].copy(),
+        "v": out_v[:n_s].copy(),
+        "R": out_R[:n_s].copy(),
+        "L": out_L[:n_s].copy(),
+        "impulse": impulse,
+        "budget": out_acc[:n_s].copy(),
+    }
+    return int(status), float(event_time), int(n_force), out_t[:n_s].copy(), samples
 
 
 _WARM: set[int] = set()
@@ -140,36 +159,6 @@ def _warm_up(system: CompiledSystem, weights: np.ndarray, check_events: bool) ->
     if key in _WARM:
         return 0.0
     start = time.perf_counter()
-    nb = system.x0.shape[0]
-    x, v, R, L = (a.copy() for a in (system.x0, system.v0, system.R0, system.L0))
-    o3, oR = np.empty((2, nb, 3)), np.empty((2, nb, 3, 3))
-    run_rigid(
-        x,
-        v,
-        R,
-        L,
-        0.0,
-        1.0,
-        0,
-        1,
-        weights,
-        system.bf,
-        system.bi,
-        system.src,
-        system.fld,
-        system.flags,
-        system.g,
-        0.0,
-        check_events,
-        np.empty(2),
-        o3,
-        o3.copy(),
-        oR,
-        o3.copy(),
-        np.zeros((nb, 3)),
-        0.0,
-        np.zeros(3),
-        np.zeros(2),
-    )
+    _integrate_rigid(system, weights, check_events, 0.0, 1.0, 0, 1, 2, 0.0, 0.0, np.zeros(3))
     _WARM.add(key)
     return time.perf_counter() - start
