@@ -53,6 +53,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--remanence-t", type=float, help="remanence B_r (T) instead of --grade")
     p.add_argument("--above", action="store_true", help="floator above the rotator (default: beneath)")
     p.add_argument("--no-verify", action="store_true", help="skip the time-domain check")
+    p.add_argument("--no-limits", action="store_true",
+                   help="skip the speed limits and the Eq. 6.18 scaling (the slowest part, a few s)")
     p.add_argument("--verify-cycles", type=int, default=2000,
                    help="drive periods of the check (default 2000)")
     p.add_argument("--json", metavar="OUT", help="write the prediction (or the map) as JSON")
@@ -101,7 +103,8 @@ def run(args: argparse.Namespace) -> int:
     if args.speed_rpm is None:
         raise PredictInputError("--speed-rpm missing (the rotator speed to predict at)")
     pred = predict(pair, args.speed_rpm / RPM, run_verify=not args.no_verify,
-                   verify_cycles=args.verify_cycles)
+                   verify_cycles=args.verify_cycles, speed_limits=not args.no_limits,
+                   scaling=not args.no_limits)
     print(format_prediction(pred))
     if args.json:
         _write_json(args.json, pred.to_json())

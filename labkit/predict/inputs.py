@@ -72,6 +72,11 @@ def magnets_from_rig(path: str | Path, remanence_t: float | None = None) -> tupl
         if name not in tables:
             raise RigFileError(file, f"bodies.{name}", "missing (required for a prediction)")
         body = parse_body(file, name, tables[name])
+        if body.grade:
+            try:
+                remanence_for_grade(body.grade)
+            except MagnetSpecError as exc:
+                raise RigFileError(file, f"bodies.{name}.grade", str(exc)) from None
         try:
             magnets[name] = magnet_from_body(body, remanence_t)
         except (ValueError, MagnetSpecError) as exc:
