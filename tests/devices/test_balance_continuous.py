@@ -9,7 +9,7 @@ import pytest
 
 from labkit.devices.base import driver_class
 from labkit.emulators.balances import MtSicsEmulator
-from labkit.emulators.plant import RigPlant, reset_plants, shared_plant
+from labkit.emulators.plant import RigPlant, shared_plant
 from labkit.errors import DeviceDisconnected
 from labkit.io.clock import RealClock, VirtualClock
 from labkit.io.ports import open_port
@@ -25,13 +25,6 @@ CASES = {
     "hx711": ("line_regex", "sim://hx711?seed=1&plant=cont&startup_s=0.1", {"baudrate": 57600},
               {"preset": "hx711_adc", "tare_reply": "Tare complete"}, 10.0),
 }
-
-
-@pytest.fixture(autouse=True)
-def _fresh_plants():
-    reset_plants()
-    yield
-    reset_plants()
 
 
 @pytest.mark.parametrize("name", sorted(CASES))

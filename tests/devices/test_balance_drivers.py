@@ -10,7 +10,7 @@ import pytest
 
 from labkit.devices.base import driver_class
 from labkit.emulators.balances import AndStdEmulator, Hx711SketchEmulator, MtSicsEmulator
-from labkit.emulators.plant import RigPlant, reset_plants, shared_plant
+from labkit.emulators.plant import RigPlant, shared_plant
 from labkit.io.clock import RealClock, VirtualClock
 from labkit.io.ports import open_port
 from labkit.io.pty_host import PtyHost
@@ -40,13 +40,6 @@ def fig525_grams(duty: float) -> float:
 
 def as_grams(reading) -> float:
     return reading.value * 1e3 if reading.quantity == "mass" else reading.value / G0 * 1e3
-
-
-@pytest.fixture(autouse=True)
-def _fresh_plants():
-    reset_plants()
-    yield
-    reset_plants()
 
 
 def open_sim(name: str, clock, **extra_options):

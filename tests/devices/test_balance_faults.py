@@ -22,13 +22,6 @@ from labkit.io.pty_host import PtyHost
 AND_7E1 = {"baudrate": 2400, "bytesize": 7, "parity": "E"}
 
 
-@pytest.fixture(autouse=True)
-def _fresh_plants():
-    reset_plants()
-    yield
-    reset_plants()
-
-
 def mt(query: str = "", clock=None, settings=None, **options):
     clock = clock or VirtualClock()
     port = open_port(f"sim://mtsics?seed=4&plant=flt{query}", clock=clock, timeout=0, **(settings or {}))

@@ -6,19 +6,12 @@ from __future__ import annotations
 import pytest
 
 from labkit.devices.base import driver_class
-from labkit.emulators.plant import RAD_S_PER_RPM, reset_plants, shared_plant
+from labkit.emulators.plant import RAD_S_PER_RPM, shared_plant
 from labkit.errors import DeviceDisconnected, DeviceError, DeviceTimeout, SafetyError
 from labkit.io.clock import VirtualClock
 from labkit.io.ports import open_port
 
 MAX_SPEED = 2500.0  # rad/s at duty 1: the plant's default motor
-
-
-@pytest.fixture(autouse=True)
-def _fresh_plants():
-    reset_plants()
-    yield
-    reset_plants()
 
 
 def open_motor(protocol: str, query: str = "", clock: VirtualClock | None = None,

@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from labkit.devices.base import driver_class
-from labkit.emulators.plant import reset_plants, shared_plant
+from labkit.emulators.plant import shared_plant
 from labkit.errors import DeviceDisconnected
 from labkit.io.clock import RealClock
 from labkit.io.ports import open_port
@@ -14,13 +14,6 @@ from labkit.io.pty_host import PtyHost
 from labkit.io.sim_port import build_emulator
 
 pytestmark = pytest.mark.timeout(30)
-
-
-@pytest.fixture(autouse=True)
-def _fresh_plants():
-    reset_plants()
-    yield
-    reset_plants()
 
 
 def open_on_pty(host: PtyHost, protocol: str, clock: RealClock, **options):

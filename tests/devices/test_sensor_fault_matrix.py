@@ -14,7 +14,7 @@ import pytest
 import serial
 
 from labkit.devices.base import driver_class
-from labkit.emulators.plant import G0, RAD_S_PER_RPM, fig525_force_n, reset_plants, shared_plant
+from labkit.emulators.plant import G0, RAD_S_PER_RPM, fig525_force_n, shared_plant
 from labkit.errors import DeviceDisconnected, DeviceError
 from labkit.io.clock import VirtualClock
 from labkit.io.ports import open_port
@@ -29,13 +29,6 @@ SENSORS = {
     "lutron16": ("tach", "lutron16", "lutron16", "&rate_hz=5", {}),
     "monarch_at": ("tach", "monarch_at", "monarch_at", "", {}),
 }
-
-
-@pytest.fixture(autouse=True)
-def _fresh_plants():
-    reset_plants()
-    yield
-    reset_plants()
 
 
 def spin_rotor(clock: VirtualClock) -> None:

@@ -4,18 +4,10 @@ thread (real clock), so the tachometer keeps its rate while the host waits on th
 import pytest
 
 from labkit.devices.base import driver_class
-from labkit.emulators.plant import reset_plants
 from labkit.io.clock import RealClock
 from labkit.io.ports import open_port
 
 pytestmark = pytest.mark.timeout(30)
-
-
-@pytest.fixture(autouse=True)
-def _fresh_plants():
-    reset_plants()
-    yield
-    reset_plants()
 
 
 def test_tachometer_keeps_its_rate_while_motor_replies_take_300_ms():

@@ -14,13 +14,6 @@ from labkit.io.clock import VirtualClock
 from labkit.io.ports import open_port
 
 
-@pytest.fixture(autouse=True)
-def _fresh_plants():
-    reset_plants()
-    yield
-    reset_plants()
-
-
 def open_tach(protocol: str, query: str = "", clock: VirtualClock | None = None,
               settings: dict | None = None, **options):
     clock = clock or VirtualClock()

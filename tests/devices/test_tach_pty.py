@@ -8,7 +8,7 @@ import threading
 import pytest
 
 from labkit.devices.base import driver_class
-from labkit.emulators.plant import RAD_S_PER_RPM, reset_plants, shared_plant
+from labkit.emulators.plant import RAD_S_PER_RPM, shared_plant
 from labkit.errors import DeviceDisconnected
 from labkit.io.clock import RealClock
 from labkit.io.ports import open_port
@@ -16,13 +16,6 @@ from labkit.io.pty_host import PtyHost
 from labkit.io.sim_port import build_emulator
 
 pytestmark = pytest.mark.timeout(30)
-
-
-@pytest.fixture(autouse=True)
-def _fresh_plants():
-    reset_plants()
-    yield
-    reset_plants()
 
 
 def settled_rotor(clock: RealClock, rpm: float) -> float:
