@@ -64,6 +64,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--workers", type=int, default=1, help="map: local worker processes (default 1)")
     p.add_argument("--scheduler", metavar="ADDR", help="map: Dask scheduler, e.g. tcp://host:8786")
     p.add_argument("--chunk", type=int, default=4, help="map: points per task (default 4)")
+    p.add_argument("--map-verify", type=int, default=0, metavar="CYCLES",
+                   help="map: also run the time-domain check (CYCLES drive periods) at every bound point")
     p.set_defaults(func=run)
 
 
@@ -188,7 +190,7 @@ def _run_map(args: argparse.Namespace, pair: Pair) -> int:
 
     try:
         axes = dict(parse_axis(a) for a in args.map)
-        points = grid_points(axes, pair, args.speed_rpm)
+        points = grid_points(axes, pair, args.speed_rpm, args.map_verify)
     except MapSpecError as exc:
         raise PredictInputError(f"--map: {exc}") from None
     result = run_sweep(points, evaluate_points, store=args.out, chunk=args.chunk, workers=args.workers,

@@ -49,9 +49,10 @@ def parse_axis(text: str) -> tuple[str, np.ndarray]:
     return name, values
 
 
-def grid_points(axes: dict[str, np.ndarray], pair: Pair, speed_rpm: float | None) -> list[dict]:
+def grid_points(axes: dict[str, np.ndarray], pair: Pair, speed_rpm: float | None,
+                verify_cycles: int = 0) -> list[dict]:
     """Sweep points: every combination of the axes; a missing axis takes the pair's tilt or
-    ``speed_rpm``."""
+    ``speed_rpm``. ``verify_cycles`` > 0 adds the time-domain check at every bound point."""
     tilts = axes.get("tilt_deg", np.array([math.degrees(pair.gamma)]))
     if "speed_rpm" in axes:
         speeds = axes["speed_rpm"]
@@ -60,7 +61,7 @@ def grid_points(axes: dict[str, np.ndarray], pair: Pair, speed_rpm: float | None
     else:
         raise MapSpecError("the map needs speeds: a speed_rpm axis or --speed-rpm")
     base = {"rotator": _magnet_dict(pair.rotator), "floator": _magnet_dict(pair.floator),
-            "placement": pair.placement, "gravity_m_s2": pair.gravity}
+            "placement": pair.placement, "gravity_m_s2": pair.gravity, "verify_cycles": int(verify_cycles)}
     return [{"tilt_deg": float(t), "speed_rpm": float(s), **base} for t, s in product(tilts, speeds)]
 
 
@@ -75,8 +76,8 @@ def _magnet(d: dict) -> Magnet:
 
 
 def evaluate_points(points: list[dict]) -> list[dict]:
-    """Sweep ``evaluate``: the bound state and the cone's linear stability at each point (no
-    time-domain run: that is the single-point check)."""
+    """Sweep ``evaluate``: the bound state and the cone's linear stability at each point, plus
+    the time-domain check (lateral stiffness, stays bound) when the point asks for it."""
     from labkit.predict.predictor import predict
 
     rows = []
@@ -84,15 +85,17 @@ def evaluate_points(points: list[dict]) -> list[dict]:
         t0 = time.perf_counter()
         pair = Pair(_magnet(p["rotator"]), _magnet(p["floator"]), math.radians(p["tilt_deg"]),
                     p["placement"], p["gravity_m_s2"])
-        pred = predict(pair, p["speed_rpm"] * 2 * math.pi / 60, run_verify=False, speed_limits=False,
-                       scaling=False, xtol=1e-8)
+        cycles = int(p.get("verify_cycles", 0))
+        pred = predict(pair, p["speed_rpm"] * 2 * math.pi / 60, run_verify=cycles > 0,
+                       verify_cycles=max(cycles, 10), speed_limits=False, scaling=False, xtol=1e-8)
         rows.append({
-            "bound": pred.bound, "stable": pred.stable,
+            "bound": pred.bound, "stable": pred.stable, "verdict": pred.verdict,
             "r_eq_mm": _num(pred.value("r_eq_mm")),
             "axial_stiffness_N_m": _num(pred.value("axial_stiffness_N_m")),
             "cone_angle_deg": _num(pred.value("cone_angle_deg")),
             "growth_rate_1_s": _num(pred.value("growth_rate_1_s")),
             "max_load_N": _num(pred.value("max_load_N")),
+            "lateral_stiffness_N_m": _num(pred.value("lateral_stiffness_N_m")),
             "wall_s": time.perf_counter() - t0,
         })
     return rows
@@ -103,9 +106,10 @@ def _num(v) -> float:
 
 
 def map_symbol(row: dict) -> str:
-    """``S`` bound and stable, ``U`` bound but unstable, ``.`` no bound state."""
+    """``S`` bound and stable, ``U`` bound but unstable, ``x`` the magnets snap together (too
+    fast: the equilibrium would be inside contact), ``.`` the floator falls (too weak)."""
     if not row.get("bound"):
-        return "."
+        return "x" if "snap" in (row.get("verdict") or "") else "."
     return "S" if row.get("stable") else "U"
 
 
@@ -118,7 +122,8 @@ def render_map(rows: list[dict]) -> str:
     lines = ["tilt_deg \\ speed_rpm " + "".join(f"{s:>{width}.0f}" for s in speeds)]
     for t in tilts:
         lines.append(f"{t:>20.3g} " + "".join(f"{cell.get((t, s), '?'):>{width}}" for s in speeds))
-    lines.append("S bound and stable, U bound but unstable, . no bound state (point dipoles)")
+    lines.append("S bound and stable, U bound but unstable, x magnets snap together, . floator falls "
+                 "(point dipoles)")
     return "\n".join(lines)
 
 

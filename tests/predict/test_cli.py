@@ -146,12 +146,16 @@ def test_rig_file_gives_the_same_answer_as_options(tmp_path, monkeypatch, capsys
 def test_map_on_a_tiny_grid_resumes(tmp_path, capsys):
     store = tmp_path / "map.jsonl"
     argv = ["predict", "--rotator", "cylinder:6x3mm", "--floator", "sphere:10mm", "--tilt-deg", "5",
-            "--map", "speed_rpm=3000:25000:2", "--out", str(store), "--json", str(tmp_path / "map.json")]
+            "--map", "speed_rpm=3000:40000:3", "--map-verify", "200", "--out", str(store),
+            "--json", str(tmp_path / "map.json")]
     rc, out, _ = _run(argv, capsys)
-    assert rc == 0 and "2 computed, 0 reused" in out
+    assert rc == 0 and "3 computed, 0 reused" in out
     rows = {r["speed_rpm"]: r for r in json.loads((tmp_path / "map.json").read_text())["points"]}
-    assert rows[25000.0]["bound"] and rows[25000.0]["stable"]
-    assert not rows[3000.0]["bound"]  # below the minimum speed
-    assert len(store.read_text().splitlines()) == 2
+    assert rows[21500.0]["bound"] and rows[21500.0]["stable"]
+    assert rows[21500.0]["lateral_stiffness_N_m"] > 0  # from the time-domain check
+    assert not rows[3000.0]["bound"] and "exceeds" in rows[3000.0]["verdict"]  # below the minimum speed
+    assert not rows[40000.0]["bound"] and "snap" in rows[40000.0]["verdict"]  # above the maximum speed
+    assert "      .      S      x" in out
+    assert len(store.read_text().splitlines()) == 3
     rc, out, _ = _run(argv, capsys)
-    assert rc == 0 and "0 computed, 2 reused" in out
+    assert rc == 0 and "0 computed, 3 reused" in out
