@@ -323,15 +323,6 @@ def speedup_at_equal_error(
     return {"by_target": ratios, "headline": min(ratios.values()) if ratios else math.nan}
 
 
-def fixed_steps_errors(points: list[Point], integrator: str) -> list[tuple[int, float]]:
-    """(N, final error) of a fixed-step integrator's points, by N."""
-    return sorted(
-        (p.steps_per_period, p.error)
-        for p in points
-        if p.integrator == integrator and p.steps_per_period is not None
-    )
-
-
 def require_target(report: SceneReport, target: float) -> dict:
     """Cheapest setting per integrator reaching ``target``; NumericsError if none does."""
     best = {}

@@ -1,4 +1,9 @@
-"""Quick fits written into results.json (the full fitting machinery lives elsewhere).
+"""Quick fits written into results.json (the full fitting machinery is :mod:`labkit.fit`).
+
+They are deliberately not :mod:`labkit.fit`'s fits: the power law here is least squares in
+y (``labkit.fit`` fits ln y) and the Eq. 6.37 fit minimises residuals in ``w^2 - v w``
+(``labkit.fit`` in v_S), so the numbers differ in the 3rd-4th digit, and recorded sessions
+replay bit-for-bit against the results.json these functions wrote.
 
 * :func:`fit_power_law`: ``y = a x^b`` as the paper plots Fig. 5.25 (x in RPM, y in grams
   force; the paper found a = 224e6, b = -1.9).

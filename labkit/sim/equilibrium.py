@@ -5,6 +5,12 @@ cyclic and static torque coefficients ``tau_C = |m| B_C`` and ``tau_S = |m| B_S`
 on a cone of zenith angle ``phi`` synchronised with the field (Eq. 5.7, 5.20). These helpers
 give ``phi`` (Eq. 5.24 isotropic, Eq. 5.35 axisymmetric, Eq. 5.64/5.68 with spin ``k``) and
 the matching initial orientation and angular velocity (Eq. 5.12, 5.62).
+
+:mod:`labkit.model.cone` has vectorised versions of the same closed forms. They are kept
+apart on purpose: its Eq. 5.35/5.64 solver is a Newton iteration returning NaN, this one
+brackets the root next to the isotropic guess and raises, and the two can pick different
+roots of the same equation; the isotropic and angular-velocity forms agree only to rounding.
+Scenes must keep their exact initial conditions, so the simulator uses these.
 """
 
 from __future__ import annotations

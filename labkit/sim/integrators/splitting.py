@@ -16,7 +16,8 @@ Yoshida's 7-stage (order 6). With ``h = T/N`` the Jacobi-type invariant of a uni
 scene has no secular drift (NUMERICS.md 2.2). Force evaluations are shared between adjacent
 kicks (first-same-as-last), so a step of an s-stage method costs s force evaluations.
 
-Status codes returned by the kernels: 0 ok, 1 non-finite, 2 blow-up, 3 contact, 4 escape.
+Status codes returned by the kernels: 0 ok, 1 non-finite, 2 blow-up, 3 contact, 4 escape
+(named in :data:`labkit.sim.run.RAW_STATUS`).
 """
 
 from __future__ import annotations
@@ -40,8 +41,6 @@ from labkit.sim.integrators.kernels import (
     S_RAD,
     compute_forces,
 )
-
-STATUS = {0: "ok", 1: "nan", 2: "blowup", 3: "contact", 4: "escape"}
 
 
 def _yoshida_triple(order_weights: list[float], order: int) -> list[float]:
