@@ -137,20 +137,9 @@ def _as_scene(scene: Scene | str) -> Scene:
 
 def timed_run(scene: Scene, system: CompiledSystem, cycles: float, integrator: str, **kw) -> SimResult:
     """One run for its errors; short runs are repeated and the fastest wall time kept."""
-    res = simulate(
-        scene,
-        cycles,
-        integrator,
-        system=system,
-        drift_threshold=math.inf,
-        rotation_threshold=math.inf,
-        samples_per_period=1,
-        **kw,
-    )
-    best = res.wall_s
-    repeats = 0
-    while best < REPEAT_BELOW_S and repeats < REPEATS:
-        again = simulate(
+
+    def run() -> SimResult:
+        return simulate(
             scene,
             cycles,
             integrator,
@@ -160,7 +149,12 @@ def timed_run(scene: Scene, system: CompiledSystem, cycles: float, integrator: s
             samples_per_period=1,
             **kw,
         )
-        best = min(best, again.wall_s)
+
+    res = run()
+    best = res.wall_s
+    repeats = 0
+    while best < REPEAT_BELOW_S and repeats < REPEATS:
+        best = min(best, run().wall_s)
         repeats += 1
     res.wall_s = best
     return res
