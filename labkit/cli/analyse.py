@@ -52,6 +52,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                        help="seconds of video per accumulation chunk: time resolution of drift (default 0.5)")
     laser.add_argument("--max-chunks", type=int, default=16,
                        help="at most this many chunks; long clips get longer ones (default 16)")
+    laser.add_argument("--colour-frames", action="store_true",
+                       help="accumulate the brightest colour channel of BGR frames instead of the codec's "
+                            "luma plane (slower; for a dim laser whose colour barely shows in luma)")
     laser.add_argument("--json", metavar="OUT", help="write the result as JSON ('-' for stdout)")
     laser.add_argument("--rerun", metavar="SPEC", help="stream frames and overlays to rerun")
     laser.set_defaults(func=run_laser)
@@ -116,7 +119,7 @@ def run_laser(args: argparse.Namespace) -> int:
         print("labkit analyse laser: tilt needs both --screen-distance-mm and --mm-per-px", file=sys.stderr)
     quality = LaserQuality(
         stride=args.stride, roi=args.roi, subpixel=not args.no_subpixel, chunk_s=args.chunk_s,
-        max_chunks=args.max_chunks,
+        max_chunks=args.max_chunks, luma=not args.colour_frames,
     )
     stream = open_stream(args.rerun, "laser")
     try:

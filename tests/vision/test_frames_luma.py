@@ -4,6 +4,7 @@ Independent reference: BT.601 luma of the converted frame (cv2.cvtColor BGR2GRAY
 (16-235) for MPEG-4 part 2 and full range (0-255) for motion JPEG.
 """
 
+import json
 import math
 from dataclasses import replace
 
@@ -69,3 +70,15 @@ def test_luma_and_colour_analyses_both_meet_the_acceptance_bounds(tmp_path, code
         for got, want in zip(p["semi_axes_px"], t["semi_axes_px"], strict=True):
             assert abs(got / want - 1) < 0.02
         assert abs((p["rotation_deg"] - t["rotation_deg"] + 90) % 180 - 90) < 2.0
+
+
+def test_cli_colour_frames_option_is_recorded(capsys, tmp_path):
+    from labkit.cli import main
+
+    path, truth = clip(tmp_path, "mp4v", ".mp4", frames=12, ellipticity=0.3)
+    for argv, luma in (([], True), (["--colour-frames"], False)):
+        assert main(["analyse", "laser", str(path), "--json", "-", *argv]) == 0
+        out = capsys.readouterr().out
+        result = json.loads(out[out.index("{"):])
+        assert result["quality"]["settings"]["luma"] is luma
+        assert math.dist(result["pattern"]["center_px"], truth["pattern"]["center_px"]) < 1.0
