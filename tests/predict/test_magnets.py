@@ -5,6 +5,8 @@ from __future__ import annotations
 import math
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from labkit.predict.magnets import MU0, MagnetSpecError, parse_magnet_spec, remanence_for_grade
 
@@ -52,3 +54,14 @@ def test_grades():
 def test_bad_specs(spec, message):
     with pytest.raises(MagnetSpecError, match=message):
         parse_magnet_spec(spec)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.text(alphabet="spherecylindcubkx:0123456789.eE+-mc ", max_size=24))
+def test_spec_parser_never_crashes(text):
+    try:
+        m = parse_magnet_spec(text)
+    except MagnetSpecError:
+        return
+    assert m.mass_kg > 0 and m.moment_a_m2 > 0 and m.inertia_axial_kg_m2 > 0 and m.inertia_radial_kg_m2 > 0
+    assert all(math.isfinite(s) and s > 0 for s in m.sizes_m)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import pytest
 from scipy.optimize import brentq
@@ -34,6 +35,16 @@ def test_predicted_equilibrium_stays_bound(story_pair, curve):
     w_plus, w_minus = ver.lateral.frequencies
     assert w_plus > 0 > w_minus
     assert ver.lateral.stiffness > 0
+
+
+def test_floator_above_the_rotator_stays_bound_too(story_pair):
+    # the above-rotator state is the point inversion of the beneath one; weight now pushes inward
+    above = replace(story_pair, placement="above")
+    curve = ForceCurve(above, OMEGA)
+    bs = curve.bound_state()
+    ver = verify(above, OMEGA, curve.state(bs.r_eq), cycles=500)
+    assert ver.status == "ok" and ver.bound
+    assert ver.distance_mean_m == pytest.approx(bs.r_eq, rel=1e-5)
 
 
 def test_equilibrium_on_the_unstable_branch_is_lost(story_pair, curve):
