@@ -20,9 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from labkit.errors import RigFileError
-
-RAD_S_PER_RPM = 2.0 * math.pi / 60.0
-G0 = 9.80665  # m/s^2, standard gravity (grams-force -> newtons)
+from labkit.units import G0, RAD_S_PER_RPM
 
 #: key suffix -> (SI unit, factor to SI). The longest matching suffix wins.
 UNIT_SUFFIXES: dict[str, tuple[str, float]] = {
@@ -61,14 +59,6 @@ def split_unit(key: str) -> tuple[str, str, float] | None:
             unit, factor = UNIT_SUFFIXES[suffix]
             return key[: -len(suffix) - 1], unit, factor
     return None
-
-
-def rpm_to_rad_s(rpm: float) -> float:
-    return rpm * RAD_S_PER_RPM
-
-
-def rad_s_to_rpm(rad_s: float) -> float:
-    return rad_s / RAD_S_PER_RPM
 
 
 # ---- the loaded rig -----------------------------------------------------------------------

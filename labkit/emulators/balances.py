@@ -31,7 +31,7 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 from labkit.emulators.base import Emulator, register_emulator
-from labkit.emulators.plant import G0
+from labkit.units import G0
 
 JUNK = b"\x00\xff\xfe"
 

@@ -21,8 +21,7 @@ import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-G0 = 9.80665  # m/s^2, standard gravity: grams-force -> newtons
-RAD_S_PER_RPM = 2.0 * math.pi / 60.0
+from labkit.units import G0, RAD_S_PER_RPM
 
 
 def fig525_force_n(speed_rad_s: float, a: float = 224e6, b: float = -1.9,

@@ -17,10 +17,10 @@ from pathlib import Path
 import numpy as np
 
 from labkit.errors import DataFileError
+from labkit.units import G0, RAD_S_PER_RPM
 
-G0 = 9.80665
 SI_FACTORS = {  # suffix -> (SI suffix, factor)
-    "_rpm": ("_rad_s", 2.0 * math.pi / 60.0),
+    "_rpm": ("_rad_s", RAD_S_PER_RPM),
     "_hz": ("_rad_s", 2.0 * math.pi),
     "_g": ("_n", G0 * 1e-3),
     "_mm": ("_m", 1e-3),

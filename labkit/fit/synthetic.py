@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-G0 = 9.80665
+from labkit.units import G0
 
 
 def write_sweep_session(root: str | Path, *, a: float = 224e6, b: float = -1.9, noise: float = 0.01,

@@ -26,7 +26,8 @@ from typing import Any
 from labkit.control.loop import SpeedControl, build_speed_control
 from labkit.errors import LabkitError, SafetyError
 from labkit.protocols.events import EventBus, Sink
-from labkit.rig import Rig, open_rig, rad_s_to_rpm
+from labkit.rig import Rig, open_rig
+from labkit.units import rad_s_to_rpm
 
 CONTROL_EVENT_INTERVAL_S = 0.25
 

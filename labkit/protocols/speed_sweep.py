@@ -22,7 +22,8 @@ from labkit.errors import LabkitError
 from labkit.protocols.params import ParamError
 from labkit.protocols.quickfit import fit_power_law
 from labkit.protocols.runner import ProtocolDef, RunContext, Step
-from labkit.rig import G0, Rig, rad_s_to_rpm, rpm_to_rad_s
+from labkit.rig import Rig
+from labkit.units import G0, rad_s_to_rpm, rpm_to_rad_s
 
 
 def reading_force_n(reading: Any) -> float:

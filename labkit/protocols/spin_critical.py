@@ -28,7 +28,8 @@ from labkit.protocols.params import ParamError
 from labkit.protocols.quickfit import fit_spin_critical_c
 from labkit.protocols.runner import ProtocolDef, RunContext, Step
 from labkit.protocols.speed_sweep import reading_force_n
-from labkit.rig import G0, Rig, rad_s_to_rpm, rpm_to_rad_s
+from labkit.rig import Rig
+from labkit.units import G0, rad_s_to_rpm, rpm_to_rad_s
 
 
 def operator_pressed_enter() -> bool:

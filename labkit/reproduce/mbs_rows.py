@@ -11,8 +11,7 @@ from labkit.model.mbs import (
 )
 from labkit.reproduce import Row, compare
 from labkit.reproduce.paper_data import EQ_6_21, EQ_6_22, FIG_6_18
-
-G0 = 9.80665
+from labkit.units import G0
 
 
 def _eq_6_22() -> list[Row]:

@@ -29,8 +29,7 @@ import numpy as np
 from labkit.errors import RigFileError
 from labkit.sim import equilibrium
 from labkit.sim.rotations import euler_zxz
-
-RPM = 2.0 * math.pi / 60.0
+from labkit.units import G0, RAD_S_PER_RPM
 
 MASS_UNITS = {"kg": 1.0, "g": 1e-3}
 INERTIA_UNITS = {"kg_m2": 1.0, "g_cm2": 1e-7}
@@ -297,7 +296,7 @@ def _omega(t: _Table, required: bool) -> float | None:
         return None
     k = keys[0]
     value = t.number(k)
-    return value * {"omega_rad_s": 1.0, "speed_rpm": RPM, "frequency_hz": 2.0 * math.pi}[k]
+    return value * {"omega_rad_s": 1.0, "speed_rpm": RAD_S_PER_RPM, "frequency_hz": 2.0 * math.pi}[k]
 
 
 def _field(t: _Table, bodies_moment: float) -> UniformField:
@@ -430,7 +429,7 @@ def scene_from_dict(data: dict, source: str = "<dict>") -> Scene:
     gtab = top.sub("gravity")
     gravity = None
     if gtab is not None:
-        gravity = _vec3(gtab, "g", {"m_s2": 1.0}, [0.0, 0.0, -9.80665])
+        gravity = _vec3(gtab, "g", {"m_s2": 1.0}, [0.0, 0.0, -G0])
         gtab.finish()
     top.finish()
     scene = Scene(name, bodies, rotators, fld, gravity, escape, period, cycles, description, source)

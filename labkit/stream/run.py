@@ -30,8 +30,7 @@ from typing import Any
 import numpy as np
 
 from labkit.stream.core import RerunSpec, open_stream
-
-RAD_S_PER_RPM = 2.0 * np.pi / 60.0
+from labkit.units import RAD_S_PER_RPM
 
 
 def run_blueprint(loops: list[str], devices: list[str]) -> Any:

@@ -11,7 +11,8 @@ import pytest
 from labkit.control import build_speed_control
 from labkit.errors import SafetyError
 from labkit.io.clock import VirtualClock, use_clock
-from labkit.rig import open_rig, parse_rig, rpm_to_rad_s
+from labkit.rig import open_rig, parse_rig
+from labkit.units import rpm_to_rad_s
 
 RIG = (Path(__file__).resolve().parents[2] / "rigs" / "emulated-fig525.toml").read_text()
 PERIOD = 0.05

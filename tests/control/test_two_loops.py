@@ -7,7 +7,8 @@ import pytest
 from labkit.control import build_speed_control
 from labkit.emulators.plant import shared_plant
 from labkit.io.clock import VirtualClock, use_clock
-from labkit.rig import open_rig, parse_rig, rpm_to_rad_s
+from labkit.rig import open_rig, parse_rig
+from labkit.units import rpm_to_rad_s
 
 BASE = (Path(__file__).resolve().parents[2] / "rigs" / "emulated-fig525.toml").read_text()
 SECOND = """

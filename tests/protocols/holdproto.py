@@ -4,7 +4,7 @@ import os
 import signal
 
 from labkit.protocols.runner import ProtocolDef, Step
-from labkit.rig import rpm_to_rad_s
+from labkit.units import rpm_to_rad_s
 
 
 class Hold(ProtocolDef):

@@ -13,7 +13,6 @@ Speeds are electrical: ERPM = mechanical RPM x pole pairs, so a 100 000 RPM rig 
 
 from __future__ import annotations
 
-import math
 import struct
 from dataclasses import dataclass
 from typing import Any
@@ -21,6 +20,7 @@ from typing import Any
 from labkit.devices.base import MotorStatus, register_driver, register_parser_benchmark
 from labkit.devices.motor.keepalive import KeepAliveMotor
 from labkit.errors import DeviceError, DeviceTimeout
+from labkit.units import RAD_S_PER_RPM
 
 COMM_FW_VERSION = 0
 COMM_GET_VALUES = 4
@@ -32,7 +32,6 @@ COMM_REBOOT = 29
 COMM_ALIVE = 30
 
 MAX_PAYLOAD = 1024
-RAD_S_PER_RPM = 2.0 * math.pi / 60.0
 
 FAULT_CODES = {
     0: "none", 1: "over_voltage", 2: "under_voltage", 3: "drv", 4: "abs_over_current",

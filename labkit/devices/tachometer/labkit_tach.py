@@ -31,8 +31,9 @@ import serial
 
 from labkit.devices.base import Reading, register_driver, register_parser_benchmark
 from labkit.devices.stream import LineFramer
-from labkit.devices.tachometer.streaming import StreamingTachometer, rpm_to_rad_s
+from labkit.devices.tachometer.streaming import StreamingTachometer
 from labkit.errors import DeviceDisconnected, DeviceReplyError, DeviceTimeout
+from labkit.units import rpm_to_rad_s
 
 FLAG_NAMES = {"Z": "zero_speed", "O": "over_range", "N": "noisy"}
 #: relative disagreement allowed between rpm and 60e6/(period_us*ppr) (print rounding)

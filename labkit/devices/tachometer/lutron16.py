@@ -25,7 +25,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from labkit.devices.base import Reading, register_driver, register_parser_benchmark
-from labkit.devices.tachometer.streaming import StreamingTachometer, rpm_to_rad_s
+from labkit.devices.tachometer.streaming import StreamingTachometer
+from labkit.units import rpm_to_rad_s
 
 STX = 0x02
 CR = 0x0D

@@ -18,8 +18,9 @@ from typing import Any
 import serial
 
 from labkit.devices.base import Reading, register_driver, register_parser_benchmark
-from labkit.devices.tachometer.streaming import StreamingTachometer, rpm_to_rad_s
+from labkit.devices.tachometer.streaming import StreamingTachometer
 from labkit.errors import DeviceDisconnected, DeviceReplyError, DeviceTimeout
+from labkit.units import rpm_to_rad_s
 
 VALUE_LINE = re.compile(rb"^\s*([+-]?\d{1,9}(?:\.\d{1,6})?)\s*(?:RPM|rpm)?\s*$")
 

@@ -12,7 +12,6 @@ adapter unplugged mid-read) surfaces in the caller's thread as
 from __future__ import annotations
 
 import bisect
-import math
 import threading
 from typing import Any
 
@@ -21,13 +20,6 @@ import serial
 from labkit.devices.base import Reading, Tachometer
 from labkit.devices.stream import StreamReader
 from labkit.io.clock import Clock
-
-RAD_S_PER_RPM = 2.0 * math.pi / 60.0
-
-
-def rpm_to_rad_s(rpm: float) -> float:
-    """Mechanical RPM -> rad/s (SI inside, ARCHITECTURE rule 5)."""
-    return rpm * RAD_S_PER_RPM
 
 
 class StreamingTachometer(Tachometer):
