@@ -139,13 +139,17 @@ def _batch(R0, l0, a, jc, js, phase, n_periods, n_steps, every, weights, zen, ja
         _one(R, l, a[b], jc[b], js[b], phase[b], n_periods, n_steps, every, weights, zen[b], jac[b])
 
 
-def _check(spec: BatchSpec, steps_per_period: int, samples_per_period: int) -> int:
+def _sample_arrays(
+    spec: BatchSpec, periods: int, steps_per_period: int, samples_per_period: int
+) -> tuple[int, np.ndarray, np.ndarray]:
+    """Checked sampling: ``(steps between samples, zenith array, jacobi array)``, both (B, n)."""
     if steps_per_period <= 0 or samples_per_period <= 0 or steps_per_period % samples_per_period:
         raise ValueError(
             f"steps per period ({steps_per_period}) must be a positive multiple of the samples "
             f"per period ({samples_per_period})"
         )
-    return steps_per_period // samples_per_period
+    n = periods * samples_per_period + 1
+    return steps_per_period // samples_per_period, np.empty((spec.size, n)), np.empty((spec.size, n))
 
 
 def run_batch_numba(
@@ -156,10 +160,7 @@ def run_batch_numba(
     method: str = "suzuki4",
 ) -> BatchResult:
     """Integrate every scene of ``spec`` for ``periods`` drive periods (numba, cached kernel)."""
-    every = _check(spec, steps_per_period, samples_per_period)
-    n = periods * samples_per_period + 1
-    zen = np.empty((spec.size, n))
-    jac = np.empty((spec.size, n))
+    every, zen, jac = _sample_arrays(spec, periods, steps_per_period, samples_per_period)
     _batch(
         np.ascontiguousarray(spec.R0, dtype=float),
         np.ascontiguousarray(spec.l0, dtype=float),
@@ -198,14 +199,12 @@ def run_batch_numpy(
     method: str = "suzuki4",
 ) -> BatchResult:
     """The same scheme as :func:`run_batch_numba`, vectorised over the batch with numpy."""
-    every = _check(spec, steps_per_period, samples_per_period)
+    every, zen, jac = _sample_arrays(spec, periods, steps_per_period, samples_per_period)
     R = np.array(spec.R0, dtype=float)
     l = np.array(spec.l0, dtype=float)
     a, jc, js, ph = (np.asarray(v, dtype=float) for v in (spec.inertia_ratio, spec.j_c, spec.j_s, spec.phase))
     inv_a1 = 1.0 / a - 1.0
-    n = periods * samples_per_period + 1
-    zen = np.empty((spec.size, n))
-    jac = np.empty((spec.size, n))
+    weights = weights_for(method)
     zen[:, 0] = np.arccos(np.clip(R[:, 2, 2], -1.0, 1.0))
     jac[:, 0] = _jacobi_np(R, l, a, jc, js, ph)
     h = 2.0 * math.pi / steps_per_period
@@ -213,7 +212,7 @@ def run_batch_numpy(
     s = 0.0
     for period in range(periods):
         for step in range(steps_per_period):
-            for w in weights_for(method):
+            for w in weights:
                 hw = w * h
                 l += 0.5 * hw * _torque(R, jc, js, s + ph)
                 c = hw * np.einsum("bi,bi->b", R[:, :, 2], l) * inv_a1
