@@ -210,7 +210,7 @@ def s1(level: str) -> Verdict:
     )
 
 
-def _nondim_state(res: SimResult, inertia: float, omega: float) -> np.ndarray:
+def _nondim_state(res: SimResult, omega: float) -> np.ndarray:
     """Dipole direction and angular velocity / omega (what Eq. 5.7 describes; see metrics)."""
     n = len(res.times_s)
     return np.concatenate([res.dipole_directions(), res.angular_velocities_rad_s.reshape(n, -1) / omega], 1)
@@ -238,7 +238,7 @@ def scale_invariance(cycles: int, inertias=(1e-12, 1e-9, 1e-6), omegas=(100.0, 1
             out["vs_nondimensional_jacobi"] = max(
                 out["vs_nondimensional_jacobi"], float(np.max(np.abs(jac - nd.jacobi[0])))
             )
-            state = _nondim_state(res, i, w)
+            state = _nondim_state(res, w)
             if base is None:
                 base = state
             else:
@@ -251,7 +251,7 @@ def s2(level: str) -> Verdict:
     start = time.perf_counter()
     tiny = _run(s1_like(1e-12, 11_000.0, name="S2"), cycles, steps_per_period=64, samples_per_period=8)
     ref = _run(s1_like(I_S1, OMEGA_S1, name="S1"), cycles, steps_per_period=64, samples_per_period=8)
-    rel = float(np.max(np.abs(_nondim_state(tiny, 1e-12, 11_000.0) - _nondim_state(ref, I_S1, OMEGA_S1))))
+    rel = float(np.max(np.abs(_nondim_state(tiny, 11_000.0) - _nondim_state(ref, OMEGA_S1))))
     grid = scale_invariance(cycles)
     worst = max(rel, *grid.values())
     return Verdict(

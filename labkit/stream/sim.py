@@ -27,7 +27,7 @@ import numpy as np
 from labkit.stream.core import RerunSpec, open_stream
 
 
-def sim_blueprint(body_names: list[str]) -> Any:
+def sim_blueprint() -> Any:
     import rerun.blueprint as rrb
 
     return rrb.Blueprint(
@@ -93,7 +93,7 @@ def _arm_length(positions: np.ndarray) -> float:
 
 def stream_sim_result(spec: RerunSpec | str, result: Any, stride: int = 1) -> None:
     """Open a stream for ``spec``, log ``result`` and close it (footer written)."""
-    rec = open_stream(spec, "labkit-simulate", blueprint=sim_blueprint(list(result.body_names)),
+    rec = open_stream(spec, "labkit-simulate", blueprint=sim_blueprint(),
                       fallback_file=f"{result.scene}.rrd")
     try:
         log_sim_result(rec, result, stride=stride)

@@ -200,7 +200,7 @@ def _kick(v, L, F, T, bf, bi, flags, g, h, impulse):
 
 
 @njit(cache=True, _nrt=False)
-def _gap(x, v, bf, bi, src, a, kind, other):
+def _gap(x, v, bf, src, a, kind, other):
     """Gap (distance - contact radii) and its rate between body ``a`` and body/rotator ``other``."""
     if kind == 0:
         rx = x[a, 0] - x[other, 0]
@@ -221,7 +221,7 @@ def _gap(x, v, bf, bi, src, a, kind, other):
 
 
 @njit(cache=True, _nrt=False)
-def _events(x, v, bf, bi, src, r_escape):
+def _events(x, v, bf, bi, src):
     """(contact gap min, its pair, nearest-neighbour distance max) over translating bodies."""
     nb = x.shape[0]
     gmin = 1e300
@@ -234,12 +234,12 @@ def _events(x, v, bf, bi, src, r_escape):
         for o in range(nb):
             if o == a:
                 continue
-            gp, _, d = _gap(x, v, bf, bi, src, a, 0, o)
+            gp, _, d = _gap(x, v, bf, src, a, 0, o)
             if gp < gmin:
                 gmin, ga, gk, go = gp, a, 0, o
             nearest = min(nearest, d)
         for s in range(src.shape[0]):
-            gp, _, d = _gap(x, v, bf, bi, src, a, 1, s)
+            gp, _, d = _gap(x, v, bf, src, a, 1, s)
             if gp < gmin:
                 gmin, ga, gk, go = gp, a, 1, s
             nearest = min(nearest, d)
@@ -371,10 +371,10 @@ def run_rigid(
             event_time = t
             break
         if check_events:
-            gmin, ga, gk, go, far = _events(x, v, bf, bi, src, r_escape)
+            gmin, ga, gk, go, far = _events(x, v, bf, bi, src)
             if ga >= 0 and gmin < 0.0:
-                g1, d1, _ = _gap(x, v, bf, bi, src, ga, gk, go)
-                g0, d0, _ = _gap(xp, vp, bf, bi, src, ga, gk, go)
+                g1, d1, _ = _gap(x, v, bf, src, ga, gk, go)
+                g0, d0, _ = _gap(xp, vp, bf, src, ga, gk, go)
                 status = 3
                 event_time = _hermite_root(t - h, h, g0, d0, g1, d1) if g0 > 0.0 else t - h
                 break
