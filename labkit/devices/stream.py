@@ -96,11 +96,13 @@ class StreamReader:
             self.error = exc
 
     def check(self) -> None:
-        """Raise the reader's error (e.g. disconnect) in the caller's thread."""
+        """Raise the reader's error in the caller's thread; a port error (pyserial's, or EIO from
+        a hung-up pty/USB adapter) as :class:`~labkit.errors.DeviceDisconnected`."""
         if self.error is not None:
             err = self.error
-            if isinstance(err, (serial.SerialException, OSError)):  # OSError: EIO from a hung-up pty/USB
-                raise DeviceDisconnected(self.device, "stream", self.last_bytes, str(err)) from err
+            if isinstance(err, (serial.SerialException, OSError)):
+                raise DeviceDisconnected(self.device, "stream", self.last_bytes,
+                                         f"port disconnected ({err})") from err
             raise err
 
     def pump(self) -> int:

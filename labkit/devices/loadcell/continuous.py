@@ -19,7 +19,7 @@ import serial
 from labkit.devices.base import Reading
 from labkit.devices.loadcell.linkio import FrameError
 from labkit.devices.stream import LineFramer, StreamReader
-from labkit.errors import DeviceDisconnected, DeviceError, DeviceTimeout
+from labkit.errors import DeviceError, DeviceTimeout
 from labkit.io.clock import Clock
 
 
@@ -62,10 +62,6 @@ class ContinuousReadings:
 
     def check(self) -> None:
         """Raise what the reader hit (an unplugged port) in the caller's thread."""
-        err = self.reader.error
-        if isinstance(err, OSError) and not isinstance(err, serial.SerialException):
-            raise DeviceDisconnected(self.device, "stream", self.reader.last_bytes,
-                                     f"port disconnected ({err})") from err
         self.reader.check()
 
     def latest(self) -> Reading | None:
