@@ -8,7 +8,6 @@ from __future__ import annotations
 import csv
 import datetime as _dt
 import json
-import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -27,19 +26,26 @@ MAX_TABLE_COLUMNS = 10
 
 
 def floator_inertia(session: Path) -> float | None:
-    """Radial moment of inertia of the rig's floator (kg m^2) from the session's rig.toml."""
-    rig = session / "rig.toml"
-    if not rig.is_file():
+    """Radial (else axial) moment of inertia of the rig's floator (kg m^2) from the session's
+    rig.toml. The floator table is validated by :func:`labkit.rig.parse_body`, so every unit a
+    rig file accepts (``inertia_radial_g_mm2``...) works here too. None when the session has no
+    readable rig, no floator or no inertia."""
+    import tomllib
+
+    from labkit.errors import RigFileError
+    from labkit.rig import parse_body
+
+    rig_path = session / "rig.toml"
+    if not rig_path.is_file():
         return None
     try:
-        bodies = tomllib.loads(rig.read_text()).get("bodies", {})
-    except tomllib.TOMLDecodeError:
+        table = tomllib.loads(rig_path.read_text()).get("bodies", {}).get("floator")
+        if not isinstance(table, dict):
+            return None
+        floator = parse_body(str(rig_path), "floator", table)
+    except (tomllib.TOMLDecodeError, RigFileError):
         return None
-    floator = bodies.get("floator", {})
-    for key in ("inertia_radial_kg_m2", "inertia_kg_m2", "inertia_axial_kg_m2"):
-        if isinstance(floator.get(key), int | float) and floator[key] > 0:
-            return float(floator[key])
-    return None
+    return floator.inertia_radial_kg_m2 or floator.inertia_axial_kg_m2
 
 
 def default_out(source: Path) -> Path:

@@ -128,7 +128,8 @@ def test_steps_without_measurement_are_skipped_with_a_note(tmp_path: Path, capsy
 
 
 def test_inertia_from_session_rig_file(sweep_session: Path, capsys):
-    (sweep_session / "rig.toml").write_text("[bodies.floator]\ninertia_radial_kg_m2 = 3e-7\n")
+    rig = '[bodies.floator]\nshape = "sphere"\ninertia_radial_kg_m2 = 3e-7\n'
+    (sweep_session / "rig.toml").write_text(rig)
     assert main(["fit", str(sweep_session), "--model", "pfr-force", "--json", "-"]) == 0
     p = json.loads(capsys.readouterr().out)["series"]["all"]["params"]
     assert p["I"]["value"] == 3e-7 and "K" in p and "tau_S" in p
