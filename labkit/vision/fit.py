@@ -32,6 +32,10 @@ MIN_GAIN_PX = 0.1  # ... and at least this much lower in absolute terms
 MIN_SECOND_TERM_PX = 1.0  # ... and its second term (b * scale) is visible
 MIN_POINTS = 20
 MAX_TROCHOID_B = 1.05  # larger b means the fast term dominates: not a trochoid of Eq. 6.38
+# a prior classification (of part of the trace) is trusted while its choice explains the whole
+# trace nearly as well as it explained the part: rms <= PRIOR_RMS_FACTOR x its rms + PRIOR_RMS_SLACK_PX
+PRIOR_RMS_FACTOR = 1.5
+PRIOR_RMS_SLACK_PX = 0.5
 
 
 @dataclass
@@ -249,7 +253,10 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
     ``band`` (points, weights, times): every trace pixel; the ellipse is polished on it, because a
     thinned centre line ends half a line width short of the sharp tips of a flat ellipse.
     ``prior``: a classification of part of the same trace (e.g. the first half of a video, done
-    while the rest was decoding); its choice is kept and only refined, with no new screening."""
+    while the rest was decoding); its choice is kept and only refined, with no new screening,
+    unless the refined choice fits the whole trace much worse than it fitted the part (a part that
+    showed too little of the pattern, e.g. few frames at a large stride): then every candidate
+    is screened again."""
     pts = np.asarray(points, dtype=float)
     w = None if weights is None else np.asarray(weights, dtype=float)
     tm = None if times is None else np.asarray(times, dtype=float)
@@ -290,6 +297,9 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
         residuals[_name(fit)] = fit.rms_residual
         if trochoid_beats(fit.rms_residual, abs(fit.b), best.rms_residual):
             best = fit
+    if prior is not None and not (
+            best.rms_residual <= PRIOR_RMS_FACTOR * prior.best.rms_residual + PRIOR_RMS_SLACK_PX):
+        return classify(points, weights, times, max_points, screen_points, trochoid_loops, band)
     return Classification(best, ellipse, residuals, t_ref)
 
 

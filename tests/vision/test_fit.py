@@ -49,3 +49,22 @@ def test_circle_is_reported_as_circle():
 def test_too_few_points_is_a_value_error():
     with pytest.raises(ValueError):
         fit_ellipse(np.zeros((5, 2)))
+
+
+def test_a_prior_from_too_little_of_the_trace_is_screened_again():
+    # the first part of a clip seen at a large stride can look like another trochoid; refined on the
+    # whole trace its choice fits far worse than it fitted the part, so every candidate is screened
+    truth = Pattern("hypotrochoid", (300.4, 200.7), 0.4, scale=100.0, b=0.3, loops=4)
+    misleading = classify(cloud(Pattern("hypotrochoid", (300.4, 200.7), 0.4, scale=100.0, b=0.3, loops=6)))
+    assert misleading.best.pattern.loops == 6
+    best = classify(cloud(truth), prior=misleading).best
+    assert pattern_kind(best) == "hypotrochoid" and best.pattern.loops == 4
+    assert abs(best.pattern.b - 0.3) < 0.05
+
+
+def test_a_prior_that_explains_the_whole_trace_is_kept():
+    truth = Pattern("epitrochoid", (300.4, 200.7), 0.2, scale=100.0, b=0.25, loops=5)
+    prior = classify(cloud(truth, seed=1))
+    best = classify(cloud(truth, seed=2), prior=prior).best
+    assert pattern_kind(best) == "epitrochoid" and best.pattern.loops == 5
+    assert "epitrochoid-5 (first part)" in classify(cloud(truth, seed=2), prior=prior).residuals
