@@ -52,9 +52,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                        help="seconds of video per accumulation chunk: time resolution of drift (default 0.5)")
     laser.add_argument("--max-chunks", type=int, default=16,
                        help="at most this many chunks; long clips get longer ones (default 16)")
-    laser.add_argument("--colour-frames", action="store_true",
-                       help="accumulate the brightest colour channel of BGR frames instead of the codec's "
-                            "luma plane (slower; for a dim laser whose colour barely shows in luma)")
+    path = laser.add_mutually_exclusive_group()
+    path.add_argument("--colour-frames", action="store_true",
+                      help="force the brightest colour channel of BGR frames (default: chosen per clip "
+                           "from the trace's contrast-to-noise in luma and in colour on the first frames)")
+    path.add_argument("--luma", action="store_true",
+                      help="force the codec's luma plane (fastest; for benchmarks)")
     laser.add_argument("--json", metavar="OUT", help="write the result as JSON ('-' for stdout)")
     laser.add_argument("--rerun", metavar="SPEC", help="stream frames and overlays to rerun")
     laser.set_defaults(func=run_laser)
@@ -119,7 +122,7 @@ def run_laser(args: argparse.Namespace) -> int:
         print("labkit analyse laser: tilt needs both --screen-distance-mm and --mm-per-px", file=sys.stderr)
     quality = LaserQuality(
         stride=args.stride, roi=args.roi, subpixel=not args.no_subpixel, chunk_s=args.chunk_s,
-        max_chunks=args.max_chunks, luma=not args.colour_frames,
+        max_chunks=args.max_chunks, luma=False if args.colour_frames else (True if args.luma else None),
     )
     stream = open_stream(args.rerun, "laser")
     try:
@@ -148,6 +151,10 @@ def _print_laser(r: dict) -> None:
     p = r["pattern"]
     rate = f"{r['fps']:.3g} fps" if r["fps"] else "photo"
     print(f"{r['source']}: {r['frames']} frames, {r['size'][0]}x{r['size'][1]}, {rate}")
+    q = r["quality"]
+    if q.get("frame_path") == "colour" and q.get("cnr_luma") is not None:
+        print(f"frames: colour (the trace's contrast-to-noise is {q['cnr_luma']:.1f} in luma vs "
+              f"{q['cnr_colour']:.1f} in colour on the first frames: too little kept in luma)")
     if p["type"] == "none":
         print(f"pattern: none ({p['reason']})")
         return

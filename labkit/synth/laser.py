@@ -47,6 +47,8 @@ class LaserSpec:
     rolling_shutter_s: float = 0.0  # readout time top to bottom
     codec: str = "mp4v"
     seed: int = 0
+    laser_bgr: tuple[float, float, float] = (0.25, 0.3, 1.0)  # B, G, R response to the laser (red)
+    background_bgr: tuple[float, float, float] = (1.0, 1.0, 1.0)  # screen tint: (0.75, 0.9, 1.0) is warm
 
     def to_dict(self) -> dict:
         d = asdict(self)
@@ -189,8 +191,8 @@ def render_laser(spec: LaserSpec, position: Trajectory | None = None) -> Iterato
     bg = _background(spec, rng)
     if hole is not None:
         bg = bg * hole + 8.0 * (1 - hole)
-    base = cv2.merge([bg, bg, bg])
-    colour = np.array([0.25, 0.3, 1.0], np.float32)  # B, G, R response to the red laser
+    base = cv2.merge([bg * np.float32(k) for k in spec.background_bgr])
+    colour = np.array(spec.laser_bgr, np.float32)
     sig, hsig = spec.spot_sigma_px, spec.halo_sigma_px
     t_mid = (spec.frames - 1) / (2 * spec.fps)
     margin = int(4 * max(sig, hsig) + 3)

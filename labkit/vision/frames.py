@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import queue
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -18,6 +18,7 @@ import numpy as np
 
 from labkit.errors import VideoError
 
+LumaChooser = Callable[[list[np.ndarray]], bool]
 PHOTO_SUFFIXES = {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp"}
 
 
@@ -35,9 +36,10 @@ class FrameSource:
     frames_read: int = 0
     truncated: str | None = None
     levels: tuple[float, float] = (0.0, 255.0)  # grey levels of black and white in the frames yielded
+    luma_chosen: bool | None = None  # what ``choose_luma`` decided (None: not asked)
 
-    def frames(self, stride: int = 1, prefetch: int = 0,
-               luma: bool = False) -> Iterator[tuple[int, np.ndarray]]:
+    def frames(self, stride: int = 1, prefetch: int = 0, luma: bool = False,
+               choose_luma: LumaChooser | None = None, probe: int = 12) -> Iterator[tuple[int, np.ndarray]]:
         """Yield ``(index, bgr_frame)`` for every ``stride``-th frame; skipped frames are only grabbed
         (demuxed and decoded, not converted), which is cheaper than reading them.
 
@@ -47,46 +49,66 @@ class FrameSource:
 
         ``prefetch > 0`` decodes in a background thread up to that many frames ahead (OpenCV
         releases the GIL while decoding, so decoding overlaps the caller's work); every frame is
-        then a fresh array. Without it the same buffer is reused: copy a frame to keep it."""
+        then a fresh array. Without it the same buffer is reused: copy a frame to keep it.
+
+        ``luma=True`` with ``choose_luma``: the first ``probe`` frames read come as BGR; the
+        decoder then calls ``choose_luma(those frames)`` (before decoding further, so nothing is
+        decoded twice) and yields luma planes from there on only if it returns True
+        (:attr:`luma_chosen` records the answer). Without a luma plane it is not called."""
         if self._photo is not None:
             self.frames_read = 1
             yield 0, self._photo
             return
         if prefetch > 0:
-            yield from self._prefetched(stride, prefetch, luma)
+            yield from self._prefetched(stride, prefetch, luma, choose_luma, probe)
         else:
-            yield from self._decode(stride, reuse=True, luma=luma)
+            yield from self._decode(stride, reuse=True, luma=luma, choose_luma=choose_luma, probe=probe)
         if self.frames_read == 0:
             raise VideoError(self.path, "no frame could be decoded (empty or corrupt video)")
         if self.frame_count > 0 and self.frames_read < self.frame_count - 1:
             self.truncated = (f"decoded {self.frames_read} of {self.frame_count} advertised frames "
                               "(truncated file?)")
 
-    def _decode(self, stride: int, reuse: bool, luma: bool = False) -> Iterator[tuple[int, np.ndarray]]:
+    def _decode(self, stride: int, reuse: bool, luma: bool = False, choose_luma: LumaChooser | None = None,
+                probe: int = 12) -> Iterator[tuple[int, np.ndarray]]:
         cap, index, buf = self._cap, 0, None
         luma = luma and self._luma_plane_available()
+        probing: list[np.ndarray] | None = [] if luma and choose_luma is not None and probe > 0 else None
         level = cv2.utils.logging.getLogLevel()
         if luma:
-            cap.set(cv2.CAP_PROP_CONVERT_RGB, 0)
             # FFMPEG warns on every unconverted planar-YUV frame; that is what we asked for
             cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
+            if probing is None:
+                cap.set(cv2.CAP_PROP_CONVERT_RGB, 0)
         try:
             while True:
                 if index % stride:
                     if not cap.grab():
                         break
                 else:
+                    if probing is not None and len(probing) == probe:
+                        self._choose(choose_luma, probing)
+                        probing = None
                     ok, frame = cap.read(buf) if reuse else cap.read()
                     if not ok:
                         break
                     buf = frame if reuse else None
+                    if probing is not None:
+                        probing.append(frame.copy() if reuse else frame)
                     yield index, frame
                 index += 1
+            if probing:  # a clip shorter than the probe: still report the measurement
+                self._choose(choose_luma, probing)
         finally:
             if luma:
                 cv2.utils.logging.setLogLevel(level)
             cap.release()
             self.frames_read = index
+
+    def _choose(self, choose_luma: LumaChooser, probed: list[np.ndarray]) -> None:
+        self.luma_chosen = bool(choose_luma(probed))
+        if self.luma_chosen and self._cap is not None:
+            self._cap.set(cv2.CAP_PROP_CONVERT_RGB, 0)
 
     def _luma_plane_available(self) -> bool:
         """Whether this file's decoder hands out a planar luma plane (H, W) when conversion is off,
@@ -117,14 +139,16 @@ class FrameSource:
         self.levels = ranges[int(np.argmin(errors))]
         return True
 
-    def _prefetched(self, stride: int, depth: int, luma: bool = False) -> Iterator[tuple[int, np.ndarray]]:
+    def _prefetched(self, stride: int, depth: int, luma: bool = False, choose_luma: LumaChooser | None = None,
+                    probe: int = 12) -> Iterator[tuple[int, np.ndarray]]:
         q: queue.Queue = queue.Queue(maxsize=depth)
         stop = threading.Event()
         done = object()
 
         def work() -> None:
             try:
-                for item in self._decode(stride, reuse=False, luma=luma):
+                frames = self._decode(stride, reuse=False, luma=luma, choose_luma=choose_luma, probe=probe)
+                for item in frames:
                     while not stop.is_set():
                         try:
                             q.put(item, timeout=0.1)

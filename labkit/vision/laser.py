@@ -22,6 +22,7 @@ import numpy as np
 from labkit.errors import VideoError
 from labkit.vision.curves import a_for_k
 from labkit.vision.fit import MIN_POINTS, Classification, classify, pattern_kind
+from labkit.vision.framepath import PROBE_FRAMES, FramePathChoice, measure_frame_path
 from labkit.vision.frames import FrameSource, open_frames
 from labkit.vision.trace import TracePoints, trace_points
 
@@ -35,16 +36,18 @@ class LaserQuality:
     """Speed/accuracy settings: analyse every ``stride``-th frame, inside ``roi`` (x, y, w, h) or
     the whole frame (None), with or without sub-pixel refinement, accumulating ``chunk_s`` seconds
     of video per chunk (the time resolution of the centre's drift) but at most ``max_chunks``
-    chunks (fewer chunks: faster; more: follows a fast drift better). ``luma``: accumulate the
-    decoder's own luma plane where the codec has one (skips the colour conversion; a live-stream
-    hook still gets BGR frames); False: the brightest colour channel of BGR frames."""
+    chunks (fewer chunks: faster; more: follows a fast drift better). ``luma``: None (auto)
+    measures the trace's contrast-to-noise on the first frames in luma and in colour and uses the
+    decoder's own luma plane (skips the colour conversion) only if luma keeps enough of it
+    (:mod:`labkit.vision.framepath`); True forces luma where the codec has a luma plane; False
+    forces the brightest colour channel of BGR frames. A live-stream hook always gets BGR."""
 
     stride: int = 1
     roi: tuple[int, int, int, int] | None = None
     subpixel: bool = True
     chunk_s: float = 0.5
     max_chunks: int = 16  # long clips get longer chunks: trace extraction per chunk costs ~15-40 ms
-    luma: bool = True
+    luma: bool | None = None
 
 
 @dataclass
@@ -77,35 +80,71 @@ def chunk_length(source: FrameSource, quality: LaserQuality) -> int:
                math.ceil(source.frame_count / max(1, quality.max_chunks)))
 
 
+class FramePathProbe:
+    """The ``choose_luma`` callback of automatic frame-path choice: keeps the measurement."""
+
+    def __init__(self, roi: tuple[int, int, int, int] | None, frame_px: int) -> None:
+        self.roi, self.frame_px = roi, frame_px
+        self.choice: FramePathChoice | None = None
+
+    def __call__(self, frames: list[np.ndarray]) -> bool:
+        self.choice = measure_frame_path(frames, self.roi, self.frame_px)
+        return self.choice.luma
+
+
 def accumulate(source: FrameSource, quality: LaserQuality, on_frame: FrameHook | None = None,
-               on_chunk: Callable[[Chunk], None] | None = None, prefetch: int = 4) -> list[Chunk]:
+               on_chunk: Callable[[Chunk], None] | None = None, prefetch: int = 4,
+               probe: FramePathProbe | None = None) -> list[Chunk]:
     """Running per-pixel maximum of the frames, one accumulator per ``quality.chunk_s`` of video
     (at least ``MIN_FRAMES_PER_CHUNK`` analysed frames, at most ``quality.max_chunks`` chunks).
     ``on_chunk`` gets each chunk as soon as it is complete; decoding runs ``prefetch`` frames
-    ahead in a thread."""
+    ahead in a thread. With ``quality.luma`` None the first frames come in colour and ``probe``
+    (or a new :class:`FramePathProbe`) decides whether the rest come as luma planes; the chunk
+    that straddles the switch is carried over into luma (its probe frames' BT.601 luma)."""
     per_chunk = chunk_length(source, quality)
     fps = source.fps or 1.0
     roi = _clip_roi(quality.roi, source.size) if quality.roi is not None else None
     chunks: list[Chunk] = []
-    luma = quality.luma and on_frame is None
-    for index, frame in source.frames(quality.stride, prefetch=prefetch, luma=luma):
+    luma = quality.luma is not False and on_frame is None
+    auto = luma and quality.luma is None
+    if auto and probe is None:
+        probe = FramePathProbe(roi, max(source.size))
+    grey: np.ndarray | None = None  # BT.601 luma accumulation of the current chunk while probing
+    for index, frame in source.frames(quality.stride, prefetch=prefetch, luma=luma,
+                                      choose_luma=probe if auto else None, probe=PROBE_FRAMES):
         if on_frame is not None:
             on_frame(index, index / fps, frame)
         ci = index // per_chunk
-        if not chunks or ci != chunks[-1].first // per_chunk:
+        x, y, w, h = roi if roi is not None else (0, 0, *source.size)
+        part = frame[y:y + h, x:x + w]
+        new_chunk = not chunks or ci != chunks[-1].first // per_chunk
+        if auto:
+            grey = _carry_grey(chunks[-1] if chunks and not new_chunk else None, part, grey, source.levels)
+        if new_chunk:
             if chunks and on_chunk is not None:
                 on_chunk(chunks[-1])
-            x, y, w, h = roi if roi is not None else (0, 0, *source.size)
-            chunks.append(Chunk(frame[y:y + h, x:x + w].copy(), (x, y), index, index))
+            chunks.append(Chunk(part.copy(), (x, y), index, index))
             continue
         c = chunks[-1]
-        x, y = c.offset
-        h, w = c.image.shape[:2]
-        cv2.max(c.image, frame[y:y + h, x:x + w], dst=c.image)
+        cv2.max(c.image, part, dst=c.image)
         c.last = index
     if chunks and on_chunk is not None:
         on_chunk(chunks[-1])
     return chunks
+
+
+def _carry_grey(chunk: Chunk | None, part: np.ndarray, grey: np.ndarray | None,
+                levels: tuple[float, float]) -> np.ndarray | None:
+    """While frames come in colour, keep the BT.601 luma maximum of the current chunk's frames;
+    when the first luma plane arrives inside a colour chunk, turn that chunk into luma (mapped to
+    the plane's black/white ``levels``). Returns the running luma maximum (None once in luma)."""
+    if part.ndim == 2:
+        if chunk is not None and chunk.image.ndim == 3 and grey is not None:
+            lo, hi = levels
+            chunk.image = cv2.convertScaleAbs(grey, alpha=(hi - lo) / 255.0, beta=lo)
+        return None
+    g = cv2.cvtColor(part, cv2.COLOR_BGR2GRAY)
+    return g if chunk is None or grey is None else cv2.max(grey, g)
 
 
 class TraceTracker:
@@ -167,6 +206,15 @@ def _check_exposure(chunks: list[Chunk], name: str, black_white: tuple[float, fl
         raise VideoError(name, f"all frames are black (brightest grey level {int(levels.max())})")
     if np.percentile(levels, 5) > 245:
         raise VideoError(name, "all frames are white (saturated); reduce exposure or gain")
+
+
+def _frame_path(chunks: list[Chunk], probe: FramePathProbe) -> dict:
+    """``frame_path`` (what the last chunk was accumulated from) and the probe's CNRs (None when
+    nothing was measured: forced path, photo, or a codec without a luma plane)."""
+    path = "luma" if chunks[-1].image.ndim == 2 else "colour"
+    if probe.choice is None:
+        return {"frame_path": path, "cnr_luma": None, "cnr_colour": None}
+    return {**probe.choice.to_quality(), "frame_path": path}
 
 
 def _none(reason: str) -> dict:
@@ -262,7 +310,9 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
                 # classify the first half while the second half decodes; the end only refines
                 prior["fit"] = pool.submit(_preliminary, list(done), [futures[id(d)] for d in done], fps)
 
-        chunks = accumulate(source, quality, on_frame, on_chunk=extract)
+        probe = FramePathProbe(_clip_roi(quality.roi, source.size) if quality.roi is not None else None,
+                               max(source.size))
+        chunks = accumulate(source, quality, on_frame, on_chunk=extract, probe=probe)
         t_frames = time.perf_counter()
         _check_exposure(chunks, source.path, source.levels)
         traces = [futures[id(c)].result() for c in chunks]
@@ -272,7 +322,8 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
             "stride": quality.stride, "roi": list(chunks[-1].offset) + list(chunks[-1].image.shape[1::-1]),
             "subpixel": quality.subpixel, "chunks": len(chunks), "trace_points": int(len(points)),
             "peak_level": peak, "noise_level": noise, "truncated": source.truncated,
-            "chunks_searched_near_previous_trace": tracker.cropped}
+            "chunks_searched_near_previous_trace": tracker.cropped,
+            **_frame_path(chunks, probe)}
     if len(points) < MIN_POINTS:
         reason = ("no light above the background noise" if len(points) == 0
                   else f"only {len(points)} trace pixels found")

@@ -58,6 +58,15 @@ def robust_noise(residual: np.ndarray) -> float:
     return max(0.5, 1.4826 * float(np.median(np.abs(sample - med))))
 
 
+def contrast_to_noise(gray: np.ndarray, frame_px: int | None = None) -> float:
+    """How far the brightest light stands above the background, in units of the noise: the
+    smoothed peak residual over the robust noise, exactly as :func:`trace_points` scores light
+    (its detection threshold is ``snr`` = 8 on this scale). ``gray``: one channel (H, W)."""
+    res = gray.astype(np.float32) - background(gray, frame_px)
+    noise = robust_noise(res)
+    return float(cv2.GaussianBlur(res, (0, 0), 1.0).max()) / noise
+
+
 def trace_points(image: np.ndarray, offset: tuple[int, int] = (0, 0), subpixel: bool = True,
                  snr: float = 8.0, relative_floor: float = 0.12, frame_px: int | None = None) -> TracePoints:
     """Centre-line points of the light trace in ``image`` (BGR or grey), plus every trace pixel.
