@@ -39,7 +39,7 @@ class FrameSource:
     luma_chosen: bool | None = None  # what ``choose_luma`` decided (None: not asked)
 
     def frames(self, stride: int = 1, prefetch: int = 0, luma: bool = False,
-               choose_luma: LumaChooser | None = None, probe: int = 12) -> Iterator[tuple[int, np.ndarray]]:
+               choose_luma: LumaChooser | None = None, probe: int = 8) -> Iterator[tuple[int, np.ndarray]]:
         """Yield ``(index, bgr_frame)`` for every ``stride``-th frame; skipped frames are only grabbed
         (demuxed and decoded, not converted), which is cheaper than reading them.
 
@@ -51,10 +51,9 @@ class FrameSource:
         releases the GIL while decoding, so decoding overlaps the caller's work); every frame is
         then a fresh array. Without it the same buffer is reused: copy a frame to keep it.
 
-        ``luma=True`` with ``choose_luma``: the first ``probe`` frames read come as BGR; the
-        decoder then calls ``choose_luma(those frames)`` (before decoding further, so nothing is
-        decoded twice) and yields luma planes from there on only if it returns True
-        (:attr:`luma_chosen` records the answer). Without a luma plane it is not called."""
+        ``luma=True`` with ``choose_luma``: before decoding, ``choose_luma`` gets the first
+        ``probe`` consecutive frames as BGR and luma planes are yielded only if it returns True
+        (:attr:`luma_chosen` records the answer); without a luma plane it is not called."""
         if self._photo is not None:
             self.frames_read = 1
             yield 0, self._photo
@@ -70,45 +69,54 @@ class FrameSource:
                               "(truncated file?)")
 
     def _decode(self, stride: int, reuse: bool, luma: bool = False, choose_luma: LumaChooser | None = None,
-                probe: int = 12) -> Iterator[tuple[int, np.ndarray]]:
+                probe: int = 8) -> Iterator[tuple[int, np.ndarray]]:
         cap, index, buf = self._cap, 0, None
         luma = luma and self._luma_plane_available()
-        probing: list[np.ndarray] | None = [] if luma and choose_luma is not None and probe > 0 else None
+        if luma and choose_luma is not None:
+            luma = self._choose(choose_luma, self._colour_head(probe))
         level = cv2.utils.logging.getLogLevel()
         if luma:
+            cap.set(cv2.CAP_PROP_CONVERT_RGB, 0)
             # FFMPEG warns on every unconverted planar-YUV frame; that is what we asked for
             cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
-            if probing is None:
-                cap.set(cv2.CAP_PROP_CONVERT_RGB, 0)
         try:
             while True:
                 if index % stride:
                     if not cap.grab():
                         break
                 else:
-                    if probing is not None and len(probing) == probe:
-                        self._choose(choose_luma, probing)
-                        probing = None
                     ok, frame = cap.read(buf) if reuse else cap.read()
                     if not ok:
                         break
                     buf = frame if reuse else None
-                    if probing is not None:
-                        probing.append(frame.copy() if reuse else frame)
                     yield index, frame
                 index += 1
-            if probing:  # a clip shorter than the probe: still report the measurement
-                self._choose(choose_luma, probing)
         finally:
             if luma:
                 cv2.utils.logging.setLogLevel(level)
             cap.release()
             self.frames_read = index
 
-    def _choose(self, choose_luma: LumaChooser, probed: list[np.ndarray]) -> None:
-        self.luma_chosen = bool(choose_luma(probed))
-        if self.luma_chosen and self._cap is not None:
-            self._cap.set(cv2.CAP_PROP_CONVERT_RGB, 0)
+    def _choose(self, choose_luma: LumaChooser, head: list[np.ndarray]) -> bool:
+        self.luma_chosen = bool(head) and bool(choose_luma(head))
+        return self.luma_chosen
+
+    def _colour_head(self, n: int) -> list[np.ndarray]:
+        """The first ``n`` frames as BGR, from a second reader: the decoder's output format is
+        fixed by its first frame (switching CAP_PROP_CONVERT_RGB mid-stream yields packed BGR
+        bytes in a luma-shaped array), so the main reader cannot start in colour and continue in
+        luma. Costs ``n`` extra decodes (~1 % of a 300-frame clip at n = 8)."""
+        cap = cv2.VideoCapture(self.path, cv2.CAP_FFMPEG)
+        head = []
+        try:
+            while len(head) < n:
+                ok, frame = cap.read()
+                if not ok:
+                    break
+                head.append(frame)
+        finally:
+            cap.release()
+        return head
 
     def _luma_plane_available(self) -> bool:
         """Whether this file's decoder hands out a planar luma plane (H, W) when conversion is off,
@@ -140,7 +148,7 @@ class FrameSource:
         return True
 
     def _prefetched(self, stride: int, depth: int, luma: bool = False, choose_luma: LumaChooser | None = None,
-                    probe: int = 12) -> Iterator[tuple[int, np.ndarray]]:
+                    probe: int = 8) -> Iterator[tuple[int, np.ndarray]]:
         q: queue.Queue = queue.Queue(maxsize=depth)
         stop = threading.Event()
         done = object()

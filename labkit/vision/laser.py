@@ -98,9 +98,8 @@ def accumulate(source: FrameSource, quality: LaserQuality, on_frame: FrameHook |
     """Running per-pixel maximum of the frames, one accumulator per ``quality.chunk_s`` of video
     (at least ``MIN_FRAMES_PER_CHUNK`` analysed frames, at most ``quality.max_chunks`` chunks).
     ``on_chunk`` gets each chunk as soon as it is complete; decoding runs ``prefetch`` frames
-    ahead in a thread. With ``quality.luma`` None the first frames come in colour and ``probe``
-    (or a new :class:`FramePathProbe`) decides whether the rest come as luma planes; the chunk
-    that straddles the switch is carried over into luma (its probe frames' BT.601 luma)."""
+    ahead in a thread. With ``quality.luma`` None, ``probe`` (or a new :class:`FramePathProbe`)
+    decides from the first frames whether the frames come as luma planes or in colour."""
     per_chunk = chunk_length(source, quality)
     fps = source.fps or 1.0
     roi = _clip_roi(quality.roi, source.size) if quality.roi is not None else None
@@ -109,7 +108,6 @@ def accumulate(source: FrameSource, quality: LaserQuality, on_frame: FrameHook |
     auto = luma and quality.luma is None
     if auto and probe is None:
         probe = FramePathProbe(roi, max(source.size))
-    grey: np.ndarray | None = None  # BT.601 luma accumulation of the current chunk while probing
     for index, frame in source.frames(quality.stride, prefetch=prefetch, luma=luma,
                                       choose_luma=probe if auto else None, probe=PROBE_FRAMES):
         if on_frame is not None:
@@ -118,8 +116,6 @@ def accumulate(source: FrameSource, quality: LaserQuality, on_frame: FrameHook |
         x, y, w, h = roi if roi is not None else (0, 0, *source.size)
         part = frame[y:y + h, x:x + w]
         new_chunk = not chunks or ci != chunks[-1].first // per_chunk
-        if auto:
-            grey = _carry_grey(chunks[-1] if chunks and not new_chunk else None, part, grey, source.levels)
         if new_chunk:
             if chunks and on_chunk is not None:
                 on_chunk(chunks[-1])
@@ -131,20 +127,6 @@ def accumulate(source: FrameSource, quality: LaserQuality, on_frame: FrameHook |
     if chunks and on_chunk is not None:
         on_chunk(chunks[-1])
     return chunks
-
-
-def _carry_grey(chunk: Chunk | None, part: np.ndarray, grey: np.ndarray | None,
-                levels: tuple[float, float]) -> np.ndarray | None:
-    """While frames come in colour, keep the BT.601 luma maximum of the current chunk's frames;
-    when the first luma plane arrives inside a colour chunk, turn that chunk into luma (mapped to
-    the plane's black/white ``levels``). Returns the running luma maximum (None once in luma)."""
-    if part.ndim == 2:
-        if chunk is not None and chunk.image.ndim == 3 and grey is not None:
-            lo, hi = levels
-            chunk.image = cv2.convertScaleAbs(grey, alpha=(hi - lo) / 255.0, beta=lo)
-        return None
-    g = cv2.cvtColor(part, cv2.COLOR_BGR2GRAY)
-    return g if chunk is None or grey is None else cv2.max(grey, g)
 
 
 class TraceTracker:
