@@ -30,11 +30,12 @@ from labkit.vision.laser import LaserQuality, accumulate, analyse_laser
 def settings(roi: tuple[int, int, int, int]) -> list[tuple[str, LaserQuality]]:
     """The quality settings compared; ``roi`` is a box around the pattern (as a user would set)."""
     return [
-        ("full (stride 1, whole frame, sub-pixel)", LaserQuality()),
+        ("full (stride 1, whole frame, sub-pixel, auto)", LaserQuality()),
+        ("stride 1, luma forced (no colour probe)", LaserQuality(luma=True)),
         ("stride 1, 0.5 s chunks however long the clip", LaserQuality(max_chunks=10**6)),
         ("stride 1, ROI", LaserQuality(roi=roi)),
         ("stride 1, no sub-pixel", LaserQuality(subpixel=False)),
-        ("stride 1, colour frames (no luma plane)", LaserQuality(luma=False)),
+        ("stride 1, colour frames forced", LaserQuality(luma=False)),
         ("stride 2", LaserQuality(stride=2)),
         ("stride 4, ROI", LaserQuality(stride=4, roi=roi)),
         ("stride 8, ROI, no sub-pixel", LaserQuality(stride=8, roi=roi, subpixel=False)),

@@ -72,13 +72,15 @@ def test_luma_and_colour_analyses_both_meet_the_acceptance_bounds(tmp_path, code
         assert abs((p["rotation_deg"] - t["rotation_deg"] + 90) % 180 - 90) < 2.0
 
 
-def test_cli_colour_frames_option_is_recorded(capsys, tmp_path):
+def test_cli_frame_path_options_are_recorded(capsys, tmp_path):
     from labkit.cli import main
 
     path, truth = clip(tmp_path, "mp4v", ".mp4", frames=12, ellipticity=0.3)
-    for argv, luma in (([], True), (["--colour-frames"], False)):
+    for argv, luma, frame_path in (([], None, "luma"), (["--luma"], True, "luma"),
+                                   (["--colour-frames"], False, "colour")):
         assert main(["analyse", "laser", str(path), "--json", "-", *argv]) == 0
         out = capsys.readouterr().out
         result = json.loads(out[out.index("{"):])
         assert result["quality"]["settings"]["luma"] is luma
+        assert result["quality"]["frame_path"] == frame_path
         assert math.dist(result["pattern"]["center_px"], truth["pattern"]["center_px"]) < 1.0
