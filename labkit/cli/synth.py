@@ -28,6 +28,16 @@ def _size(text: str) -> tuple[int, int]:
     return w, h
 
 
+def _bgr(text: str) -> tuple[float, float, float]:
+    try:
+        b, g, r = (float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError("expected B,G,R factors, e.g. 0.7,0.88,1") from None
+    if min(b, g, r) < 0:
+        raise argparse.ArgumentTypeError("colour factors must be >= 0")
+    return b, g, r
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     parser = sub.add_parser(
         "synth",
@@ -62,6 +72,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     laser.add_argument("--exposure-ms", type=float, help="exposure per frame (default from --level)")
     laser.add_argument("--codec", default="mp4v", help="fourcc: mp4v (.mp4), MJPG (.avi), FFV1 (.mkv)")
     laser.add_argument("--seed", type=int, default=0)
+    laser.add_argument("--brightness", type=float, help="trace peak / full scale (default from --level)")
+    laser.add_argument("--background", type=float, help="grey level of the screen (default from --level)")
+    laser.add_argument("--noise", type=float, help="sensor noise sigma in grey levels (default from --level)")
+    laser.add_argument("--laser-bgr", type=_bgr, help="B,G,R response to the laser (default 0.25,0.3,1: red)")
+    laser.add_argument("--screen-bgr", type=_bgr, help="B,G,R tint of the screen light (default 1,1,1; "
+                                                       "0.7,0.88,1 is a warm lamp)")
     laser.add_argument("--angles", metavar="RUN", help="simulator run: t_s, tilt_x_rad, tilt_y_rad")
     laser.add_argument("--screen-distance-mm", type=float, default=500.0, help="with --angles")
     laser.add_argument("--mm-per-px", type=float, default=0.5, help="with --angles")
@@ -131,6 +147,9 @@ def run_laser(args: argparse.Namespace) -> int:
     )
     if args.exposure_ms is not None:
         spec = replace(spec, exposure_s=args.exposure_ms / 1000)
+    looks = {"brightness": args.brightness, "background": args.background, "noise_sigma": args.noise,
+             "laser_bgr": args.laser_bgr, "background_bgr": args.screen_bgr}
+    spec = replace(spec, **{k: v for k, v in looks.items() if v is not None})
     position, truth = None, None
     if args.angles:
         t, tx, ty = load_angles(args.angles)
