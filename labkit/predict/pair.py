@@ -124,11 +124,14 @@ class ForceCurve:
     def _refine(self, grid: np.ndarray, values: np.ndarray, i: int, xtol: float) -> tuple[float, float]:
         a, b = grid[max(i - 1, 0)], grid[min(i + 1, len(grid) - 1)]
 
+        if not (np.isfinite(values[max(i - 1, 0)]) and np.isfinite(values[min(i + 1, len(grid) - 1)])):
+            return float(grid[i]), -float(values[i])  # next to distances without a steady state
+
         def f(r: float) -> float:
             v = self(r)
-            return v if math.isfinite(v) else math.inf
+            return v if math.isfinite(v) else 1e30
 
-        res = minimize_scalar(f, bounds=(a, b), method="bounded", options={"xatol": xtol})
+        res = minimize_scalar(f, bounds=(a, b), method="bounded", options={"xatol": xtol, "maxiter": 100})
         if res.fun <= values[i]:
             return float(res.x), -float(res.fun)
         return float(grid[i]), -float(values[i])
@@ -140,9 +143,10 @@ class ForceCurve:
 
 
 def _log_root(fn, omega0: float, increasing: bool, rtol: float, first_step: float = 0.05,
-              max_steps: int = 9) -> float:
+              max_factor: float = 1000.0) -> float:
     """Root in omega of ``fn`` (monotone in omega; NaN counts as the low side): bracketed from
-    ``omega0`` by steps in log(omega) that double from ``first_step``, then Brent in log(omega)."""
+    ``omega0`` by steps in log(omega) that double from ``first_step``, then Brent in log(omega).
+    NaN when there is no root within ``max_factor`` of ``omega0``."""
     def g(log_w: float) -> float:
         v = fn(math.exp(log_w))
         if not math.isfinite(v):
@@ -152,8 +156,10 @@ def _log_root(fn, omega0: float, increasing: bool, rtol: float, first_step: floa
     x0 = math.log(omega0)
     v0 = g(x0)
     sign_up = (v0 < 0) == increasing  # the root lies above omega0
+    reach = math.log(max_factor)
     a, step = x0, first_step
-    for _ in range(max_steps):
+    while abs(a - x0) < reach:
+        step = min(step, reach - abs(a - x0))
         b = a + step if sign_up else a - step
         if (g(b) > 0) != (v0 > 0):
             lo, hi = (a, b) if a < b else (b, a)

@@ -176,11 +176,20 @@ def _speed_limits(pred: Prediction, pair: Pair, omega: float, curve: ForceCurve,
                            "earlier (resonances, Sec. 6.0.5)"))
     if not math.isfinite(curve.stiffness_limit(1e-7)[1]):
         return
+    if pair.load <= 0:
+        pred.add(Estimate("min_speed_rpm", "minimum speed (weight = largest attraction)", math.nan, "rpm",
+                          STEADY_STATE, "6.19, below 6.22",
+                          note="not searched: above the rotator the weight pushes the floator inwards and "
+                               "the PFR carries it at any speed; the cone's stability (Eq. 5.46) and the "
+                               "point-dipole steady state set the real limit"))
+        return
     guess = scaled_min_speed_guess(curve)
     w_min, cost = timed(lambda: min_speed(pair, omega, rtol=rtol, guess=guess))
     pred.cost_s += cost
     note = "largest net attraction = weight"
-    if math.isfinite(w_min):
+    if not math.isfinite(w_min):
+        note = "none within 1000x below this speed"
+    else:
         r_lim, _ = ForceCurve(pair, w_min).stiffness_limit(1e-7)
         tau_c, tau_s = pair.torques(r_lim)
         if not criterion_holds(tau_c, tau_s, pair.floator.inertia_radial_kg_m2, w_min):

@@ -159,3 +159,15 @@ def test_map_on_a_tiny_grid_resumes(tmp_path, capsys):
     assert len(store.read_text().splitlines()) == 3
     rc, out, _ = _run(argv, capsys)
     assert rc == 0 and "0 computed, 3 reused" in out
+
+
+def test_above_the_rotator(tmp_path, capsys, story_json):
+    out = tmp_path / "above.json"
+    rc, text, _ = _run(STORY + ["--above", "--no-verify", "--json", str(out)], capsys)
+    assert rc == 0
+    data = json.loads(out.read_text())
+    assert data["inputs"]["placement"] == "above" and data["bound"]
+    # the weight now pushes the floator inwards: closer than beneath (Eq. 6.19 with F_E < 0)
+    assert data["results"]["r_eq_mm"]["value"] < story_json[2]["results"]["r_eq_mm"]["value"]
+    assert data["results"]["min_speed_rpm"]["value"] is None
+    assert "not searched" in data["results"]["min_speed_rpm"]["note"]
