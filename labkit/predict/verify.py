@@ -133,8 +133,9 @@ def verify(pair: Pair, omega: float, state: FloatorState, cycles: int = 400, pus
            drift_threshold: float = 1e-6, tolerance: float = 0.25) -> VerifyResult:
     """Simulate ``cycles`` drive periods from the predicted equilibrium (see module docstring).
 
-    The sideways push moves the floator by about ``push_fraction`` of r_eq at the drive
-    frequency. The state counts as bound when the run ends ``ok`` and the distance stays within
+    The sideways push is a velocity of ``push_fraction * r_eq * omega / 40`` (a lateral
+    oscillation of some ten micrometres for the story's pair), enough to excite both whirls.
+    The state counts as bound when the run ends ``ok`` and the axial distance stays within
     ``tolerance`` (relative) of r_eq.
     """
     r_eq = state.r
