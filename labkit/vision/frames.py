@@ -71,9 +71,10 @@ class FrameSource:
     def _decode(self, stride: int, reuse: bool, luma: bool = False, choose_luma: LumaChooser | None = None,
                 probe: int = 8) -> Iterator[tuple[int, np.ndarray]]:
         cap, index, buf = self._cap, 0, None
-        luma = luma and self._luma_plane_available()
+        head: list[np.ndarray] = []
+        luma = luma and self._luma_plane_available(head, probe if choose_luma is not None else 1)
         if luma and choose_luma is not None:
-            luma = self._choose(choose_luma, self._colour_head(probe))
+            luma = self._choose(choose_luma, head)
         level = cv2.utils.logging.getLogLevel()
         if luma:
             cap.set(cv2.CAP_PROP_CONVERT_RGB, 0)
@@ -101,28 +102,15 @@ class FrameSource:
         self.luma_chosen = bool(head) and bool(choose_luma(head))
         return self.luma_chosen
 
-    def _colour_head(self, n: int) -> list[np.ndarray]:
-        """The first ``n`` frames as BGR, from a second reader: the decoder's output format is
-        fixed by its first frame (switching CAP_PROP_CONVERT_RGB mid-stream yields packed BGR
-        bytes in a luma-shaped array), so the main reader cannot start in colour and continue in
-        luma. Costs ``n`` extra decodes (~1 % of a 300-frame clip at n = 8)."""
-        cap = cv2.VideoCapture(self.path, cv2.CAP_FFMPEG)
-        head = []
-        try:
-            while len(head) < n:
-                ok, frame = cap.read()
-                if not ok:
-                    break
-                head.append(frame)
-        finally:
-            cap.release()
-        return head
-
-    def _luma_plane_available(self) -> bool:
+    def _luma_plane_available(self, head: list[np.ndarray] | None = None, head_n: int = 1) -> bool:
         """Whether this file's decoder hands out a planar luma plane (H, W) when conversion is off,
         checked on the first frame (packed or RGB pixel formats fail it). Also sets
         :attr:`levels` from that frame: studio range (16, 235) or full range (0, 255), whichever
-        maps the converted frame's luma onto the plane better."""
+        maps the converted frame's luma onto the plane better. The converting reader also puts
+        the first ``head_n`` BGR frames into ``head`` (the colour probe of automatic choice: the
+        main reader's output format is fixed by its first frame, and switching
+        CAP_PROP_CONVERT_RGB mid-stream yields packed BGR bytes in a luma-shaped array, so the
+        probe needs a reader of its own: ``head_n`` extra decodes)."""
         if self._cap is None or self._cap.getBackendName() != "FFMPEG":
             return False
         level = cv2.utils.logging.getLogLevel()
@@ -133,6 +121,10 @@ class FrameSource:
             plane.set(cv2.CAP_PROP_CONVERT_RGB, 0)
             ok, first = plane.read()
             ok_bgr, bgr = converted.read()
+            if head is not None and ok_bgr:
+                head.append(bgr)
+                while len(head) < head_n and (more := converted.read())[0]:
+                    head.append(more[1])
         finally:
             plane.release()
             converted.release()
