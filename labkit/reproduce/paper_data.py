@@ -1,4 +1,4 @@
-"""Numbers printed in the paper, transcribed once (/work/shared/paper/pfr-mbs-paper.md).
+"""Numbers printed in the PFR/MBS paper, transcribed once (ids follow its table and equation numbers).
 
 Angles in rad, inertias in kg m^2, torques in N m, speeds in rad/s.
 """
