@@ -19,6 +19,7 @@ import numpy as np
 from labkit.errors import VideoError
 
 LumaChooser = Callable[[list[np.ndarray]], bool]
+HELD_FRAMES = 32  # luma planes decoded while the colour probe runs (~30 MB at 1280x720)
 PHOTO_SUFFIXES = {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp"}
 
 
@@ -70,11 +71,11 @@ class FrameSource:
 
     def _decode(self, stride: int, reuse: bool, luma: bool = False, choose_luma: LumaChooser | None = None,
                 probe: int = 8) -> Iterator[tuple[int, np.ndarray]]:
+        if luma and choose_luma is not None and self._cap.getBackendName() == "FFMPEG":
+            yield from self._decode_auto(stride, reuse, choose_luma, probe)
+            return
         cap, index, buf = self._cap, 0, None
-        head: list[np.ndarray] = []
-        luma = luma and self._luma_plane_available(head, probe if choose_luma is not None else 1)
-        if luma and choose_luma is not None:
-            luma = self._choose(choose_luma, head)
+        luma = luma and self._luma_plane_available()
         level = cv2.utils.logging.getLogLevel()
         if luma:
             cap.set(cv2.CAP_PROP_CONVERT_RGB, 0)
@@ -98,9 +99,109 @@ class FrameSource:
             cap.release()
             self.frames_read = index
 
-    def _choose(self, choose_luma: LumaChooser, head: list[np.ndarray]) -> bool:
-        self.luma_chosen = bool(head) and bool(choose_luma(head))
-        return self.luma_chosen
+    def _decode_auto(self, stride: int, reuse: bool, choose_luma: LumaChooser,
+                     probe: int) -> Iterator[tuple[int, np.ndarray]]:
+        """Luma or colour chosen by ``choose_luma``, without waiting for it: the main reader
+        decodes the luma plane at once while a converting reader decodes the first ``probe`` BGR
+        frames and ``choose_luma`` judges them in a thread (OpenCV releases the GIL). Luma planes
+        decoded meanwhile are held back (at most ``HELD_FRAMES``) and yielded if luma is chosen;
+        otherwise (colour chosen, or no planar luma from this codec) they are dropped and the
+        converting reader, already ``probe`` frames in, carries on as the colour source."""
+        cap, converted = self._cap, cv2.VideoCapture(self.path, cv2.CAP_FFMPEG)
+        head: list[np.ndarray] = []
+        plane_ok = threading.Event()
+        verdict: dict[str, bool] = {}
+
+        def judge() -> None:
+            while len(head) < probe and (more := converted.read())[0]:
+                head.append(more[1])
+            plane_ok.wait()
+            if verdict["plane"] and head:
+                verdict["luma"] = bool(choose_luma(head))
+
+        level = cv2.utils.logging.getLogLevel()
+        cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)  # unconverted YUV warnings
+        cap.set(cv2.CAP_PROP_CONVERT_RGB, 0)
+        judge_thread = threading.Thread(target=judge, name="labkit-frame-path", daemon=True)
+        judge_thread.start()
+        held: list[tuple[int, np.ndarray]] = []
+        index, buf, first = 0, None, None
+        try:
+            try:
+                while judge_thread.is_alive() and len(held) < HELD_FRAMES:
+                    if index % stride:
+                        if not cap.grab():
+                            break
+                    else:
+                        ok, frame = cap.read()
+                        if not ok:
+                            break
+                        if first is None:
+                            w, h = self.size
+                            first = frame
+                            verdict["plane"] = frame.shape == (h, w) and frame.dtype == np.uint8
+                            plane_ok.set()
+                            if not verdict["plane"]:
+                                break
+                        held.append((index, frame))
+                    index += 1
+            finally:
+                verdict.setdefault("plane", False)
+                plane_ok.set()
+                judge_thread.join()
+            luma = verdict["plane"] and verdict.get("luma", False)
+            if verdict["plane"] and head:
+                self.luma_chosen = luma
+                self._set_levels(first, head[0])
+            if luma:
+                yield from held
+                held.clear()
+                while True:
+                    if index % stride:
+                        if not cap.grab():
+                            break
+                    else:
+                        ok, frame = cap.read(buf) if reuse else cap.read()
+                        if not ok:
+                            break
+                        buf = frame if reuse else None
+                        yield index, frame
+                    index += 1
+            else:
+                held.clear()
+                cap.release()
+                self.levels = (0.0, 255.0)
+                index = 0
+                for frame in head:
+                    if index % stride == 0:
+                        yield index, frame
+                    index += 1
+                if len(head) == probe:
+                    while True:
+                        if index % stride:
+                            if not converted.grab():
+                                break
+                        else:
+                            ok, frame = converted.read(buf) if reuse else converted.read()
+                            if not ok:
+                                break
+                            buf = frame if reuse else None
+                            yield index, frame
+                        index += 1
+        finally:
+            cv2.utils.logging.setLogLevel(level)
+            cap.release()
+            converted.release()
+            self.frames_read = index
+
+    def _set_levels(self, plane: np.ndarray, bgr: np.ndarray) -> None:
+        """:attr:`levels` from a luma plane and the same frame converted to BGR: studio range
+        (16, 235) or full range (0, 255), whichever maps the converted luma onto the plane better."""
+        y = plane[::4, ::4].astype(np.float32)
+        gray = cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY)[::4, ::4].astype(np.float32)
+        ranges = [(0.0, 255.0), (16.0, 235.0)]
+        errors = [float(np.mean(np.abs(y - (lo + gray * (hi - lo) / 255.0)))) for lo, hi in ranges]
+        self.levels = ranges[int(np.argmin(errors))]
 
     def _luma_plane_available(self, head: list[np.ndarray] | None = None, head_n: int = 1) -> bool:
         """Whether this file's decoder hands out a planar luma plane (H, W) when conversion is off,
