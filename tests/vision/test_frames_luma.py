@@ -84,3 +84,38 @@ def test_cli_frame_path_options_are_recorded(capsys, tmp_path):
         assert result["quality"]["settings"]["luma"] is luma
         assert result["quality"]["frame_path"] == frame_path
         assert math.dist(result["pattern"]["center_px"], truth["pattern"]["center_px"]) < 1.0
+
+
+@pytest.mark.parametrize("choose", [True, False])
+@pytest.mark.parametrize("frames,stride,prefetch", [(40, 3, 0), (60, 1, 2), (5, 2, 2)])
+def test_automatic_choice_yields_exactly_the_forced_paths_frames(tmp_path, choose, frames, stride, prefetch):
+    """The luma plane is decoded while the chooser judges the first frames; whatever it decides, the
+    frames must be those of the forced path: luma planes when it says yes, and BGR frames (the
+    probe's reader carrying on after its head frames) when it says no. Clips shorter and longer
+    than the probe and the planes held back meanwhile."""
+    path, _ = clip(tmp_path, "mp4v", ".mp4", frames=frames)
+    forced = [(i, f.copy()) for i, f in open_frames(path).frames(stride=stride, luma=choose)]
+    seen: list[int] = []
+
+    def chooser(head):
+        seen.append(len(head))
+        assert all(f.ndim == 3 for f in head)  # the chooser always judges colour frames
+        return choose
+
+    source = open_frames(path)
+    auto = [(i, f.copy()) for i, f in source.frames(stride=stride, prefetch=prefetch, luma=True,
+                                                    choose_luma=chooser, probe=8)]
+    assert seen == [min(8, frames)] and source.luma_chosen is choose
+    assert [i for i, _ in auto] == [i for i, _ in forced] == list(range(0, frames, stride))
+    assert all(np.array_equal(a, b) for (_, a), (_, b) in zip(auto, forced, strict=True))
+    assert source.frames_read == frames
+    assert source.levels == ((16.0, 235.0) if choose else (0.0, 255.0))
+
+
+def test_automatic_choice_is_not_asked_without_a_planar_luma(tmp_path):
+    path, _ = clip(tmp_path, "FFV1", ".mkv", frames=10)
+    asked = []
+    source = open_frames(path)
+    frames = list(source.frames(luma=True, prefetch=2, choose_luma=lambda head: asked.append(1) or True))
+    assert len(frames) == 10 and all(f.ndim == 3 for _, f in frames)
+    assert asked == [] and source.luma_chosen is None
