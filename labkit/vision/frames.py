@@ -23,6 +23,27 @@ HELD_FRAMES = 32  # luma planes decoded while the colour probe runs (~30 MB at 1
 PHOTO_SUFFIXES = {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp"}
 
 
+def read_strided(cap: cv2.VideoCapture, position: list[int], stride: int,
+                 reuse: bool) -> Iterator[tuple[int, np.ndarray]]:
+    """Yield ``(index, frame)`` for every ``stride``-th frame of ``cap`` from ``position[0]`` on,
+    only grabbing (not decoding) the frames between. ``position[0]`` always holds the index of
+    the next frame, also when the consumer stops early, so callers can report frames read.
+    With ``reuse`` the same buffer is decoded into each time: copy a frame to keep it."""
+    buf = None
+    while True:
+        index = position[0]
+        if index % stride:
+            if not cap.grab():
+                return
+        else:
+            ok, frame = cap.read(buf) if reuse else cap.read()
+            if not ok:
+                return
+            buf = frame if reuse else None
+            yield index, frame
+        position[0] = index + 1
+
+
 @dataclass
 class FrameSource:
     """An opened video or photo. Iterate :meth:`frames` once."""
@@ -74,7 +95,7 @@ class FrameSource:
         if luma and choose_luma is not None and self._cap.getBackendName() == "FFMPEG":
             yield from self._decode_auto(stride, reuse, choose_luma, probe)
             return
-        cap, index, buf = self._cap, 0, None
+        cap, position = self._cap, [0]
         luma = luma and self._luma_plane_available()
         level = cv2.utils.logging.getLogLevel()
         if luma:
@@ -82,22 +103,12 @@ class FrameSource:
             # FFMPEG warns on every unconverted planar-YUV frame; that is what we asked for
             cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
         try:
-            while True:
-                if index % stride:
-                    if not cap.grab():
-                        break
-                else:
-                    ok, frame = cap.read(buf) if reuse else cap.read()
-                    if not ok:
-                        break
-                    buf = frame if reuse else None
-                    yield index, frame
-                index += 1
+            yield from read_strided(cap, position, stride, reuse)
         finally:
             if luma:
                 cv2.utils.logging.setLogLevel(level)
             cap.release()
-            self.frames_read = index
+            self.frames_read = position[0]
 
     def _decode_auto(self, stride: int, reuse: bool, choose_luma: LumaChooser,
                      probe: int) -> Iterator[tuple[int, np.ndarray]]:
@@ -125,10 +136,11 @@ class FrameSource:
         judge_thread = threading.Thread(target=judge, name="labkit-frame-path", daemon=True)
         judge_thread.start()
         held: list[tuple[int, np.ndarray]] = []
-        index, buf, first = 0, None, None
+        position, first = [0], None
         try:
             try:
                 while judge_thread.is_alive() and len(held) < HELD_FRAMES:
+                    index = position[0]
                     if index % stride:
                         if not cap.grab():
                             break
@@ -144,7 +156,7 @@ class FrameSource:
                             if not verdict["plane"]:
                                 break
                         held.append((index, frame))
-                    index += 1
+                    position[0] = index + 1
             finally:
                 verdict.setdefault("plane", False)
                 plane_ok.set()
@@ -156,43 +168,23 @@ class FrameSource:
             if luma:
                 yield from held
                 held.clear()
-                while True:
-                    if index % stride:
-                        if not cap.grab():
-                            break
-                    else:
-                        ok, frame = cap.read(buf) if reuse else cap.read()
-                        if not ok:
-                            break
-                        buf = frame if reuse else None
-                        yield index, frame
-                    index += 1
+                yield from read_strided(cap, position, stride, reuse)
             else:
                 held.clear()
                 cap.release()
                 self.levels = (0.0, 255.0)
-                index = 0
-                for frame in head:
+                position[0] = 0
+                for index, frame in enumerate(head):
                     if index % stride == 0:
                         yield index, frame
-                    index += 1
+                    position[0] = index + 1
                 if len(head) == probe:
-                    while True:
-                        if index % stride:
-                            if not converted.grab():
-                                break
-                        else:
-                            ok, frame = converted.read(buf) if reuse else converted.read()
-                            if not ok:
-                                break
-                            buf = frame if reuse else None
-                            yield index, frame
-                        index += 1
+                    yield from read_strided(converted, position, stride, reuse)
         finally:
             cv2.utils.logging.setLogLevel(level)
             cap.release()
             converted.release()
-            self.frames_read = index
+            self.frames_read = position[0]
 
     def _set_levels(self, plane: np.ndarray, bgr: np.ndarray) -> None:
         """:attr:`levels` from a luma plane and the same frame converted to BGR: studio range
