@@ -11,6 +11,7 @@ point). Pure functions: no I/O.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field, replace
 
@@ -66,19 +67,40 @@ def _curve(c: complex, a: complex, b: complex, k: int, t: np.ndarray) -> np.ndar
     return c + a * np.exp(1j * t) + b * np.exp(1j * k * t)
 
 
-def _closest_parameters(z: np.ndarray, a: complex, b: complex, k: int, samples: int) -> np.ndarray:
-    """Parameter t of the closest point of the centred curve ``A e^{it} + B e^{ikt}`` to each z:
-    nearest of ``samples`` curve points, then two Newton steps on ``|z(t) - p|^2``."""
-    ts = np.linspace(0.0, 2 * math.pi, samples, endpoint=False)
-    curve = _curve(0j, a, b, k, ts)
-    tree = cKDTree(np.column_stack([curve.real, curve.imag]))
-    _, idx = tree.query(np.column_stack([z.real, z.imag]))
-    return _newton_parameters(z, a, b, k, ts[idx], 2)
+@dataclass
+class _Rows:
+    """Several fits of the same points advanced together (one row per start or candidate): complex
+    coefficients ``c, a, b, v`` and integer ``k``, each of shape (S,). Batching the rows turns
+    many small array operations into a few larger ones (the fit of a 250-point trace is
+    dominated by per-call overhead, not arithmetic)."""
+
+    k: np.ndarray
+    c: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    v: np.ndarray
+
+    def col(self, name: str) -> np.ndarray:
+        return getattr(self, name)[:, None]
 
 
-def _newton_parameters(z: np.ndarray, a: complex, b: complex, k: int, t: np.ndarray,
-                       steps: int) -> np.ndarray:
-    """Refine closest-point parameters by Newton steps on ``|A e^{it} + B e^{ikt} - z|^2``."""
+def _closest_parameters(z: np.ndarray, rows: _Rows, samples: np.ndarray) -> np.ndarray:
+    """Parameter t of the closest point of each row's centred curve ``A e^{it} + B e^{ikt}`` to
+    each of that row's z (S, N): nearest of ``samples`` curve points, then two Newton steps on
+    ``|z(t) - p|^2``."""
+    t = np.empty(z.shape)
+    for i in range(len(z)):
+        ts = np.linspace(0.0, 2 * math.pi, int(samples[i]), endpoint=False)
+        curve = _curve(0j, rows.a[i], rows.b[i], int(rows.k[i]), ts)
+        tree = cKDTree(np.column_stack([curve.real, curve.imag]))
+        _, idx = tree.query(np.column_stack([z[i].real, z[i].imag]))
+        t[i] = ts[idx]
+    return _newton_parameters(z, rows, t, 2)
+
+
+def _newton_parameters(z: np.ndarray, rows: _Rows, t: np.ndarray, steps: int) -> np.ndarray:
+    """Refine closest-point parameters (S, N) by Newton steps on ``|A e^{it} + B e^{ikt} - z|^2``."""
+    a, b, k = rows.col("a"), rows.col("b"), rows.col("k")
     for _ in range(steps):
         e1, ek = np.exp(1j * t), np.exp(1j * k * t)
         d = a * e1 + b * ek - z
@@ -95,17 +117,19 @@ PROBE_ITERATIONS = 4  # every start gets this many steps; only the best one is c
 TANGENTIAL_WEIGHT = 0.2  # share of the along-curve residual kept in the solve (stabilises it)
 
 
-def _solve_point_to_line(z: np.ndarray, sw: np.ndarray, tau: np.ndarray, k: int, a: complex, b: complex,
-                         t: np.ndarray, fit_drift: bool) -> np.ndarray:
-    """One linear solve for complex ``c, A, B (, v)`` with the curve parameters t fixed, minimising
-    the residual along each point's curve normal plus ``TANGENTIAL_WEIGHT`` times the residual
-    along the tangent (point-to-line ICP: it converges in a few steps where plain
-    point-to-point ICP slides slowly along the curve)."""
-    e1, ek = np.exp(1j * t), np.exp(1j * k * t)
-    tangent = 1j * (a * e1 + k * b * ek)
+def _solve_point_to_line(z: np.ndarray, sw: np.ndarray, tau: np.ndarray, rows: _Rows, t: np.ndarray,
+                         fit_drift: bool) -> np.ndarray:
+    """One linear solve per row for complex ``c, A, B (, v)`` (S, 3 or 4) with the curve parameters
+    t (S, N) fixed, minimising the residual along each point's curve normal plus
+    ``TANGENTIAL_WEIGHT`` times the residual along the tangent (point-to-line ICP: it converges in
+    a few steps where plain point-to-point ICP slides slowly along the curve)."""
+    e1, ek = np.exp(1j * t), np.exp(1j * rows.col("k") * t)
+    tangent = 1j * (rows.col("a") * e1 + rows.col("k") * rows.col("b") * ek)
     tangent = tangent / np.maximum(np.abs(tangent), 1e-12)
-    basis = [np.ones_like(z), e1, ek] + ([tau.astype(complex)] if fit_drift else [])
-    rows, rhs = [], []
+    basis = [np.ones_like(e1), e1, ek]
+    if fit_drift:
+        basis.append(np.broadcast_to(tau.astype(complex), e1.shape))
+    rows_m, rhs = [], []
     for direction, weight in ((1j * tangent, 1.0), (tangent, TANGENTIAL_WEIGHT)):
         # projection of (complex) x onto a unit direction d: Re(conj(d) x)
         proj = np.conj(direction)
@@ -113,46 +137,67 @@ def _solve_point_to_line(z: np.ndarray, sw: np.ndarray, tau: np.ndarray, k: int,
         for g in basis:  # unknown u = ur + i ui contributes Re(proj g) ur - Im(proj g) ui
             pg = proj * g
             cols += [pg.real, -pg.imag]
-        rows.append(np.column_stack(cols) * (sw * weight)[:, None])
+        rows_m.append(np.stack(cols, axis=-1) * (sw * weight)[None, :, None])
         rhs.append((proj * z).real * sw * weight)
-    m, y = np.vstack(rows), np.concatenate(rhs)
+    m, y = np.concatenate(rows_m, axis=1), np.concatenate(rhs, axis=-1)
+    mt = np.swapaxes(m, 1, 2)
     try:
-        x = np.linalg.solve(m.T @ m, m.T @ y)
+        x = np.linalg.solve(mt @ m, (mt @ y[:, :, None]))[:, :, 0]
     except np.linalg.LinAlgError:
-        x, *_ = np.linalg.lstsq(m, y, rcond=None)
-    return x[0::2] + 1j * x[1::2]
+        x = np.stack([np.linalg.lstsq(m[i], y[i], rcond=None)[0] for i in range(len(m))])
+    return x[:, 0::2] + 1j * x[:, 1::2]
+
+
+def _icp_rows(z: np.ndarray, w: np.ndarray, tau: np.ndarray, rows: _Rows, iterations: int, fit_drift: bool,
+              samples: np.ndarray) -> tuple[_Rows, np.ndarray]:
+    """Point-to-line ICP of every row on the same points; returns the rows and their weighted rms
+    residuals (inf for a degenerate trochoid whose second term dominates: a circle traced |k|
+    times). Stops early once every row has stopped moving."""
+    sw = np.sqrt(w)
+    trochoid = rows.k != -1
+    t = None
+
+    def centred() -> np.ndarray:
+        return z[None, :] - rows.col("c") - rows.col("v") * tau[None, :]
+
+    for it in range(iterations):
+        if it % 6 == 0:
+            t = _closest_parameters(centred(), rows, samples)
+        else:
+            t = _newton_parameters(centred(), rows, t, 2)
+        sol = _solve_point_to_line(z[None, :], sw, tau, rows, t, fit_drift)
+        c, a, b = sol[:, 0], sol[:, 1], sol[:, 2]
+        v = sol[:, 3] if fit_drift else np.zeros_like(c)
+        too_big = trochoid & (np.abs(b) > MAX_TROCHOID_B * np.abs(a))  # stay in the trochoid family
+        b = np.where(too_big, b * MAX_TROCHOID_B * np.abs(a) / np.maximum(np.abs(b), 1e-300), b)
+        moved = np.abs(c - rows.c) + np.abs(a - rows.a) + np.abs(b - rows.b)
+        rows = _Rows(rows.k, c, a, b, v)
+        if it % 6 == 5 and bool(np.all(moved < 1e-3)):
+            break
+    if t is None or iterations < 3:
+        t = _closest_parameters(centred(), rows, samples)
+    else:  # warm: the last parameters are close, a Newton refinement is enough
+        t = _newton_parameters(centred(), rows, t, 2)
+    curve = rows.col("c") + rows.col("a") * np.exp(1j * t) + rows.col("b") * np.exp(1j * rows.col("k") * t)
+    r = np.abs(curve + rows.col("v") * tau[None, :] - z[None, :])
+    rms = np.sqrt(np.sum(w * r * r, axis=1) / np.sum(w))
+    degenerate = trochoid & ~(np.abs(rows.b) < 0.999 * MAX_TROCHOID_B * np.abs(rows.a))
+    return rows, np.where(degenerate, math.inf, rms)
+
+
+def _curve_fit(rows: _Rows, rms: np.ndarray, i: int) -> CurveFit:
+    """Row ``i`` as a :class:`CurveFit` with its canonical pattern."""
+    k, c, a, b = int(rows.k[i]), complex(rows.c[i]), complex(rows.a[i]), complex(rows.b[i])
+    pattern = ellipse_from_coefficients(c, a, b) if k == -1 else trochoid_from_coefficients(c, a, b, k)
+    return CurveFit(k, c, a, b, complex(rows.v[i]), float(rms[i]), pattern)
 
 
 def _icp(z: np.ndarray, w: np.ndarray, tau: np.ndarray, k: int, c: complex, a: complex, b: complex,
          iterations: int, fit_drift: bool, samples: int, v: complex = 0j) -> CurveFit:
-    sw = np.sqrt(w)
-    t = None
-    for it in range(iterations):
-        if it % 6 == 0:
-            t = _closest_parameters(z - c - v * tau, a, b, k, samples)
-        else:
-            t = _newton_parameters(z - c - v * tau, a, b, k, t, 2)
-        sol = _solve_point_to_line(z, sw, tau, k, a, b, t, fit_drift)
-        new = (sol[0], sol[1], sol[2], sol[3] if fit_drift else 0j)
-        if k != -1 and abs(new[2]) > MAX_TROCHOID_B * abs(new[1]):  # stay in the trochoid family
-            new = (new[0], new[1], new[2] * MAX_TROCHOID_B * abs(new[1]) / abs(new[2]), new[3])
-        moved = abs(new[0] - c) + abs(new[1] - a) + abs(new[2] - b)
-        c, a, b, v = new
-        if moved < 1e-3 and it % 6 == 5:
-            break
-    if t is None or iterations < 3:
-        t = _closest_parameters(z - c - v * tau, a, b, k, samples)
-    else:  # warm: the last parameters are close, a Newton refinement is enough
-        t = _newton_parameters(z - c - v * tau, a, b, k, t, 2)
-    r = np.abs(_curve(c, a, b, k, t) + v * tau - z)
-    rms = float(np.sqrt(np.sum(w * r * r) / np.sum(w)))
-    if k != -1 and not abs(b) < 0.999 * MAX_TROCHOID_B * abs(a):
-        rms = math.inf  # degenerate: the second term dominates (a circle traced |k| times)
-    if k == -1:
-        pattern = ellipse_from_coefficients(c, a, b)
-    else:
-        pattern = trochoid_from_coefficients(c, a, b, k)
-    return CurveFit(k, c, a, b, v, rms, pattern)
+    """ICP of one curve (:func:`_icp_rows` with one row)."""
+    rows = _Rows(np.array([k]), np.array([c], complex), np.array([a], complex), np.array([b], complex),
+                 np.array([v], complex))
+    return _curve_fit(*_icp_rows(z, w, tau, rows, iterations, fit_drift, np.array([samples])), 0)
 
 
 def _ellipse_start(z: np.ndarray) -> tuple[complex, complex, complex]:
@@ -168,11 +213,24 @@ def _ellipse_start(z: np.ndarray) -> tuple[complex, complex, complex]:
     return complex(cx, cy), e * (major + minor) / 2, e * (major - minor) / 2
 
 
-def _arc_uniform_canonical(b: float, k: int, n: int = 4096) -> np.ndarray:
+@functools.lru_cache(maxsize=256)
+def _canonical_moments(b: float, k: int, n: int = 4096) -> tuple[complex, float, complex]:
+    """Centroid, rms radius and m-fold angular moment (see :func:`_trochoid_starts`) of the
+    canonical trochoid ``e^{it} + b e^{ikt}`` sampled uniformly in arc length; they depend only
+    on ``b`` and ``k``, so every trace reuses them."""
     t = np.linspace(0, 2 * math.pi, n, endpoint=False)
     zc = _curve(0j, 1.0, b, k, t)
     speed = np.abs(1j * np.exp(1j * t) + 1j * k * b * np.exp(1j * k * t))
-    return zc, speed
+    m = abs(k - 1)
+    cen_c = complex(np.sum(speed * zc) / np.sum(speed))
+    dc = zc - cen_c
+    rms_c = math.sqrt(float(np.sum(speed * np.abs(dc) ** 2) / np.sum(speed)))
+    mom_c = complex(np.sum(speed * np.abs(dc) ** _moment_power(m) * np.exp(-1j * m * np.angle(dc))))
+    return cen_c, rms_c, mom_c
+
+
+def _moment_power(m: int) -> int:
+    return 2 if m == 1 else 1  # with r^1 the m = 1 moment vanishes at the centroid
 
 
 def _trochoid_starts(z: np.ndarray, w: np.ndarray, k: int, bs: tuple[float, ...]):
@@ -183,14 +241,9 @@ def _trochoid_starts(z: np.ndarray, w: np.ndarray, k: int, bs: tuple[float, ...]
     d = z - cen
     rms = math.sqrt(float(np.sum(w * np.abs(d) ** 2) / np.sum(w)))
     m = abs(k - 1)
-    power = 2 if m == 1 else 1  # with r^1 the m = 1 moment vanishes at the centroid
-    mom = np.sum(w * np.abs(d) ** power * np.exp(-1j * m * np.angle(d)))
+    mom = np.sum(w * np.abs(d) ** _moment_power(m) * np.exp(-1j * m * np.angle(d)))
     for b in bs:
-        zc, speed = _arc_uniform_canonical(b, k)
-        cen_c = complex(np.sum(speed * zc) / np.sum(speed))
-        dc = zc - cen_c
-        rms_c = math.sqrt(float(np.sum(speed * np.abs(dc) ** 2) / np.sum(speed)))
-        mom_c = np.sum(speed * np.abs(dc) ** power * np.exp(-1j * m * np.angle(dc)))
+        cen_c, rms_c, mom_c = _canonical_moments(float(b), int(k))
         s = rms / rms_c
         rho = (np.angle(mom_c) - np.angle(mom)) / m if abs(mom) > 0 else 0.0
         # a limacon (m = 1) has no symmetry to lock on to: try four quadrants; otherwise the
@@ -213,17 +266,31 @@ def fit_trochoid(points: np.ndarray, kind: str, loops: int, weights: np.ndarray 
                  b_starts: tuple[float, ...] = (0.15, 0.45, 0.9)) -> CurveFit:
     """Fit an epitrochoid or hypotrochoid (Eq. 6.38) with ``loops`` loops: a few steps from each
     start (:func:`_trochoid_starts`), then the best one to ``iterations`` steps."""
+    return fit_trochoids(points, [k_for(kind, loops)], weights, times, iterations, b_starts)[0]
+
+
+def fit_trochoids(points: np.ndarray, ks: list[int], weights: np.ndarray | None = None,
+                  times: np.ndarray | None = None, iterations: int = 30,
+                  b_starts: tuple[float, ...] = (0.15, 0.45, 0.9)) -> list[CurveFit]:
+    """:func:`fit_trochoid` for several frequency ratios ``ks`` (:func:`labkit.vision.curves.k_for`)
+    at once, one fit per k: every start of every k is probed for ``PROBE_ITERATIONS`` steps in one
+    batch, then each k's best start is carried on to ``iterations`` steps in a second batch."""
     z, w, tau = _prepare(points, weights, times)
-    k = k_for(kind, loops)
-    samples = 200 * abs(k)
     drift = times is not None
-    probes = [_icp(z, w, tau, k, c, a, b, PROBE_ITERATIONS, drift, samples)
-              for c, a, b in _trochoid_starts(z, w, k, b_starts)]
-    best = min(probes, key=lambda f: f.rms_residual)
-    if not math.isfinite(best.rms_residual):  # every start degenerated; keep the least bad
-        best = min(probes, key=lambda f: abs(f.b) / max(abs(f.a), 1e-12))
-    return _icp(z, w, tau, k, best.c, best.a, best.b, max(0, iterations - PROBE_ITERATIONS), drift, samples,
-                best.drift)
+    starts = [(k, c, a, b) for k in ks for c, a, b in _trochoid_starts(z, w, k, b_starts)]
+    k_col, c, a, b = (np.array(col) for col in zip(*starts, strict=True))
+    probes = _Rows(k_col, c, a, b, np.zeros(len(starts), complex))
+    probes, rms = _icp_rows(z, w, tau, probes, PROBE_ITERATIONS, drift, 200 * np.abs(k_col))
+    chosen = []
+    for k in ks:
+        mine = np.flatnonzero(k_col == k)
+        if np.isfinite(rms[mine]).any():
+            chosen.append(mine[np.argmin(rms[mine])])
+        else:  # every start degenerated; keep the least bad
+            chosen.append(mine[np.argmin(np.abs(probes.b[mine]) / np.maximum(np.abs(probes.a[mine]), 1e-12))])
+    best = _Rows(*(getattr(probes, name)[chosen] for name in ("k", "c", "a", "b", "v")))
+    rows, rms = _icp_rows(z, w, tau, best, max(0, iterations - PROBE_ITERATIONS), drift, 200 * np.abs(best.k))
+    return [_curve_fit(rows, rms, i) for i in range(len(ks))]
 
 
 def _prepare(points, weights, times):
@@ -280,13 +347,10 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
         f = prior.best
         shortlist = [] if f.k == -1 else [replace(f, c=f.c + f.drift * (t_ref - prior.t_ref))]
     else:
-        screened: list[CurveFit] = []
-        for kind, first in (("epitrochoid", 2), ("hypotrochoid", 3)):
-            for loops in trochoid_loops:
-                if loops < first:
-                    continue
-                screened.append(fit_trochoid(screen[0], kind, loops, screen[1], screen[2], iterations=10))
-        screened.sort(key=lambda f: f.rms_residual)
+        ks = [k_for(kind, loops) for kind, first in (("epitrochoid", 2), ("hypotrochoid", 3))
+              for loops in trochoid_loops if loops >= first]
+        screened = sorted(fit_trochoids(screen[0], ks, screen[1], screen[2], iterations=10),
+                          key=lambda f: f.rms_residual)
         for f in screened:
             residuals[_name(f)] = f.rms_residual
         shortlist = [f for f in screened[:2] if math.isfinite(f.rms_residual)]
