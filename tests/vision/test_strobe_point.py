@@ -14,8 +14,8 @@ from labkit.synth.strobe import body_coverage
 from labkit.vision.curves import a_for_k, k_for
 from labkit.vision.strobe import analyse_strobe, phase_pattern
 
-# Bounds for point_pattern on the seeded clips. Measured over seeds 20-85 (easy/medium/hard):
-# centre error <= 0.03 px easy, 0.17 px medium, 0.40 px hard (rolling shutter and a 60-level
+# Bounds for point_pattern on the seeded clips. Measured over 7 seeds per level (20-82):
+# centre error <= 0.04 px easy, 0.18 px medium, 0.40 px hard (rolling shutter and a 60-level
 # gradient); semi-major error <= 0.85 %, mostly the motion blur, which shrinks the trajectory by
 # sin(b/2)/(b/2) (0.4 % at b = 0.3 rad). A body drawn or measured 0.7 px too long (what an
 # anti-aliased fillPoly did) moved the tip's centre by 0.6-1.1 px and its semi-major by 2-2.7 %:
