@@ -41,14 +41,18 @@ def background(gray: np.ndarray, frame_px: int | None = None) -> np.ndarray:
     disc of ~1/10 of the image size on a 4x reduced copy removes every bright structure narrower
     than that (trace lines, their halo, small loops) and keeps broad light and the dark hole."""
     h, w = gray.shape
-    sw, sh = max(1, w // 4), max(1, h // 4)
+    # OpenCV reduces by exactly 4 several times faster than by 4.006: pad to a multiple of 4
+    pad_h, pad_w = -h % 4, -w % 4
+    if pad_h or pad_w:
+        gray = cv2.copyMakeBorder(gray, 0, pad_h, 0, pad_w, cv2.BORDER_REPLICATE)
+    sw, sh = gray.shape[1] // 4, gray.shape[0] // 4
     small = cv2.resize(gray, (sw, sh), interpolation=cv2.INTER_AREA)
     k = max(3, int(0.1 * (frame_px or max(h, w)) / 4) | 1)
     k = min(k, max(3, (min(sw, sh) - 1) | 1))
     disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
     opened = cv2.morphologyEx(small, cv2.MORPH_OPEN, disc, borderType=cv2.BORDER_REPLICATE)
     opened = cv2.blur(opened, (max(1, k // 2), max(1, k // 2)))
-    return cv2.resize(opened, (w, h), interpolation=cv2.INTER_LINEAR).astype(np.float32)
+    return cv2.resize(opened, (4 * sw, 4 * sh), interpolation=cv2.INTER_LINEAR)[:h, :w].astype(np.float32)
 
 
 def robust_noise(residual: np.ndarray) -> float:
@@ -118,28 +122,53 @@ def _centreline(mask: np.ndarray, res: np.ndarray, offset: tuple[int, int], subp
     m8 = mask.astype(np.uint8)
     dist = cv2.distanceTransform(m8, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
     ridge = (dist >= cv2.dilate(dist, np.ones((3, 3), np.uint8)) - 0.35) & (dist > 0)
-    ys, xs = np.nonzero(ridge)
+    ys, xs = _nonzero(ridge)
     if len(xs) == 0:
         return TracePoints(np.zeros((0, 2)), np.zeros(0), peak, noise)
     x, y = xs.astype(float), ys.astype(float)
     weights = np.ones(len(xs))
     if subpixel:
         half = int(np.clip(np.median(dist[ys, xs]), 1, 12))
-        k = 2 * half + 1
-        wimg = np.where(mask, res, 0).astype(np.float32)
-        h, w = res.shape
-        gx, gy = np.meshgrid(np.arange(w, dtype=np.float32), np.arange(h, dtype=np.float32))
-        s0 = cv2.boxFilter(wimg, -1, (k, k), normalize=False)[ys, xs]
-        sx = cv2.boxFilter(wimg * gx, -1, (k, k), normalize=False)[ys, xs]
-        sy = cv2.boxFilter(wimg * gy, -1, (k, k), normalize=False)[ys, xs]
-        ok = s0 > 0
-        x[ok], y[ok] = sx[ok] / s0[ok], sy[ok] / s0[ok]
+        x, y = _window_centroids(np.where(mask, res, 0).astype(np.float32), xs, ys, half)
         weights = np.clip(res[ys, xs], 1e-3, None).astype(float)
     pts = np.column_stack([x + offset[0], y + offset[1]])
-    bys, bxs = np.nonzero(mask)
+    bys, bxs = _nonzero(mask)
     band = np.column_stack([bxs + offset[0], bys + offset[1]]).astype(float)
     band_w = np.clip(res[bys, bxs], 1e-3, None).astype(float) if subpixel else np.ones(len(bxs))
     return TracePoints(pts, weights, peak, noise, band, band_w)
+
+
+def _nonzero(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.nonzero`` of a boolean image (rows, columns in row-major order) through OpenCV, which
+    scans a sparse mask several times faster."""
+    found = cv2.findNonZero(mask.view(np.uint8))
+    if found is None:
+        return np.zeros(0, np.intp), np.zeros(0, np.intp)
+    found = found.reshape(-1, 2)
+    return found[:, 1].astype(np.intp), found[:, 0].astype(np.intp)
+
+
+def _window_centroids(weights: np.ndarray, xs: np.ndarray, ys: np.ndarray,
+                      half: int) -> tuple[np.ndarray, np.ndarray]:
+    """Intensity centroid of the ``(2 half + 1)^2`` window of ``weights`` around each pixel
+    ``(xs, ys)``; light outside the image counts as none, and a pixel whose window holds no light
+    keeps its own position. Row sums of every window come from two horizontal box filters; only
+    the asked-for windows add their rows up (the trace is a thin curve in its bounding box)."""
+    k = 2 * half + 1
+    columns = np.arange(weights.shape[1], dtype=np.float32)[None, :]
+    row_sum = cv2.boxFilter(weights, -1, (k, 1), normalize=False, borderType=cv2.BORDER_CONSTANT)
+    row_moment = cv2.boxFilter(weights * columns, -1, (k, 1), normalize=False, borderType=cv2.BORDER_CONSTANT)
+    rows = ys[:, None] + np.arange(-half, half + 1)[None, :]
+    inside = (rows >= 0) & (rows < weights.shape[0])
+    rows_in, cols = np.clip(rows, 0, weights.shape[0] - 1), xs[:, None]
+    r0 = np.where(inside, row_sum[rows_in, cols], 0.0)
+    s0 = r0.sum(axis=1)
+    sx = np.where(inside, row_moment[rows_in, cols], 0.0).sum(axis=1)
+    sy = (r0 * rows).sum(axis=1)
+    ok = s0 > 0
+    x, y = xs.astype(float), ys.astype(float)
+    x[ok], y[ok] = sx[ok] / s0[ok], sy[ok] / s0[ok]
+    return x, y
 
 
 @dataclass
