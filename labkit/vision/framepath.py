@@ -37,11 +37,24 @@ class FramePathChoice:
 
     luma: bool
     cnr_luma: float
-    cnr_colour: float
+    cnr_colour: float | None  # None: luma was ample on its own, colour was not measured
 
     def to_quality(self) -> dict:
+        colour = None if self.cnr_colour is None else round(self.cnr_colour, 2)
         return {"frame_path": "luma" if self.luma else "colour", "cnr_luma": round(self.cnr_luma, 2),
-                "cnr_colour": round(self.cnr_colour, 2)}
+                "cnr_colour": colour}
+
+
+def luma_plane_cnr(planes: list[np.ndarray], roi: tuple[int, int, int, int] | None = None,
+                   frame_px: int | None = None) -> float:
+    """CNR of the per-pixel maximum of the decoder's luma planes (inside ``roi``). The planes
+    are what the luma path analyses, and a CNR is a ratio, so studio-range planes (16-235) score
+    like full-range grey up to rounding."""
+    x, y, w, h = roi if roi is not None else (0, 0, planes[0].shape[1], planes[0].shape[0])
+    luma_max = planes[0][y:y + h, x:x + w].copy()
+    for plane in planes[1:]:
+        cv2.max(luma_max, plane[y:y + h, x:x + w], dst=luma_max)
+    return contrast_to_noise(luma_max, frame_px)
 
 
 def measure_frame_path(frames: list[np.ndarray], roi: tuple[int, int, int, int] | None = None,

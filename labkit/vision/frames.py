@@ -113,29 +113,48 @@ class FrameSource:
     def _decode_auto(self, stride: int, reuse: bool, choose_luma: LumaChooser,
                      probe: int) -> Iterator[tuple[int, np.ndarray]]:
         """Luma or colour chosen by ``choose_luma``, without waiting for it: the main reader
-        decodes the luma plane at once while a converting reader decodes the first ``probe`` BGR
-        frames and ``choose_luma`` judges them in a thread (OpenCV releases the GIL). Luma planes
-        decoded meanwhile are held back (at most ``HELD_FRAMES``) and yielded if luma is chosen;
-        otherwise (colour chosen, or no planar luma from this codec) they are dropped and the
-        converting reader, already ``probe`` frames in, carries on as the colour source."""
+        decodes the luma plane at once while a converting reader decodes BGR frames and a judge
+        thread decides (OpenCV releases the GIL). If ``choose_luma`` has a ``luma_is_ample``
+        method, the judge first gives it the first ``probe`` luma planes the main reader has
+        decoded anyway: when they carry the trace clearly, luma is chosen after one BGR frame
+        (needed for the planes' grey levels). Otherwise the converting reader decodes the first
+        ``probe`` BGR frames for ``choose_luma``. Luma planes decoded meanwhile are held back (at
+        most ``HELD_FRAMES``) and yielded if luma is chosen; otherwise (colour chosen, or no
+        planar luma from this codec) they are dropped and the converting reader, already some
+        frames in, carries on as the colour source."""
         cap, converted = self._cap, cv2.VideoCapture(self.path, cv2.CAP_FFMPEG)
         head: list[np.ndarray] = []
-        plane_ok = threading.Event()
+        held: list[tuple[int, np.ndarray]] = []
+        plane_ok, planes_ready = threading.Event(), threading.Event()
         verdict: dict[str, bool] = {}
+        ample = getattr(choose_luma, "luma_is_ample", None)
+
+        def read_head(n: int) -> None:
+            while len(head) < n:
+                ok, frame = converted.read()
+                if not ok:
+                    verdict["converted_ended"] = True
+                    return
+                head.append(frame)
 
         def judge() -> None:
-            while len(head) < probe and (more := converted.read())[0]:
-                head.append(more[1])
+            read_head(1 if ample is not None else probe)
             plane_ok.wait()
-            if verdict["plane"] and head:
-                verdict["luma"] = bool(choose_luma(head))
+            if not (verdict["plane"] and head):
+                return
+            if ample is not None:
+                planes_ready.wait()
+                if ample([frame for _, frame in held[:probe]]):
+                    verdict["luma"] = True
+                    return
+                read_head(probe)
+            verdict["luma"] = bool(choose_luma(head))
 
         level = cv2.utils.logging.getLogLevel()
         cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)  # unconverted YUV warnings
         cap.set(cv2.CAP_PROP_CONVERT_RGB, 0)
         judge_thread = threading.Thread(target=judge, name="labkit-frame-path", daemon=True)
         judge_thread.start()
-        held: list[tuple[int, np.ndarray]] = []
         position, first = [0], None
         try:
             try:
@@ -156,10 +175,13 @@ class FrameSource:
                             if not verdict["plane"]:
                                 break
                         held.append((index, frame))
+                        if len(held) == probe:
+                            planes_ready.set()
                     position[0] = index + 1
             finally:
                 verdict.setdefault("plane", False)
                 plane_ok.set()
+                planes_ready.set()
                 judge_thread.join()
             luma = verdict["plane"] and verdict.get("luma", False)
             if verdict["plane"] and head:
@@ -178,7 +200,7 @@ class FrameSource:
                     if index % stride == 0:
                         yield index, frame
                     position[0] = index + 1
-                if len(head) == probe:
+                if not verdict.get("converted_ended"):
                     yield from read_strided(converted, position, stride, reuse)
         finally:
             cv2.utils.logging.setLogLevel(level)

@@ -22,7 +22,13 @@ import numpy as np
 from labkit.errors import VideoError
 from labkit.vision.curves import a_for_k
 from labkit.vision.fit import MIN_POINTS, Classification, classify, pattern_kind
-from labkit.vision.framepath import PROBE_FRAMES, FramePathChoice, measure_frame_path
+from labkit.vision.framepath import (
+    AMPLE_LUMA_CNR,
+    PROBE_FRAMES,
+    FramePathChoice,
+    luma_plane_cnr,
+    measure_frame_path,
+)
 from labkit.vision.frames import FrameSource, open_frames
 from labkit.vision.trace import TracePoints, trace_points
 
@@ -81,11 +87,20 @@ def chunk_length(source: FrameSource, quality: LaserQuality) -> int:
 
 
 class FramePathProbe:
-    """The ``choose_luma`` callback of automatic frame-path choice: keeps the measurement."""
+    """The ``choose_luma`` callback of automatic frame-path choice: keeps the measurement.
+    :meth:`luma_is_ample` judges the first luma planes; only if it says no are the first
+    frames decoded in colour as well and judged by the full rule (:meth:`__call__`)."""
 
     def __init__(self, roi: tuple[int, int, int, int] | None, frame_px: int) -> None:
         self.roi, self.frame_px = roi, frame_px
         self.choice: FramePathChoice | None = None
+
+    def luma_is_ample(self, planes: list[np.ndarray]) -> bool:
+        cnr = luma_plane_cnr(planes, self.roi, self.frame_px)
+        if cnr < AMPLE_LUMA_CNR:
+            return False
+        self.choice = FramePathChoice(True, cnr, None)
+        return True
 
     def __call__(self, frames: list[np.ndarray]) -> bool:
         self.choice = measure_frame_path(frames, self.roi, self.frame_px)

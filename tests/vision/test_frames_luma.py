@@ -119,3 +119,42 @@ def test_automatic_choice_is_not_asked_without_a_planar_luma(tmp_path):
     frames = list(source.frames(luma=True, prefetch=2, choose_luma=lambda head: asked.append(1) or True))
     assert len(frames) == 10 and all(f.ndim == 3 for _, f in frames)
     assert asked == [] and source.luma_chosen is None
+
+
+class PlaneFirstChooser:
+    """A chooser that judges the luma planes first (like the laser analysis's probe)."""
+
+    def __init__(self, ample: bool, choose: bool) -> None:
+        self.ample, self.choose = ample, choose
+        self.planes_seen: list[int] = []
+        self.colour_seen: list[int] = []
+
+    def luma_is_ample(self, planes):
+        assert all(p.ndim == 2 for p in planes)  # the decoder's own planes, no colour decoded
+        self.planes_seen.append(len(planes))
+        return self.ample
+
+    def __call__(self, head):
+        assert all(f.ndim == 3 for f in head)
+        self.colour_seen.append(len(head))
+        return self.choose
+
+
+@pytest.mark.parametrize("ample,choose", [(True, False), (False, True), (False, False)])
+@pytest.mark.parametrize("frames,stride", [(40, 1), (40, 3), (5, 1)])
+def test_planes_judged_first_decide_alone_when_ample(tmp_path, ample, choose, frames, stride):
+    """Ample planes choose luma without any colour judgement; otherwise the colour frames are
+    judged as before. Either way the frames are exactly the forced path's."""
+    path, _ = clip(tmp_path, "mp4v", ".mp4", frames=frames)
+    luma = ample or choose
+    forced = [(i, f.copy()) for i, f in open_frames(path).frames(stride=stride, luma=luma)]
+    chooser = PlaneFirstChooser(ample, choose)
+    source = open_frames(path)
+    auto = [(i, f.copy()) for i, f in source.frames(stride=stride, prefetch=2, luma=True,
+                                                    choose_luma=chooser, probe=8)]
+    assert chooser.planes_seen == [min(8, len(range(0, frames, stride)))]
+    assert chooser.colour_seen == ([] if ample else [min(8, frames)])
+    assert source.luma_chosen is luma
+    assert [i for i, _ in auto] == [i for i, _ in forced] == list(range(0, frames, stride))
+    assert all(np.array_equal(a, b) for (_, a), (_, b) in zip(auto, forced, strict=True))
+    assert source.frames_read == frames
