@@ -237,10 +237,16 @@ def _none(reason: str) -> dict:
 
 
 def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | None,
-                 band: tuple | None = None, prior: Classification | None = None) -> tuple[dict, dict]:
-    """Classify and fit a trace; returns the JSON ``pattern`` object and fit diagnostics."""
+                 band: tuple | None = None, prior: Classification | None = None,
+                 centre_time: float | None = None) -> tuple[dict, dict]:
+    """Classify and fit a trace; returns the JSON ``pattern`` object and fit diagnostics. With
+    ``times``, the fitted centre drifts; it is reported at ``centre_time`` (s, e.g. the middle of
+    the recording), or at the mean time of the points fitted."""
     cls = classify(points, weights, times, band=band, prior=prior)
     best, ell = cls.best, cls.ellipse.pattern
+    centre = best.c
+    if times is not None and centre_time is not None:
+        centre += best.drift * (centre_time - cls.t_ref)
     major, minor = ell.semi_axes
     kind = pattern_kind(cls.best)
     p = best.pattern
@@ -254,12 +260,13 @@ def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | No
     else:
         axes, ellipticity = [major, minor], (1 - minor / major if major > 0 else 0.0)
         rotation, loops = math.degrees(ell.rotation_rad), 1
-    pattern = {"type": kind, "center_px": [float(p.center[0]), float(p.center[1])], "semi_axes_px": axes,
+    pattern = {"type": kind, "center_px": [float(centre.real), float(centre.imag)], "semi_axes_px": axes,
                "rotation_deg": rotation, "ellipticity": ellipticity,
                "loops": loops, "trochoid": trochoid, "rms_residual_px": best.rms_residual}
     residuals = {k: (v if math.isfinite(v) else None) for k, v in cls.residuals.items()}
+    coverage = {k: (v if math.isfinite(v) else None) for k, v in cls.coverage.items()}
     diag = {"drift_px_s": [float(best.drift.real), float(best.drift.imag)],
-            "candidate_residuals_px": residuals}
+            "candidate_residuals_px": residuals, "candidate_coverage_px": coverage}
     return pattern, diag
 
 
@@ -345,7 +352,8 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
         drift = len(chunks) > 1 and fps
         if band is not None and not drift:
             band = (band[0], band[1], None)
-        pattern, diag = pattern_dict(points, weights, times if drift else None, band, preliminary)
+        middle = (source.frames_read - 1) / (2 * fps) if fps else None
+        pattern, diag = pattern_dict(points, weights, times if drift else None, band, preliminary, middle)
         qual.update(diag)
         tilt = None
         if screen_distance_mm and mm_per_px:

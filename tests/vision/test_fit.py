@@ -6,7 +6,15 @@ import numpy as np
 import pytest
 
 from labkit.vision.curves import Pattern, rotation_error_deg
-from labkit.vision.fit import classify, fit_ellipse, pattern_kind
+from labkit.vision.fit import (
+    classify,
+    coverage_rms,
+    fit_ellipse,
+    fit_trochoid,
+    pattern_kind,
+    two_way_rms,
+    without_outliers,
+)
 
 
 def cloud(pattern, n=2500, noise=1.0, seed=0):
@@ -68,3 +76,33 @@ def test_a_prior_that_explains_the_whole_trace_is_kept():
     best = classify(cloud(truth, seed=2), prior=prior).best
     assert pattern_kind(best) == "epitrochoid" and best.pattern.loops == 5
     assert "epitrochoid-5 (first part)" in classify(cloud(truth, seed=2), prior=prior).residuals
+
+
+def test_coverage_tells_a_curve_with_extra_loops_from_the_right_one():
+    """A 7-loop epitrochoid fitted to a 4-loop trace passes near the light (its residual is
+    small), but most of its length runs over dark screen: its coverage is tens of px, the true
+    curve's is at the noise level."""
+    truth = Pattern("epitrochoid", (640.4, 360.7), 0.3, scale=166.0, b=0.3, loops=4)
+    pts = cloud(truth, noise=1.0)
+    z = pts[:, 0] + 1j * pts[:, 1]
+    right, wrong = fit_trochoid(pts, "epitrochoid", 4), fit_trochoid(pts, "epitrochoid", 7)
+    no_drift = np.zeros(len(z))
+    assert coverage_rms(right, z, no_drift) < 2.0
+    assert coverage_rms(wrong, z, no_drift) > 10 * coverage_rms(right, z, no_drift)
+    assert two_way_rms(right.rms_residual, coverage_rms(right, z, no_drift)) < two_way_rms(
+        wrong.rms_residual, coverage_rms(wrong, z, no_drift))
+
+
+def test_a_last_refit_without_outliers_removes_their_pull():
+    """5 % specks scattered inside an ellipse (compression ringing, halo blobs) pull a least-squares
+    fit; the refit without points beyond 3 robust sigmas recovers centre and axes."""
+    truth = Pattern("ellipse", (200.0, 150.0), math.radians(30), (90.0, 60.0))
+    rng = np.random.default_rng(3)
+    specks = np.column_stack([rng.uniform(150, 215, 150), rng.uniform(120, 180, 150)])
+    pts = np.vstack([cloud(truth, n=3000, noise=0.7), specks])
+    pulled = fit_ellipse(pts)
+    clean = without_outliers(pulled, pts)
+    error = math.dist(clean.pattern.center, truth.center)
+    assert error < 0.1 < math.dist(pulled.pattern.center, truth.center)
+    assert clean.pattern.semi_axes == pytest.approx((90, 60), rel=0.005)
+    assert clean.rms_residual == pytest.approx(0.7, rel=0.15)  # the noise across the curve
