@@ -327,8 +327,8 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
     pattern can pass as close to the light as the right one (hard 720p footage: a 4-loop
     epitrochoid read as 7 loops with b = 0.85, 3.1 px residual against 3.5 px, but 47 px of
     coverage against 6 px).
-    ``band`` (points, weights, times): every trace pixel; the ellipse is polished on it, because a
-    thinned centre line ends half a line width short of the sharp tips of a flat ellipse.
+    ``band`` (points, weights, times): every trace pixel; an ellipse that wins is polished on it,
+    because a thinned centre line ends half a line width short of the sharp tips of a flat ellipse.
     ``prior``: a classification of part of the same trace (e.g. the first half of a video, done
     while the rest was decoding); its choice is kept and only refined, with no new screening,
     unless the refined choice fits the whole trace much worse than it fitted the part (a part that
@@ -344,16 +344,6 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
     full = take(_subsample(len(pts), max_points))
     screen = take(_subsample(len(pts), screen_points, seed=1))
     ellipse = fit_ellipse(*full)
-    if band is not None and len(band[0]) >= MIN_POINTS:
-        idx = _subsample(len(band[0]), 2 * max_points, seed=2)
-        subset = [None if a is None else np.asarray(a)[idx] for a in band]
-        polished = without_outliers(polish(ellipse, *subset), *subset)
-        # centres refer to the mean time of the points fitted: the band's, here; move to the centre
-        # line's, then take the residual on the centre line, comparable with the trochoids'
-        shift = polished.drift * (_mean_time(full[2]) - _mean_time(subset[2]))
-        z, w_, tau = _prepare(*full)
-        ellipse = _icp(z, w_, tau, -1, polished.c + shift, polished.a, polished.b, 0, False, 1440,
-                       polished.drift)
     t_ref = _mean_time(full[2])
     residuals = {"ellipse": ellipse.rms_residual}
     coverage: dict[str, float] = {}
@@ -377,15 +367,38 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
         fit = _icp(z, w_, tau, f.k, f.c, f.a, f.b, 20, full[2] is not None, 200 * abs(f.k), f.drift)
         residuals[_name(fit)], coverage[_name(fit)] = fit.rms_residual, coverage_rms(fit, z, tau)
         refined.append(fit)
-    best = ellipse
-    if refined:
-        trochoid = min(refined, key=lambda f: two_way_rms(f.rms_residual, coverage[_name(f)]))
-        if trochoid_beats(trochoid.rms_residual, abs(trochoid.b), ellipse.rms_residual):
-            best = without_outliers(trochoid, *full)
+    trochoid = min(refined, key=lambda f: two_way_rms(f.rms_residual, coverage[_name(f)]), default=None)
+
+    def trochoid_wins() -> bool:
+        return trochoid is not None and trochoid_beats(trochoid.rms_residual, abs(trochoid.b),
+                                                       ellipse.rms_residual)
+
+    beats = trochoid_wins()
+    if not beats and band is not None and len(band[0]) >= MIN_POINTS:
+        # the ellipse looks like the answer: polish it on the band and judge again (polishing
+        # only raises its residual on the centre line, so a trochoid that beat the unpolished
+        # ellipse would beat the polished one too: that work is skipped for trochoids)
+        ellipse = _polished_on_band(ellipse, band, full, 2 * max_points)
+        residuals["ellipse"] = ellipse.rms_residual
+        beats = trochoid_wins()
+    best = without_outliers(trochoid, *full) if beats else ellipse
     if prior is not None and not (
             best.rms_residual <= PRIOR_RMS_FACTOR * prior.best.rms_residual + PRIOR_RMS_SLACK_PX):
         return classify(points, weights, times, max_points, screen_points, trochoid_loops, band)
     return Classification(best, ellipse, residuals, t_ref, coverage)
+
+
+def _polished_on_band(ellipse: CurveFit, band: tuple, full: tuple, max_points: int) -> CurveFit:
+    """The ellipse refitted on (up to ``max_points`` of) every trace pixel ``band`` without its
+    outliers, with its residual taken on the centre-line points ``full`` (comparable with the
+    trochoids'). Centres refer to the mean time of the points fitted, so the band fit's centre is
+    moved to the centre line's."""
+    idx = _subsample(len(band[0]), max_points, seed=2)
+    subset = [None if a is None else np.asarray(a)[idx] for a in band]
+    polished = without_outliers(polish(ellipse, *subset), *subset)
+    shift = polished.drift * (_mean_time(full[2]) - _mean_time(subset[2]))
+    z, w, tau = _prepare(*full)
+    return _icp(z, w, tau, -1, polished.c + shift, polished.a, polished.b, 0, False, 1440, polished.drift)
 
 
 OUTLIER_SIGMAS = 3.0  # a last refit leaves out points this many robust sigmas off the curve

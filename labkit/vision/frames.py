@@ -217,15 +217,12 @@ class FrameSource:
         errors = [float(np.mean(np.abs(y - (lo + gray * (hi - lo) / 255.0)))) for lo, hi in ranges]
         self.levels = ranges[int(np.argmin(errors))]
 
-    def _luma_plane_available(self, head: list[np.ndarray] | None = None, head_n: int = 1) -> bool:
+    def _luma_plane_available(self) -> bool:
         """Whether this file's decoder hands out a planar luma plane (H, W) when conversion is off,
         checked on the first frame (packed or RGB pixel formats fail it). Also sets
-        :attr:`levels` from that frame: studio range (16, 235) or full range (0, 255), whichever
-        maps the converted frame's luma onto the plane better. The converting reader also puts
-        the first ``head_n`` BGR frames into ``head`` (the colour probe of automatic choice: the
-        main reader's output format is fixed by its first frame, and switching
-        CAP_PROP_CONVERT_RGB mid-stream yields packed BGR bytes in a luma-shaped array, so the
-        probe needs a reader of its own: ``head_n`` extra decodes)."""
+        :attr:`levels` from that frame (:meth:`_set_levels`). A reader of its own decodes the
+        first frame in colour: the main reader's output format is fixed by its first frame, and
+        switching CAP_PROP_CONVERT_RGB mid-stream yields packed BGR bytes in a luma-shaped array."""
         if self._cap is None or self._cap.getBackendName() != "FFMPEG":
             return False
         level = cv2.utils.logging.getLogLevel()
@@ -236,10 +233,6 @@ class FrameSource:
             plane.set(cv2.CAP_PROP_CONVERT_RGB, 0)
             ok, first = plane.read()
             ok_bgr, bgr = converted.read()
-            if head is not None and ok_bgr:
-                head.append(bgr)
-                while len(head) < head_n and (more := converted.read())[0]:
-                    head.append(more[1])
         finally:
             plane.release()
             converted.release()
@@ -247,11 +240,7 @@ class FrameSource:
         w, h = self.size
         if not (ok and ok_bgr and first.shape == (h, w) and first.dtype == np.uint8):
             return False
-        y = first[::4, ::4].astype(np.float32)
-        gray = cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY)[::4, ::4].astype(np.float32)
-        ranges = [(0.0, 255.0), (16.0, 235.0)]
-        errors = [float(np.mean(np.abs(y - (lo + gray * (hi - lo) / 255.0)))) for lo, hi in ranges]
-        self.levels = ranges[int(np.argmin(errors))]
+        self._set_levels(first, bgr)
         return True
 
     def _prefetched(self, stride: int, depth: int, luma: bool = False, choose_luma: LumaChooser | None = None,

@@ -193,11 +193,15 @@ def _touches(points: np.ndarray, inner: tuple[float, float, float, float], edge:
                 or (edge[2] and x.max() > inner[2]) or (edge[3] and y.max() > inner[3]))
 
 
-def _check_exposure(chunks: list[Chunk], name: str, black_white: tuple[float, float] = (0.0, 255.0)) -> None:
-    """Refuse all-black or all-white footage; ``black_white``: the frames' black and white levels
-    (16, 235 for a studio-range luma plane), mapped to 0-255 first."""
-    counts = sum(np.bincount(c.image.ravel()[:: max(1, c.image.size // 200000)], minlength=256)
-                 for c in chunks)
+def grey_histogram(image: np.ndarray) -> np.ndarray:
+    """256-bin histogram of about 200 000 evenly spaced samples of an accumulated chunk."""
+    return np.bincount(image.ravel()[:: max(1, image.size // 200000)], minlength=256)
+
+
+def _check_exposure(counts: np.ndarray, name: str, black_white: tuple[float, float] = (0.0, 255.0)) -> None:
+    """Refuse all-black or all-white footage from the chunks' summed :func:`grey_histogram`;
+    ``black_white``: the frames' black and white levels (16, 235 for a studio-range luma plane),
+    mapped to 0-255 first."""
     black, white = black_white
 
     def level(grey: float) -> float:
@@ -319,12 +323,14 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
     expected = math.ceil(source.frame_count / per_chunk) if source.frame_count > 0 else 0
     with ThreadPoolExecutor(max_workers=1) as pool:  # trace extraction overlaps decoding
         futures: dict[int, Future] = {}
+        histograms: list[Future] = []
         tracker = TraceTracker(max(source.size), quality.subpixel)  # one worker: chunks in order
         done: list[Chunk] = []
         prior: dict[str, Future] = {}
 
         def extract(c: Chunk) -> None:
             futures[id(c)] = pool.submit(tracker.extract, c)
+            histograms.append(pool.submit(grey_histogram, c.image))
             done.append(c)
             if expected >= 4 and len(done) == expected // 2:
                 # classify the first half while the second half decodes; the end only refines
@@ -334,7 +340,7 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
                                max(source.size))
         chunks = accumulate(source, quality, on_frame, on_chunk=extract, probe=probe)
         t_frames = time.perf_counter()
-        _check_exposure(chunks, source.path, source.levels)
+        _check_exposure(sum(h.result() for h in histograms), source.path, source.levels)
         traces = [futures[id(c)].result() for c in chunks]
         preliminary = prior["fit"].result() if "fit" in prior else None
     points, weights, times, band, peak, noise = gather(chunks, traces, fps)
