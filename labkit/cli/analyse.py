@@ -50,8 +50,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     laser.add_argument("--no-subpixel", action="store_true", help="skip sub-pixel refinement")
     laser.add_argument("--chunk-s", type=float, default=0.5,
                        help="seconds of video per accumulation chunk: time resolution of drift (default 0.5)")
-    laser.add_argument("--max-chunks", type=int, default=16,
-                       help="at most this many chunks; long clips get longer ones (default 16)")
+    laser.add_argument("--max-chunks", type=int, default=12,  # LaserQuality.max_chunks (not imported here)
+                       help="at most this many chunks; long clips get longer ones (default 12)")
     path = laser.add_mutually_exclusive_group()
     path.add_argument("--colour-frames", action="store_true",
                       help="force the brightest colour channel of BGR frames (default: chosen per clip "

@@ -363,10 +363,13 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
         shortlist = [f for f in screened[:2] if math.isfinite(f.rms_residual)]
     z, w_, tau = _prepare(*full)
     refined = []
-    for f in shortlist:
-        fit = _icp(z, w_, tau, f.k, f.c, f.a, f.b, 20, full[2] is not None, 200 * abs(f.k), f.drift)
+    if shortlist:  # refined together: one batch of ICP steps for both
+        names = ("k", "c", "a", "b", "drift")
+        rows = _Rows(*(np.array([getattr(f, name) for f in shortlist]) for name in names))
+        rows, rms = _icp_rows(z, w_, tau, rows, 20, full[2] is not None, 200 * np.abs(rows.k))
+        refined = [_curve_fit(rows, rms, i) for i in range(len(shortlist))]
+    for fit in refined:
         residuals[_name(fit)], coverage[_name(fit)] = fit.rms_residual, coverage_rms(fit, z, tau)
-        refined.append(fit)
     trochoid = min(refined, key=lambda f: two_way_rms(f.rms_residual, coverage[_name(f)]), default=None)
 
     def trochoid_wins() -> bool:

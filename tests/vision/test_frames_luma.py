@@ -82,6 +82,7 @@ def test_cli_frame_path_options_are_recorded(capsys, tmp_path):
         out = capsys.readouterr().out
         result = json.loads(out[out.index("{"):])
         assert result["quality"]["settings"]["luma"] is luma
+        assert result["quality"]["settings"]["max_chunks"] == LaserQuality().max_chunks  # CLI default
         assert result["quality"]["frame_path"] == frame_path
         assert math.dist(result["pattern"]["center_px"], truth["pattern"]["center_px"]) < 1.0
 
