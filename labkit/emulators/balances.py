@@ -18,7 +18,8 @@ Fault knobs besides the common ones (PROTOCOLS 5.2): ``overload`` / ``underload`
 (probability per weight reply), ``unstable`` (probability a reply is forced dynamic),
 ``error_reply`` (probability a command gets ``EL`` / ``EC,E02``), ``reset_at`` (s after
 open: power-on junk, ``I4`` line on MT-SICS, zero and tare lost), ``mid_frame`` (the first
-streamed line starts mid-line), ``wrong_baud`` (garbles both directions). Host bytes that
+streamed line starts mid-line), ``wrong_baud`` (garbles both directions), ``stop_at`` (HX711:
+s after open at which the sketch stops printing). Host bytes that
 are not printable ASCII get ``ET`` / ``EC,E00``; unknown commands ``ES`` / ``EC,E01``.
 """
 
@@ -456,6 +457,9 @@ class AndStdEmulator(BalanceEmulator):
 
 
 HX711_BAUD = {"hx711_adc": 57600, "bogde": 38400, "bare_float": 115200}
+#: the HX711's 24-bit two's complement rails (datasheet: output saturates there) and the
+#: emulated bridge's zero offset in counts
+ADC_MAX, ADC_MIN, ADC_ZERO = 0x7FFFFF, -0x800000, 81234
 
 
 @register_emulator
@@ -463,6 +467,13 @@ class Hx711SketchEmulator(BalanceEmulator):
     """An Arduino + HX711 running a third-party sketch (``preset``): boot banner, then one
     value line per conversion at ``rate_hz`` (10 SPS), ``t`` tares. With ``unit=raw`` it
     prints ADC counts (``calibration`` counts/g) that saturate at 0x7FFFFF / -0x800000.
+
+    The ADC saturates in every mode: a load beyond the rail (about 19.8 kg at the default
+    ``calibration`` of 420 counts/g; 4e6 counts/g puts it at 2.1 g) makes a calibrated
+    sketch print the rail's constant value, as the real libraries do (no overload marker).
+    Faults: ``overload`` (probability per line that the ADC sits at its positive rail),
+    ``reset_at`` (the sketch reboots: banner again, tare at start-up with the load on the
+    cell), ``stop_at`` (s after open: the sketch stops printing, the port stays open).
     """
 
     protocol = "hx711"
@@ -486,8 +497,14 @@ class Hx711SketchEmulator(BalanceEmulator):
         if self.preset == "hx711_adc":
             self._queue(b"\r\nStarting...\r\n", t + 0.01)
             self._queue(b"Startup is complete\r\n", self._stream_from)
-        elif self.preset == "bogde":
-            self._queue(b"HX711 Demo\r\nInitializing the scale\r\n", t + 0.01)
+        elif self.preset == "bogde":  # HX711_full_example's setup(): numbers that are no weights
+            raw = int(round(self.to_unit(self.signal.last.gross_n) * self.calibration)) + ADC_ZERO
+            self._queue(b"HX711 Demo\r\nInitializing the scale\r\nBefore setting up the scale:\r\n"
+                        b"read: \t\t%d\r\nread average: \t\t%d\r\n" % (raw, raw), t + 0.01)
+            self._queue(b"After setting up the scale:\r\nget units: \t\t0.0\r\nReadings:\r\n",
+                        self._stream_from - 0.01)
+        else:  # a minimal sketch: one line of text, then bare numbers
+            self._queue(b"\r\nHX711 scale ready\r\n", t + 0.01)
 
     def on_tick(self, tick: Tick) -> None:
         if not self.streaming and tick.t >= self._stream_from:
@@ -510,15 +527,21 @@ class Hx711SketchEmulator(BalanceEmulator):
         return "S", self.to_unit(tick.gross_n - self.zero_n - self.tare_n)
 
     def stream_line(self, tick: Tick) -> None:
+        stop = self.faults.get("stop_at")
+        if stop is not None and self.since_open(tick.t) >= stop:
+            return  # switched off / cable pulled at the sketch's end: nothing more
         _, grams = self.weigh(tick)
         assert grams is not None
+        counts = int(round(grams * self.calibration)) + ADC_ZERO
+        saturated = not ADC_MIN < counts < ADC_MAX
+        counts = max(ADC_MIN, min(ADC_MAX, counts))
+        if self._chance("overload"):
+            counts, saturated = ADC_MAX, True
         if self.unit == "raw":
-            counts = int(round(grams * self.calibration)) + 81234
-            counts = max(-0x800000, min(0x7FFFFF, counts))
-            if self._chance("overload"):
-                counts = 0x7FFFFF
             number = str(counts)
         else:
+            if saturated:  # the sketch converts the railed code like any other
+                grams = (counts - ADC_ZERO) / self.calibration
             number = f"{grams:.{self.decimals}f}"
         if self.preset == "hx711_adc":
             line = f"Load_cell output val: {number}"

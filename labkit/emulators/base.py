@@ -43,6 +43,8 @@ PROTOCOL_FAULTS = {
     "unstable": "balances: probability a reply is forced dynamic",
     "error_reply": "balances, labkit-tach: probability a command gets an error reply",
     "reset_at": "s after open of a device reset (power-on state)",
+    "stop_at": "streaming devices: s after open at which the output stops (meter switched off, "
+               "cable pulled at the meter); the port stays open",
     "mid_frame": "the first bytes after open are the tail of a frame/line",
     "noisy": "labkit-tach: probability per line of a rejected glitch",
     "low_vin": "Pololu SMC: low-VIN error",

@@ -8,7 +8,21 @@ skipped, never read as numbers. Values become SI with ``(value - offset) * scale
 ``unit`` (``g``, ``kg``, ``N``... or ``raw`` for uncalibrated ADC counts).
 
 The sketches stream continuously; the driver reads the next line that arrives after the
-call. They report no stability: a reading is flagged stable only when ``stable_std`` is
+call.
+
+Overload: the HX711 saturates at its rails, 0x7FFFFF / -0x800000 counts (datasheet); the
+public sketches of the presets print no overload marker of their own. A printed rail code
+is overload whatever the calibration; a calibrated sketch prints a constant number beyond
+the cell's range instead, which only ``capacity`` (the cell's rated load, in the printed
+unit) can catch. Overload readings have value NaN, ``overload=True``, ``stable=False``.
+
+Reset: an Arduino that reboots (brown-out, watchdog, USB re-enumeration) prints its boot
+banner again and tares itself at start-up with whatever load is on the cell. Banner lines
+(``boot_pattern``, per preset) are never read as weights; one that follows a value line
+counts as a device reset (``resets_seen``) and the next reading carries the flags
+``device_reset`` and ``tare_lost``: its zero is the load at the reboot, not the user's.
+
+The sketches report no stability: a reading is flagged stable only when ``stable_std`` is
 set and the last ``stable_window`` values spread less than it; otherwise stable is True
 with the flag ``stability_unknown``.
 """
@@ -47,17 +61,22 @@ class Preset:
     unit: str = "g"
     tare_command: str = "t"
     tare_reply: str | None = None   # regex of the line confirming a tare (None: none sent)
+    boot_pattern: str | None = None  # regex found in the sketch's boot banner lines
 
 
 PRESETS: dict[str, Preset] = {
     # olkal/HX711_ADC example Read_1x_load_cell: "Load_cell output val: 12.34"
     "hx711_adc": Preset(rf"Load_cell output val:\s*(?P<value>{FLOAT})", 57600, "g", "t",
-                        r"Tare complete"),
+                        r"Tare complete",
+                        r"Starting\.\.\.|Startup is complete|Timeout, check MCU>HX711 wiring"),
     # bogde/HX711 examples: "one reading:\t1.23\t| average:\t1.25" or "Reading: 1.23 g"
     "bogde": Preset(rf"(?:one reading:\s*{FLOAT}\s*\|\s*average:\s*(?P<value>{FLOAT}))"
-                    rf"|(?:Reading:\s*(?P<value2>{FLOAT})\s*(?P<unit>[A-Za-z]+)?)", 38400, "g", "t", None),
-    # sketches that print one bare number per line
-    "bare_float": Preset(rf"\s*(?P<value>{FLOAT})\s*", 115200, "g", "t", None),
+                    rf"|(?:Reading:\s*(?P<value2>{FLOAT})\s*(?P<unit>[A-Za-z]+)?)", 38400, "g", "t", None,
+                    r"HX711 Demo|Initializing the scale|(?:Before|After) setting up the scale:"),
+    # sketches that print one bare number per line; their banner (if any) is text: a
+    # printable line with a word of 4+ letters (not Arduino's "nan"/"inf"/"ovf")
+    "bare_float": Preset(rf"\s*(?P<value>{FLOAT})\s*", 115200, "g", "t", None,
+                         r"^[ -~\t]*[A-Za-z]{4,}[ -~\t]*$"),
 }
 
 
@@ -107,6 +126,27 @@ def parse_value_line(line: bytes, pattern: re.Pattern[str]) -> LineValue:
     return LineValue(value, groups.get("unit"))
 
 
+def compile_boot_pattern(pattern: str | None) -> re.Pattern[str] | None:
+    """Compile a banner pattern; ``None`` or ``""`` means the sketch has no known banner."""
+    if not pattern:
+        return None
+    try:
+        return re.compile(pattern)
+    except re.error as exc:
+        raise ValueError(f"boot_pattern {pattern!r}: {exc}") from None
+
+
+def is_boot_line(line: bytes, boot: re.Pattern[str] | None) -> bool:
+    """True when ``line`` is part of the sketch's boot banner (``boot`` found in it).
+
+    Pure; bytes outside ASCII are read as Latin-1, so power-on junk glued to a banner line
+    does not hide it. ``boot=None`` (no banner known) is never a boot line.
+    """
+    if boot is None:
+        return False
+    return boot.search(line.rstrip(b"\r\n").decode("latin-1")) is not None
+
+
 def format_value_line(preset: str, value: float, decimals: int = 2) -> bytes:
     """A line as the preset's sketch prints it (for tests and documentation)."""
     number = f"{value:.{decimals}f}"
@@ -133,11 +173,16 @@ class LineRegexBalance(ContinuousMixin, LinkTailMixin, Balance):
     calibration: ``g`` default, ``kg``, ``N``, or ``raw``), ``scale`` (1), ``offset`` (0),
     ``capacity`` (in ``unit``; beyond it a reading is overload), ``tare_command`` (``t``),
     ``tare_reply`` (regex), ``tare_settle_s`` (1.5, wait after a tare the
-    sketch does not confirm), ``stable_std`` and ``stable_window`` (8), ``eol`` (``"CRLF"``).
+    sketch does not confirm), ``stable_std`` and ``stable_window`` (8), ``eol`` (``"CRLF"``),
+    ``boot_pattern`` (regex of the sketch's banner lines; ``""``: none).
+
+    ``resets_seen`` counts banners that followed a value line (the device rebooted during
+    use); the first reading after one is flagged ``device_reset`` and ``tare_lost``.
     """
 
     protocol = "line_regex"
-    option_names = frozenset({"capacity", "eol", "offset", "pattern", "preset", "scale", "stable_std",
+    option_names = frozenset({"boot_pattern", "capacity", "eol", "offset", "pattern", "preset", "scale",
+                              "stable_std",
                               "stable_window", "tare_command", "tare_reply", "tare_settle_s", "unit"})
     default_serial = {"baudrate": 57600, "bytesize": 8, "parity": "N", "stopbits": 1}
 
@@ -158,6 +203,11 @@ class LineRegexBalance(ContinuousMixin, LinkTailMixin, Balance):
         reply = options.get("tare_reply", preset.tare_reply)
         self.tare_reply = re.compile(str(reply)) if reply else None
         self.tare_settle_s = float(options.get("tare_settle_s", 1.5))
+        boot = options.get("boot_pattern", preset.boot_pattern)
+        self.boot_pattern = compile_boot_pattern(str(boot) if boot is not None else None)
+        self.resets_seen = 0
+        self._booting = True        # banner lines before the first value: the boot we opened into
+        self._reset_pending = False
         stable_std = options.get("stable_std")
         self.stable_std = float(stable_std) if stable_std is not None else None
         self.window: deque[float] = deque(maxlen=int(options.get("stable_window", 8)))
@@ -165,7 +215,7 @@ class LineRegexBalance(ContinuousMixin, LinkTailMixin, Balance):
         eol = eol_bytes(str(options.get("eol", "CRLF")))
         self.read_eol = b"\r" if eol == b"\r" else b"\n"
         self.link = LineLink(port, clock, self.name, expected_serial=self.serial_expected,
-                             write_eol=eol, read_eol=self.read_eol)
+                             write_eol=eol, read_eol=self.read_eol, on_unsolicited=self._unsolicited)
         if self.unit != "raw":
             try:
                 to_si(1.0, self.unit)
@@ -178,10 +228,45 @@ class LineRegexBalance(ContinuousMixin, LinkTailMixin, Balance):
         preset = PRESETS.get(str(options.get("preset", "hx711_adc")), PRESETS["hx711_adc"])
         return dict(cls.default_serial, baudrate=preset.baudrate)
 
+    def _is_boot(self, line: bytes) -> bool:
+        """A banner line, and not the sketch's tare confirmation."""
+        if not is_boot_line(line, self.boot_pattern):
+            return False
+        return self.tare_reply is None or not self.tare_reply.search(line.decode("latin-1"))
+
     def _accept(self, line: bytes) -> LineValue | None:
-        return parse_value_line(line, self.pattern)
+        try:
+            return parse_value_line(line, self.pattern)
+        except FrameError:
+            if self._is_boot(line):
+                return None  # a valid line, not a value: the link hands it to _unsolicited
+            raise
+
+    # ---- device reset: the boot banner again -----------------------------------------------
+    def _unsolicited(self, _t: float, line: bytes) -> None:
+        """Lines that are not the awaited value (banner, stale values dropped before a read)."""
+        if self._is_boot(line):
+            self._note_boot_line()
+        else:
+            try:
+                parse_value_line(line, self.pattern)
+            except FrameError:
+                return
+            self._booting = False
+
+    def _note_boot_line(self) -> None:
+        if not self._booting:  # a banner after values: the sketch rebooted and re-tared
+            self.resets_seen += 1
+            self._reset_pending = True
+            self.window.clear()
+        self._booting = True
 
     def _reading(self, t: float, line: bytes, parsed: LineValue) -> Reading:
+        self._booting = False
+        flags: set[str] = set()
+        if self._reset_pending:
+            self._reset_pending = False
+            flags |= {"device_reset", "tare_lost"}
         shown = (parsed.value - self.offset) * self.scale
         unit = parsed.unit or self.unit
         # a printed saturation code is overload whatever the calibration (PROTOCOLS 1.4)
@@ -194,11 +279,10 @@ class LineRegexBalance(ContinuousMixin, LinkTailMixin, Balance):
                 quantity, value, si_unit = to_si(shown, unit)
             except UnitError as exc:
                 raise DeviceReplyError(self.name, "stream", line, str(exc)) from None
-        flags: set[str] = set()
         if overload:
             self.window.clear()
             return Reading(t, quantity, float("nan"), si_unit, stable=False, overload=True,
-                           raw=line, device=self.name, flags=frozenset({"overload"}))
+                           raw=line, device=self.name, flags=frozenset(flags | {"overload"}))
         self.window.append(value)
         if self.stable_std is None:
             stable = True
@@ -223,7 +307,11 @@ class LineRegexBalance(ContinuousMixin, LinkTailMixin, Balance):
         pass
 
     def _stream_reading(self, t: float, line: bytes) -> Reading | None:
-        return self._reading(t, line, parse_value_line(line, self.pattern))
+        parsed = self._accept(line)
+        if parsed is None:
+            self._note_boot_line()
+            return None
+        return self._reading(t, line, parsed)
 
     def identify(self) -> dict[str, Any]:
         """Sketches do not identify themselves: the preset and pattern in use."""
@@ -252,8 +340,7 @@ class LineRegexBalance(ContinuousMixin, LinkTailMixin, Balance):
             if rx is not None:
                 text = line.decode("ascii", "replace")
                 return True if rx.search(text) else None
-            parse_value_line(line, self.pattern)
-            return True
+            return True if self._accept(line) is not None else None
 
         self.link.send(self.tare_command)
         if rx is None:  # no confirmation line: give the sketch its averaging time
