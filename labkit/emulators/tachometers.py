@@ -14,6 +14,8 @@ Fault knobs besides the common ones of :mod:`labkit.emulators.base` (PROTOCOLS 5
 * ``reset_at`` - labkit-tach: clock time (s after open) of a device reset (banner, seq 0,
   settings back to defaults).
 * ``wrong_baud`` - also garbles what the device sends (the host reads at the wrong rate).
+* ``stop_at`` - s after open at which the device stops sending (meter switched off, cable
+  pulled at the meter end): no more bytes, but the port stays open and ``in_waiting`` works.
 """
 
 from __future__ import annotations
@@ -74,6 +76,15 @@ class _StreamingTachEmulator(Emulator):
             self._next_t = when + 1.0 / self.rate_hz
             if data:
                 self.send(data, when)
+
+    def stopped(self, t: float) -> bool:
+        """True once the ``stop_at`` fault has silenced the device (its port stays open)."""
+        stop = self.faults.get("stop_at")
+        return stop is not None and self._opened_at is not None and self.since_open(t) >= stop
+
+    def _queue(self, data: bytes, ready: float) -> None:
+        if not self.stopped(ready):  # switched off: neither frames nor replies
+            super()._queue(data, ready)
 
     def send(self, data: bytes, when: float) -> None:
         if self.faults.get("mid_frame") and not self._started_mid_frame:

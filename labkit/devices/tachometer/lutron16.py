@@ -26,6 +26,7 @@ from typing import Any
 
 from labkit.devices.base import Reading, register_driver, register_parser_benchmark
 from labkit.devices.tachometer.streaming import StreamingTachometer
+from labkit.errors import DeviceTimeout
 from labkit.units import rpm_to_rad_s
 
 STX = 0x02
@@ -98,8 +99,10 @@ class Lutron16Framer:
         self.buffer = bytearray()
         self.max_buffer = max_buffer
         self.dropped = 0  # bytes thrown away while resyncing
+        self.bytes_seen = 0  # every byte fed, frames or not (tells "silent" from "garbage")
 
     def feed(self, data: bytes) -> list[bytes]:
+        self.bytes_seen += len(data)
         self.buffer += data
         frames: list[bytes] = []
         while True:
@@ -148,6 +151,35 @@ class Lutron16Tachometer(StreamingTachometer):
 
     def make_framer(self) -> Lutron16Framer:
         return Lutron16Framer()
+
+    def wait_reading(self, timeout: float = 2.0) -> Reading:
+        """The first reading received after this call; never an older (stale) one.
+
+        The meter only streams, so silence is the only sign that it was switched off or its
+        cable pulled at the meter end (the host's port stays open). After ``timeout`` s
+        without a new reading this raises :class:`~labkit.errors.DeviceTimeout` naming the
+        device, what it waited for, the last bytes seen and whether any bytes came at all.
+        """
+        framer = self.reader.framer
+        assert isinstance(framer, Lutron16Framer)
+        seen_before, rejected_before = framer.bytes_seen, self.frames_rejected
+        try:
+            return super().wait_reading(timeout)
+        except DeviceTimeout as exc:
+            last = self.latest()
+            ago = (f"last reading {self.clock.now() - last.t:.1f} s ago" if last is not None
+                   else "no reading since open")
+            if framer.bytes_seen == seen_before:
+                why = ("the meter sent nothing: switched off, its RS-232 output off, "
+                       "or the cable pulled at the meter")
+            elif self.frames_rejected > rejected_before:
+                why = ("only frames this driver refuses (other display or unit; "
+                       "check the display/rpm_code options)")
+            else:
+                why = "only bytes that are no 16-byte frame; check baud rate (9600 8N1)"
+            raise DeviceTimeout(self.name, "stream", exc.last_bytes,
+                                f"no reading in {timeout} s, waiting for a 16-byte frame "
+                                f"of display {self.display}: {why}; {ago}") from None
 
     def parse_frame(self, t: float, frame: bytes) -> Reading | None:
         decoded = parse_lutron16(frame)
