@@ -16,7 +16,7 @@ from labkit.io.clock import RealClock, VirtualClock, use_clock
 from labkit.io.pty_host import PtyHost
 
 CASSETTES = Path(__file__).resolve().parents[1] / "recordings" / "cassettes"
-KEYS = {"t", "value", "unit", "stable", "overload", "raw"}
+KEYS = {"t", "value", "unit", "stable", "overload", "flags", "raw"}
 
 
 @pytest.fixture(autouse=True)
@@ -129,3 +129,16 @@ def test_probe_continuous_reads_the_sir_stream(capsys):
     times = [json.loads(line)["t"] for line in out]
     gaps = [b - a for a, b in zip(times[1:], times[2:], strict=False)]  # the first line answers SIR
     assert gaps == pytest.approx([0.05] * 4, abs=0.006)  # then the emulated balance streams at 20 Hz
+
+
+def test_probe_shows_a_device_reset_in_the_reading_flags(capsys):
+    """An HX711 sketch that reboots mid-session prints its banner again and re-tares: the next
+    reading says so (``flags``), once."""
+    code, out, err = probe(capsys, "balance", "--protocol", "line_regex", "-o", "preset=bogde",
+                           "--port", "sim://hx711?preset=bogde&startup_s=0.1&faults=reset_at:1.5",
+                           "--samples", "40", "--json")
+    assert code == 0, err
+    flags = [set(json.loads(line)["flags"]) for line in out]
+    flagged = [i for i, f in enumerate(flags) if "device_reset" in f]
+    assert len(flagged) == 1 and "tare_lost" in flags[flagged[0]]
+    assert flagged[0] > 0 and all("stability_unknown" in f for f in flags)  # the sketch has no flag

@@ -40,9 +40,10 @@ class Reading:
     flags: frozenset[str] = field(default_factory=frozenset)
 
     def as_json(self) -> dict[str, Any]:
-        """The probe's JSON object: keys t, value, unit, stable, overload, raw (+ quantity).
+        """The probe's JSON object: keys t, value, unit, stable, overload, flags, raw (+ quantity).
 
-        A non-finite value (overload) is ``None`` so the object stays valid JSON."""
+        A non-finite value (overload) is ``None`` so the object stays valid JSON. ``flags`` lists
+        what the driver noticed besides the value (e.g. ``device_reset``, ``tare_lost``)."""
         return {
             "t": self.t,
             "quantity": self.quantity,
@@ -50,6 +51,7 @@ class Reading:
             "unit": self.unit,
             "stable": self.stable,
             "overload": self.overload,
+            "flags": sorted(self.flags),
             "raw": self.raw.decode("latin-1"),
         }
 
