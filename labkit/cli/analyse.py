@@ -4,6 +4,9 @@ Prints a short summary; ``--json OUT`` writes the full result (``-`` for stdout)
 success, 1 when a usable file holds no trace (pattern "none", with the reason), 2 for unusable
 input (missing, unreadable, truncated to nothing, all black or white, no body).
 ``--rerun SPEC`` is handed to ``labkit.stream.vision.open_vision_stream`` when that module exists.
+``--speed-rpm`` (rotor speed while filming) and ``--spin-rad-s`` (floator spin) are recorded as
+top-level ``rotor_speed_rpm`` and ``spin_rad_s`` (null when not given), so that ``labkit fit
+*.json --model cone-angle`` can fit cone angle against speed (Eq. 5.24, Eq. 5.68 with spin).
 """
 
 from __future__ import annotations
@@ -32,6 +35,24 @@ def _positive(text: str) -> float:
     return v
 
 
+def _finite(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text}") from None
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"must be a finite number, got {text}")
+    return v
+
+
+def _add_speed_arguments(parser: argparse.ArgumentParser, rotor_hz_note: str = "") -> None:
+    parser.add_argument("--speed-rpm", type=_positive, metavar="RPM",
+                        help="rotor speed while filming (tachometer), recorded as rotor_speed_rpm for "
+                             "`labkit fit --model cone-angle`" + rotor_hz_note)
+    parser.add_argument("--spin-rad-s", type=_finite, metavar="W",
+                        help="floator spin while filming, recorded as spin_rad_s (Eq. 5.68 uses it)")
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     parser = sub.add_parser(
         "analyse",
@@ -58,6 +79,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                            "from the trace's contrast-to-noise in luma and in colour on the first frames)")
     path.add_argument("--luma", action="store_true",
                       help="force the codec's luma plane (fastest; for benchmarks)")
+    _add_speed_arguments(laser)
     laser.add_argument("--json", metavar="OUT", help="write the result as JSON ('-' for stdout)")
     laser.add_argument("--rerun", metavar="SPEC", help="stream frames and overlays to rerun")
     laser.set_defaults(func=run_laser)
@@ -74,6 +96,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         default="tip",
         help="body point whose trajectory is classified (default tip)",
     )
+    _add_speed_arguments(strobe, " (default: 60 x --rotor-hz)")
     strobe.add_argument("--json", metavar="OUT", help="write the result as JSON ('-' for stdout)")
     strobe.add_argument("--rerun", metavar="SPEC", help="stream frames and overlays to rerun")
     strobe.set_defaults(func=run_strobe)
@@ -94,6 +117,25 @@ def open_stream(spec: str | None, kind: str):
         )
         return None
     return open_vision_stream(spec, kind)
+
+
+def record_speeds(result: dict, speed_rpm: float | None, spin_rad_s: float | None) -> dict:
+    """Add the top-level ``rotor_speed_rpm`` and ``spin_rad_s`` keys (None when not known) that
+    ``labkit.fit.data`` reads to put a clip's cone angle against its rotor speed (Eq. 5.24)."""
+    result["rotor_speed_rpm"] = speed_rpm
+    result["spin_rad_s"] = spin_rad_s
+    return result
+
+
+def _speed_line(r: dict) -> str | None:
+    if r.get("rotor_speed_rpm") is None and r.get("spin_rad_s") is None:
+        return None
+    parts = []
+    if r.get("rotor_speed_rpm") is not None:
+        parts.append(f"rotor speed {r['rotor_speed_rpm']:.6g} rpm")
+    if r.get("spin_rad_s") is not None:
+        parts.append(f"floator spin {r['spin_rad_s']:.6g} rad/s")
+    return "  ".join(parts)
 
 
 def _write_json(result: dict, out: str | None) -> None:
@@ -136,6 +178,7 @@ def run_laser(args: argparse.Namespace) -> int:
             )
         except ValueError as exc:
             raise VideoError(args.path, str(exc)) from None
+        record_speeds(result, args.speed_rpm, args.spin_rad_s)
         if stream:
             stream.result(result)
     finally:
@@ -179,6 +222,20 @@ def _print_laser(r: dict) -> None:
         )
     if r["quality"].get("truncated"):
         print(f"warning: {r['quality']['truncated']}")
+    if _speed_line(r):
+        print(_speed_line(r))
+
+
+def _strobe_speed_rpm(speed_rpm: float | None, rotor_hz: float | None) -> float | None:
+    """The tachometer's ``--speed-rpm``, else 60 x ``--rotor-hz``; warns when both disagree by > 1 %."""
+    if rotor_hz is None:
+        return speed_rpm
+    if speed_rpm is None:
+        return 60.0 * rotor_hz
+    if abs(speed_rpm / (60.0 * rotor_hz) - 1) > 0.01:
+        print(f"labkit analyse strobe: --speed-rpm {speed_rpm:g} differs from 60 x --rotor-hz = "
+              f"{60.0 * rotor_hz:g} rpm by more than 1 %; recording --speed-rpm", file=sys.stderr)
+    return speed_rpm
 
 
 def run_strobe(args: argparse.Namespace) -> int:
@@ -186,6 +243,7 @@ def run_strobe(args: argparse.Namespace) -> int:
 
     if (args.rotor_hz is None) != (args.strobe_hz is None):
         raise LabkitError("labkit analyse strobe: give --rotor-hz and --strobe-hz together")
+    speed_rpm = _strobe_speed_rpm(args.speed_rpm, args.rotor_hz)
     stream = open_stream(args.rerun, "strobe")
     try:
         result = analyse_strobe(
@@ -197,6 +255,7 @@ def run_strobe(args: argparse.Namespace) -> int:
             args.point,
             on_frame=stream.frame if stream else None,
         )
+        record_speeds(result, speed_rpm, args.spin_rad_s)
         if stream:
             stream.result(result)
     finally:
@@ -217,4 +276,6 @@ def run_strobe(args: argparse.Namespace) -> int:
             f"{r['rc_offset_direction'] or ''}"
         )
         print(f"{r['quality']['point']} trajectory: {r['point_pattern']['type']}")
+        if _speed_line(r):
+            print(_speed_line(r))
     return 0

@@ -1,4 +1,9 @@
-"""``labkit fit INPUT --model NAME``: fit a session, results JSON or CSV against the PFR model.
+"""``labkit fit INPUT... --model NAME``: fit a session, results JSON or CSV against the PFR model.
+
+Several inputs (files, folders, glob patterns) are joined row by row; ``labkit analyse
+laser|strobe --json`` files give one row each (cone angle against rotor speed, Eq. 5.24), so
+``labkit fit clips/*.json --model cone-angle --inertia I`` fits the clips of a speed series;
+``--table OUT.csv`` writes the collected rows.
 
 Prints values, standard errors, 95 % intervals and fit quality per series; ``--json OUT``
 writes ``{"model", "series": {NAME: {"params": {P: {"value", "stderr", "ci95"}}, "n",
@@ -14,7 +19,7 @@ import sys
 from pathlib import Path
 
 from labkit.errors import FitError
-from labkit.fit.data import load_table
+from labkit.fit.data import load_tables, write_table
 from labkit.fit.models import MODELS, PAPER_OMEGA_C
 from labkit.fit.table_fit import FitOptions, fit_table
 from labkit.fit.text import format_report
@@ -24,7 +29,9 @@ from labkit.stream.core import add_rerun_argument
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("fit", help="fit data against the PFR model (Eq. 5.24, 5.81, 5.85, 6.13, 6.37)",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("input", help="session directory, results JSON or CSV with a header row")
+    p.add_argument("input", nargs="+",
+                   help="session directory, results JSON, CSV with a header row, or `labkit analyse "
+                   "--json` files (several, a folder of them or a glob pattern: one row per clip)")
     p.add_argument("--model", required=True, choices=list(MODELS), help="model to fit")
     p.add_argument("--x", help="x column (default per model, see docs/fitting.md)")
     p.add_argument("--y", help="y column")
@@ -44,6 +51,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="exit with status 3 when any fit has a warning (for scripts and CI)")
     p.add_argument("--json", metavar="OUT", help="write the fit as JSON ('-' for stdout)")
     p.add_argument("--plot", metavar="OUT.png", help="write data, fit and residuals as a PNG")
+    p.add_argument("--table", metavar="OUT.csv",
+                   help="also write the collected input rows as a CSV (e.g. speed and cone angle per clip)")
     add_rerun_argument(p)
     p.add_argument("--overlay", action="append", default=[], metavar="CSV",
                    help="draw curves from a CSV on the plot (first column x, others y, matched by "
@@ -78,13 +87,18 @@ def parse_fixes(items: list[str]) -> dict[str, float]:
 
 def run(args: argparse.Namespace) -> int:
     inertia = args.inertia
-    if inertia is None and Path(args.input).is_dir():
+    if inertia is None and len(args.input) == 1 and Path(args.input[0]).is_dir():
         from labkit.report.build import floator_inertia
-        inertia = floator_inertia(Path(args.input))
+        inertia = floator_inertia(Path(args.input[0]))
     options = FitOptions(x=args.x, y=args.y, sigma=args.sigma, series=args.series, inertia=inertia,
                          omega_c=parse_omega_c(args.omega_c), fixed=parse_fixes(args.fix),
                          bootstrap=args.bootstrap, seed=args.seed)
-    table = load_table(args.input)
+    table = load_tables(args.input)
+    if table.meta.get("skipped"):
+        left_out = ", ".join(table.meta["skipped"])
+        print(f"labkit fit: {table.source}: not analysis results, left out: {left_out}", file=sys.stderr)
+    if args.table:
+        write_table(table, args.table)
     report = fit_table(table, args.model, options)
     to_stdout = args.json == "-"
     print(format_report(report), file=sys.stderr if to_stdout else sys.stdout)

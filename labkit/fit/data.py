@@ -1,16 +1,26 @@
-"""Loading the data a fit needs: a CSV with a header row, a results JSON, or a session directory.
+"""Loading the data a fit needs: a CSV with a header row, a results JSON, a session directory,
+or the JSON of ``labkit analyse laser|strobe`` (one clip = one row).
 
 A session directory holds ``results.json`` ``{"protocol", "points": [{...}, ...], "fit": {...}}``
 and ``run.json`` (rig and run metadata). A results JSON may also be a bare list of point
 objects. Columns keep the names of the file; units are in the names (``speed_rpm``,
 ``force_g``) and :func:`to_si` converts them by suffix.
+
+An analysis JSON (recognised by its keys, see :func:`analysis_kind`) becomes the row
+``speed_rpm`` (its ``rotor_speed_rpm``), ``cone_angle_rad`` (laser ``tilt_rad.major``, strobe
+``tilt_amplitude_rad``), ``cone_angle_minor_rad`` (laser ``tilt_rad.minor``), ``spin_rad_s``
+when recorded, and the text columns ``kind`` and ``source_file``: the cone angle against rotor
+speed of Eq. 5.24 (Eq. 5.68 with spin). :func:`load_tables` joins several inputs (files,
+folders of analysis JSON, glob patterns) row by row.
 """
 
 from __future__ import annotations
 
 import csv
+import glob
 import json
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -70,8 +80,12 @@ def load_table(path: str | Path) -> Table:
     if path.is_dir():
         results = path / "results.json"
         if not results.exists():
+            analyses = _analysis_files(path)
+            if analyses:
+                return _load_analysis_folder(path, analyses)
             raise DataFileError(str(path), "", "not a session directory: no results.json inside "
-                                "(did the run finish? `labkit run --resume` completes it)")
+                                "(did the run finish? `labkit run --resume` completes it), and no "
+                                "`labkit analyse --json` files either")
         table = _load_json(results)
         run = path / "run.json"
         if run.exists():
@@ -102,12 +116,22 @@ def _load_csv(path: Path) -> Table:
     return _columns_to_table(str(path), cols, {})
 
 
-def _load_json(path: Path) -> Table:
+def _read_json(path: Path):
     try:
-        doc = json.loads(path.read_text())
+        return json.loads(path.read_text())
     except json.JSONDecodeError as exc:
         raise DataFileError(str(path), "", f"invalid JSON ({exc.msg} at line {exc.lineno})") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise DataFileError(str(path), "", f"cannot read: {getattr(exc, 'strerror', None) or exc}") from None
+
+
+def _load_json(path: Path) -> Table:
+    doc = _read_json(path)
     meta: dict = {}
+    if analysis_kind(doc):
+        row = analysis_row(doc, str(path))
+        return _columns_to_table(str(path), {k: [v] for k, v in row.items()},
+                                 {"analysis": row["kind"], "video": doc.get("source")})
     if isinstance(doc, dict):
         points = doc.get("points")
         if not isinstance(points, list):
@@ -157,3 +181,192 @@ def _as_float(v) -> float | None:
         except ValueError:
             return None
     return None
+
+
+# --- `labkit analyse laser|strobe --json` files: one clip, one row (cone angle vs rotor speed) ---
+
+LASER_KEYS = frozenset({"pattern", "tilt_rad", "quality"})
+STROBE_KEYS = frozenset({"tilt_amplitude_rad", "lateral_amplitude_px", "phase_source"})
+
+
+def analysis_kind(doc) -> str | None:
+    """``"laser"`` or ``"strobe"`` when ``doc`` is the JSON of ``labkit analyse laser|strobe``
+    (recognised by its keys), else None."""
+    if not isinstance(doc, dict) or "points" in doc:
+        return None
+    if LASER_KEYS <= doc.keys():
+        return "laser"
+    if STROBE_KEYS <= doc.keys():
+        return "strobe"
+    return None
+
+
+def analysis_row(doc: dict, file: str) -> dict[str, float | str]:
+    """The fit row of one analysed clip: ``speed_rpm``, ``cone_angle_rad`` (laser
+    ``tilt_rad.major``, strobe ``tilt_amplitude_rad``), ``cone_angle_minor_rad`` (laser),
+    ``spin_rad_s`` when recorded, ``kind`` and ``source_file``; the points of Eq. 5.24 / 5.68.
+
+    Raises :class:`DataFileError` naming ``file`` and what is missing: the rotor speed (analysed
+    without ``--speed-rpm``) or the tilt (laser without ``--screen-distance-mm``/``--mm-per-px``,
+    or no trace found).
+    """
+    kind = analysis_kind(doc)
+    if kind is None:
+        raise DataFileError(file, "", "not a `labkit analyse laser|strobe --json` result")
+    video = doc.get("source") or "CLIP"
+    speed = doc.get("rotor_speed_rpm")
+    if speed is None:
+        raise DataFileError(file, "rotor_speed_rpm", "no rotor speed recorded (analysed without "
+                            f"--speed-rpm); rerun `labkit analyse {kind} {video} ... --speed-rpm RPM`")
+    speed = _finite_number(file, "rotor_speed_rpm", speed)
+    if kind == "laser":
+        tilt = doc.get("tilt_rad")
+        if not tilt:
+            pattern = doc.get("pattern") or {}
+            if pattern.get("type") == "none":
+                why = f"no trace in the clip (pattern none: {pattern.get('reason', 'no reason given')})"
+            else:
+                why = (f"no tilt: analysed without --screen-distance-mm and --mm-per-px; rerun "
+                       f"`labkit analyse laser {video} --screen-distance-mm L --mm-per-px S ...`")
+            raise DataFileError(file, "tilt_rad", why)
+        if not isinstance(tilt, dict):
+            raise DataFileError(file, "tilt_rad", "expected an object with 'major' and 'minor'")
+        row: dict[str, float | str] = {
+            "speed_rpm": speed,
+            "cone_angle_rad": _finite_number(file, "tilt_rad.major", tilt.get("major")),
+            "cone_angle_minor_rad": _finite_number(file, "tilt_rad.minor", tilt.get("minor")),
+        }
+    else:
+        row = {"speed_rpm": speed,
+               "cone_angle_rad": _finite_number(file, "tilt_amplitude_rad", doc.get("tilt_amplitude_rad"))}
+    if doc.get("spin_rad_s") is not None:
+        row["spin_rad_s"] = _finite_number(file, "spin_rad_s", doc["spin_rad_s"])
+    row["kind"] = kind
+    row["source_file"] = file
+    return row
+
+
+def _finite_number(file: str, key: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise DataFileError(file, key, f"expected a finite number, got {json.dumps(value)}")
+    return float(value)
+
+
+def _analysis_files(folder: Path) -> list[Path]:
+    """The analysis JSON files directly in ``folder`` (others, e.g. ``.truth.json``, are left out)."""
+    out = []
+    for p in sorted(folder.glob("*.json")):
+        try:
+            doc = json.loads(p.read_text())
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+            continue
+        if analysis_kind(doc):
+            out.append(p)
+    return out
+
+
+def _load_analysis_folder(folder: Path, files: list[Path]) -> Table:
+    others = sorted({p.name for p in folder.glob("*.json")} - {p.name for p in files})
+    table = _join([load_table(p) for p in files], str(folder))
+    table.meta["skipped"] = others
+    return table
+
+
+def expand_inputs(inputs: Sequence[str | Path]) -> list[Path]:
+    """Paths as given; a pattern with ``*``, ``?`` or ``[`` that is not an existing path is
+    expanded (sorted). Raises :class:`DataFileError` for a pattern that matches nothing."""
+    out: list[Path] = []
+    for item in inputs:
+        text = str(item)
+        if not Path(text).exists() and any(c in text for c in "*?["):
+            matches = sorted(glob.glob(text))
+            if not matches:
+                raise DataFileError(text, "", "no file matches this pattern")
+            out.extend(Path(m) for m in matches)
+        else:
+            out.append(Path(text))
+    return out
+
+
+def load_tables(inputs: Sequence[str | Path]) -> Table:
+    """Load several inputs (files, folders, glob patterns) and join them row by row.
+
+    One plain input gives :func:`load_table`'s table unchanged. Otherwise a column missing
+    from one input is blank (NaN, or "" for text) in its rows, and a ``source_file`` column
+    names each row's file. Analysis JSONs must agree on spin: either every clip records
+    ``spin_rad_s`` or none does (a :class:`DataFileError` names the clips without it).
+    """
+    paths = expand_inputs(inputs)
+    if not paths:
+        raise DataFileError("", "", "no input given")
+    if len(paths) == 1:
+        return load_table(paths[0])
+    return _join([load_table(p) for p in paths], _describe(paths))
+
+
+def _describe(paths: Sequence[Path]) -> str:
+    names = [str(p) for p in paths]
+    if len(names) <= 3:
+        return ", ".join(names)
+    return f"{names[0]} ... {names[-1]} ({len(names)} files)"
+
+
+def _join(tables: list[Table], source: str) -> Table:
+    _check_spin_recorded(tables)
+    numeric_names: list[str] = []
+    text_names: list[str] = []
+    for t in tables:
+        numeric_names += [n for n in t.numeric if n not in numeric_names]
+        text_names += [n for n in t.text if n not in text_names]
+    if "source_file" not in text_names:
+        text_names.append("source_file")
+    as_text = [n for n in numeric_names if n in text_names]  # numbers in one file, words in another
+    numeric_names = [n for n in numeric_names if n not in as_text]
+    numeric = {n: np.concatenate([t.numeric.get(n, np.full(len(t), math.nan)) for t in tables])
+               for n in numeric_names}
+    text: dict[str, list[str]] = {}
+    for n in text_names:
+        text[n] = []
+        for t in tables:
+            if n in t.text:
+                text[n] += t.text[n]
+            elif n in t.numeric:
+                text[n] += ["" if math.isnan(v) else f"{v:.10g}" for v in t.numeric[n]]
+            elif n == "source_file":
+                text[n] += [t.source] * len(t)
+            else:
+                text[n] += [""] * len(t)
+    meta = {"inputs": [t.source for t in tables]}
+    return Table(source, numeric, text, meta)
+
+
+def _check_spin_recorded(tables: list[Table]) -> None:
+    clips = [t for t in tables if t.meta.get("analysis")]
+    without = [t.source for t in clips if "spin_rad_s" not in t.numeric]
+    if without and len(without) < len(clips):
+        shown = ", ".join(without[:3]) + (f" and {len(without) - 3} more" if len(without) > 3 else "")
+        raise DataFileError(without[0], "spin_rad_s",
+                            f"{len(clips) - len(without)} of {len(clips)} clips record the floator spin but "
+                            f"{shown} do(es) not; give --spin-rad-s to `labkit analyse` for every clip or "
+                            "for none (Eq. 5.68 needs it per point)")
+
+
+def write_table(table: Table, path: str | Path) -> Path:
+    """Write ``table`` as a CSV with a header row (numeric columns first, blanks for NaN) that
+    :func:`load_table` reads back; a ``#`` comment line names the source."""
+    path = Path(path)
+    names = list(table.numeric) + list(table.text)
+    rows = []
+    for i in range(len(table)):
+        row = ["" if math.isnan(v[i]) else f"{v[i]:.10g}" for v in table.numeric.values()]
+        rows.append(row + [v[i] for v in table.text.values()])
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with path.open("w", newline="") as fh:
+            fh.write(f"# collected by labkit fit from {table.source}\n")
+            writer = csv.writer(fh)
+            writer.writerow(names)
+            writer.writerows(rows)
+    except OSError as exc:
+        raise DataFileError(str(path), "", f"cannot write the table: {exc.strerror}") from None
+    return path

@@ -10,7 +10,8 @@ import pytest
 from labkit.cli import main
 
 VIDEOS = Path(__file__).resolve().parents[2] / "recordings" / "videos"
-LASER_KEYS = {"source", "frames", "fps", "size", "pattern", "tilt_rad", "quality"}
+LASER_KEYS = {"source", "frames", "fps", "size", "pattern", "tilt_rad", "quality",
+              "rotor_speed_rpm", "spin_rad_s"}  # the last two from the CLI (--speed-rpm, --spin-rad-s)
 PATTERN_KEYS = {"type", "center_px", "semi_axes_px", "rotation_deg", "ellipticity", "loops", "trochoid",
                 "rms_residual_px"}
 STROBE_KEYS = {"source", "frames", "apparent_hz", "tilt_amplitude_rad", "lateral_amplitude_px",
