@@ -95,8 +95,9 @@ def run(args: argparse.Namespace) -> int:
                          bootstrap=args.bootstrap, seed=args.seed)
     table = load_tables(args.input)
     if table.meta.get("skipped"):
-        left_out = ", ".join(table.meta["skipped"])
-        print(f"labkit fit: {table.source}: not analysis results, left out: {left_out}", file=sys.stderr)
+        left_out = table.meta["skipped"]
+        print(f"labkit fit: left out {len(left_out)} JSON file(s) that are not analysis results: "
+              f"{', '.join(left_out)}", file=sys.stderr)
     if args.table:
         write_table(table, args.table)
     report = fit_table(table, args.model, options)

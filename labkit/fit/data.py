@@ -294,14 +294,38 @@ def load_tables(inputs: Sequence[str | Path]) -> Table:
     One plain input gives :func:`load_table`'s table unchanged. Otherwise a column missing
     from one input is blank (NaN, or "" for text) in its rows, and a ``source_file`` column
     names each row's file. Analysis JSONs must agree on spin: either every clip records
-    ``spin_rad_s`` or none does (a :class:`DataFileError` names the clips without it).
+    ``spin_rad_s`` or none does (a :class:`DataFileError` names the clips without it). Other
+    JSON files among analysis JSONs (e.g. ``.truth.json``) are left out and listed in
+    ``meta["skipped"]``.
     """
     paths = expand_inputs(inputs)
     if not paths:
         raise DataFileError("", "", "no input given")
     if len(paths) == 1:
         return load_table(paths[0])
-    return _join([load_table(p) for p in paths], _describe(paths))
+    kept, skipped = _leave_out_stray_json(paths)
+    table = _join([load_table(p) for p in kept], _describe(kept))
+    if skipped:
+        table.meta["skipped"] = [str(p) for p in skipped]
+    return table
+
+
+def _leave_out_stray_json(paths: list[Path]) -> tuple[list[Path], list[Path]]:
+    """Among analysis JSONs (``clips/*.json``), JSON files that are neither analysis results nor
+    results tables (``labkit synth`` ``.truth.json``, a fit's ``--json`` output) are left out, as
+    in a folder; they are listed, never dropped unseen. Without analysis JSONs nothing is left out."""
+    kinds = {}
+    for p in paths:
+        if p.suffix.lower() == ".json" and p.is_file():
+            try:
+                doc = json.loads(p.read_text())
+            except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+                continue  # load_table names the problem
+            kinds[p] = "analysis" if analysis_kind(doc) else (
+                "table" if isinstance(doc, list) or (isinstance(doc, dict) and "points" in doc) else "other")
+    if "analysis" not in kinds.values():
+        return paths, []
+    return [p for p in paths if kinds.get(p) != "other"], [p for p in paths if kinds.get(p) == "other"]
 
 
 def _describe(paths: Sequence[Path]) -> str:

@@ -201,6 +201,27 @@ def test_cli_notes_files_left_out_of_a_folder(tmp_path: Path, capsys):
     assert main(["fit", str(tmp_path / "clips"), "--model", "cone-angle", "--inertia", str(I_KG_M2),
                  "--table", str(table)]) == 0
     captured = capsys.readouterr()
-    assert "not analysis results, left out: fit.json" in captured.err
+    assert "left out 1 JSON file(s) that are not analysis results: fit.json" in captured.err
     assert "tau_C" in captured.out
     assert len(load_table(table)) == 5
+
+
+def test_glob_leaves_out_truth_and_fit_outputs_but_lists_them(tmp_path: Path):
+    """`clips/*.json` also matches `labkit synth`'s .truth.json and a fit's --json output."""
+    from labkit.synth import laser_truth
+    from labkit.synth.presets import laser_preset
+
+    files = cone_folder(tmp_path / "clips")
+    truth = write(tmp_path / "clips" / "c08000.truth.json", laser_truth(laser_preset("easy", (320, 240))))
+    fit_out = write(tmp_path / "clips" / "fit.json", {"model": "cone-angle", "series": {}})
+    t = load_tables([str(tmp_path / "clips" / "*.json")])
+    assert t.text["source_file"] == [str(p) for p in files]
+    assert t.meta["skipped"] == [str(truth), str(fit_out)]
+    assert t.source == f"{files[0]} ... {files[-1]} (5 files)"
+
+
+def test_without_analysis_json_nothing_is_left_out(tmp_path: Path):
+    results = write(tmp_path / "results.json", {"points": [{"speed_rpm": 1, "force_g": 2}]})
+    other = write(tmp_path / "other.json", {"model": "x"})
+    with pytest.raises(DataFileError, match=rf"^{other}:points: expected a list"):
+        load_tables([results, other])
