@@ -370,9 +370,9 @@ def _check_spin_recorded(tables: list[Table]) -> None:
     if without and len(without) < len(clips):
         shown = ", ".join(without[:3]) + (f" and {len(without) - 3} more" if len(without) > 3 else "")
         raise DataFileError(without[0], "spin_rad_s",
-                            f"{len(clips) - len(without)} of {len(clips)} clips record the floator spin but "
-                            f"{shown} do(es) not; give --spin-rad-s to `labkit analyse` for every clip or "
-                            "for none (Eq. 5.68 needs it per point)")
+                            f"{len(clips) - len(without)} of {len(clips)} clips record the floator spin and "
+                            f"{len(without)} do not ({shown}); give --spin-rad-s to `labkit analyse` for "
+                            "every clip or for none (Eq. 5.68 needs it per point)")
 
 
 def write_table(table: Table, path: str | Path) -> Path:
