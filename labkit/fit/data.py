@@ -247,9 +247,14 @@ def analysis_row(doc: dict, file: str) -> dict[str, float | str]:
 
 
 def _finite_number(file: str, key: str, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise DataFileError(file, key, f"expected a finite number, got {json.dumps(value)}")
-    return float(value)
+    try:
+        number = None if isinstance(value, bool) or not isinstance(value, int | float) else float(value)
+    except OverflowError:  # an integer beyond the float range
+        number = None
+    if number is None or not math.isfinite(number):
+        shown = json.dumps(value)
+        raise DataFileError(file, key, f"expected a finite number, got {shown[:40]}")
+    return number
 
 
 def _analysis_files(folder: Path) -> list[Path]:

@@ -9,6 +9,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from labkit.cli import main
 from labkit.errors import DataFileError
@@ -90,6 +92,7 @@ def test_strobe_row():
     (laser_doc(9000, float("nan")), "a.json:tilt_rad.major: expected a finite number, got NaN"),
     (strobe_doc(9000, None), "a.json:tilt_amplitude_rad: expected a finite number, got null"),
     (laser_doc(9000, 0.1, spin_rad_s="x"), "a.json:spin_rad_s: expected a finite number"),
+    (laser_doc(10 ** 400, 0.1), "a.json:rotor_speed_rpm: expected a finite number, got 1000000000"),
 ])
 def test_unusable_clip_is_named_with_what_is_missing(tmp_path: Path, doc, message):
     path = write(tmp_path / "a.json", doc)
@@ -225,3 +228,26 @@ def test_without_analysis_json_nothing_is_left_out(tmp_path: Path):
     other = write(tmp_path / "other.json", {"model": "x"})
     with pytest.raises(DataFileError, match=rf"^{other}:points: expected a list"):
         load_tables([results, other])
+
+
+json_values = st.recursive(
+    st.none() | st.booleans() | st.integers() | st.floats() | st.text(max_size=5),
+    lambda inner: (st.lists(inner, max_size=3)
+                   | st.dictionaries(st.sampled_from(["major", "minor", "x"]), inner, max_size=3)),
+    max_leaves=6)
+
+
+@settings(max_examples=200, deadline=None)
+@given(speed=json_values, tilt=json_values, spin=json_values, kind=st.sampled_from(["laser", "strobe"]))
+def test_any_analysis_values_give_a_finite_row_or_a_named_error(speed, tilt, spin, kind):
+    doc = laser_doc(1.0, 0.1) if kind == "laser" else strobe_doc(1.0, 0.1)
+    doc.update({"rotor_speed_rpm": speed, "spin_rad_s": spin,
+                ("tilt_rad" if kind == "laser" else "tilt_amplitude_rad"): tilt})
+    try:
+        row = analysis_row(doc, "f.json")
+    except DataFileError as exc:
+        assert str(exc).startswith("f.json:")
+        return
+    numbers = [v for k, v in row.items() if k not in ("kind", "source_file")]
+    assert all(isinstance(v, float) and math.isfinite(v) for v in numbers)
+    assert row["speed_rpm"] == speed and row["kind"] == kind
