@@ -84,6 +84,17 @@ class _Rows:
     def col(self, name: str) -> np.ndarray:
         return getattr(self, name)[:, None]
 
+    def take(self, index: list[int] | np.ndarray) -> _Rows:
+        """The rows at ``index``."""
+        return _Rows(self.k[index], self.c[index], self.a[index], self.b[index], self.v[index])
+
+    @staticmethod
+    def of(fits: list[CurveFit]) -> _Rows:
+        """One row per fit, starting where the fit ended."""
+        return _Rows(np.array([f.k for f in fits]), np.array([f.c for f in fits], complex),
+                     np.array([f.a for f in fits], complex), np.array([f.b for f in fits], complex),
+                     np.array([f.drift for f in fits], complex))
+
 
 def _closest_parameters(z: np.ndarray, rows: _Rows, samples: np.ndarray) -> np.ndarray:
     """Parameter t of the closest point of each row's centred curve ``A e^{it} + B e^{ikt}`` to
@@ -289,7 +300,7 @@ def fit_trochoids(points: np.ndarray, ks: list[int], weights: np.ndarray | None 
             chosen.append(mine[np.argmin(rms[mine])])
         else:  # every start degenerated; keep the least bad
             chosen.append(mine[np.argmin(np.abs(probes.b[mine]) / np.maximum(np.abs(probes.a[mine]), 1e-12))])
-    best = _Rows(*(getattr(probes, name)[chosen] for name in ("k", "c", "a", "b", "v")))
+    best = probes.take(chosen)
     rows, rms = _icp_rows(z, w, tau, best, max(0, iterations - PROBE_ITERATIONS), drift, 200 * np.abs(best.k))
     return [_curve_fit(rows, rms, i) for i in range(len(ks))]
 
@@ -364,8 +375,7 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
     z, w_, tau = _prepare(*full)
     refined = []
     if shortlist:  # refined together: one batch of ICP steps for both
-        names = ("k", "c", "a", "b", "drift")
-        rows = _Rows(*(np.array([getattr(f, name) for f in shortlist]) for name in names))
+        rows = _Rows.of(shortlist)
         rows, rms = _icp_rows(z, w_, tau, rows, 20, full[2] is not None, 200 * np.abs(rows.k))
         refined = [_curve_fit(rows, rms, i) for i in range(len(shortlist))]
     for fit in refined:
@@ -414,7 +424,7 @@ def without_outliers(fit: CurveFit, points: np.ndarray, weights: np.ndarray | No
     halo beside a bright trace, a few % of the points but tens of px off, would otherwise pull
     the centre and b. The rms residual of the result is over the points kept."""
     z, w, tau = _prepare(points, weights, times)
-    rows = _Rows(*(np.array([value]) for value in (fit.k, fit.c, fit.a, fit.b, fit.drift)))
+    rows = _Rows.of([fit])
     samples = np.array([1440 if fit.k == -1 else 200 * abs(fit.k)])
     t = _closest_parameters((z - fit.c - fit.drift * tau)[None, :], rows, samples)[0]
     distance = np.abs(_curve(fit.c, fit.a, fit.b, fit.k, t) + fit.drift * tau - z)
