@@ -49,7 +49,8 @@ def main(args: argparse.Namespace) -> int:
         return 2
     if result.identical:
         n = len((out.results or {}).get("points", []))
-        print(f"replayed {args.session}: {n} points, results identical to results.json")
+        print(f"replayed {args.session}: {n} points, results identical to results.json "
+              "(points exact, fits within relative 1e-6)")
         return 0
     print(f"labkit replay: results differ from {args.session}/results.json:", file=sys.stderr)
     for line in result.differences[:20]:

@@ -11,6 +11,7 @@
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -137,24 +138,50 @@ class ReplayOutcome:
     differences: list[str]
 
 
-def diff_results(a: Any, b: Any, path: str = "results") -> list[str]:
-    """Human-readable differences between two JSON values (first few)."""
+#: Derived numbers (fits) may differ between CPUs in their last digits: BLAS and LAPACK pick
+#: different kernels per instruction set, and a fit sums in a different order. Recorded bytes,
+#: readings and points are compared exactly; values under a derived key (``fit``) are equal when
+#: ``|a - b| <= REPLAY_FIT_RTOL * max(|a|, |b|) + REPLAY_FIT_ATOL`` (documented in docs/protocols.md).
+REPLAY_FIT_RTOL = 1e-6
+REPLAY_FIT_ATOL = 1e-12
+DERIVED_KEYS = frozenset({"fit"})
+
+
+def _close(a: float, b: float) -> bool:
+    if math.isnan(a) and math.isnan(b):
+        return True
+    return abs(a - b) <= REPLAY_FIT_RTOL * max(abs(a), abs(b)) + REPLAY_FIT_ATOL
+
+
+def diff_results(a: Any, b: Any, path: str = "results", derived: bool = False) -> list[str]:
+    """Human-readable differences between two JSON values, both values printed.
+
+    Everything is compared exactly except numbers below a key in :data:`DERIVED_KEYS`, which
+    are compared within :data:`REPLAY_FIT_RTOL` (a fit's last digits depend on the CPU).
+    """
+    if derived and isinstance(a, int | float) and isinstance(b, int | float) \
+            and not isinstance(a, bool) and not isinstance(b, bool):
+        if _close(float(a), float(b)):
+            return []
+        return [f"{path}: replay {a!r} != recording {b!r} (beyond relative tolerance {REPLAY_FIT_RTOL:g})"]
     if type(a) is not type(b):
-        return [f"{path}: {a!r} != {b!r}"]
+        return [f"{path}: replay {a!r} != recording {b!r}"]
     if isinstance(a, dict):
         out = []
         for k in sorted(set(a) | set(b)):
             if k not in a or k not in b:
                 out.append(f"{path}.{k}: only in {'replay' if k in a else 'recording'}")
             else:
-                out += diff_results(a[k], b[k], f"{path}.{k}")
+                out += diff_results(a[k], b[k], f"{path}.{k}", derived or k in DERIVED_KEYS)
         return out
     if isinstance(a, list):
         if len(a) != len(b):
             return [f"{path}: {len(a)} entries != {len(b)}"]
         pairs = enumerate(zip(a, b, strict=True))
-        return [d for i, (x, y) in pairs for d in diff_results(x, y, f"{path}[{i}]")]
-    return [] if a == b else [f"{path}: {a!r} != {b!r}"]
+        return [d for i, (x, y) in pairs for d in diff_results(x, y, f"{path}[{i}]", derived)]
+    if a == b or (isinstance(a, float) and math.isnan(a) and math.isnan(b)):
+        return []
+    return [f"{path}: replay {a!r} != recording {b!r}"]
 
 
 def replay_session(path: str | Path, sinks: list[Sink] | None = None) -> ReplayOutcome:

@@ -1,11 +1,13 @@
-"""Every recorded session under recordings/sessions/ replays bit-for-bit from its cassettes."""
+"""Every recorded session under recordings/sessions/ replays from its cassettes: points exactly, fits
+within the documented tolerance (their last digits depend on the CPU's BLAS kernels)."""
 
 import json
+import shutil
 from pathlib import Path
 
 import pytest
 
-from labkit.protocols.launch import replay_session
+from labkit.protocols.launch import REPLAY_FIT_RTOL, replay_session
 
 SESSIONS = sorted((Path(__file__).resolve().parents[2] / "recordings" / "sessions").glob("*/run.json"))
 
@@ -21,5 +23,27 @@ def test_replay_reproduces_the_results_exactly(run_json):
     recorded = json.loads((session / "results.json").read_text())
     result = replay_session(session)
     assert result.identical, result.differences[:5]
-    assert result.outcome.results == recorded
+    assert result.outcome.results["points"] == recorded["points"]
     assert result.outcome.status == json.loads(run_json.read_text())["status"]
+
+
+def _replay_after_editing_fit(tmp_path, scale):
+    copy = tmp_path / "edited"
+    shutil.copytree(SESSIONS[0].parent, copy)
+    results = json.loads((copy / "results.json").read_text())
+    b = results["fit"]["params"]["b"]
+    b["value"] *= scale
+    (copy / "results.json").write_text(json.dumps(results))
+    return replay_session(copy), b["value"]
+
+
+def test_a_fit_differing_in_its_last_digits_still_replays(tmp_path):
+    result, _ = _replay_after_editing_fit(tmp_path, 1 + 1e-11)   # another CPU's BLAS
+    assert result.identical, result.differences
+
+
+def test_a_fit_beyond_the_tolerance_is_a_difference_with_both_values(tmp_path):
+    result, edited = _replay_after_editing_fit(tmp_path, 1 + 10 * REPLAY_FIT_RTOL)
+    assert not result.identical
+    (line,) = result.differences
+    assert "results.fit.params.b.value" in line and repr(edited) in line and "tolerance" in line
