@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 from labkit.cli.run import close_sinks
+from labkit.protocols.events import FlagTally
 from labkit.protocols.launch import replay_session
 from labkit.session import export_csv, load_session
 from labkit.stream import add_rerun_argument, run_sink
@@ -36,7 +37,8 @@ def main(args: argparse.Namespace) -> int:
         for path in export_csv(record.path):
             print(path)
         return 0
-    sinks = []
+    flags = FlagTally()
+    sinks: list = [flags]
     if args.rerun is not None:  # the same rerun sink as `labkit run`
         sinks.append(run_sink(args.rerun, None))
     try:
@@ -44,6 +46,8 @@ def main(args: argparse.Namespace) -> int:
     finally:
         close_sinks(sinks, "replay")
     out = result.outcome
+    if flags.counts:
+        print(f"device flags: {flags.summary()}")
     if out.status != "completed" and out.error is not None and result.recorded is None:
         print(f"labkit replay: {out.status}: {out.reason}", file=sys.stderr)
         return 2

@@ -25,9 +25,10 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from labkit.control.pi import PIGains, PIState, SettleDetector, pi_step, ramp_toward
+from labkit.documents import Interlock, RunDocument
 from labkit.errors import SafetyError
 
-Emit = Callable[[dict[str, Any]], None]
+Emit = Callable[[RunDocument], None]
 
 
 @dataclass
@@ -184,10 +185,7 @@ class SpeedControl:
                 if self._job is not None:
                     self._job.cancel()
                     self._job = None
-                event: dict[str, Any] = {"type": "interlock", "t": self.tripped_at, "reason": reason}
-                if failed:
-                    event["stop_failed"] = failed
-                self.emit(event)
+                self.emit(Interlock(t=self.tripped_at, reason=reason, stop_failed=tuple(failed)))
 
     def request_zero(self) -> None:
         """Ask for the safe state at the next control tick (first Ctrl-C); safe from a signal handler."""

@@ -55,6 +55,17 @@ class Reading:
             "raw": self.raw.decode("latin-1"),
         }
 
+    @classmethod
+    def from_json(cls, obj: dict[str, Any]) -> Reading:
+        """The reading :meth:`as_json` wrote (``value`` None reads back as NaN; files written
+        before flags and raw were recorded read back with none)."""
+        value = obj.get("value")
+        return cls(t=float(obj["t"]), quantity=str(obj.get("quantity", "")),
+                   value=float("nan") if value is None else float(value), unit=str(obj.get("unit", "")),
+                   stable=bool(obj.get("stable", True)), overload=bool(obj.get("overload", False)),
+                   raw=str(obj.get("raw", "")).encode("latin-1"), device=str(obj.get("device", "")),
+                   flags=frozenset(obj.get("flags") or ()))
+
 
 @dataclass(frozen=True)
 class MotorStatus:

@@ -1,31 +1,13 @@
-"""The run's event stream: plain dicts handed to pluggable sinks.
+"""The run's event stream: typed documents (:mod:`labkit.documents`) handed to sinks.
 
-Every event has ``type`` and ``t`` (clock seconds). Types and their keys (SI values):
+Every document has ``t`` (clock seconds) and a ``type``; the table of types and fields is in
+:mod:`labkit.documents`. A sink is anything with
+``on_event(doc: RunDocument) -> None`` (the session writer, the progress bar, the rerun sink
+of ``labkit.stream``). Sinks must not raise; :class:`EventBus` drops a sink that does and
+reports it once on stderr so a broken viewer never stops a motor shutdown.
 
-=============  ==================================================================================
-type           keys
-=============  ==================================================================================
-start          protocol, params, rig, n_steps, session (path or None), resumed_from, dry_run
-step           index, n_steps, label, targets_rad_s {loop: rad/s}, eta_s
-setpoint       loop, target_rad_s
-settled        index, settle_time_s, speeds_rad_s {loop: rad/s}
-control        loops {name: {target_rad_s, setpoint_rad_s, measured_rad_s, duty, settled}}
-reading        device, quantity, value, unit, stable, overload
-zero           device, value (balance reading at rest before zeroing, in its unit), unit
-point          index, point (one result row, as written to results.json)
-drop           index, trial, rotor_rad_s, spin_rad_s, cause ("balance"|"spin_loss"|"key")
-checkpoint     index
-stop_request   count (1: stop at next checkpoint; 2: safe state now)
-interlock      reason (every motor was commanded to zero)
-fault          reason (an exception ended the run; motors zeroed)
-results        results (the results.json object)
-stop           status ("completed"|"interrupted"|"failed"), reason, steps_done
-=============  ==================================================================================
-
-A sink is anything with ``on_event(event: dict) -> None`` (the session writer, the progress
-bar, the rerun sink of ``labkit.stream``). Sinks must not raise; :class:`EventBus` drops a
-sink that does and reports it once on stderr so a broken viewer never stops a motor
-shutdown.
+:class:`FlagTally` counts the flags device readings carried (``device_reset``,
+``tare_lost``, ``overload``...): ``labkit run`` and ``labkit replay`` print it at the end.
 """
 
 from __future__ import annotations
@@ -33,9 +15,21 @@ from __future__ import annotations
 import sys
 from typing import Any, Protocol
 
+from labkit.documents import (
+    DOCUMENT_TYPES,
+    ReadingEvent,
+    RunDocument,
+    RunStart,
+    RunStop,
+    Settled,
+    StepStart,
+    as_document,
+    document_from_json,
+)
+
 
 class Sink(Protocol):
-    def on_event(self, event: dict[str, Any]) -> None: ...
+    def on_event(self, event: RunDocument) -> None: ...
 
 
 class EventBus:
@@ -47,7 +41,9 @@ class EventBus:
     def add(self, sink: Sink) -> None:
         self.sinks.append(sink)
 
-    def emit(self, event: dict[str, Any]) -> None:
+    def emit(self, event: RunDocument | dict[str, Any]) -> None:
+        """Hand ``event`` to every sink (a plain dict is first read as its document)."""
+        event = as_document(event, 0.0)
         for sink in list(self.sinks):
             try:
                 sink.on_event(event)
@@ -61,13 +57,39 @@ class ListSink:
     """Keeps every event in memory (tests, replay comparison)."""
 
     def __init__(self) -> None:
-        self.events: list[dict[str, Any]] = []
+        self.events: list[RunDocument] = []
 
-    def on_event(self, event: dict[str, Any]) -> None:
+    def on_event(self, event: RunDocument) -> None:
         self.events.append(event)
 
-    def of_type(self, kind: str) -> list[dict[str, Any]]:
-        return [e for e in self.events if e.get("type") == kind]
+    def of_type(self, kind: str) -> list[RunDocument]:
+        return [e for e in self.events if e.type == kind]
+
+
+class FlagTally:
+    """Counts the flags of the device readings of a run: ``{role: {flag: count}}``, with the
+    clock time each flag was first seen."""
+
+    def __init__(self) -> None:
+        self.counts: dict[str, dict[str, int]] = {}
+        self.first_t: dict[tuple[str, str], float] = {}
+
+    def on_event(self, event: RunDocument) -> None:
+        if isinstance(event, ReadingEvent):
+            self.add(event.device, event.reading.flags, event.reading.t)
+
+    def add(self, role: str, flags: Any, t: float) -> None:
+        for flag in sorted(flags):
+            per_role = self.counts.setdefault(role, {})
+            per_role[flag] = per_role.get(flag, 0) + 1
+            self.first_t.setdefault((role, flag), t)
+
+    def summary(self) -> str:
+        """One line, e.g. ``balance: device_reset x1 (first at 7.20 s), tare_lost x1 ...``;
+        empty when no reading carried a flag."""
+        parts = [f"{role}: {flag} x{n} (first at {self.first_t[(role, flag)]:.2f} s)"
+                 for role, flags in sorted(self.counts.items()) for flag, n in sorted(flags.items())]
+        return "; ".join(parts)
 
 
 class ProgressSink:
@@ -85,26 +107,29 @@ class ProgressSink:
         )
         self.task: Any = None
 
-    def on_event(self, event: dict[str, Any]) -> None:
-        kind = event.get("type")
-        if kind == "start" and not event.get("dry_run"):
+    def on_event(self, event: RunDocument) -> None:
+        if isinstance(event, RunStart) and not event.dry_run:
             self.progress.start()
-            self.task = self.progress.add_task("run", total=event["n_steps"],
-                                               protocol=event["protocol"], state="starting")
+            self.task = self.progress.add_task("run", total=event.n_steps,
+                                               protocol=event.protocol, state="starting")
         elif self.task is None:
             return
-        elif kind == "step":
-            self.progress.update(self.task, completed=event["index"], state=f"step: {event['label']}")
-        elif kind == "settled":
-            self.progress.update(self.task, state=f"settled in {event['settle_time_s']:.1f} s, recording")
-        elif kind == "point":
+        elif isinstance(event, StepStart):
+            self.progress.update(self.task, completed=event.index, state=f"step: {event.label}")
+        elif isinstance(event, Settled):
+            self.progress.update(self.task, state=f"settled in {event.settle_time_s:.1f} s, recording")
+        elif event.type == "point":
             self.progress.update(self.task, completed=event["index"] + 1)
-        elif kind in ("interlock", "fault"):
-            self.progress.update(self.task, state=f"[red]{kind}: {event['reason']}")
-        elif kind == "stop":
-            self.progress.update(self.task, state=event["status"])
+        elif event.type in ("interlock", "fault"):
+            self.progress.update(self.task, state=f"[red]{event.type}: {event['reason']}")
+        elif isinstance(event, RunStop):
+            self.progress.update(self.task, state=event.status)
             self.progress.stop()
             return
         else:
             return
         self.progress.refresh()  # show each state change at once, not at the next auto-refresh
+
+
+__all__ = ["DOCUMENT_TYPES", "EventBus", "FlagTally", "ListSink", "ProgressSink", "RunDocument", "Sink",
+           "document_from_json"]

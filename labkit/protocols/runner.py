@@ -23,9 +23,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from labkit import documents as doc
 from labkit.control.loop import SpeedControl, build_speed_control
 from labkit.errors import LabkitError, SafetyError
 from labkit.protocols.events import EventBus, Sink
+from labkit.protocols.operator import Operator, default_operator
 from labkit.rig import Rig, open_rig
 from labkit.units import rad_s_to_rpm
 
@@ -133,14 +135,13 @@ class RunContext:
     def now(self) -> float:
         return self.clock.now()
 
-    def emit(self, event: dict[str, Any]) -> None:
-        event.setdefault("t", self.clock.now())
-        self.runner.bus.emit(event)
+    def emit(self, event: doc.RunDocument | dict[str, Any]) -> None:
+        """Hand a document to the sinks (a plain dict without ``t`` is stamped now)."""
+        self.runner.bus.emit(doc.as_document(event, self.clock.now()))
 
     def emit_reading(self, role: str, reading: Any) -> None:
-        self.emit({"type": "reading", "t": reading.t, "device": role, "quantity": reading.quantity,
-                   "value": reading.value, "unit": reading.unit, "stable": reading.stable,
-                   "overload": reading.overload})
+        """The reading itself, flags and raw bytes included, as a ``reading`` document."""
+        self.emit(doc.ReadingEvent.of(role, reading))
 
     def log_tach_readings(self) -> None:
         """Emit the tachometers' new readings as ``reading`` events (readings/ROLE.jsonl)."""
@@ -163,9 +164,18 @@ class RunContext:
         loops = {name: {"target_rad_s": s.target_rad_s, "setpoint_rad_s": s.setpoint_rad_s,
                         "measured_rad_s": s.measured_rad_s, "duty": s.duty, "settled": s.settled}
                  for name, s in self.control.snapshots().items()}
-        self.emit({"type": "control", "loops": loops})
+        self.emit(doc.ControlSnapshot(t=now, loops=loops))
 
     # ---- verbs --------------------------------------------------------------------------
+    def operator_signalled(self) -> bool:
+        """True once per operator signal (the Enter key on a terminal) since the last call;
+        never blocks. Virtual-clock runs have no operator unless one is given to the runner."""
+        return self.runner.operator.signalled()
+
+    def discard_operator_signals(self) -> None:
+        """Forget signals given before now (a key pressed while nothing was watched)."""
+        self.runner.operator.discard()
+
     def checkpoint(self) -> None:
         """Raise if an interlock tripped or the operator asked to stop."""
         self.control.check()
@@ -177,7 +187,7 @@ class RunContext:
         self.checkpoint()
         self.control.set_targets(targets_rad_s)
         for loop, target in targets_rad_s.items():
-            self.emit({"type": "setpoint", "loop": loop, "target_rad_s": target})
+            self.emit(doc.Setpoint(t=self.clock.now(), loop=loop, target_rad_s=target))
 
     def sleep(self, duration_s: float) -> None:
         """Wait ``duration_s`` on the clock in control periods, checking at each."""
@@ -204,8 +214,8 @@ class RunContext:
             if self.control.settled():
                 took = self.clock.now() - start
                 speeds = {n: s.measured_rad_s for n, s in self.control.snapshots().items()}
-                self.emit({"type": "settled", "index": self.step.index if self.step else None,
-                           "settle_time_s": took, "speeds_rad_s": speeds})
+                self.emit(doc.Settled(t=self.clock.now(), index=self.step.index if self.step else None,
+                                      settle_time_s=took, speeds_rad_s=speeds))
                 return took
             if self.clock.now() - start > timeout:
                 snaps = self.control.snapshots()
@@ -276,7 +286,7 @@ class Runner:
     def __init__(self, protocol: ProtocolDef, rig: Rig, params: dict[str, Any], *, clock: Any,
                  sinks: list[Sink] | None = None, session: Any = None,
                  previous_points: list[dict[str, Any]] | None = None, done_steps: set[int] | None = None,
-                 port_override: Any = None) -> None:
+                 port_override: Any = None, operator: Operator | None = None) -> None:
         self.protocol = protocol
         self.rig = rig
         self.params = params
@@ -288,6 +298,7 @@ class Runner:
         self.previous_points = list(previous_points or [])
         self.done_steps = set(done_steps or ())
         self.port_override = port_override
+        self.operator = operator if operator is not None else default_operator(clock)
         self.stop_count = 0
         self._saving = False
         self.control: SpeedControl | None = None
@@ -302,7 +313,7 @@ class Runner:
         """What Ctrl-C does: 1st - motors to zero at the next tick, stop at next checkpoint;
         2nd - interlock now (every motor zero) and KeyboardInterrupt."""
         self.stop_count += 1
-        self.bus.emit({"type": "stop_request", "t": self.clock.now(), "count": self.stop_count})
+        self.bus.emit(doc.StopRequest(t=self.clock.now(), count=self.stop_count))
         if self._saving:
             return  # motors are already at zero; let results.json and run.json be written whole
         if self.stop_count == 1:
@@ -326,11 +337,10 @@ class Runner:
         ctx: RunContext | None = None
         previous_handler = self._install_sigint()
         cassettes = self.session.cassette_dir if self.session is not None else None
-        self.bus.emit({"type": "start", "t": self.clock.now(), "protocol": self.protocol.name,
-                       "params": self.params, "rig": self.rig.name, "n_steps": len(self.steps),
-                       "session": str(self.session.path) if self.session is not None else None,
-                       "resumed_from": (self.session.meta.get("resumed_from") if self.session else None),
-                       "dry_run": False})
+        self.bus.emit(doc.RunStart(
+            t=self.clock.now(), protocol=self.protocol.name, params=self.params, rig=self.rig.name,
+            n_steps=len(self.steps), session=str(self.session.path) if self.session is not None else None,
+            resumed_from=(self.session.meta.get("resumed_from") if self.session else None)))
         try:
             opened = open_rig(self.rig, self.clock, record_to=cassettes, port_override=self.port_override)
             self.control = build_speed_control(opened, self.clock, emit=self.bus.emit)
@@ -341,14 +351,14 @@ class Runner:
                     continue
                 ctx.checkpoint()
                 ctx.step = step
-                self.bus.emit({"type": "step", "t": self.clock.now(), "index": step.index,
-                               "n_steps": len(self.steps), "label": step.label,
-                               "targets_rad_s": step.targets_rad_s, "eta_s": step.est_duration_s})
+                self.bus.emit(doc.StepStart(t=self.clock.now(), index=step.index, n_steps=len(self.steps),
+                                            label=step.label, targets_rad_s=step.targets_rad_s,
+                                            eta_s=step.est_duration_s))
                 point = self.protocol.run_step(ctx, step)
                 point = normalise({"step": step.index, **point})
                 new_points.append(point)
-                self.bus.emit({"type": "point", "t": self.clock.now(), "index": step.index, "point": point})
-                self.bus.emit({"type": "checkpoint", "t": self.clock.now(), "index": step.index})
+                self.bus.emit(doc.PointDone(t=self.clock.now(), index=step.index, point=point))
+                self.bus.emit(doc.Checkpoint(t=self.clock.now(), index=step.index))
         except StopRequested as exc:
             status, reason, error = "interrupted", str(exc), exc
         except KeyboardInterrupt as exc:
@@ -358,7 +368,7 @@ class Runner:
             reason = str(exc) if isinstance(exc, LabkitError) else f"{type(exc).__name__}: {exc}"
             error = exc
             if not (self.control is not None and self.control.tripped):
-                self.bus.emit({"type": "fault", "t": self.clock.now(), "reason": reason})
+                self.bus.emit(doc.Fault(t=self.clock.now(), reason=reason))
         finally:
             self._saving = True  # from here on Ctrl-C only counts (QCoDeS' DelayedKeyboardInterrupt)
             if self.control is not None:
@@ -377,10 +387,9 @@ class Runner:
             ctx.log_tach_readings()
         points = self.previous_points + new_points
         results = normalise({"protocol": self.protocol.name, "points": points, "fit": self._fit(points)})
-        self.bus.emit({"type": "results", "t": self.clock.now(), "results": results})
+        self.bus.emit(doc.Results(t=self.clock.now(), results=results))
         steps_done = len(self.done_steps) + len(new_points)
-        self.bus.emit({"type": "stop", "t": self.clock.now(), "status": status, "reason": reason,
-                       "steps_done": steps_done})
+        self.bus.emit(doc.RunStop(t=self.clock.now(), status=status, reason=reason, steps_done=steps_done))
         if self.session is not None:
             self.session.write_results(results)
             self.session.finish(status, reason)

@@ -18,6 +18,7 @@ import math
 import statistics
 from typing import Any
 
+from labkit import documents as doc
 from labkit.errors import LabkitError
 from labkit.protocols.params import ParamError
 from labkit.protocols.quickfit import fit_power_law
@@ -84,7 +85,7 @@ class SpeedSweep(ProtocolDef):
     def setup(self, ctx: RunContext) -> None:
         balance = ctx.devices["balance"]
         before = balance.read_stable()
-        ctx.emit({"type": "zero", "device": "balance", "value": before.value, "unit": before.unit})
+        ctx.emit(doc.Zeroed(t=ctx.now(), device="balance", value=before.value, unit=before.unit))
         balance.zero()
 
     def _rest(self, ctx: RunContext) -> tuple[float, float]:

@@ -17,11 +17,10 @@ Quick fit: C of Eq. 6.37, ``-k w^2 = C (1 - w/3000)``.
 from __future__ import annotations
 
 import math
-import select
 import statistics
-import sys
 from typing import Any
 
+from labkit import documents as doc
 from labkit.errors import LabkitError
 from labkit.protocols.drop_spin import drop_instant, fresh_samples, line_spacing, spin_at
 from labkit.protocols.params import ParamError
@@ -30,35 +29,6 @@ from labkit.protocols.runner import ProtocolDef, RunContext, Step
 from labkit.protocols.speed_sweep import reading_force_n
 from labkit.rig import Rig
 from labkit.units import G0, rad_s_to_rpm, rpm_to_rad_s
-
-
-def operator_pressed_enter() -> bool:
-    """True if a line is waiting on an interactive stdin (never blocks; False when not a TTY)."""
-    try:
-        if not sys.stdin.isatty():
-            return False
-        ready, _, _ = select.select([sys.stdin], [], [], 0)
-        if ready:
-            sys.stdin.readline()
-            return True
-    except (OSError, ValueError):
-        pass
-    return False
-
-
-def discard_pending_keys() -> None:
-    """Throw away lines typed before now on an interactive stdin (never blocks).
-
-    An Enter pressed while the rotor was still settling would otherwise sit in the terminal
-    buffer and end the next trial the moment it starts, before any spin was seen."""
-    try:
-        if not sys.stdin.isatty():
-            return
-        while select.select([sys.stdin], [], [], 0)[0]:
-            if not sys.stdin.readline():
-                return
-    except (OSError, ValueError):
-        pass
 
 
 class SpinCritical(ProtocolDef):
@@ -112,7 +82,7 @@ class SpinCritical(ProtocolDef):
     def setup(self, ctx: RunContext) -> None:
         balance = ctx.devices["balance"]
         before = balance.read_stable()
-        ctx.emit({"type": "zero", "device": "balance", "value": before.value, "unit": before.unit})
+        ctx.emit(doc.Zeroed(t=ctx.now(), device="balance", value=before.value, unit=before.unit))
         balance.zero()
 
     def _wait_held(self, ctx: RunContext, threshold: float, after_drop: bool) -> None:
@@ -133,8 +103,7 @@ class SpinCritical(ProtocolDef):
         """Watch one held floator until it drops; None if it never does."""
         p = ctx.params
         self._wait_held(ctx, threshold, after_drop)
-        if not ctx.clock.is_virtual:
-            discard_pending_keys()   # only a key pressed while watching this floator counts
+        ctx.discard_operator_signals()   # only a key pressed while watching this floator counts
         held_at = last_held = ctx.now()
         loss = rpm_to_rad_s(p["spin_loss_rpm"])
         spin_seen = False
@@ -152,7 +121,7 @@ class SpinCritical(ProtocolDef):
                 silent = spin is None or ctx.now() - spin.t > ctx.rig.control.tach_timeout_s
                 if silent or spin.value < loss:
                     cause = "spin_loss"
-            if cause is None and not ctx.clock.is_virtual and operator_pressed_enter():
+            if cause is None and ctx.operator_signalled():
                 cause = "key"
             if cause is not None:
                 gone_t = reading.t if cause == "balance" else (ctx.now() if cause == "key" else None)
@@ -192,7 +161,7 @@ class SpinCritical(ProtocolDef):
             if trial is None:
                 break
             trials.append(trial)
-            ctx.emit({"type": "drop", "index": step.index, "trial": trial_no, **trial})
+            ctx.emit(doc.Drop(t=ctx.now(), index=step.index, trial=trial_no, **trial))
             recent = [t["spin_rad_s"] for t in trials[-int(p["consistent_n"]):]]
             if len(recent) >= p["consistent_n"]:
                 spread = (max(recent) - min(recent)) / max(abs(statistics.fmean(recent)), 1e-9)

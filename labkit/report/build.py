@@ -19,6 +19,7 @@ from labkit.fit.overlay import Overlay
 from labkit.fit.table_fit import FitReport, fit_table
 from labkit.report import markdown as md
 from labkit.report.figures import contact_sheet, fit_figure
+from labkit.report.flags import flags_section
 from labkit.report.plans import Plan, plan_for
 from labkit.report.video import overlay, sample_frames
 
@@ -80,6 +81,7 @@ def build_report(source: str | Path, out: str | Path | None = None, *, model: st
     lines += _metadata_section(table, run, protocol, inertia)
     if source.is_dir():
         lines += _events_section(source / "events.jsonl")
+        lines += flags_section(source)
     lines += _data_section(table, out)
     lines += _fit_sections(table, plan, out, overlays)
     (out / "report.md").write_text("\n".join(lines) + "\n")

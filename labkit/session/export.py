@@ -6,7 +6,9 @@ import csv
 import json
 from pathlib import Path
 
-COLUMNS = ("t", "quantity", "value", "unit", "stable", "overload")
+COLUMNS = ("t", "quantity", "value", "unit", "stable", "overload", "flags")
+#: raw bytes (latin-1 text) go to Parquet only: a spreadsheet is for the numbers
+PARQUET_COLUMNS = (*COLUMNS, "raw")
 
 
 def read_jsonl(path: Path) -> list[dict]:
@@ -29,7 +31,11 @@ def readings_to_parquet(src: Path, dest: Path) -> None:
     import pyarrow.parquet as pq
 
     rows = read_jsonl(src)
-    table = pa.table({c: [r.get(c) for r in rows] for c in COLUMNS})
+    columns = {c: [r.get(c) for r in rows] for c in PARQUET_COLUMNS}
+    # files from before flags were recorded have none
+    columns["flags"] = pa.array([list(f or []) for f in columns["flags"]], type=pa.list_(pa.string()))
+    columns["raw"] = [r if r is not None else "" for r in columns["raw"]]
+    table = pa.table(columns)
     pq.write_table(table, dest)
 
 
@@ -40,7 +46,7 @@ def readings_to_csv(src: Path, dest: Path) -> int:
         writer = csv.writer(f)
         writer.writerow(COLUMNS)
         for r in rows:
-            writer.writerow([r.get(c) for c in COLUMNS])
+            writer.writerow([";".join(r.get(c) or ()) if c == "flags" else r.get(c) for c in COLUMNS])
     return len(rows)
 
 

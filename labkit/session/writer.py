@@ -7,7 +7,8 @@ Layout (documented in docs/protocols.md)::
                           start/end, notes, status and reason, resumed_from
       rig.toml            the rig file exactly as read
       events.jsonl        one event per line (setpoints, settles, points, drops, interlocks...)
-      readings/ROLE.jsonl one reading per line per device: t, quantity, value, unit, stable, overload
+      readings/ROLE.jsonl one reading per line per device (Reading.as_json): t, quantity, value,
+                          unit, stable, overload, flags (device_reset, tare_lost...), raw
       readings/ROLE.parquet  the same as a table, written at the end (pyarrow)
       cassettes/ROLE.jsonl   every serial byte of that port (record://)
       results.json        {"protocol", "points", "fit"} at the end
@@ -30,6 +31,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any, TextIO
 
+from labkit.documents import ReadingEvent, RunDocument
 from labkit.errors import LabkitError
 
 FLUSH_INTERVAL_S = 0.5  # wall-clock seconds between flushes of reading files (< 1 s)
@@ -167,19 +169,19 @@ class Session:
             raise SessionError(f"{path}: cannot write: {exc.strerror or exc}") from None
 
     # ---- writing --------------------------------------------------------------------------
-    def on_event(self, event: dict[str, Any]) -> None:
+    def on_event(self, event: RunDocument) -> None:
         if self.closed:
             return
-        if event.get("type") == "reading":
-            role = str(event.get("device", "unknown"))
+        if isinstance(event, ReadingEvent):
+            role = event.device or "unknown"
             f = self._readings.get(role)
             if f is None:
                 f = self._readings[role] = open(self.readings_dir / f"{role}.jsonl", "a",  # noqa: SIM115
                                                 encoding="utf-8")
-            f.write(dumps({k: v for k, v in event.items() if k not in ("type", "device")}) + "\n")
+            f.write(dumps(event.reading.as_json()) + "\n")
             self._maybe_flush()
         else:
-            self._events.write(dumps(event) + "\n")
+            self._events.write(dumps(event.to_json()) + "\n")
             self.flush()
 
     def _maybe_flush(self) -> None:

@@ -1,8 +1,8 @@
 """Rerun sink of a protocol run (``labkit run`` / ``labkit demo`` / ``labkit replay``).
 
-It is an event sink (:mod:`labkit.protocols.events`): it turns the run's plain-dict events
-into rerun entities. Only entities the run has are logged (a rig without a balance gets no
-force plot; a single loop gets no second speed plot).
+It is an event sink (:mod:`labkit.protocols.events`): it turns the run's typed documents
+(:mod:`labkit.documents`) into rerun entities. Only entities the run has are logged (a rig
+without a balance gets no force plot; a single loop gets no second speed plot).
 
 Entity paths (timelines: ``time`` = clock seconds since start as a duration, ``step`` =
 protocol step index):
@@ -15,6 +15,8 @@ entity                              content
 ``/rig/<loop>/target_rpm``         the step's target
 ``/rig/<loop>/duty``               commanded duty cycle (0..1)
 ``/rig/<device>/<quantity>``       every device reading in SI (e.g. ``/rig/balance/force``, N)
+``/rig/<device>/frame``            each reading's raw bytes (``raw``, latin-1 text) and flags
+                                   (``flags``: e.g. ``device_reset;tare_lost``, empty if none)
 ``/results/points``                one point per finished step, x = speed (kRPM), y = force (g)
                                    for the sweep, x = rotor, y = spin (rad/s) for spin-critical
 ``/results/fit``                   the quick fit's curve over the points, updated each step
@@ -29,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from labkit import documents as doc
 from labkit.stream.core import RerunSpec, open_stream
 from labkit.units import RAD_S_PER_RPM
 
@@ -73,8 +76,7 @@ class RerunRunSink:
         self.flush_error: str | None = None
 
     # ---- helpers ------------------------------------------------------------------------
-    def _time(self, event: dict[str, Any]) -> None:
-        t = float(event.get("t", 0.0))
+    def _time(self, t: float) -> None:
         if self.t0 is None:
             self.t0 = t
         self.rec.set_time("time", duration=max(0.0, t - self.t0))
@@ -92,71 +94,73 @@ class RerunRunSink:
     def _text(self, text: str, level: str = "INFO") -> None:
         self.rec.log("/events", self.rr.TextLog(text, level=level))
 
-    # ---- events -------------------------------------------------------------------------
-    def on_event(self, event: dict[str, Any]) -> None:
-        kind = event.get("type")
-        if kind == "step":
-            self.step = int(event.get("index", self.step))
-        self._time(event)
-        handler = getattr(self, f"_on_{kind}", None)
+    # ---- documents ----------------------------------------------------------------------
+    def on_event(self, event: doc.RunDocument) -> None:
+        if isinstance(event, doc.StepStart):
+            self.step = event.index
+        self._time(float(event.t))
+        handler = getattr(self, f"_on_{event.type}", None)
         if handler is not None:
             handler(event)
 
-    def _on_start(self, e: dict[str, Any]) -> None:
-        self.protocol = str(e.get("protocol", ""))
-        self._text(f"start {self.protocol} on {e.get('rig')} ({e.get('n_steps')} steps)")
+    def _on_start(self, e: doc.RunStart) -> None:
+        self.protocol = e.protocol
+        self._text(f"start {self.protocol} on {e.rig} ({e.n_steps} steps)")
 
-    def _on_step(self, e: dict[str, Any]) -> None:
-        targets = e.get("targets_rad_s") or {}
-        for loop, rad_s in targets.items():
+    def _on_step(self, e: doc.StepStart) -> None:
+        for loop, rad_s in e.targets_rad_s.items():
             self._scalar(f"/rig/{loop}/target_rpm", rad_s / RAD_S_PER_RPM, "target")
-        label = e.get("label") or ""
-        self._text(f"step {e.get('index')}/{e.get('n_steps')} {label}")
+        self._text(f"step {e.index}/{e.n_steps} {e.label}")
 
-    def _on_control(self, e: dict[str, Any]) -> None:
-        for loop, snap in (e.get("loops") or {}).items():
+    def _on_control(self, e: doc.ControlSnapshot) -> None:
+        for loop, snap in e.loops.items():
             for key, name in (("measured_rad_s", "speed_rpm"), ("setpoint_rad_s", "setpoint_rpm")):
                 value = snap.get(key)
                 self._scalar(f"/rig/{loop}/{name}", None if value is None else value / RAD_S_PER_RPM,
                              name.replace("_rpm", ""))
             self._scalar(f"/rig/{loop}/duty", snap.get("duty"), "duty")
 
-    def _on_reading(self, e: dict[str, Any]) -> None:
-        device, quantity = e.get("device", "device"), e.get("quantity", "value")
-        self._scalar(f"/rig/{device}/{quantity}", e.get("value"), f"{quantity} [{e.get('unit', '')}]")
+    def _on_reading(self, e: doc.ReadingEvent) -> None:
+        """The value as a scalar; the frame's raw bytes and flags on ``/rig/<device>/frame``
+        (``raw``, ``flags`` joined by ``;``); a flagged reading also as a warning in ``/events``."""
+        r = e.reading
+        self._scalar(f"/rig/{e.device}/{r.quantity}", r.value, f"{r.quantity} [{r.unit}]")
+        flags = ";".join(sorted(r.flags))
+        self.rec.log(f"/rig/{e.device}/frame",
+                     self.rr.AnyValues(raw=r.raw.decode("latin-1"), flags=flags))
+        if flags:
+            self._text(f"{e.device}: {', '.join(sorted(r.flags))} (raw {r.raw!r})", "WARN")
 
-    def _on_settled(self, e: dict[str, Any]) -> None:
-        self._text(f"settled in {e.get('settle_time_s', float('nan')):.2f} s")
+    def _on_settled(self, e: doc.Settled) -> None:
+        self._text(f"settled in {e.settle_time_s:.2f} s")
 
-    def _on_drop(self, e: dict[str, Any]) -> None:
-        self._text(f"drop ({e.get('cause')}): rotor {e.get('rotor_rad_s', 0):.0f} rad/s, "
-                   f"spin {e.get('spin_rad_s', 0):.0f} rad/s")
+    def _on_drop(self, e: doc.Drop) -> None:
+        self._text(f"drop ({e.cause}): rotor {e.rotor_rad_s:.0f} rad/s, spin {e.spin_rad_s:.0f} rad/s")
 
-    def _on_interlock(self, e: dict[str, Any]) -> None:
-        self._text(f"interlock: {e.get('reason')}; motors at zero", "ERROR")
+    def _on_interlock(self, e: doc.Interlock) -> None:
+        self._text(f"interlock: {e.reason}; motors at zero", "ERROR")
 
-    def _on_fault(self, e: dict[str, Any]) -> None:
-        self._text(f"fault: {e.get('reason')}; motors at zero", "ERROR")
+    def _on_fault(self, e: doc.Fault) -> None:
+        self._text(f"fault: {e.reason}; motors at zero", "ERROR")
 
-    def _on_stop_request(self, e: dict[str, Any]) -> None:
-        self._text(f"stop requested (Ctrl-C x{e.get('count')})", "WARN")
+    def _on_stop_request(self, e: doc.StopRequest) -> None:
+        self._text(f"stop requested (Ctrl-C x{e.count})", "WARN")
 
-    def _on_stop(self, e: dict[str, Any]) -> None:
-        level = "INFO" if e.get("status") == "completed" else "WARN"
-        self._text(f"stop: {e.get('status')} after {e.get('steps_done')} steps "
-                   f"{'(' + str(e['reason']) + ')' if e.get('reason') else ''}", level)
+    def _on_stop(self, e: doc.RunStop) -> None:
+        level = "INFO" if e.status == "completed" else "WARN"
+        self._text(f"stop: {e.status} after {e.steps_done} steps "
+                   f"{'(' + str(e.reason) + ')' if e.reason else ''}", level)
 
-    def _on_point(self, e: dict[str, Any]) -> None:
-        point = e.get("point") or {}
-        xy = point_xy(self.protocol, point)
+    def _on_point(self, e: doc.PointDone) -> None:
+        xy = point_xy(self.protocol, e.point)
         if xy is None:
             return
         self.points.append(xy)
         self.rec.log("/results/points", self.rr.Points2D(np.asarray(self.points), radii=0.15,
                                                          colors=[30, 110, 220]))
 
-    def _on_results(self, e: dict[str, Any]) -> None:
-        fit = (e.get("results") or {}).get("fit") or {}
+    def _on_results(self, e: doc.Results) -> None:
+        fit = (e.results or {}).get("fit") or {}
         curve = fit_curve(self.protocol, fit, self.points)
         if curve is not None:
             self.rec.log("/results/fit", self.rr.LineStrips2D([curve], colors=[220, 60, 30]))

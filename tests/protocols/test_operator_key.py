@@ -13,7 +13,7 @@ import pytest
 
 from labkit.emulators.plant import shared_plant
 from labkit.protocols.launch import execute, prepare_run
-from labkit.protocols.spin_critical import discard_pending_keys, operator_pressed_enter
+from labkit.protocols.operator import discard_pending_keys, operator_pressed_enter
 
 RIGS = Path(__file__).resolve().parents[2] / "rigs"
 

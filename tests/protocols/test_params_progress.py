@@ -4,6 +4,7 @@ import io
 
 import pytest
 
+from labkit import documents as doc
 from labkit.protocols import ProgressSink
 from labkit.protocols.params import ParamError, parse_number_list, resolve_params
 
@@ -36,10 +37,10 @@ def test_progress_bar_shows_step_k_of_n_and_the_settle_state():
 
     out = io.StringIO()
     sink = ProgressSink(Console(file=out, force_terminal=True, width=120))
-    sink.on_event({"type": "start", "protocol": "speed-sweep", "n_steps": 4, "dry_run": False})
-    sink.on_event({"type": "step", "index": 1, "label": "up 8000 RPM"})
-    sink.on_event({"type": "settled", "settle_time_s": 2.5})
-    sink.on_event({"type": "point", "index": 1})
-    sink.on_event({"type": "stop", "status": "completed"})
+    sink.on_event(doc.RunStart(t=0.0, protocol="speed-sweep", params={}, rig="r", n_steps=4))
+    sink.on_event(doc.StepStart(t=1.0, index=1, n_steps=4, label="up 8000 RPM", targets_rad_s={}))
+    sink.on_event(doc.Settled(t=2.0, index=1, settle_time_s=2.5))
+    sink.on_event(doc.PointDone(t=3.0, index=1, point={}))
+    sink.on_event(doc.RunStop(t=4.0, status="completed"))
     text = out.getvalue()
     assert "2/4" in text and "settled in 2.5 s" in text and "speed-sweep" in text

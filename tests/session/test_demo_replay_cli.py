@@ -48,5 +48,5 @@ def test_export_csv(tmp_path, capsys):
     shutil.copytree(RECORDED, copy)
     assert main(["replay", str(copy), "--export-csv"]) == 0
     header, first = (copy / "readings" / "balance.csv").read_text().splitlines()[:2]
-    assert header == "t,quantity,value,unit,stable,overload"
-    assert len(first.split(",")) == 6
+    assert header == "t,quantity,value,unit,stable,overload,flags"
+    assert len(first.split(",")) == 7     # a recording from before flags: an empty flags cell

@@ -1,0 +1,239 @@
+"""The run's documents: one frozen dataclass per event type (bluesky's document model).
+
+Every document has ``t`` (clock seconds) and a class-level ``type`` (its name in
+``events.jsonl``). :meth:`RunDocument.to_json` is the one place a document becomes JSON;
+:func:`document_from_json` reads a line of ``events.jsonl`` (or a reading file) back.
+
+=============  ================  ====================================================================
+type           class             fields (SI values)
+=============  ================  ====================================================================
+start          RunStart          protocol, params, rig, n_steps, session (path or None),
+                                 resumed_from, dry_run
+step           StepStart         index, n_steps, label, targets_rad_s {loop: rad/s}, eta_s
+setpoint       Setpoint          loop, target_rad_s
+settled        Settled           index, settle_time_s, speeds_rad_s {loop: rad/s}
+control        ControlSnapshot   loops {name: {target_rad_s, setpoint_rad_s, measured_rad_s, duty,
+                                 settled}}
+reading        ReadingEvent      device (the rig role), reading (the driver's
+                                 :class:`~labkit.devices.base.Reading`, flags and raw bytes included)
+zero           Zeroed            device, value (balance reading at rest before zeroing), unit
+point          PointDone         index, point (one result row, as written to results.json)
+drop           Drop              index, trial, rotor_rad_s, spin_rad_s, cause
+                                 ("balance"|"spin_loss"|"key"), hold_s
+checkpoint     Checkpoint        index
+stop_request   StopRequest       count (1: stop at next checkpoint; 2: safe state now)
+interlock      Interlock         reason (every motor was commanded to zero), stop_failed
+fault          Fault             reason (an exception ended the run; motors zeroed)
+results        Results           results (the results.json object)
+stop           RunStop           status ("completed"|"interrupted"|"failed"), reason, steps_done
+=============  ================  ====================================================================
+
+A reading is serialised by :meth:`Reading.as_json` only: the reading files
+(``readings/ROLE.jsonl``), ``labkit probe`` and the rerun sink all see the same keys
+(``t, quantity, value, unit, stable, overload, flags, raw``). Decision record:
+docs/decisions/0001-typed-run-documents.md.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+from labkit.devices.base import Reading
+
+
+@dataclass(frozen=True, kw_only=True)
+class RunDocument:
+    """Base of every run document: ``t`` is the clock time (s) of what it reports."""
+
+    type: ClassVar[str] = ""
+    t: float
+
+    def to_json(self) -> dict[str, Any]:
+        """The ``events.jsonl`` object: ``{"type": ..., "t": ..., <fields>}``."""
+        out: dict[str, Any] = {"type": self.type, "t": self.t}
+        for f in dataclasses.fields(self):
+            if f.name != "t":
+                out[f.name] = getattr(self, f.name)
+        return out
+
+    # Read-only mapping access by JSON key (``doc["reason"]``), for code that reads
+    # events.jsonl and live documents alike.
+    def __getitem__(self, key: str) -> Any:
+        return self.to_json()[key]
+
+    def get(self, key: str, default: Any = None) -> Any:
+        return self.to_json().get(key, default)
+
+
+@dataclass(frozen=True, kw_only=True)
+class RunStart(RunDocument):
+    type: ClassVar[str] = "start"
+    protocol: str
+    params: dict[str, Any]
+    rig: str
+    n_steps: int
+    session: str | None = None
+    resumed_from: str | None = None
+    dry_run: bool = False
+
+
+@dataclass(frozen=True, kw_only=True)
+class StepStart(RunDocument):
+    type: ClassVar[str] = "step"
+    index: int
+    n_steps: int
+    label: str
+    targets_rad_s: dict[str, float]
+    eta_s: float = 0.0
+
+
+@dataclass(frozen=True, kw_only=True)
+class Setpoint(RunDocument):
+    type: ClassVar[str] = "setpoint"
+    loop: str
+    target_rad_s: float
+
+
+@dataclass(frozen=True, kw_only=True)
+class Settled(RunDocument):
+    type: ClassVar[str] = "settled"
+    index: int | None
+    settle_time_s: float
+    speeds_rad_s: dict[str, float | None] = field(default_factory=dict)
+
+
+@dataclass(frozen=True, kw_only=True)
+class ControlSnapshot(RunDocument):
+    type: ClassVar[str] = "control"
+    loops: dict[str, dict[str, Any]]
+
+
+@dataclass(frozen=True, kw_only=True)
+class ReadingEvent(RunDocument):
+    """One device reading; ``device`` is the rig role (the reading file's name)."""
+
+    type: ClassVar[str] = "reading"
+    device: str
+    reading: Reading
+
+    @classmethod
+    def of(cls, device: str, reading: Reading) -> ReadingEvent:
+        return cls(t=reading.t, device=device, reading=reading)
+
+    def to_json(self) -> dict[str, Any]:
+        return {"type": self.type, "device": self.device, **self.reading.as_json()}
+
+
+@dataclass(frozen=True, kw_only=True)
+class Zeroed(RunDocument):
+    type: ClassVar[str] = "zero"
+    device: str
+    value: float
+    unit: str
+
+
+@dataclass(frozen=True, kw_only=True)
+class PointDone(RunDocument):
+    type: ClassVar[str] = "point"
+    index: int
+    point: dict[str, Any]
+
+
+@dataclass(frozen=True, kw_only=True)
+class Drop(RunDocument):
+    type: ClassVar[str] = "drop"
+    index: int
+    trial: int
+    rotor_rad_s: float
+    spin_rad_s: float
+    cause: str
+    hold_s: float = float("nan")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Checkpoint(RunDocument):
+    type: ClassVar[str] = "checkpoint"
+    index: int
+
+
+@dataclass(frozen=True, kw_only=True)
+class StopRequest(RunDocument):
+    type: ClassVar[str] = "stop_request"
+    count: int
+
+
+@dataclass(frozen=True, kw_only=True)
+class Interlock(RunDocument):
+    type: ClassVar[str] = "interlock"
+    reason: str
+    stop_failed: tuple[str, ...] = ()
+
+    def to_json(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"type": self.type, "t": self.t, "reason": self.reason}
+        if self.stop_failed:
+            out["stop_failed"] = list(self.stop_failed)
+        return out
+
+
+@dataclass(frozen=True, kw_only=True)
+class Fault(RunDocument):
+    type: ClassVar[str] = "fault"
+    reason: str
+
+
+@dataclass(frozen=True, kw_only=True)
+class Results(RunDocument):
+    type: ClassVar[str] = "results"
+    results: dict[str, Any]
+
+
+@dataclass(frozen=True, kw_only=True)
+class RunStop(RunDocument):
+    type: ClassVar[str] = "stop"
+    status: str
+    reason: str | None = None
+    steps_done: int = 0
+
+
+DOCUMENT_TYPES: dict[str, type[RunDocument]] = {
+    cls.type: cls for cls in (RunStart, StepStart, Setpoint, Settled, ControlSnapshot, ReadingEvent,
+                              Zeroed, PointDone, Drop, Checkpoint, StopRequest, Interlock, Fault,
+                              Results, RunStop)
+}
+
+
+class UnknownDocument(ValueError):
+    """A JSON object that is no run document (unknown ``type`` or a missing field)."""
+
+
+def document_from_json(obj: dict[str, Any]) -> RunDocument:
+    """The document a line of ``events.jsonl`` was written from (inverse of ``to_json``).
+
+    Raises :class:`UnknownDocument` naming the type and the missing field."""
+    kind = obj.get("type")
+    cls = DOCUMENT_TYPES.get(str(kind))
+    if cls is None:
+        known = ", ".join(sorted(DOCUMENT_TYPES))
+        raise UnknownDocument(f"unknown run document type {kind!r}; known: {known}")
+    if cls is ReadingEvent:
+        reading = Reading.from_json({**obj, "device": obj.get("device", "")})
+        return ReadingEvent.of(str(obj.get("device", "")), reading)
+    kwargs: dict[str, Any] = {"t": float(obj.get("t", 0.0))}
+    for f in dataclasses.fields(cls):
+        if f.name == "t":
+            continue
+        if f.name in obj:
+            kwargs[f.name] = tuple(obj[f.name]) if f.name == "stop_failed" else obj[f.name]
+        elif f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+            raise UnknownDocument(f"{kind} document without {f.name!r}: {obj}")
+    return cls(**kwargs)
+
+
+def as_document(event: RunDocument | dict[str, Any], now: float) -> RunDocument:
+    """``event`` itself, or the document a plain dict (``{"type": ..., ...}``) describes;
+    a dict without ``t`` is stamped ``now``."""
+    if isinstance(event, RunDocument):
+        return event
+    return document_from_json({"t": now, **event})
