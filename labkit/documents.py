@@ -218,7 +218,8 @@ def document_from_json(obj: dict[str, Any]) -> RunDocument:
         known = ", ".join(sorted(DOCUMENT_TYPES))
         raise UnknownDocument(f"unknown run document type {kind!r}; known: {known}")
     if cls is ReadingEvent:
-        reading = Reading.from_json({**obj, "device": obj.get("device", "")})
+        # "device" of a reading document is the rig role; the driver's own name is not recorded
+        reading = Reading.from_json({k: v for k, v in obj.items() if k != "device"})
         return ReadingEvent.of(str(obj.get("device", "")), reading)
     kwargs: dict[str, Any] = {"t": float(obj.get("t", 0.0))}
     for f in dataclasses.fields(cls):

@@ -81,3 +81,39 @@ def test_enter_on_the_terminal_registers_the_drop(tmp_path, monkeypatch):
     # the first press after the trial began, not one typed while the rotor settled
     assert any(abs(trial["spin_rad_s"] - spin) < 30.0 for spin in operator.spins_at_press)
     assert point["rotor_rpm"] == pytest.approx(9000, rel=0.02)
+
+
+class ScriptedHand:
+    """Signals the runner's operator every 0.5 s (clock) once the rotor settled, noting the
+    floator's spin at each signal, like the terminal test's operator; a virtual-clock run, no
+    terminal. Signals given before the trial began are discarded by the protocol."""
+
+    def __init__(self, operator) -> None:
+        self.operator, self.settled, self.last = operator, False, -1e9
+        self.spins_at_signal: list[float] = []
+
+    def on_event(self, event) -> None:
+        if event.type == "settled":
+            self.settled = True
+        elif event.type == "reading" and self.settled and event.t - self.last >= 0.5:
+            self.last = event.t
+            self.spins_at_signal.append(shared_plant("fig618").floator.spin_rad_s)
+            self.operator.signal()
+
+
+def test_operator_signal_is_a_runner_verb_any_input_can_drive(tmp_path):
+    from labkit.protocols.operator import QueuedOperator
+
+    operator = QueuedOperator()
+    hand = ScriptedHand(operator)
+    prep = prepare_run(RIGS / "emulated-fig618.toml", "spin-critical",
+                       ["start_rpm=9000", "stop_rpm=9000", "max_trials=1"], clock="virtual",
+                       session_root=tmp_path, sinks=[hand])
+    prep.runner.operator = operator
+    outcome = execute(prep, tmp_path)
+    assert outcome.status == "completed", outcome.reason
+    [point] = outcome.results["points"]
+    [trial] = point["trials"]
+    assert trial["cause"] == "key"
+    assert shared_plant("fig618").floator.drops == 0
+    assert any(abs(trial["spin_rad_s"] - spin) < 30.0 for spin in hand.spins_at_signal)
