@@ -15,6 +15,7 @@ import pytest
 
 from labkit.cli import main
 from labkit.stream.readback import column, entity_paths
+from labkit.testing.processes import start_group, stop_group
 
 RECORDINGS = Path(__file__).resolve().parents[2] / "recordings" / "videos"
 
@@ -36,8 +37,10 @@ def wait_listening(port: int, timeout_s: float = 20.0) -> None:
 
 
 def rerun(*args: str) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "rerun", *args], stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL)
+    """``python -m rerun`` runs the rerun binary as its child: started as a process group so
+    that :func:`stop_group` ends both (``terminate()`` alone left the binary running)."""
+    return start_group([sys.executable, "-m", "rerun", *args], stdout=subprocess.DEVNULL,
+                       stderr=subprocess.DEVNULL)
 
 
 @pytest.fixture
@@ -48,8 +51,7 @@ def grpc_server():
         wait_listening(port)
         yield port
     finally:
-        server.terminate()
-        server.wait(timeout=10)
+        stop_group(server)
 
 
 @pytest.mark.filterwarnings("ignore:RRD file has no footer")  # read while the saver still writes
@@ -69,7 +71,6 @@ def test_laser_analysis_streams_to_a_running_server(grpc_server, tmp_path, capsy
             if saved.exists() and saved.stat().st_size:
                 frames, _ = column(saved, "/video/frame", "EncodedImage:blob", "frame")
     finally:
-        saver.terminate()
-        saver.wait(timeout=10)
+        stop_group(saver)
     assert len(frames) == frames_analysed
     assert {"/video/frame", "/video/frame/fit", "/video/pattern"} <= entity_paths(saved)
