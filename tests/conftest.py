@@ -1,4 +1,10 @@
-"""Suite-wide checks. Every process a test starts must be ended by that test: a session
+"""Suite-wide fixtures.
+
+Each test runs in its own emulation (:class:`labkit.emulators.Emulation`): the plants of its
+``sim://`` ports are its own, so no test sees the motors or forces another left behind, and
+no test resets a registry by hand.
+
+Every process a test starts must be ended by that test: a session
 that leaves one running (a ``rerun`` server, an emulator host, a ``labkit`` subprocess) fails,
 naming its command line.
 
@@ -13,6 +19,7 @@ import uuid
 
 import pytest
 
+from labkit.emulators import Emulation, use_emulation
 from labkit.testing.processes import processes_with_env
 
 MARKER = "LABKIT_TEST_SESSION"
@@ -42,3 +49,10 @@ def no_process_left_behind():
                 pass
         lines = "\n".join(f"  pid {pid}: {cmd}" for pid, cmd in sorted(left.items()))
         pytest.fail(f"the test session left {len(left)} process(es) running:\n{lines}", pytrace=False)
+
+
+@pytest.fixture(autouse=True)
+def emulation(request):
+    """The test's own emulation (``emulation.plant("fig525")`` is what its sim:// ports share)."""
+    with use_emulation(Emulation(request.node.nodeid)) as emu:
+        yield emu

@@ -11,19 +11,12 @@ import pytest
 
 from labkit.cli import main
 from labkit.emulators.balances import MtSicsEmulator
-from labkit.emulators.plant import RigPlant, reset_plants
+from labkit.emulators.plant import RigPlant
 from labkit.io.clock import RealClock, VirtualClock, use_clock
 from labkit.io.pty_host import PtyHost
 
 CASSETTES = Path(__file__).resolve().parents[1] / "recordings" / "cassettes"
 KEYS = {"t", "value", "unit", "stable", "overload", "flags", "raw"}
-
-
-@pytest.fixture(autouse=True)
-def _fresh_plants():
-    reset_plants()
-    yield
-    reset_plants()
 
 
 def probe(capsys, *argv: str) -> tuple[int, list[str], str]:
@@ -108,7 +101,6 @@ def test_probe_unknown_protocol_and_bad_option(capsys):
 
 
 def test_probe_motor_reads_status_and_never_starts_it(capsys):
-    reset_plants()
     code, out, err = probe(capsys, "motor", "--protocol", "pololu_smc", "--port",
                            "sim://pololu_smc?plant=probe-motor", "--samples", "2", "--json")
     if code == 2 and "no motor driver" in err:

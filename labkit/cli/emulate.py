@@ -15,10 +15,10 @@ import json
 import sys
 import threading
 
+from labkit.emulators.sim_port import build_emulator
 from labkit.errors import PortURLError
 from labkit.io.clock import RealClock
 from labkit.io.pty_host import PtyHost
-from labkit.io.sim_port import build_emulator
 
 
 def parse_device_option(text: str) -> tuple[str, str]:

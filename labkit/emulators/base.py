@@ -175,7 +175,7 @@ class Emulator:
 
         The base knows only queued replies. Streaming emulators override this to include
         their next unsolicited frame; a ``sim://`` port on a virtual clock then jumps straight
-        there instead of polling in small steps (labkit.io.sim_port).
+        there instead of polling in small steps (labkit.emulators.sim_port).
         """
         return self.next_ready_time()
 

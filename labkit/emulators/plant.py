@@ -18,7 +18,8 @@ from __future__ import annotations
 import math
 import random
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 from labkit.units import G0, RAD_S_PER_RPM
@@ -231,10 +232,6 @@ class RigPlant:
             return self.force_law(self.speed(t))
 
 
-_PLANTS: dict[str, RigPlant] = {}
-_PLANTS_LOCK = threading.Lock()
-
-
 def fig618_plant(seed: int = 0) -> RigPlant:
     """The spin-critical rig of Fig. 6.18 (series 1: 15 mm sphere, 13.36 g, C = 4.7e5)."""
     return RigPlant(seed=seed, floator=FloatorPlant(seed=seed))
@@ -253,18 +250,71 @@ def make_plant(name: str, seed: int = 0) -> RigPlant:
     return preset(seed) if preset else RigPlant(seed=seed)
 
 
-def shared_plant(name: str, seed: int = 0) -> RigPlant:
-    """The process-wide plant called ``name`` (created on first use), shared by sim:// ports.
+class Emulation:
+    """The plants of one emulated rig: ``sim://`` ports opened while it is current share its
+    plants by name (``plant=fig525`` in their URLs), so a balance sees the speed its motor
+    emulator reached. Scope one with ``with use_emulation(Emulation()) as emu:``; each test
+    of labkit's suite gets its own (tests/conftest.py). Decision record:
+    docs/decisions/0003-scoped-emulations.md."""
 
-    Names starting with a preset (``fig525``, ``fig618``, ``fig618.test3``) get that preset.
-    """
-    with _PLANTS_LOCK:
-        if name not in _PLANTS:
-            _PLANTS[name] = make_plant(name, seed)
-        return _PLANTS[name]
+    def __init__(self, name: str = "") -> None:
+        self.name = name
+        self._plants: dict[str, RigPlant] = {}
+        self._lock = threading.Lock()
+
+    def plant(self, name: str, seed: int = 0) -> RigPlant:
+        """The plant called ``name`` (created on first use; names starting with a preset such
+        as ``fig525``, ``fig618``, ``fig618.test3`` get that preset)."""
+        with self._lock:
+            if name not in self._plants:
+                self._plants[name] = make_plant(name, seed)
+            return self._plants[name]
+
+    def plants(self) -> dict[str, RigPlant]:
+        with self._lock:
+            return dict(self._plants)
+
+    def clear(self) -> None:
+        """Forget every plant (the next run starts from rest)."""
+        with self._lock:
+            self._plants.clear()
+
+    def __repr__(self) -> str:
+        return f"Emulation({self.name!r}, plants={sorted(self._plants)})"
+
+
+#: the emulation of a process that scopes none (``labkit run``, ``labkit emulate``)
+_PROCESS_EMULATION = Emulation("process")
+_stack: list[Emulation] = []
+_stack_lock = threading.Lock()
+
+
+def current_emulation() -> Emulation:
+    """The innermost emulation made current by :func:`use_emulation` (any thread sees it:
+    emulators are built when their port opens, sometimes on a driver's reader thread), else
+    the process's own."""
+    with _stack_lock:
+        return _stack[-1] if _stack else _PROCESS_EMULATION
+
+
+@contextmanager
+def use_emulation(emulation: Emulation | None = None) -> Iterator[Emulation]:
+    """Make ``emulation`` (default: a new one) current inside the ``with`` block."""
+    emu = emulation if emulation is not None else Emulation()
+    with _stack_lock:
+        _stack.append(emu)
+    try:
+        yield emu
+    finally:
+        with _stack_lock:
+            _stack.remove(emu)
+
+
+def shared_plant(name: str, seed: int = 0) -> RigPlant:
+    """The current emulation's plant called ``name`` (:meth:`Emulation.plant`)."""
+    return current_emulation().plant(name, seed)
 
 
 def reset_plants() -> None:
-    """Forget all shared plants (tests)."""
-    with _PLANTS_LOCK:
-        _PLANTS.clear()
+    """Forget the current emulation's plants (:meth:`Emulation.clear`)."""
+    current_emulation().clear()

@@ -7,6 +7,8 @@ clock, so a virtual clock replays timeouts instantly and deterministically.
 
 from __future__ import annotations
 
+import random
+
 import serial
 from serial.serialutil import SerialBase
 
@@ -120,3 +122,8 @@ class ClockedSerial(SerialBase):
             "stopbits": self._stopbits,
             "timeout": self._timeout,
         }
+
+
+def garble(data: bytes, rng: random.Random) -> bytes:
+    """Bytes as a UART at the wrong baud/format sees them: same length, unrelated values."""
+    return bytes(rng.randrange(256) for _ in data)

@@ -2,11 +2,13 @@
 
 ``open_port(url, clock=..., baudrate=..., timeout=...)`` accepts everything
 ``serial.serial_for_url`` does (device paths, ``socket://``, ``loop://``, ``hwgrep://``, pty
-paths) plus labkit's own schemes, registered once with pyserial:
+paths) plus the schemes of the URL-handler packages registered with pyserial
+(``serial.protocol_handler_packages``):
 
-* ``sim://<protocol>?seed=N&faults=...`` - an emulator (labkit.io.sim_port);
 * ``record://<inner-url>?cassette=PATH&port=NAME`` - tee every byte to a cassette;
-* ``replay://<cassette>?mode=strict|timed`` - serve a cassette.
+* ``replay://<cassette>?mode=strict|timed`` - serve a cassette (both: this package);
+* ``sim://<protocol>?seed=N&faults=...`` - an emulator: registered by :mod:`labkit.emulators`
+  when it is imported (the transport knows no emulator; docs/decisions/0002-emulators-own-sim-urls.md).
 
 labkit's ports wait on the given clock (default :func:`labkit.io.clock.current_clock`);
 native ports ignore it.
@@ -19,17 +21,19 @@ from typing import Any
 
 import serial
 
+from labkit.errors import PortURLError
 from labkit.io.clock import Clock, current_clock
 
 HANDLER_PACKAGE = "labkit.io.urlhandlers"
 _register_lock = threading.Lock()
 
 
-def register_url_handlers() -> None:
-    """Make pyserial find ``sim://``, ``record://`` and ``replay://`` (idempotent)."""
+def register_url_handlers(package: str = HANDLER_PACKAGE) -> None:
+    """Make pyserial find the ``protocol_<scheme>`` modules of ``package`` (idempotent);
+    by default ``record://`` and ``replay://``."""
     with _register_lock:
-        if HANDLER_PACKAGE not in serial.protocol_handler_packages:
-            serial.protocol_handler_packages.append(HANDLER_PACKAGE)
+        if package not in serial.protocol_handler_packages:
+            serial.protocol_handler_packages.append(package)
 
 
 def open_port(url: str, *, clock: Clock | None = None, **serial_settings: Any) -> serial.SerialBase:
@@ -39,7 +43,12 @@ def open_port(url: str, *, clock: Clock | None = None, **serial_settings: Any) -
     :class:`labkit.errors.PortURLError` for a malformed labkit URL.
     """
     register_url_handlers()
-    port = serial.serial_for_url(url, do_not_open=True, **serial_settings)
+    try:
+        port = serial.serial_for_url(url, do_not_open=True, **serial_settings)
+    except ValueError as exc:
+        if url.lower().startswith("sim://") and "not known" in str(exc):
+            raise PortURLError(url, "sim:// ports are served by labkit.emulators; import it first") from None
+        raise
     if hasattr(port, "clock"):
         port.clock = clock if clock is not None else current_clock()
     port.open()

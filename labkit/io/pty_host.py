@@ -25,10 +25,30 @@ import termios
 import threading
 import tty
 from collections.abc import Callable
+from typing import Protocol
 
-from labkit.emulators.base import Emulator
 from labkit.io.clock import Clock, current_clock
-from labkit.io.sim_port import garble
+from labkit.io.clocked import garble
+
+
+class HostedDevice(Protocol):
+    """What a pty host serves: bytes in (``receive``), bytes out (``emit``) as functions of
+    clock time, and whether the device is plugged in (an emulator of labkit.emulators)."""
+
+    seed: int
+    role: str
+    protocol: str
+
+    def open(self, t: float) -> None: ...
+
+    def power_on(self, t: float) -> None: ...
+
+    def connected(self, t: float) -> bool: ...
+
+    def receive(self, data: bytes, t: float) -> None: ...
+
+    def emit(self, t: float) -> bytes: ...
+
 
 #: termios speed constant -> baud rate
 BAUD_OF_SPEED = {
@@ -72,7 +92,7 @@ class PtyHost:
 
     def __init__(
         self,
-        emulator: Emulator,
+        emulator: HostedDevice,
         clock: Clock | None = None,
         on_reconnect: Callable[[str], None] | None = None,
     ) -> None:

@@ -1,6 +1,7 @@
-"""Pure parsing of labkit's port URLs (no I/O): ``sim://``, ``record://``, ``replay://``.
+"""Pure parsing of labkit's transport URLs (no I/O): ``record://``, ``replay://``.
 
-* ``sim://<protocol>?seed=N&faults=a:1,b:2&plant=NAME&role=ROLE&<emulator options>``
+(``sim://`` belongs to the emulators: :mod:`labkit.emulators.urls`.)
+
 * ``record://<inner-url>?cassette=PATH&port=NAME`` - ``cassette`` and ``port`` are taken out
   of the query; every other query key stays with the inner URL, so
   ``record://sim://mtsics?seed=3&cassette=rec/b.jsonl&port=balance`` records
@@ -11,10 +12,9 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from urllib.parse import parse_qsl, quote, unquote
 
-from labkit.emulators.base import parse_faults
 from labkit.errors import PortURLError
 
 RECORD_KEYS = ("cassette", "port")
@@ -32,49 +32,6 @@ def split_scheme(url: str) -> tuple[str, str]:
 def _split_query(rest: str) -> tuple[str, list[tuple[str, str]]]:
     path, _, query = rest.partition("?")
     return path, parse_qsl(query, keep_blank_values=True)
-
-
-@dataclass(frozen=True)
-class SimSpec:
-    """What a ``sim://`` URL asks for."""
-
-    protocol: str
-    seed: int = 0
-    faults: dict[str, float] = field(default_factory=dict)
-    plant: str = "default"
-    role: str = ""
-    options: dict[str, str] = field(default_factory=dict)
-
-
-def parse_sim_url(url: str) -> SimSpec:
-    """Parse ``sim://<protocol>?seed=..&faults=..&plant=..&role=..&<options>``."""
-    scheme, rest = split_scheme(url)
-    if scheme != "sim":
-        raise PortURLError(url, "expected a sim://<protocol>?... URL")
-    protocol, query = _split_query(rest)
-    protocol = protocol.strip("/")
-    if not protocol:
-        raise PortURLError(url, "no emulator protocol after sim://")
-    seed, faults, plant, role = 0, {}, "default", ""
-    options: dict[str, str] = {}
-    for key, value in query:
-        if key == "seed":
-            try:
-                seed = int(value)
-            except ValueError:
-                raise PortURLError(url, f"seed={value!r} is not an integer") from None
-        elif key == "faults":
-            try:
-                faults.update(parse_faults(value))
-            except ValueError as exc:
-                raise PortURLError(url, str(exc)) from None
-        elif key == "plant":
-            plant = value or "default"
-        elif key == "role":
-            role = value
-        else:
-            options[key] = value
-    return SimSpec(protocol, seed, faults, plant, role or protocol, options)
 
 
 @dataclass(frozen=True)

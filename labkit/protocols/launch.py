@@ -52,11 +52,12 @@ def make_clock(kind: str, rig: Rig) -> Clock:
 
 
 def fresh_emulators(rig: Rig) -> None:
-    """A new run on emulators starts from fresh plants (shared plants are per process)."""
+    """A new run on emulators starts from rest: the current emulation's plants are forgotten
+    (:class:`labkit.emulators.Emulation`; a test's own, or the process's)."""
     if any(d.port.startswith("sim://") for d in rig.devices.values()):
-        from labkit.emulators.plant import reset_plants
+        from labkit.emulators import current_emulation
 
-        reset_plants()
+        current_emulation().clear()
 
 
 def carried_points(record: SessionRecord) -> list[dict[str, Any]]:

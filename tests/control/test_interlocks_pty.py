@@ -12,9 +12,9 @@ from pathlib import Path
 import pytest
 
 from labkit.emulators.plant import shared_plant
+from labkit.emulators.sim_port import build_emulator
 from labkit.io.clock import RealClock, use_clock
 from labkit.io.pty_host import PtyHost
-from labkit.io.sim_port import build_emulator
 from labkit.protocols import ListSink, Runner
 from labkit.protocols.params import resolve_params
 from labkit.rig import parse_rig

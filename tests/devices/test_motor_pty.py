@@ -7,11 +7,11 @@ import pytest
 
 from labkit.devices.base import driver_class
 from labkit.emulators.plant import shared_plant
+from labkit.emulators.sim_port import build_emulator
 from labkit.errors import DeviceDisconnected
 from labkit.io.clock import RealClock
 from labkit.io.ports import open_port
 from labkit.io.pty_host import PtyHost
-from labkit.io.sim_port import build_emulator
 
 pytestmark = pytest.mark.timeout(30)
 

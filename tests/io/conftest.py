@@ -9,10 +9,7 @@
 
 from __future__ import annotations
 
-import pytest
-
 from labkit.emulators.base import Emulator, register_emulator
-from labkit.emulators.plant import reset_plants
 
 
 @register_emulator
@@ -65,10 +62,3 @@ class TickerTestEmulator(Emulator):
         queued = self.next_ready_time()
         upcoming = self._due(self._count + 1)
         return upcoming if queued is None else min(queued, upcoming)
-
-
-@pytest.fixture(autouse=True)
-def _fresh_plants():
-    reset_plants()
-    yield
-    reset_plants()

@@ -8,9 +8,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from labkit.emulators.urls import parse_sim_url
 from labkit.errors import CassetteError, PortURLError
 from labkit.io.cassette import decode_data, encode_data, load_cassette
-from labkit.io.urls import parse_record_url, parse_replay_url, parse_sim_url
+from labkit.io.urls import parse_record_url, parse_replay_url
 
 
 @given(st.binary(max_size=200))

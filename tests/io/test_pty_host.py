@@ -7,9 +7,9 @@ import threading
 import pytest
 import serial
 
+from labkit.emulators.sim_port import build_emulator
 from labkit.io.clock import RealClock
 from labkit.io.pty_host import PtyHost
-from labkit.io.sim_port import build_emulator
 
 
 def lines_until_echo(port: serial.Serial) -> bytes:

@@ -6,17 +6,10 @@ from pathlib import Path
 import pytest
 
 from labkit.cli import main
-from labkit.emulators.plant import reset_plants, shared_plant
+from labkit.emulators.plant import shared_plant
 
 REPO = Path(__file__).resolve().parents[2]
 FIG525 = str(REPO / "rigs" / "emulated-fig525.toml")
-
-
-@pytest.fixture(autouse=True)
-def fresh_plants():
-    reset_plants()
-    yield
-    reset_plants()
 
 
 def run_cli(argv, capsys):

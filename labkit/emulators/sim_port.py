@@ -27,13 +27,14 @@ from serial.serialutil import to_bytes
 
 from labkit.emulators.base import DISCONNECT_MESSAGE, Emulator, emulator_class
 from labkit.emulators.plant import shared_plant
+from labkit.emulators.urls import parse_sim_url
 from labkit.errors import PortURLError
-from labkit.io.clocked import LINE_SETTINGS, REAL_POLL_S, VIRTUAL_POLL_S, ClockedSerial, poll_step
-from labkit.io.urls import parse_sim_url
+from labkit.io.clocked import LINE_SETTINGS, REAL_POLL_S, VIRTUAL_POLL_S, ClockedSerial, garble, poll_step
 
 
 def build_emulator(url: str) -> Emulator:
-    """The emulator a ``sim://`` URL describes, on its shared plant."""
+    """The emulator a ``sim://`` URL describes, on its plant in the current emulation
+    (:func:`labkit.emulators.plant.current_emulation`)."""
     spec = parse_sim_url(url)
     try:
         cls = emulator_class(spec.protocol)
@@ -57,11 +58,6 @@ def settings_mismatch(expected: dict[str, Any] | None, actual: dict[str, Any]) -
         for key in LINE_SETTINGS
         if key in expected and expected[key] != actual.get(key)
     }
-
-
-def garble(data: bytes, rng: random.Random) -> bytes:
-    """Bytes as a UART at the wrong baud/format sees them: same length, unrelated values."""
-    return bytes(rng.randrange(256) for _ in data)
 
 
 def emulator_wake_time(emulator: Emulator, now: float) -> float | None:
@@ -192,6 +188,6 @@ class SimSerial(ClockedSerial):
 
 
 def serial_class_for_url(url: str) -> tuple[str, type[SimSerial]]:
-    """pyserial hook (``labkit.io.urlhandlers.protocol_sim``)."""
+    """pyserial hook (``labkit.emulators.urlhandlers.protocol_sim``)."""
     parse_sim_url(url)  # fail early, with the URL in the message
     return url, SimSerial
