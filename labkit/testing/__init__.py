@@ -1,1 +1,12 @@
-"""Helpers for testing code that uses labkit, and for labkit's own tests."""
+"""Helpers for testing code that uses labkit, and for labkit's own tests.
+
+* :func:`expected_protocol` - a driver against a strict list of byte pairs, in memory
+  (:mod:`labkit.testing.protocol`);
+* :func:`start_group` / :func:`stop_group` - child processes ended with their own children
+  (:mod:`labkit.testing.processes`).
+"""
+
+from labkit.testing.processes import start_group, stop_group
+from labkit.testing.protocol import ExchangePort, ProtocolMismatch, expected_protocol
+
+__all__ = ["ExchangePort", "ProtocolMismatch", "expected_protocol", "start_group", "stop_group"]
