@@ -154,6 +154,8 @@ class Drop(RunDocument):
 
 @dataclass(frozen=True, kw_only=True)
 class Checkpoint(RunDocument):
+    """Step ``index`` is done and saved: a resumed run starts after it."""
+
     type: ClassVar[str] = "checkpoint"
     index: int
 
@@ -161,6 +163,7 @@ class Checkpoint(RunDocument):
 @dataclass(frozen=True, kw_only=True)
 class StopRequest(RunDocument):
     type: ClassVar[str] = "stop_request"
+    #: how many times Ctrl-C was pressed: 1 stops at the next checkpoint, 2 zeroes every motor now
     count: int
 
 
@@ -179,6 +182,8 @@ class Interlock(RunDocument):
 
 @dataclass(frozen=True, kw_only=True)
 class Fault(RunDocument):
+    """An exception ended the run (``reason`` says which); every motor was commanded to zero."""
+
     type: ClassVar[str] = "fault"
     reason: str
 
@@ -186,6 +191,7 @@ class Fault(RunDocument):
 @dataclass(frozen=True, kw_only=True)
 class Results(RunDocument):
     type: ClassVar[str] = "results"
+    #: the results.json object: protocol, points, fit
     results: dict[str, Any]
 
 

@@ -6,16 +6,10 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from urllib.parse import parse_qsl
 
 from labkit.emulators.base import parse_faults
 from labkit.errors import PortURLError
-from labkit.io.urls import split_scheme
-
-
-def _split_query(rest: str) -> tuple[str, list[tuple[str, str]]]:
-    path, _, query = rest.partition("?")
-    return path, parse_qsl(query, keep_blank_values=True)
+from labkit.io.urls import split_query, split_scheme
 
 
 @dataclass(frozen=True)
@@ -35,7 +29,7 @@ def parse_sim_url(url: str) -> SimSpec:
     scheme, rest = split_scheme(url)
     if scheme != "sim":
         raise PortURLError(url, "expected a sim://<protocol>?... URL")
-    protocol, query = _split_query(rest)
+    protocol, query = split_query(rest)
     protocol = protocol.strip("/")
     if not protocol:
         raise PortURLError(url, "no emulator protocol after sim://")

@@ -141,21 +141,11 @@ class RecordSerial(ClockedSerial):
         if self.inner is not None and self.is_open:
             self.inner.break_condition = self._break_state
 
-    @property
-    def cts(self) -> bool:
-        return self._live().cts
-
-    @property
-    def dsr(self) -> bool:
-        return self._live().dsr
-
-    @property
-    def ri(self) -> bool:
-        return self._live().ri
-
-    @property
-    def cd(self) -> bool:
-        return self._live().cd
+    # modem status lines: the inner port's
+    cts = property(lambda self: self._live().cts)
+    dsr = property(lambda self: self._live().dsr)
+    ri = property(lambda self: self._live().ri)
+    cd = property(lambda self: self._live().cd)
 
     def _live(self) -> serial.SerialBase:
         self._require_open()

@@ -29,7 +29,8 @@ def split_scheme(url: str) -> tuple[str, str]:
     return scheme.lower(), rest
 
 
-def _split_query(rest: str) -> tuple[str, list[tuple[str, str]]]:
+def split_query(rest: str) -> tuple[str, list[tuple[str, str]]]:
+    """``"mtsics?seed=3&x="`` -> ``("mtsics", [("seed", "3"), ("x", "")])``."""
     path, _, query = rest.partition("?")
     return path, parse_qsl(query, keep_blank_values=True)
 
@@ -48,7 +49,7 @@ def parse_record_url(url: str) -> RecordSpec:
     scheme, rest = split_scheme(url)
     if scheme != "record":
         raise PortURLError(url, "expected a record://<inner-url>?cassette=PATH URL")
-    inner, query = _split_query(rest)
+    inner, query = split_query(rest)
     own = {k: v for k, v in query if k in RECORD_KEYS}
     kept = [(k, v) for k, v in query if k not in RECORD_KEYS]
     if not inner:
@@ -80,7 +81,7 @@ def parse_replay_url(url: str) -> ReplaySpec:
     scheme, rest = split_scheme(url)
     if scheme != "replay":
         raise PortURLError(url, "expected a replay://<cassette-path>?mode=strict|timed URL")
-    path, query = _split_query(rest)
+    path, query = split_query(rest)
     path = unquote(path)
     if not path:
         raise PortURLError(url, "no cassette path after replay://")

@@ -8,6 +8,7 @@ import pytest
 
 from labkit.devices.loadcell.mtsics import MtSicsBalance
 from labkit.devices.motor.pololu_smc import PololuSmc
+from labkit.emulators.motors import _smc_crc7
 from labkit.errors import DeviceReplyError, DeviceTimeout
 from labkit.testing import ProtocolMismatch, expected_protocol
 
@@ -64,21 +65,10 @@ def test_pololu_never_moves_before_enable_and_stops_on_close():
         motor.set_duty(0.5)
 
 
-def vendor_crc7(message: bytes) -> int:
-    """getCRC() of the Pololu SMC G2 user's guide (section 6.4), transcribed: CRC7_POLY 0x91."""
-    crc = 0
-    for byte in message:
-        crc ^= byte
-        for _ in range(8):
-            if crc & 1:
-                crc ^= 0x91
-            crc >>= 1
-    return crc
-
-
 def test_pololu_crc_option_appends_the_crc7_byte():
-    assert vendor_crc7(b"\x83") == 0x1A                  # the guide's worked example
-    with expected_protocol(PololuSmc, [(b"\x83\x1a", None), (bytes([0xE0, vendor_crc7(b"\xe0")]), None)],
+    """0x1A after 83 is the guide's worked example; the stop packet's CRC is the emulator's
+    own (written apart from the driver)."""
+    with expected_protocol(PololuSmc, [(b"\x83\x1a", None), (bytes([0xE0, _smc_crc7(b"\xe0")]), None)],
                            crc=True) as motor:
         motor.enable()
 
