@@ -48,7 +48,7 @@ class DeviceItem:
 
 
 @dataclass
-class Session:
+class PortSession:
     """Events between one ``open`` and the next."""
 
     open_event: dict[str, Any] | None = None
@@ -59,14 +59,14 @@ class Session:
     device: list[DeviceItem] = field(default_factory=list)
 
 
-def split_sessions(cassette: Cassette) -> list[Session]:
+def split_sessions(cassette: Cassette) -> list[PortSession]:
     """Group a cassette's events into open/close sessions, pairing reads with their markers."""
-    sessions: list[Session] = []
-    current: Session | None = None
+    sessions: list[PortSession] = []
+    current: PortSession | None = None
     for event in cassette.events:
         kind = event.get("event") if event["dir"] == "ctl" else event["dir"]
         if kind == "open" or current is None:
-            current = Session(open_event=event if kind == "open" else None)
+            current = PortSession(open_event=event if kind == "open" else None)
             sessions.append(current)
             if kind == "open":
                 continue
@@ -157,10 +157,10 @@ class ReplaySerial(ClockedSerial):
     def __init__(self, *args, **kwargs) -> None:
         self.cassette: Cassette | None = None
         self.mode = "strict"
-        self.sessions: list[Session] = []
+        self.sessions: list[PortSession] = []
         self.port_name = ""
         self._next_session = 0
-        self._session: Session | None = None
+        self._session: PortSession | None = None
         self._tx_pos = 0
         self._dev_idx = 0
         self._chunk_pos = 0
@@ -198,7 +198,7 @@ class ReplaySerial(ClockedSerial):
             raise rebuild_error(session.open_error)
         self.is_open = True
 
-    def _check_settings(self, session: Session) -> None:
+    def _check_settings(self, session: PortSession) -> None:
         recorded = (session.open_event or {}).get("serial") or {}
         actual = self.settings_summary()
         for key in LINE_SETTINGS:

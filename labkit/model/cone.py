@@ -106,8 +106,12 @@ def cone_equation_residual(phi, tau_c, tau_s, i_axial, i_radial, omega, k: float
     return tau_c * c + tau_s * s - w2 * s * (-k * i_axial + (i_radial - i_axial) * c)
 
 
-def cone_angle_axisymmetric(tau_c, tau_s, i_axial, i_radial, omega, k: float = -1.0):
-    """Equilibrium cone angle of an axisymmetric body, root of Eq. 5.35 (Eq. 5.64 with spin ``k``).
+def cone_angles_axisymmetric(*, tau_c, tau_s, i_axial, i_radial, omega, k: float = -1.0):
+    """Equilibrium cone angle(s) of an axisymmetric body, root of Eq. 5.35 (Eq. 5.64 with spin ``k``).
+
+    Keyword-only: :func:`labkit.sim.equilibrium.cone_angle_axisymmetric` (a scalar root for
+    the simulator) takes the same quantities in another order, so a positional call here is
+    refused rather than silently swapped (docs/decisions/0005-names.md).
 
     Vectorised Newton iteration started from the isotropic closed form (Eq. 5.24 / 5.68 with
     the inertia the equation has at phi -> 0). Returns NaN where it does not converge.
@@ -184,7 +188,8 @@ def conical_initial_state(tau_c: float, tau_s: float, i_axial: float, i_radial: 
     principal inertias (I_R, I_R, I_A). Field convention of Eq. 5.21.
     """
     if phi is None:
-        phi = float(cone_angle_axisymmetric(tau_c, tau_s, i_axial, i_radial, omega, k))
+        phi = float(cone_angles_axisymmetric(tau_c=tau_c, tau_s=tau_s, i_axial=i_axial, i_radial=i_radial,
+                                             omega=omega, k=k))
     rot = conical_rotation(phi, omega, t, k)
     v = conical_angular_velocity(phi, omega, t, k)
     inertia_body = np.diag([i_radial, i_radial, i_axial])

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from labkit.model.cone import cone_angle_axisymmetric
+from labkit.model.cone import cone_angles_axisymmetric
 
 EZ = np.array([0.0, 0.0, 1.0])
 
@@ -64,7 +64,8 @@ def equilibrium(phi: float, inertia_ratio: float = 1.0) -> np.ndarray:
 
 def equilibrium_phi(body: RotatingFieldBody) -> float:
     """Cone angle of ``body`` from Eq. 5.35 (nondimensional: I_R = omega = 1)."""
-    return float(cone_angle_axisymmetric(body.j_c, body.j_s, 1.0 / body.inertia_ratio, 1.0, 1.0))
+    return float(cone_angles_axisymmetric(tau_c=body.j_c, tau_s=body.j_s, i_axial=1.0 / body.inertia_ratio,
+                                          i_radial=1.0, omega=1.0))
 
 
 def jacobian(y: np.ndarray, body: RotatingFieldBody, h: float = 1e-6) -> np.ndarray:

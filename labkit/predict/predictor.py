@@ -22,7 +22,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from labkit.model.cone import cone_angle_axisymmetric
+from labkit.model.cone import cone_angles_axisymmetric
 from labkit.model.conical_dynamics import RotatingFieldBody, equilibrium, jacobian
 from labkit.model.mbs import scaled_speed
 from labkit.model.stability import criterion_holds, min_static_torque
@@ -140,8 +140,9 @@ def _bound_state_numbers(pred: Prediction, pair: Pair, omega: float, curve: Forc
                       STEADY_STATE, "Sec. 5.2, Fig. 5.13"))
     f = pair.floator
     tau_c, tau_s = pair.torques(r)
-    (phi_cf, cost) = timed(lambda: float(cone_angle_axisymmetric(
-        tau_c, tau_s, f.inertia_axial_kg_m2, f.inertia_radial_kg_m2, omega)))
+    (phi_cf, cost) = timed(lambda: float(cone_angles_axisymmetric(
+        tau_c=tau_c, tau_s=tau_s, i_axial=f.inertia_axial_kg_m2, i_radial=f.inertia_radial_kg_m2,
+        omega=omega)))
     pred.add(Estimate("cone_angle_deg", "cone angle", math.degrees(phi_cf), "deg", CLOSED_FORM,
                       "5.35 (5.24) with 5.28", accuracy=abs(math.degrees(phi_cf - state.phi)),
                       accuracy_how="vs the steady state with its lateral circle", cost_s=cost))

@@ -5,7 +5,8 @@ y (``labkit.fit`` fits ln y) and the Eq. 6.37 fit minimises residuals in ``w^2 -
 (``labkit.fit`` in v_S), so the numbers differ in the 3rd-4th digit, and recorded sessions
 replay bit-for-bit against the results.json these functions wrote.
 
-* :func:`fit_power_law`: ``y = a x^b`` as the paper plots Fig. 5.25 (x in RPM, y in grams
+* :func:`quick_fit_power_law`: model ``power-law`` (the spelling of :mod:`labkit.fit`'s model
+  registry), ``y = a x^b`` as the paper plots Fig. 5.25 (x in RPM, y in grams
   force; the paper found a = 224e6, b = -1.9).
 * :func:`fit_spin_critical_c`: Eq. 6.37, ``-k w^2 = C (1 - w/w_ref)`` with ``k = v/w - 1``;
   linear in C, so it is a one-parameter least-squares fit through the origin of
@@ -21,7 +22,7 @@ def _param(value: float, stderr: float) -> dict[str, float]:
     return {"value": float(value), "stderr": float(stderr)}
 
 
-def fit_power_law(x: list[float], y: list[float], sigma: list[float] | None = None) -> dict:
+def quick_fit_power_law(x: list[float], y: list[float], sigma: list[float] | None = None) -> dict:
     """Weighted least squares of ``y = a x^b``; started from a log-log line. Needs y > 0."""
     import numpy as np  # imported here: the CLI starts fast when no fit runs
     from scipy.optimize import curve_fit
@@ -44,7 +45,7 @@ def fit_power_law(x: list[float], y: list[float], sigma: list[float] | None = No
     # error propagation for a = c * x_ref^-b
     ja = np.array([x_ref**-b, -a * math.log(x_ref)])
     var_a = float(ja @ cov @ ja)
-    return {"model": "power_law", "formula": "y = a * x^b", "x": "speed_rpm", "y": "force_g",
+    return {"model": "power-law", "formula": "y = a * x^b", "x": "speed_rpm", "y": "force_g",
             "params": {"a": _param(a, math.sqrt(max(var_a, 0.0))),
                        "b": _param(b, math.sqrt(max(cov[1, 1], 0.0)))},
             "n": int(len(xa))}

@@ -21,7 +21,7 @@ from typing import Any
 from labkit import documents as doc
 from labkit.errors import LabkitError
 from labkit.protocols.params import ParamError
-from labkit.protocols.quickfit import fit_power_law
+from labkit.protocols.quickfit import quick_fit_power_law
 from labkit.protocols.runner import ProtocolDef, RunContext, Step
 from labkit.rig import Rig
 from labkit.units import G0, rad_s_to_rpm, rpm_to_rad_s
@@ -46,7 +46,7 @@ def mean_stderr(values: list[float]) -> tuple[float, float]:
 class SpeedSweep(ProtocolDef):
     name = "speed-sweep"
     summary = "PFR force vs rotor speed on a balance (Fig. 5.25)"
-    fit_model = "power_law"
+    fit_model = "power-law"
     defaults: dict[str, Any] = {
         "speeds_rpm": [6000.0 + 1000.0 * i for i in range(15)],  # 6000:20000:1000
         "up_down": False,        # also sweep back down (hysteresis)
@@ -128,4 +128,5 @@ class SpeedSweep(ProtocolDef):
         usable = [pt for pt in points
                   if pt.get("speed_rpm") is not None and pt.get("force_g") is not None and pt["force_g"] > 0]
         sigma = [pt["force_stderr_g"] if pt.get("force_stderr_g") is not None else math.nan for pt in usable]
-        return fit_power_law([pt["speed_rpm"] for pt in usable], [pt["force_g"] for pt in usable], sigma)
+        return quick_fit_power_law([pt["speed_rpm"] for pt in usable], [pt["force_g"] for pt in usable],
+                                   sigma)

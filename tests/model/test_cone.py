@@ -6,9 +6,9 @@ import pytest
 
 from labkit.model.cone import (
     cone_angle,
-    cone_angle_axisymmetric,
     cone_angle_spin,
     cone_angle_tilted_dipole,
+    cone_angles_axisymmetric,
     cone_equation_residual,
     conical_angular_velocity,
     conical_axis,
@@ -68,16 +68,18 @@ def test_tilted_dipole_form_equals_eq_5_24_with_eq_5_28():
 
 def test_axisymmetric_root_reduces_to_isotropic_and_solves_eq_5_35():
     iso = cone_angle(1e-3, 2e-4, 1e-7, W)
-    assert cone_angle_axisymmetric(1e-3, 2e-4, 1e-7, 1e-7, W) == pytest.approx(iso)
-    phi = cone_angle_axisymmetric(7.5e-4, 2.25e-4, 8.099e-8, 1.058e-7, 60 * np.pi)
+    same = cone_angles_axisymmetric(tau_c=1e-3, tau_s=2e-4, i_axial=1e-7, i_radial=1e-7, omega=W)
+    assert same == pytest.approx(iso)
+    phi = cone_angles_axisymmetric(tau_c=7.5e-4, tau_s=2.25e-4, i_axial=8.099e-8, i_radial=1.058e-7,
+                                   omega=60 * np.pi)
     assert abs(cone_equation_residual(phi, 7.5e-4, 2.25e-4, 8.099e-8, 1.058e-7, 60 * np.pi)) < 1e-15
     # Table 5.3 row 1 prints phi-calc = 0.2102 (4 decimals)
     assert phi == pytest.approx(0.2102, abs=6e-5)
 
 
 def test_axisymmetric_root_is_vectorised():
-    phis = cone_angle_axisymmetric([7.5e-4, 1e-3], [1e-4, 1.3e-4], [8.099e-8, 2e-7], [1.058e-7, 1.125e-7],
-                                   60 * np.pi)
+    phis = cone_angles_axisymmetric(tau_c=[7.5e-4, 1e-3], tau_s=[1e-4, 1.3e-4], i_axial=[8.099e-8, 2e-7],
+                                    i_radial=[1.058e-7, 1.125e-7], omega=60 * np.pi)
     assert phis.shape == (2,)
     assert phis[1] == pytest.approx(0.2472, abs=6e-5)  # Table 5.3 row 32
 
@@ -87,7 +89,8 @@ def test_spin_closed_form_matches_general_root_and_fig_5_11a():
     k = spin_parameter(-0.5 * W, W)
     assert k == pytest.approx(-1.5)
     phi = cone_angle_spin(1e-3, 0.0, 8.1e-8, W, k)
-    assert phi == pytest.approx(cone_angle_axisymmetric(1e-3, 0.0, 8.1e-8, 8.1e-8, W, k))
+    general = cone_angles_axisymmetric(tau_c=1e-3, tau_s=0.0, i_axial=8.1e-8, i_radial=8.1e-8, omega=W, k=k)
+    assert phi == pytest.approx(general)
     assert phi == pytest.approx(0.12962, rel=5e-4)
     v = conical_angular_velocity(phi, W, 0.0, k)
     # the caption's |v| = (48.71, 122.28) up to the COMSOL sign convention (Table 5.2)
@@ -110,3 +113,10 @@ def test_initial_state_obeys_eulers_equation_under_the_magnetic_torque():
     torque = torque_in_field(state.dipole_axis, rotating_field(tau_c, tau_s, W, t))
     assert np.allclose(dl_dt, torque, rtol=1e-6, atol=1e-9)
     assert np.allclose(state.rotation @ state.body_angular_velocity, state.angular_velocity)
+
+
+def test_a_positional_call_is_refused_not_swapped():
+    """labkit.sim.equilibrium.cone_angle_axisymmetric takes (omega, tau_c, tau_s, i_radial, i_axial):
+    the model's version must not accept the same numbers in its own order without names."""
+    with pytest.raises(TypeError):
+        cone_angles_axisymmetric(1e-3, 2e-4, 1e-7, 1e-7, W)  # type: ignore[misc]
