@@ -87,17 +87,7 @@ def solve(
     """
     y_rs = np.asarray(y_rs, dtype=float)
     w = np.ones_like(y_rs) if weights is None else np.asarray(weights, dtype=float)
-
-    def residuals(t: np.ndarray) -> np.ndarray:
-        # Outside the model's domain (overflow, log of a negative) the residual is huge but
-        # finite, which steers the solver back; the solution itself is checked below.
-        try:
-            with np.errstate(all="ignore"):
-                r = (y_rs - model_rs(t)) * w
-        except (OverflowError, ZeroDivisionError, ValueError):
-            return np.full(len(y_rs), OUT_OF_DOMAIN)
-        return np.where(np.isfinite(r), r, OUT_OF_DOMAIN)
-
+    residuals = _residual_function(y_rs, model_rs, w)
     theta0 = np.asarray(theta0, dtype=float)
     n, p = len(y), len(theta0)
     if n <= p:
@@ -105,49 +95,16 @@ def solve(
             f"{model}: {n} point(s) for {p} fitted parameter(s) ({', '.join(theta_names)}); "
             f"need at least {p + 1} to estimate uncertainties"
         )
-    r0 = residuals(theta0)
-    if np.any(np.abs(r0) >= OUT_OF_DOMAIN):
-        raise FitError(f"{model}: the model is not finite at the starting point; check the data")
-    with np.errstate(all="ignore"):
-        sol = optimize.least_squares(residuals, theta0, method="lm", jac="3-point",
-                                     x_scale=1.0, xtol=1e-10, ftol=1e-12, gtol=1e-12,
-                                     max_nfev=MAX_NFEV_PER_PARAM * (p + 1))
-    if sol.status == 0:
-        raise FitError(f"{model}: no convergence after {sol.nfev} evaluations: the parameters "
-                       f"({', '.join(theta_names)}) wander along a flat valley, i.e. they are not "
-                       f"identifiable from these data{'; ' + hint if hint else ''}")
-    if sol.status < 0 or not np.all(np.isfinite(sol.x)):
-        raise FitError(f"{model}: the solver did not converge ({sol.message})")
-    theta = sol.x
+    theta = _least_squares(model, residuals, theta0, theta_names, hint)
     r = residuals(theta)
-    if np.any(np.abs(r) >= OUT_OF_DOMAIN):
-        raise FitError(f"{model}: the model is not finite at the solution; check the data range")
     jac = _jacobian(residuals, theta)
     dof = n - p
     ssr = float(r @ r)
     s2 = ssr / dof
     cov_theta, cond, corr = _covariance(model, jac, s2, theta_names)
-
-    tq = t95(dof)
     warns = list(warnings)
-    estimates: dict[str, ParamEstimate] = {}
-    for par in params:
-        try:
-            with np.errstate(all="ignore"):
-                estimates[par.name] = _estimate(par, theta, cov_theta, tq, warns, model)
-        except (OverflowError, ZeroDivisionError) as exc:
-            raise FitError(f"{model}: {par.name} cannot be computed from the fit ({exc}); "
-                           "it is not identifiable from these data") from None
-
-    if cond > CONDITION_WARN:
-        warns.append(
-            f"ill-conditioned: scaled condition number {cond:.2g}; the parameters "
-            f"{_worst_pair(corr, theta_names)} trade off against each other"
-        )
-    else:
-        pair = _worst_pair(corr, theta_names, threshold=CORRELATION_WARN)
-        if pair:
-            warns.append(f"parameters {pair} are almost fully correlated; only a combination is fixed")
+    estimates = _estimates(model, params, theta, cov_theta, t95(dof), warns)
+    warns += _conditioning_warnings(cond, corr, theta_names)
 
     raw_res = y_rs - model_rs(theta)
     ss_tot = float(np.sum((y_rs - y_rs.mean()) ** 2))
@@ -177,6 +134,66 @@ def solve(
         y_name=y_name,
         extra={"theta": theta.copy(), "cov_theta": cov_theta},
     )
+
+
+def _residual_function(y_rs: np.ndarray, model_rs: Callable[[np.ndarray], np.ndarray],
+                       w: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    """Weighted residuals in residual space. Outside the model's domain (overflow, log of a
+    negative) the residual is huge but finite, which steers the solver back; the solution
+    itself is checked by :func:`_least_squares`."""
+
+    def residuals(t: np.ndarray) -> np.ndarray:
+        try:
+            with np.errstate(all="ignore"):
+                r = (y_rs - model_rs(t)) * w
+        except (OverflowError, ZeroDivisionError, ValueError):
+            return np.full(len(y_rs), OUT_OF_DOMAIN)
+        return np.where(np.isfinite(r), r, OUT_OF_DOMAIN)
+
+    return residuals
+
+
+def _least_squares(model: str, residuals: Callable[[np.ndarray], np.ndarray], theta0: np.ndarray,
+                   theta_names: Sequence[str], hint: str) -> np.ndarray:
+    """Levenberg-Marquardt from ``theta0``; FitError saying why when there is no usable solution."""
+    if np.any(np.abs(residuals(theta0)) >= OUT_OF_DOMAIN):
+        raise FitError(f"{model}: the model is not finite at the starting point; check the data")
+    with np.errstate(all="ignore"):
+        sol = optimize.least_squares(residuals, theta0, method="lm", jac="3-point",
+                                     x_scale=1.0, xtol=1e-10, ftol=1e-12, gtol=1e-12,
+                                     max_nfev=MAX_NFEV_PER_PARAM * (len(theta0) + 1))
+    if sol.status == 0:
+        raise FitError(f"{model}: no convergence after {sol.nfev} evaluations: the parameters "
+                       f"({', '.join(theta_names)}) wander along a flat valley, i.e. they are not "
+                       f"identifiable from these data{'; ' + hint if hint else ''}")
+    if sol.status < 0 or not np.all(np.isfinite(sol.x)):
+        raise FitError(f"{model}: the solver did not converge ({sol.message})")
+    if np.any(np.abs(residuals(sol.x)) >= OUT_OF_DOMAIN):
+        raise FitError(f"{model}: the model is not finite at the solution; check the data range")
+    return sol.x
+
+
+def _estimates(model: str, params: Sequence[Param], theta: np.ndarray, cov_theta: np.ndarray, tq: float,
+               warns: list[str]) -> dict[str, ParamEstimate]:
+    """Every reported parameter with its uncertainty (warnings appended to ``warns``)."""
+    estimates: dict[str, ParamEstimate] = {}
+    for par in params:
+        try:
+            with np.errstate(all="ignore"):
+                estimates[par.name] = _estimate(par, theta, cov_theta, tq, warns, model)
+        except (OverflowError, ZeroDivisionError) as exc:
+            raise FitError(f"{model}: {par.name} cannot be computed from the fit ({exc}); "
+                           "it is not identifiable from these data") from None
+    return estimates
+
+
+def _conditioning_warnings(cond: float, corr: np.ndarray, theta_names: Sequence[str]) -> list[str]:
+    """An ill-conditioned fit, or two parameters almost fully correlated, said in words."""
+    if cond > CONDITION_WARN:
+        return [f"ill-conditioned: scaled condition number {cond:.2g}; the parameters "
+                f"{_worst_pair(corr, theta_names)} trade off against each other"]
+    pair = _worst_pair(corr, theta_names, threshold=CORRELATION_WARN)
+    return [f"parameters {pair} are almost fully correlated; only a combination is fixed"] if pair else []
 
 
 def _bind(predict_with, theta: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
