@@ -11,6 +11,7 @@ to zero first. Keys are documented in ``docs/rig-files.md``.
 from __future__ import annotations
 
 import math
+import re
 import tomllib
 import urllib.parse
 from collections.abc import Callable
@@ -41,6 +42,23 @@ UNIT_SUFFIXES: dict[str, tuple[str, float]] = {
     "s": ("s", 1.0),
     "gf": ("N", 1e-3 * G0),
     "n": ("N", 1.0),
+}
+
+#: Absolute sanity caps, whatever a rig file says (docs/rig-files.md, "Caps"). A value beyond
+#: one is a typo or a unit mistake, never a setting: the fastest rotor of the paper turns at
+#: 100 000 RPM, and an interlock that waits an hour is no interlock.
+MAX_SPEED_RPM = 150_000.0             # every speed (limits, control, ...)
+MAX_RAMP_RPM_PER_S = 150_000.0        # every acceleration
+MAX_DURATION_S = 3600.0               # every time: settle timeouts, serial timeouts, ...
+MAX_TACH_TIMEOUT_S = 10.0             # tachometer silent longer than this cannot be allowed
+MAX_CONTROL_PERIOD_S = 1.0            # a speed loop slower than 1 Hz cannot hold a ramp
+MAX_RIG_FILE_BYTES = 1_000_000        # a rig file is a few kB; /dev/zero is not a rig file
+#: Device roles and loop names become file names inside a session (``readings/ROLE.jsonl``).
+ROLE_PATTERN = re.compile(r"[a-z][a-z0-9_]{0,63}")
+_CAPS_SI: dict[str, tuple[float, str]] = {
+    "rad/s": (MAX_SPEED_RPM * RAD_S_PER_RPM, f"{MAX_SPEED_RPM:.0f} RPM"),
+    "rad/s^2": (MAX_RAMP_RPM_PER_S * RAD_S_PER_RPM, f"{MAX_RAMP_RPM_PER_S:.0f} RPM/s"),
+    "s": (MAX_DURATION_S, f"{MAX_DURATION_S:.0f} s"),
 }
 
 KINDS = ("balance", "tach", "motor")
@@ -186,11 +204,17 @@ class _Section:
         if not ok:
             want = typ.__name__ if isinstance(typ, type) else " or ".join(t.__name__ for t in typ)
             raise self.error(name, f"must be {want}, got {value!r}")
+        if isinstance(value, float) and not math.isfinite(value):
+            raise self.error(name, f"must be a finite number, got {value!r}")
         return value
 
     def quantity(self, base: str, si_unit: str, required: bool = False, default: float | None = None,
-                 positive: bool = True, allow_zero: bool = False) -> float | None:
-        """Find ``base_<suffix>`` with a suffix of ``si_unit``; return the SI value."""
+                 positive: bool = True, allow_zero: bool = False,
+                 cap: tuple[float, str] | None = None) -> float | None:
+        """Find ``base_<suffix>`` with a suffix of ``si_unit``; return the SI value.
+
+        The value must be finite and at most ``cap`` (SI value, text), by default the
+        absolute cap of its unit (:data:`MAX_SPEED_RPM`, :data:`MAX_DURATION_S`, ...)."""
         found = [k for k in self.table if (s := split_unit(k)) and s[0] == base]
         if len(found) > 1:
             raise self.error(found[1], f"given twice (also as {found[0]})")
@@ -206,11 +230,17 @@ class _Section:
         if unit != si_unit:
             raise self.error(key, f"wrong unit: {base} is a {si_unit} quantity")
         value = self.table[key]
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise self.error(key, f"must be a number, got {value!r}")
+        if not math.isfinite(value):
+            raise self.error(key, f"must be a finite number, got {value!r}")
         if positive and (value < 0 or (value == 0 and not allow_zero)):
             raise self.error(key, f"must be {'>= 0' if allow_zero else '> 0'}, got {value!r}")
-        return float(value) * factor
+        si = float(value) * factor
+        limit = cap if cap is not None else _CAPS_SI.get(si_unit)
+        if limit is not None and abs(si) > limit[0] * (1 + 1e-12):
+            raise self.error(key, f"{value!r} is beyond the sanity cap of {limit[1]}")
+        return si
 
     def finish(self) -> None:
         for k in self.table:
@@ -244,7 +274,29 @@ def _check_port_url(sec: _Section, url: str) -> None:
             raise sec.error("port", str(exc.args[0])) from None
 
 
+def _check_finite(sec: _Section, key: str, value: Any) -> None:
+    """Every number inside ``value`` (a driver's options, nested) is finite: a NaN timeout or
+    gain handed to a driver is a wait that never ends or a duty that means full power."""
+    if isinstance(value, float) and not math.isfinite(value):
+        raise sec.error(key, f"must be a finite number, got {value!r}")
+    if isinstance(value, dict):
+        for k, v in value.items():
+            _check_finite(sec, f"{key}.{k}", v)
+    elif isinstance(value, list):
+        for i, v in enumerate(value):
+            _check_finite(sec, f"{key}[{i}]", v)
+
+
+def check_role(file: str, key: str, role: str) -> None:
+    """A device role or loop name is ``[a-z][a-z0-9_]*`` (at most 64 characters): it becomes
+    a file name inside a session, so ``../x`` or ``/tmp/x`` would write outside it."""
+    if not ROLE_PATTERN.fullmatch(role):
+        raise RigFileError(file, key, f"name {role!r} must be lower-case letters, digits and _, "
+                                      "starting with a letter (at most 64 characters)")
+
+
 def _device(file: str, role: str, table: Any, check_protocols: bool) -> DeviceConfig:
+    check_role(file, f"devices.{role}", role)
     sec = _Section(file, f"devices.{role}", table)
     kind = sec.raw("kind", str, required=True)
     if kind not in KINDS:
@@ -274,7 +326,11 @@ def _device(file: str, role: str, table: Any, check_protocols: bool) -> DeviceCo
         raise ssec.error("stopbits", f"must be 1, 1.5 or 2, got {serial['stopbits']}")
     if "baudrate" in serial and serial["baudrate"] <= 0:
         raise ssec.error("baudrate", f"must be > 0, got {serial['baudrate']}")
+    for name in ("timeout", "write_timeout"):
+        if name in serial and not 0 <= serial[name] <= MAX_DURATION_S:
+            raise ssec.error(name, f"must be in [0, {MAX_DURATION_S:.0f}] s, got {serial[name]}")
     options = dict(sec.raw("options", dict, default={}))
+    _check_finite(sec, "options", options)
     if check_protocols:
         from labkit.devices.base import driver_class, unknown_options, unknown_options_message
 
@@ -320,12 +376,14 @@ def _control(file: str, table: Any, devices: dict[str, DeviceConfig]) -> Control
     d = ControlSettings()
     loops_raw = sec.raw("loops", list, default=None)
     values = dict(
-        period_s=sec.quantity("period", "s", default=d.period_s),
+        period_s=sec.quantity("period", "s", default=d.period_s,
+                              cap=(MAX_CONTROL_PERIOD_S, f"{MAX_CONTROL_PERIOD_S:g} s")),
         full_speed_rad_s=sec.quantity("full_speed", "rad/s", default=d.full_speed_rad_s),
         settle_tolerance_rad_s=sec.quantity("settle_tolerance", "rad/s", default=d.settle_tolerance_rad_s),
         settle_hold_s=sec.quantity("settle_hold", "s", default=d.settle_hold_s, allow_zero=True),
         settle_timeout_s=sec.quantity("settle_timeout", "s", default=d.settle_timeout_s),
-        tach_timeout_s=sec.quantity("tach_timeout", "s", default=d.tach_timeout_s),
+        tach_timeout_s=sec.quantity("tach_timeout", "s", default=d.tach_timeout_s,
+                                    cap=(MAX_TACH_TIMEOUT_S, f"{MAX_TACH_TIMEOUT_S:g} s")),
         status_period_s=sec.quantity("status_period", "s", default=d.status_period_s),
     )
     for gain in ("kp", "ki"):
@@ -347,6 +405,7 @@ def _control(file: str, table: Any, devices: dict[str, DeviceConfig]) -> Control
             motor = lsec.raw("motor", str, required=True)
             tach = lsec.raw("tach", str, required=True)
             name = lsec.raw("name", str, default=motor.removesuffix("_motor"))
+            check_role(file, lsec.key("name"), name)
             lsec.finish()
             for key, role, kind in (("motor", motor, "motor"), ("tach", tach, "tach")):
                 if role not in devices or devices[role].kind != kind:
@@ -414,11 +473,23 @@ def load_rig(path: str | Path, check_protocols: bool = True) -> Rig:
         if bundled is None:
             raise RigFileError(str(path), "(file)", "no such rig file")
         p = bundled
+    return parse_rig(read_rig_text(p), str(p), check_protocols)
+
+
+def read_rig_text(path: Path) -> str:
+    """A rig file's text, read with a bound (:data:`MAX_RIG_FILE_BYTES`). RigFileError otherwise."""
     try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise RigFileError(str(p), "(file)", f"cannot read: {exc}") from None
-    return parse_rig(text, str(p), check_protocols)
+        with open(path, "rb") as f:
+            data = f.read(MAX_RIG_FILE_BYTES + 1)
+    except OSError as exc:
+        raise RigFileError(str(path), "(file)", f"cannot read: {exc.strerror or exc}") from None
+    if len(data) > MAX_RIG_FILE_BYTES:
+        raise RigFileError(str(path), "(file)",
+                           f"larger than {MAX_RIG_FILE_BYTES // 1000} kB; not a rig file")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise RigFileError(str(path), "(file)", f"not UTF-8 text (byte {exc.start})") from None
 
 
 def bundled_rig_names() -> list[str]:
