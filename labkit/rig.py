@@ -509,6 +509,7 @@ PortOpener = Callable[..., Any]
 
 
 def _record_url(inner: str, cassette: Path, role: str) -> str:
+    check_role("<rig>", f"devices.{role}", role)  # a Rig built in Python skips load_rig's check
     query = urllib.parse.urlencode({"cassette": str(cassette), "port": role})
     return f"record://{inner}?{query}" if "?" not in inner else f"record://{inner}&{query}"
 

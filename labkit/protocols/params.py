@@ -131,20 +131,30 @@ def resolve_params(defaults: dict[str, Any], overrides: dict[str, Any] | list[st
             known = ", ".join(sorted(defaults))
             name = protocol or "this protocol"
             raise ParamError(f"--set {key}: unknown parameter of {name} (known: {known})")
-        params[key] = coerce(key, value, defaults[key]) if isinstance(value, str) else check_typed(key, value)
+        default = defaults[key]
+        typed = isinstance(value, str)
+        params[key] = coerce(key, value, default) if typed else check_typed(key, value, default)
     return params
 
 
-def check_typed(key: str, value: Any) -> Any:
-    """A value given as a number or list (a session's run.json on --resume) obeys the same
-    rules as one typed after ``--set``."""
-    if isinstance(value, bool):
+def _is_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def check_typed(key: str, value: Any, default: Any) -> Any:
+    """A value given already typed (a session's run.json on --resume) has the type of the
+    default and obeys the same rules as one typed after ``--set``."""
+    if isinstance(default, bool) or isinstance(default, str):
+        if type(value) is not type(default):
+            raise ParamError(f"--set {key}: must be {type(default).__name__}, got {value!r:.40}")
         return value
-    if isinstance(value, int | float):
-        return type(value)(check_value(key, value))
-    if isinstance(value, list):
+    if isinstance(default, int | float):
+        if not _is_number(value) or (isinstance(default, int) and not isinstance(value, int)):
+            raise ParamError(f"--set {key}: must be a number, got {value!r:.40}")
+        return type(default)(check_value(key, value))
+    if isinstance(default, list):
+        if not isinstance(value, list) or not all(_is_number(v) for v in value):
+            raise ParamError(f"--set {key}: must be a list of numbers, got {value!r:.40}")
         check_count(key, len(value))
-        for v in value:
-            if isinstance(v, int | float) and not isinstance(v, bool):
-                check_value(key, v)
+        return [check_value(key, float(v)) for v in value]
     return value

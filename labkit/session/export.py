@@ -3,25 +3,18 @@
 from __future__ import annotations
 
 import csv
-import json
 from pathlib import Path
 
 COLUMNS = ("t", "quantity", "value", "unit", "stable", "overload")
 
 
-def read_jsonl(path: Path) -> list[dict]:
-    """Lines of a JSONL file; a torn last line (crash mid-write) is skipped."""
-    rows = []
-    with open(path, encoding="utf-8") as f:
-        for line in f:
-            line = line.strip()
-            if not line:
-                continue
-            try:
-                rows.append(json.loads(line))
-            except json.JSONDecodeError:
-                continue  # only the last line of a killed run can be torn
-    return rows
+def read_jsonl(path: Path, problems: list[str] | None = None) -> list[dict]:
+    """Objects of a JSONL file, bounded; a torn last line (crash mid-write) is skipped, any
+    other damaged line too, reported in ``problems`` as ``file:line: reason``
+    (:func:`labkit.session.reader.read_jsonl_lines`)."""
+    from labkit.session.reader import read_jsonl as read_checked
+
+    return read_checked(path, problems)
 
 
 def readings_to_parquet(src: Path, dest: Path) -> None:
