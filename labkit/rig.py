@@ -420,6 +420,8 @@ def parse_rig(text: str, file: str = "<rig>", check_protocols: bool = True) -> R
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise RigFileError(file, "(syntax)", str(exc)) from None
+    except RecursionError:
+        raise RigFileError(file, "(syntax)", "nested too deeply") from None
     top = _Section(file, "", data)
     rig_sec = _Section(file, "rig", top.raw("rig", dict, required=True))
     name = rig_sec.raw("name", str, required=True)

@@ -33,8 +33,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 def main(args: argparse.Namespace) -> int:
     if args.export_csv:
         record = load_session(args.session)
-        for path in export_csv(record.path):
+        problems: list[str] = []
+        for path in export_csv(record.path, problems):
             print(path)
+        for warning in problems:
+            print(f"labkit replay: warning: {warning}", file=sys.stderr)
         return 0
     sinks = []
     if args.rerun is not None:  # the same rerun sink as `labkit run`
@@ -43,6 +46,8 @@ def main(args: argparse.Namespace) -> int:
         result = replay_session(Path(args.session), sinks=sinks)
     finally:
         close_sinks(sinks, "replay")
+    for warning in result.warnings:
+        print(f"labkit replay: warning: {warning}", file=sys.stderr)
     out = result.outcome
     if out.status != "completed" and out.error is not None and result.recorded is None:
         print(f"labkit replay: {out.status}: {out.reason}", file=sys.stderr)

@@ -219,6 +219,8 @@ class ReplayOutcome:
     recorded: dict[str, Any] | None
     identical: bool
     differences: list[str]
+    #: ``file:line: reason`` of damaged lines skipped while reading the session
+    warnings: list[str] = field(default_factory=list)
 
 
 #: Derived numbers (fits) may differ between CPUs in their last digits: BLAS and LAPACK pick
@@ -285,4 +287,4 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None) -> ReplayO
     replayed = normalise(outcome.results)
     recorded = record.results
     diffs = diff_results(replayed, recorded) if recorded is not None else ["recording has no results.json"]
-    return ReplayOutcome(outcome, recorded, not diffs, diffs)
+    return ReplayOutcome(outcome, recorded, not diffs, diffs, record.problems)

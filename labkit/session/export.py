@@ -26,9 +26,10 @@ def readings_to_parquet(src: Path, dest: Path) -> None:
     pq.write_table(table, dest)
 
 
-def readings_to_csv(src: Path, dest: Path) -> int:
-    """Write ``src`` (readings JSONL) as CSV; returns the number of rows."""
-    rows = read_jsonl(src)
+def readings_to_csv(src: Path, dest: Path, problems: list[str] | None = None) -> int:
+    """Write ``src`` (readings JSONL) as CSV; returns the number of rows. Damaged lines are
+    skipped and reported in ``problems``."""
+    rows = read_jsonl(src, problems)
     with open(dest, "w", newline="", encoding="utf-8") as f:
         writer = csv.writer(f)
         writer.writerow(COLUMNS)
@@ -37,11 +38,12 @@ def readings_to_csv(src: Path, dest: Path) -> int:
     return len(rows)
 
 
-def export_csv(session: Path) -> list[Path]:
-    """Export every device's readings of a session to ``readings/ROLE.csv``."""
+def export_csv(session: Path, problems: list[str] | None = None) -> list[Path]:
+    """Export every device's readings of a session to ``readings/ROLE.csv`` (damaged lines
+    skipped, reported in ``problems`` as ``file:line: reason``)."""
     out = []
     for src in sorted((session / "readings").glob("*.jsonl")):
         dest = src.with_suffix(".csv")
-        readings_to_csv(src, dest)
+        readings_to_csv(src, dest, problems)
         out.append(dest)
     return out
