@@ -23,6 +23,20 @@ DEEP = b"[" * 100_000 + b"]" * 100_000
 DEEP_OBJ = b'{"a":' * 100_000 + b"1" + b"}" * 100_000
 
 
+def png_header(width: int, height: int) -> bytes:
+    """A PNG that declares ``width`` x ``height`` RGB pixels (an image bomb's header) with a
+    tiny, truncated image stream."""
+    import struct
+    import zlib
+
+    def chunk(kind: bytes, body: bytes) -> bytes:
+        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
+
+    ihdr = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
+    return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(b"\0" * 1000)) \
+        + chunk(b"IEND", b"")
+
+
 def _write(path: Path, data: bytes) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_bytes(data)
@@ -53,6 +67,7 @@ def file_case(filename: str, data: bytes, command: str, needle: str | None = Non
             "fit": ["fit", path, "--model", "power-law"],
             "report": ["report", path, "--out", tmp / "report"],
             "run": ["run", path, "speed-sweep", "--dry-run"],
+            "analyse": ["analyse", "laser", path],
             "overlay": ["report", session, "--out", tmp / "report", "--overlay", path],
         }[command]
         return argv, needle or filename
@@ -112,6 +127,11 @@ for command in ("fit", "report"):
     CASES[f"json-deep-object-{command}"] = file_case("data.json", DEEP_OBJ, command)
 CASES["overlay-csv-junk"] = file_case("overlay.csv", JUNK, "overlay")
 CASES["overlay-csv-5mb-cell"] = file_case("overlay.csv", b"x,y\n1," + b"9" * 5_000_000 + b"\n", "overlay")
+CASES["png-bomb-100000x100000"] = file_case("bomb.png", png_header(100_000, 100_000), "analyse",
+                                            "the limit of 100000000")
+CASES["png-bomb-12000x12000"] = file_case("bomb.png", png_header(12_000, 12_000), "analyse",
+                                          "144000000 pixels, more than the limit")
+CASES["png-junk"] = file_case("junk.png", JUNK, "analyse", "junk.png")
 CASES["rig-junk"] = file_case("rig.toml", JUNK, "run")
 CASES["rig-deep"] = file_case("rig.toml", b"a = " + b"[" * 100_000 + b"]" * 100_000, "run")
 CASES["rig-big"] = file_case("rig.toml", b"# " + b"x" * 2_000_000 + b"\n", "run")
