@@ -65,8 +65,12 @@ def file_case(filename: str, data: bytes, command: str, needle: str | None = Non
         path = _write(tmp / filename, data)
         argv = {
             "fit": ["fit", path, "--model", "power-law"],
+            "fit-folder": ["fit", path.parent, "--model", "power-law"],
             "report": ["report", path, "--out", tmp / "report"],
             "run": ["run", path, "speed-sweep", "--dry-run"],
+            "predict": ["predict", path, "--speed-rpm", "12000"],
+            "emulate": ["emulate", path, "--seconds", "0"],
+            "resume-path": ["run", "--resume", path, "--dry-run"],
             "analyse": ["analyse", "laser", path],
             "overlay": ["report", session, "--out", tmp / "report", "--overlay", path],
         }[command]
@@ -135,6 +139,18 @@ CASES["png-junk"] = file_case("junk.png", JUNK, "analyse", "junk.png")
 CASES["rig-junk"] = file_case("rig.toml", JUNK, "run")
 CASES["rig-deep"] = file_case("rig.toml", b"a = " + b"[" * 100_000 + b"]" * 100_000, "run")
 CASES["rig-big"] = file_case("rig.toml", b"# " + b"x" * 2_000_000 + b"\n", "run")
+for command in ("predict", "emulate"):
+    CASES[f"rig-junk-{command}"] = file_case("rig.toml", JUNK, command)
+    CASES[f"rig-deep-{command}"] = file_case("rig.toml", b"a = " + b"[" * 100_000 + b"]" * 100_000, command)
+    CASES[f"rig-big-{command}"] = file_case("rig.toml", b"# " + b"x" * 2_000_000 + b"\n", command)
+CASES["predict-dev-zero"] = argv_case(["predict", "/dev/zero", "--speed-rpm", "12000"], "/dev/zero")
+CASES["emulate-dev-zero"] = argv_case(["emulate", "/dev/zero", "--seconds", "0"], "/dev/zero")
+CASES["resume-a-file"] = file_case("notes.txt", b"hello", "resume-path", "notes.txt")
+CASES["resume-nothing"] = argv_case(["run", "--resume", "/nonexistent/S", "--dry-run"], "/nonexistent/S")
+CASES["cassette-junk-replay"] = session_file_case("cassettes/balance.jsonl", JUNK, "replay", "balance.jsonl")
+CASES["cassette-deep-replay"] = session_file_case("cassettes/rotor_motor.jsonl", DEEP + b"\n", "replay",
+                                                  "rotor_motor.jsonl")
+CASES["fit-folder-of-junk-json"] = file_case("clips/a.json", JUNK, "fit-folder", "clips")
 CASES["rig-dev-zero"] = argv_case(["run", "/dev/zero", "speed-sweep", "--dry-run"], "/dev/zero")
 CASES["rig-dir"] = argv_case(["run", "/tmp", "speed-sweep", "--dry-run"], "/tmp")
 CASES["set-huge-range"] = argv_case(
