@@ -331,6 +331,11 @@ def _device(file: str, role: str, table: Any, check_protocols: bool) -> DeviceCo
             raise ssec.error(name, f"must be in [0, {MAX_DURATION_S:.0f}] s, got {serial[name]}")
     options = dict(sec.raw("options", dict, default={}))
     _check_finite(sec, "options", options)
+    for name, value in options.items():
+        scale = 1.0 if name.endswith("_s") else 1e3 if name.endswith("_ms") else None
+        if scale is not None and isinstance(value, int | float) and not isinstance(value, bool) \
+                and not 0 <= value <= MAX_DURATION_S * scale:
+            raise sec.error(f"options.{name}", f"must be in [0, {MAX_DURATION_S * scale:.0f}], got {value!r}")
     if check_protocols:
         from labkit.devices.base import driver_class, unknown_options, unknown_options_message
 

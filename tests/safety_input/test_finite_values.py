@@ -38,6 +38,12 @@ RIG_CASES = [
     ("serial = { baudrate = 9600, timeout = 0.5 }",
      "serial = { baudrate = 9600, timeout = 0.5 }\noptions = { reply_timeout_s = nan }",
      "devices.balance.options.reply_timeout_s", "finite"),
+    ("serial = { baudrate = 115200, timeout = 0.2 }",
+     "serial = { baudrate = 115200, timeout = 0.2 }\noptions = { reply_timeout_s = 1e9 }",
+     "devices.rotor_tach.options.reply_timeout_s", "must be in [0, 3600]"),
+    ("serial = { baudrate = 115200, timeout = 0.2 }",
+     "serial = { baudrate = 115200, timeout = 0.2 }\noptions = { zto_ms = -5 }",
+     "devices.rotor_tach.options.zto_ms", "must be in [0, 3600000]"),
 ]
 
 
