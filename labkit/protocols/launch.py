@@ -277,8 +277,9 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None) -> ReplayO
     rig = load_rig(record.rig_path())
     protocol = get_protocol(record.protocol)
     params = resolve_params(protocol.defaults, record.params, protocol.name)
-    points = list(record.meta.get("carried_points") or [])
-    done = {int(p["step"]) for p in points if "step" in p}
+    carried = [(where, p) for where, p in recorded_points(record) if "carried_points" in where]
+    points, dropped = check_carried_points(carried, protocol.plan(rig, params))
+    done = {int(p["step"]) for p in points}
     clock = VirtualClock()
     runner = Runner(protocol, rig, params, clock=clock, sinks=sinks, previous_points=points,
                     done_steps=done, port_override=lambda dev: replay_url(record.path, dev.role))
@@ -287,4 +288,4 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None) -> ReplayO
     replayed = normalise(outcome.results)
     recorded = record.results
     diffs = diff_results(replayed, recorded) if recorded is not None else ["recording has no results.json"]
-    return ReplayOutcome(outcome, recorded, not diffs, diffs, record.problems)
+    return ReplayOutcome(outcome, recorded, not diffs, diffs, record.problems + dropped)

@@ -162,3 +162,23 @@ def test_one_session_is_resumed_by_one_process_at_a_time(complete_session, tmp_p
     code, out, err, new = resume(session, tmp_path / "new", capsys)   # released: resumes
     assert code == 0, err
     assert result_steps(new) == [0, 1, 2, 3]
+
+
+def test_phantom_carried_point_in_run_json_is_ignored(complete_session, tmp_path, capsys):
+    session = killed_copy(complete_session, tmp_path / "old")
+    meta = json.loads((session / "run.json").read_text())
+    meta["carried_points"] = [{"step": "x"}, {"step": 7, "target_rpm": 1.0}]
+    (session / "run.json").write_text(json.dumps(meta))
+    code, out, err, new = resume(session, tmp_path / "new", capsys)
+    assert code == 0, err
+    assert "run.json:carried_points[0]: a point without an integer step; ignored" in err
+    assert "run.json:carried_points[1]: point with step 7 is outside the plan" in err
+    assert result_steps(new) == [0, 1, 2, 3]
+    code, out, err = run_cli(["replay", new], capsys)     # the new session replays: nothing carried
+    assert code == 0 and "Traceback" not in err, err
+    meta = json.loads((new / "run.json").read_text())
+    meta["carried_points"] = [{"step": "x"}]
+    (new / "run.json").write_text(json.dumps(meta))
+    code, out, err = run_cli(["replay", new], capsys)
+    assert "Traceback" not in err
+    assert "carried_points[0]: a point without an integer step; ignored" in err
