@@ -69,6 +69,7 @@ def file_case(filename: str, data: bytes, command: str, needle: str | None = Non
             "report": ["report", path, "--out", tmp / "report"],
             "run": ["run", path, "speed-sweep", "--dry-run"],
             "predict": ["predict", path, "--speed-rpm", "12000"],
+            "simulate": ["simulate", path],
             "emulate": ["emulate", path, "--seconds", "0"],
             "resume-path": ["run", "--resume", path, "--dry-run"],
             "analyse": ["analyse", "laser", path],
@@ -143,6 +144,10 @@ for command in ("predict", "emulate"):
     CASES[f"rig-junk-{command}"] = file_case("rig.toml", JUNK, command)
     CASES[f"rig-deep-{command}"] = file_case("rig.toml", b"a = " + b"[" * 100_000 + b"]" * 100_000, command)
     CASES[f"rig-big-{command}"] = file_case("rig.toml", b"# " + b"x" * 2_000_000 + b"\n", command)
+CASES["scene-junk-simulate"] = file_case("scene.toml", JUNK, "simulate")
+CASES["scene-deep-simulate"] = file_case("scene.toml", b"a = " + b"[" * 100_000 + b"]" * 100_000, "simulate")
+CASES["scene-dev-zero-simulate"] = argv_case(["simulate", "/dev/zero"], "/dev/zero")
+CASES["video-junk-analyse"] = file_case("clip.mp4", JUNK * 10, "analyse", "clip.mp4")
 CASES["predict-dev-zero"] = argv_case(["predict", "/dev/zero", "--speed-rpm", "12000"], "/dev/zero")
 CASES["emulate-dev-zero"] = argv_case(["emulate", "/dev/zero", "--seconds", "0"], "/dev/zero")
 CASES["resume-a-file"] = file_case("notes.txt", b"hello", "resume-path", "notes.txt")
