@@ -8,11 +8,14 @@
   (ports, serial settings), never what is measured: bodies, geometry, limits, control,
   devices (roles, kinds, protocols, options) must be unchanged.
 * :class:`ResumeLock`: one process resumes a session at a time (``SESSION/.resume.lock``,
-  an advisory lock the kernel releases when the process ends, however it ends).
+  an advisory lock the kernel releases when the process ends, however it ends). A session
+  folder that cannot be written (read-only download) is resumed without the lock: the
+  resume writes only its new session, never the old one.
 """
 
 from __future__ import annotations
 
+import errno
 import math
 import os
 from dataclasses import asdict
@@ -125,6 +128,8 @@ class ResumeLock:
             return self
         for _ in range(10):  # the file may be removed by its holder between open and flock
             f = self._open()
+            if f is None:
+                return self  # a read-only session (a download, a shipped recording): nothing to guard
             try:
                 fcntl.flock(f.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
             except OSError:
@@ -150,7 +155,9 @@ class ResumeLock:
     def _open(self) -> Any:
         try:
             return open(self.path, "a+", encoding="utf-8")  # noqa: SIM115 - held until release()
-        except OSError as exc:
+        except (PermissionError, OSError) as exc:
+            if isinstance(exc, PermissionError) or exc.errno == errno.EROFS:
+                return None
             raise LabkitError(f"{self.path}: cannot lock the session for resume: {exc.strerror or exc}") \
                 from None
 

@@ -5,9 +5,12 @@ fails before its first step keeps no session, and one process resumes a session 
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
+
+import pytest
 
 from .conftest import FIG525, REPO, assert_one_line, killed_copy, run_cli
 
@@ -182,3 +185,15 @@ def test_phantom_carried_point_in_run_json_is_ignored(complete_session, tmp_path
     code, out, err = run_cli(["replay", new], capsys)
     assert "Traceback" not in err
     assert "carried_points[0]: a point without an integer step; ignored" in err
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root can write into a read-only folder")
+def test_read_only_session_is_resumed_without_a_lock(complete_session, tmp_path, capsys):
+    session = killed_copy(complete_session, tmp_path / "old")
+    session.chmod(0o555)
+    try:
+        code, out, err, new = resume(session, tmp_path / "new", capsys)
+    finally:
+        session.chmod(0o755)
+    assert code == 0, err
+    assert result_steps(new) == [0, 1, 2, 3]
