@@ -5,7 +5,8 @@
 :class:`labkit.errors.RigFileError` as ``file:key: reason`` before any port is opened.
 :func:`open_rig` opens the ports (optionally through ``record://`` into a session's
 cassettes) and instantiates the drivers; closing an :class:`OpenRig` commands every motor
-to zero first. Keys are documented in ``docs/rig-files.md``.
+to zero first. Keys are documented in ``docs/rig-files.md``; unit suffixes, caps, role names
+and the table reader live in :mod:`labkit.rig_checks`.
 """
 
 from __future__ import annotations
@@ -20,28 +21,22 @@ from pathlib import Path
 from typing import Any
 
 from labkit.errors import RigFileError
-from labkit.units import G0, RAD_S_PER_RPM
-
-#: key suffix -> (SI unit, factor to SI). The longest matching suffix wins.
-UNIT_SUFFIXES: dict[str, tuple[str, float]] = {
-    "rpm_per_s": ("rad/s^2", RAD_S_PER_RPM),
-    "rad_s2": ("rad/s^2", 1.0),
-    "rpm": ("rad/s", RAD_S_PER_RPM),
-    "rad_s": ("rad/s", 1.0),
-    "kg_m2": ("kg m^2", 1.0),
-    "g_mm2": ("kg m^2", 1e-9),
-    "a_m2": ("A m^2", 1.0),
-    "kg": ("kg", 1.0),
-    "g": ("kg", 1e-3),
-    "mm": ("m", 1e-3),
-    "m": ("m", 1.0),
-    "deg": ("rad", math.pi / 180.0),
-    "rad": ("rad", 1.0),
-    "ms": ("s", 1e-3),
-    "s": ("s", 1.0),
-    "gf": ("N", 1e-3 * G0),
-    "n": ("N", 1.0),
-}
+from labkit.rig_checks import (  # noqa: F401 - re-exported: labkit.rig is the public module
+    MAX_CONTROL_PERIOD_S,
+    MAX_DURATION_S,
+    MAX_RAMP_RPM_PER_S,
+    MAX_RIG_FILE_BYTES,
+    MAX_SPEED_RPM,
+    MAX_TACH_TIMEOUT_S,
+    ROLE_PATTERN,
+    UNIT_SUFFIXES,
+    _check_finite,
+    _check_port_url,
+    _Section,
+    check_role,
+    read_rig_text,
+    split_unit,
+)
 
 KINDS = ("balance", "tach", "motor")
 SHAPES = ("sphere", "cylinder", "ring", "block", "cube")
@@ -49,16 +44,6 @@ SERIAL_KEYS: dict[str, type | tuple[type, ...]] = {
     "baudrate": int, "bytesize": int, "parity": str, "stopbits": (int, float),
     "timeout": (int, float), "write_timeout": (int, float), "xonxoff": bool, "rtscts": bool,
 }
-
-
-def split_unit(key: str) -> tuple[str, str, float] | None:
-    """``"mass_g"`` -> ``("mass", "kg", 1e-3)``; None when the key has no unit suffix."""
-    lowered = key.lower()
-    for suffix in sorted(UNIT_SUFFIXES, key=len, reverse=True):
-        if lowered.endswith("_" + suffix):
-            unit, factor = UNIT_SUFFIXES[suffix]
-            return key[: -len(suffix) - 1], unit, factor
-    return None
 
 
 # ---- the loaded rig -----------------------------------------------------------------------
@@ -157,94 +142,8 @@ class Rig:
         return dev
 
 
-# ---- validation helpers -------------------------------------------------------------------
-class _Section:
-    """Reads one TOML table, converting unit suffixes and remembering unknown keys."""
-
-    def __init__(self, file: str, prefix: str, table: Any) -> None:
-        self.file, self.prefix = file, prefix
-        if not isinstance(table, dict):
-            raise RigFileError(file, prefix, f"must be a table, got {type(table).__name__}")
-        self.table = dict(table)
-        self.used: set[str] = set()
-
-    def key(self, name: str) -> str:
-        return f"{self.prefix}.{name}" if self.prefix else name
-
-    def error(self, key: str, reason: str) -> RigFileError:
-        return RigFileError(self.file, self.key(key), reason)
-
-    def raw(self, name: str, typ: type | tuple[type, ...], required: bool = False,
-            default: Any = None) -> Any:
-        if name not in self.table:
-            if required:
-                raise self.error(name, "missing (required)")
-            return default
-        self.used.add(name)
-        value = self.table[name]
-        ok = isinstance(value, typ) and not (isinstance(value, bool) and typ in (int, float, (int, float)))
-        if not ok:
-            want = typ.__name__ if isinstance(typ, type) else " or ".join(t.__name__ for t in typ)
-            raise self.error(name, f"must be {want}, got {value!r}")
-        return value
-
-    def quantity(self, base: str, si_unit: str, required: bool = False, default: float | None = None,
-                 positive: bool = True, allow_zero: bool = False) -> float | None:
-        """Find ``base_<suffix>`` with a suffix of ``si_unit``; return the SI value."""
-        found = [k for k in self.table if (s := split_unit(k)) and s[0] == base]
-        if len(found) > 1:
-            raise self.error(found[1], f"given twice (also as {found[0]})")
-        if not found:
-            if base in self.table:
-                raise self.error(base, f"needs a unit suffix, e.g. {base}_{_example_suffix(si_unit)}")
-            if required:
-                raise self.error(f"{base}_{_example_suffix(si_unit)}", "missing (required)")
-            return default
-        key = found[0]
-        _, unit, factor = split_unit(key)  # type: ignore[misc]
-        self.used.add(key)
-        if unit != si_unit:
-            raise self.error(key, f"wrong unit: {base} is a {si_unit} quantity")
-        value = self.table[key]
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise self.error(key, f"must be a number, got {value!r}")
-        if positive and (value < 0 or (value == 0 and not allow_zero)):
-            raise self.error(key, f"must be {'>= 0' if allow_zero else '> 0'}, got {value!r}")
-        return float(value) * factor
-
-    def finish(self) -> None:
-        for k in self.table:
-            if k not in self.used:
-                raise self.error(k, "unknown key")
-
-
-def _example_suffix(si_unit: str) -> str:
-    return {"rad/s": "rpm", "rad/s^2": "rpm_per_s", "kg": "g", "m": "mm", "rad": "deg",
-            "s": "s", "kg m^2": "kg_m2", "A m^2": "a_m2", "N": "n"}.get(si_unit, "si")
-
-
-def _check_port_url(sec: _Section, url: str) -> None:
-    if not url.strip():
-        raise sec.error("port", "empty port URL")
-    scheme = urllib.parse.urlsplit(url).scheme
-    if scheme == "" and not url.startswith("/") and not url.upper().startswith("COM"):
-        raise sec.error("port", f"{url!r} is neither a device path nor a URL (sim://, socket://, ...)")
-    if scheme == "sim":
-        # an emulated device is checked whole here (emulator, seed, fault names), before any
-        # port opens, so a typo is a file:key error and not a failed, "resumable" session
-        from labkit.emulators.base import emulator_class
-        from labkit.emulators.urls import parse_sim_url
-        from labkit.errors import PortURLError
-
-        try:
-            emulator_class(parse_sim_url(url).protocol)
-        except PortURLError as exc:
-            raise sec.error("port", exc.reason) from None
-        except KeyError as exc:
-            raise sec.error("port", str(exc.args[0])) from None
-
-
 def _device(file: str, role: str, table: Any, check_protocols: bool) -> DeviceConfig:
+    check_role(file, f"devices.{role}", role)
     sec = _Section(file, f"devices.{role}", table)
     kind = sec.raw("kind", str, required=True)
     if kind not in KINDS:
@@ -274,7 +173,16 @@ def _device(file: str, role: str, table: Any, check_protocols: bool) -> DeviceCo
         raise ssec.error("stopbits", f"must be 1, 1.5 or 2, got {serial['stopbits']}")
     if "baudrate" in serial and serial["baudrate"] <= 0:
         raise ssec.error("baudrate", f"must be > 0, got {serial['baudrate']}")
+    for name in ("timeout", "write_timeout"):
+        if name in serial and not 0 <= serial[name] <= MAX_DURATION_S:
+            raise ssec.error(name, f"must be in [0, {MAX_DURATION_S:.0f}] s, got {serial[name]}")
     options = dict(sec.raw("options", dict, default={}))
+    _check_finite(sec, "options", options)
+    for name, value in options.items():
+        scale = 1.0 if name.endswith("_s") else 1e3 if name.endswith("_ms") else None
+        if scale is not None and isinstance(value, int | float) and not isinstance(value, bool) \
+                and not 0 <= value <= MAX_DURATION_S * scale:
+            raise sec.error(f"options.{name}", f"must be in [0, {MAX_DURATION_S * scale:.0f}], got {value!r}")
     if check_protocols:
         from labkit.devices.base import driver_class, unknown_options, unknown_options_message
 
@@ -320,12 +228,14 @@ def _control(file: str, table: Any, devices: dict[str, DeviceConfig]) -> Control
     d = ControlSettings()
     loops_raw = sec.raw("loops", list, default=None)
     values = dict(
-        period_s=sec.quantity("period", "s", default=d.period_s),
+        period_s=sec.quantity("period", "s", default=d.period_s,
+                              cap=(MAX_CONTROL_PERIOD_S, f"{MAX_CONTROL_PERIOD_S:g} s")),
         full_speed_rad_s=sec.quantity("full_speed", "rad/s", default=d.full_speed_rad_s),
         settle_tolerance_rad_s=sec.quantity("settle_tolerance", "rad/s", default=d.settle_tolerance_rad_s),
         settle_hold_s=sec.quantity("settle_hold", "s", default=d.settle_hold_s, allow_zero=True),
         settle_timeout_s=sec.quantity("settle_timeout", "s", default=d.settle_timeout_s),
-        tach_timeout_s=sec.quantity("tach_timeout", "s", default=d.tach_timeout_s),
+        tach_timeout_s=sec.quantity("tach_timeout", "s", default=d.tach_timeout_s,
+                                    cap=(MAX_TACH_TIMEOUT_S, f"{MAX_TACH_TIMEOUT_S:g} s")),
         status_period_s=sec.quantity("status_period", "s", default=d.status_period_s),
     )
     for gain in ("kp", "ki"):
@@ -347,6 +257,7 @@ def _control(file: str, table: Any, devices: dict[str, DeviceConfig]) -> Control
             motor = lsec.raw("motor", str, required=True)
             tach = lsec.raw("tach", str, required=True)
             name = lsec.raw("name", str, default=motor.removesuffix("_motor"))
+            check_role(file, lsec.key("name"), name)
             lsec.finish()
             for key, role, kind in (("motor", motor, "motor"), ("tach", tach, "tach")):
                 if role not in devices or devices[role].kind != kind:
@@ -361,6 +272,8 @@ def parse_rig(text: str, file: str = "<rig>", check_protocols: bool = True) -> R
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise RigFileError(file, "(syntax)", str(exc)) from None
+    except RecursionError:
+        raise RigFileError(file, "(syntax)", "nested too deeply") from None
     top = _Section(file, "", data)
     rig_sec = _Section(file, "rig", top.raw("rig", dict, required=True))
     name = rig_sec.raw("name", str, required=True)
@@ -414,11 +327,7 @@ def load_rig(path: str | Path, check_protocols: bool = True) -> Rig:
         if bundled is None:
             raise RigFileError(str(path), "(file)", "no such rig file")
         p = bundled
-    try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise RigFileError(str(p), "(file)", f"cannot read: {exc}") from None
-    return parse_rig(text, str(p), check_protocols)
+    return parse_rig(read_rig_text(p), str(p), check_protocols)
 
 
 def bundled_rig_names() -> list[str]:
@@ -438,6 +347,7 @@ PortOpener = Callable[..., Any]
 
 
 def _record_url(inner: str, cassette: Path, role: str) -> str:
+    check_role("<rig>", f"devices.{role}", role)  # a Rig built in Python skips load_rig's check
     query = urllib.parse.urlencode({"cassette": str(cassette), "port": role})
     return f"record://{inner}?{query}" if "?" not in inner else f"record://{inner}&{query}"
 

@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 from labkit.cli.run import close_sinks
+from labkit.errors import CassetteError
 from labkit.protocols.events import FlagTally
 from labkit.protocols.launch import replay_session
 from labkit.session import export_csv, load_session
@@ -34,8 +35,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 def main(args: argparse.Namespace) -> int:
     if args.export_csv:
         record = load_session(args.session)
-        for path in export_csv(record.path):
+        problems: list[str] = []
+        for path in export_csv(record.path, problems):
             print(path)
+        for warning in problems:
+            print(f"labkit replay: warning: {warning}", file=sys.stderr)
         return 0
     flags = FlagTally()
     sinks: list = [flags]
@@ -45,10 +49,13 @@ def main(args: argparse.Namespace) -> int:
         result = replay_session(Path(args.session), sinks=sinks)
     finally:
         close_sinks(sinks, "replay")
+    for warning in result.warnings:
+        print(f"labkit replay: warning: {warning}", file=sys.stderr)
     out = result.outcome
     if flags.counts:
         print(f"device flags: {flags.summary()}")
-    if out.status != "completed" and out.error is not None and result.recorded is None:
+    if out.status != "completed" and (isinstance(out.error, CassetteError) or
+                                      (out.error is not None and result.recorded is None)):
         print(f"labkit replay: {out.status}: {out.reason}", file=sys.stderr)
         return 2
     if result.identical:

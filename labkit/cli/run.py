@@ -12,6 +12,7 @@ import argparse
 import sys
 from typing import Any
 
+from labkit.errors import LabkitError
 from labkit.protocols import PROTOCOLS, ProgressSink
 from labkit.protocols.launch import execute, prepare_run
 from labkit.stream import add_rerun_argument
@@ -53,6 +54,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--dry-run", action="store_true", help="print the planned steps and check limits; no motion"
     )
     p.add_argument("--resume", metavar="SESSION", help="continue the remaining steps of SESSION as a new run")
+    p.add_argument("--rig", dest="resume_rig", metavar="FILE",
+                   help="with --resume: use FILE instead of the session's rig copy (ports and serial "
+                        "settings may differ; bodies, limits, control and devices must not)")
     add_common(p)
     p.set_defaults(func=main)
 
@@ -115,7 +119,7 @@ def close_sinks(sinks: list[Any], command: str) -> None:
                   file=sys.stderr)
 
 
-def report(outcome: Any) -> int:
+def report(outcome: Any, resumed_from: Any = None) -> int:
     where = f" (session {outcome.session})" if outcome.session else ""
     fit = (outcome.results or {}).get("fit") or {}
     params = ", ".join(
@@ -131,12 +135,19 @@ def report(outcome: Any) -> int:
     print(f"labkit run: {outcome.status}: {outcome.reason}{where}", file=sys.stderr)
     if outcome.session:
         print(f"resume with: labkit run --resume {outcome.session}", file=sys.stderr)
+    elif resumed_from is not None:
+        print(f"fix the cause, then resume again: labkit run --resume {resumed_from} "
+              "[--rig FIXED.toml to change ports]", file=sys.stderr)
     return 130 if outcome.status == "interrupted" else 2
 
 
 def main(args: argparse.Namespace) -> int:
+    if args.resume_rig and not args.resume:
+        raise LabkitError("--rig FILE goes with --resume SESSION (a new run names its rig first)")
+    if args.resume and args.rig and args.resume_rig:
+        raise LabkitError("--resume: give the replacement rig once (--rig FILE)")
     prep = prepare_run(
-        args.rig,
+        args.resume_rig or args.rig if args.resume else args.rig,
         args.protocol,
         args.sets,
         clock=args.clock,
@@ -144,6 +155,8 @@ def main(args: argparse.Namespace) -> int:
         resume=args.resume,
         sinks=[] if args.dry_run else sinks_for(args),
     )
+    for warning in prep.warnings:
+        print(f"labkit run: warning: {warning}", file=sys.stderr)
     if args.dry_run:
         print(prep.runner.dry_run())
         return 0
@@ -156,4 +169,4 @@ def main(args: argparse.Namespace) -> int:
         outcome = execute(prep, args.sessions, notes=args.notes, on_session=on_session)
     finally:
         close_sinks(sinks, "run")
-    return report(outcome)
+    return report(outcome, args.resume)

@@ -29,6 +29,9 @@ import numpy as np
 from labkit.errors import DataFileError
 from labkit.units import G0, RAD_S_PER_RPM
 
+#: The largest data file read (CSV or JSON); a bigger one is refused before it is read.
+MAX_DATA_FILE_BYTES = 256_000_000
+
 SI_FACTORS = {  # suffix -> (SI suffix, factor)
     "_rpm": ("_rad_s", RAD_S_PER_RPM),
     "_hz": ("_rad_s", 2.0 * math.pi),
@@ -89,10 +92,7 @@ def load_table(path: str | Path) -> Table:
         table = _load_json(results)
         run = path / "run.json"
         if run.exists():
-            try:
-                table.meta["run"] = json.loads(run.read_text())
-            except json.JSONDecodeError as exc:
-                raise DataFileError(str(run), "", f"invalid JSON ({exc.msg} at line {exc.lineno})") from None
+            table.meta["run"] = _read_json(run)
         table.meta["session"] = str(path)
         return table
     if not path.exists():
@@ -102,9 +102,39 @@ def load_table(path: str | Path) -> Table:
     return _load_csv(path)
 
 
+def _read_bounded(path: Path) -> bytes:
+    """The bytes of a data file, at most :data:`MAX_DATA_FILE_BYTES`; DataFileError otherwise."""
+    try:
+        if not path.is_file():
+            raise DataFileError(str(path), "", "not a regular file")
+        with path.open("rb") as fh:
+            data = fh.read(MAX_DATA_FILE_BYTES + 1)
+    except OSError as exc:
+        raise DataFileError(str(path), "", f"cannot read: {exc.strerror or exc}") from None
+    if len(data) > MAX_DATA_FILE_BYTES:
+        raise DataFileError(str(path), "", f"larger than {MAX_DATA_FILE_BYTES // 1_000_000} MB")
+    return data
+
+
+def _read_text(path: Path) -> str:
+    data = _read_bounded(path)
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise DataFileError(str(path), f"line {line}", f"not UTF-8 text (byte {exc.start})") from None
+
+
 def _load_csv(path: Path) -> Table:
-    with path.open(newline="") as fh:
-        rows = list(csv.reader(line for line in fh if not line.lstrip().startswith("#")))
+    text = _read_text(path)
+    if "\x00" in text:
+        line = text.count("\n", 0, text.index("\x00")) + 1
+        raise DataFileError(str(path), f"line {line}", "contains a NUL byte: not a text CSV")
+    reader = csv.reader(line for line in text.splitlines(keepends=True) if not line.lstrip().startswith("#"))
+    try:
+        rows = list(reader)
+    except csv.Error as exc:
+        raise DataFileError(str(path), f"row {reader.line_num}", f"not a readable CSV ({exc})") from None
     if not rows or not any(cell.strip() for cell in rows[0]):
         raise DataFileError(str(path), "", "empty file: a CSV with a header row is expected")
     header = [h.strip() for h in rows[0]]
@@ -117,12 +147,24 @@ def _load_csv(path: Path) -> Table:
 
 
 def _read_json(path: Path):
+    """A JSON document, bounded in size and nesting; DataFileError naming the file otherwise."""
+    from labkit.session.reader import parse_json_bytes
+
     try:
-        return json.loads(path.read_text())
-    except json.JSONDecodeError as exc:
-        raise DataFileError(str(path), "", f"invalid JSON ({exc.msg} at line {exc.lineno})") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise DataFileError(str(path), "", f"cannot read: {getattr(exc, 'strerror', None) or exc}") from None
+        return parse_json_bytes(_read_bounded(path))
+    except ValueError as exc:
+        raise DataFileError(str(path), "", f"invalid JSON: {exc}") from None
+
+
+read_json = _read_json
+
+
+def _try_json(path: Path):
+    """The JSON of ``path``, or None when it is unreadable (its loader names the problem later)."""
+    try:
+        return _read_json(path)
+    except DataFileError:
+        return None
 
 
 def _load_json(path: Path) -> Table:
@@ -261,10 +303,7 @@ def _analysis_files(folder: Path) -> list[Path]:
     """The analysis JSON files directly in ``folder`` (others, e.g. ``.truth.json``, are left out)."""
     out = []
     for p in sorted(folder.glob("*.json")):
-        try:
-            doc = json.loads(p.read_text())
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError):
-            continue
+        doc = _try_json(p)
         if analysis_kind(doc):
             out.append(p)
     return out
@@ -322,9 +361,8 @@ def _leave_out_stray_json(paths: list[Path]) -> tuple[list[Path], list[Path]]:
     kinds = {}
     for p in paths:
         if p.suffix.lower() == ".json" and p.is_file():
-            try:
-                doc = json.loads(p.read_text())
-            except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+            doc = _try_json(p)
+            if doc is None:
                 continue  # load_table names the problem
             kinds[p] = "analysis" if analysis_kind(doc) else (
                 "table" if isinstance(doc, list) or (isinstance(doc, dict) and "points" in doc) else "other")

@@ -138,13 +138,23 @@ class Cassette:
         return str(self.header.get("port", self.path.stem))
 
 
+#: A cassette bigger than this is refused before it is read (a long recorded run is ~100 MB).
+MAX_CASSETTE_BYTES = 4_000_000_000
+
+
 def load_cassette(path: str | Path) -> Cassette:
     """Read and validate a cassette. Problems raise CassetteError naming file, line and key."""
     path = Path(path)
     try:
-        lines = path.read_text(encoding="utf-8").splitlines()
+        if path.stat().st_size > MAX_CASSETTE_BYTES:
+            raise CassetteError(str(path), 0, f"larger than {MAX_CASSETTE_BYTES} bytes")
+        raw = path.read_bytes()
     except OSError as exc:
         raise CassetteError(str(path), 0, f"cannot read cassette: {exc.strerror or exc}") from None
+    try:
+        lines = raw.decode("utf-8").splitlines()
+    except UnicodeDecodeError as exc:
+        raise CassetteError(str(path), raw.count(b"\n", 0, exc.start) + 1, "not UTF-8 text") from None
     if not lines:
         raise CassetteError(str(path), 1, "empty file, expected a labkit-cassette header")
     header = _json_line(path, 1, lines[0])
@@ -167,6 +177,8 @@ def _json_line(path: Path, number: int, line: str) -> dict[str, Any]:
         obj = json.loads(line)
     except json.JSONDecodeError as exc:
         raise CassetteError(str(path), number, f"not JSON: {exc.msg}") from None
+    except RecursionError:
+        raise CassetteError(str(path), number, "not JSON: nested too deeply") from None
     if not isinstance(obj, dict):
         raise CassetteError(str(path), number, "expected a JSON object")
     return obj

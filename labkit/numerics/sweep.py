@@ -57,13 +57,13 @@ def load_store(path: Path) -> dict[str, dict]:
     if not path.exists():
         return done
     try:
-        text = path.read_text()
+        raw = path.read_bytes()
     except OSError as exc:
         raise SweepError(f"{path}: cannot read the partial results ({exc.strerror})") from None
-    for line in text.splitlines():
+    for line in raw.splitlines():
         try:
-            row = json.loads(line)
-        except json.JSONDecodeError:
+            row = json.loads(line.decode("utf-8"))
+        except (UnicodeDecodeError, json.JSONDecodeError, RecursionError):
             continue
         if isinstance(row, dict) and "key" in row:
             done[row["key"]] = row

@@ -18,7 +18,7 @@ from labkit.predict.magnets import (
     parse_magnet_spec,
     remanence_for_grade,
 )
-from labkit.rig import Body, bundled_rig_path, parse_body
+from labkit.rig import Body, bundled_rig_path, parse_body, read_rig_text
 
 
 class PredictInputError(LabkitError):
@@ -56,12 +56,13 @@ def magnets_from_rig(path: str | Path, remanence_t: float | None = None) -> tupl
             raise RigFileError(str(path), "(file)", "no such rig file")
         p = bundled
     file = str(path)
+    text = read_rig_text(p)  # bounded (a rig path of /dev/zero), UTF-8 checked
     try:
-        data = tomllib.loads(p.read_text())
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise RigFileError(file, "(syntax)", str(exc)) from None
-    except OSError as exc:
-        raise RigFileError(file, "(file)", exc.strerror or str(exc)) from None
+    except RecursionError:
+        raise RigFileError(file, "(syntax)", "nested too deeply") from None
     tables = data.get("bodies")
     if not isinstance(tables, dict):
         raise RigFileError(file, "bodies",

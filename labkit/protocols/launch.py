@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,6 +23,7 @@ from labkit.io.clock import Clock, RealClock, VirtualClock, use_clock
 from labkit.protocols import get_protocol
 from labkit.protocols.events import Sink
 from labkit.protocols.params import resolve_params
+from labkit.protocols.resume import ResumeLock, check_carried_points, rig_differences
 from labkit.protocols.runner import ProtocolDef, Runner, RunOutcome, normalise
 from labkit.rig import Rig, load_rig
 from labkit.session import Session, SessionRecord, check_writable, load_session
@@ -36,6 +38,9 @@ class PreparedRun:
     runner: Runner
     resumed_from: SessionRecord | None = None
     carried_points: list[dict[str, Any]] = field(default_factory=list)
+    #: one line each: damaged lines skipped, recorded points dropped (printed by the CLI)
+    warnings: list[str] = field(default_factory=list)
+    lock: ResumeLock | None = None
 
 
 def all_simulated(rig: Rig) -> bool:
@@ -61,18 +66,63 @@ def fresh_emulators(rig: Rig) -> None:
 
 
 def carried_points(record: SessionRecord) -> list[dict[str, Any]]:
-    """All result rows a session holds: those it carried from earlier runs plus its own."""
+    """All result rows a session holds: those it carried from earlier runs plus its own
+    (as recorded, unchecked; :func:`recorded_points` says where each comes from)."""
     return list(record.meta.get("carried_points") or []) + record.completed_points()
+
+
+def recorded_points(record: SessionRecord) -> list[tuple[str, Any]]:
+    """``(where, point)`` of every point a session holds (``run.json:carried_points[i]`` and
+    ``events.jsonl:LINE``), for :func:`labkit.protocols.resume.check_carried_points`."""
+    carried = record.meta.get("carried_points") or []
+    if not isinstance(carried, list):
+        carried = [carried]
+    run_json = record.path / "run.json"
+    return [(f"{run_json}:carried_points[{i}]", p) for i, p in enumerate(carried)] + record.point_events()
+
+
+def resume_rig(record: SessionRecord, rig_path: str | Path | None, resume: str | Path) -> Rig:
+    """The session's rig, or ``rig_path`` when it differs only in ports and serial settings."""
+    session_rig = load_rig(record.rig_path())
+    if rig_path is None:
+        return session_rig
+    rig = load_rig(rig_path)
+    diffs = rig_differences(session_rig, rig)
+    if diffs:
+        raise LabkitError(f"--resume {resume} --rig {rig_path}: only ports and serial settings may change, "
+                          f"but {'; '.join(diffs)} differ from the session's rig.toml")
+    return rig
 
 
 def prepare_run(rig_path: str | Path | None, protocol_name: str | None, sets: list[str] | None, *,
                 clock: str = "auto", session_root: str | Path | None = "sessions",
                 resume: str | Path | None = None, sinks: list[Sink] | None = None) -> PreparedRun:
-    """Validate everything and build the runner; nothing is opened yet."""
+    """Validate everything and build the runner; nothing is opened yet.
+
+    With ``resume`` (and ``session_root``: not a dry run) the session is locked against a
+    second resume until :func:`execute` ends (or :meth:`PreparedRun.lock` is released)."""
+    if resume is None:
+        return _prepare(rig_path, protocol_name, sets, clock, session_root, None, sinks)
+    lock = ResumeLock(Path(resume)).acquire() if session_root is not None and Path(resume).is_dir() else None
+    try:
+        prep = _prepare(rig_path, protocol_name, sets, clock, session_root, resume, sinks)
+    except BaseException:
+        if lock is not None:
+            lock.release()
+        raise
+    prep.lock = lock
+    return prep
+
+
+def _prepare(rig_path: str | Path | None, protocol_name: str | None, sets: list[str] | None, clock: str,
+             session_root: str | Path | None, resume: str | Path | None,
+             sinks: list[Sink] | None) -> PreparedRun:
     record = None
+    warnings: list[str] = []
     if resume is not None:
         record = load_session(resume)
-        rig = load_rig(record.rig_path())
+        warnings += record.problems
+        rig = resume_rig(record, rig_path, resume)
         if protocol_name and protocol_name != record.protocol:
             raise LabkitError(f"--resume {resume}: that session ran {record.protocol}, not {protocol_name}")
         protocol = get_protocol(record.protocol)
@@ -86,15 +136,18 @@ def prepare_run(rig_path: str | Path | None, protocol_name: str | None, sets: li
         protocol = get_protocol(protocol_name)
         params = resolve_params(protocol.defaults, sets, protocol.name)
     the_clock = make_clock(clock, rig)
-    points = carried_points(record) if record is not None else []
-    done = {int(p["step"]) for p in points if "step" in p}
+    points: list[dict[str, Any]] = []
+    if record is not None:
+        points, dropped = check_carried_points(recorded_points(record), protocol.plan(rig, params))
+        warnings += dropped
+    done = {int(p["step"]) for p in points}
     runner = Runner(protocol, rig, params, clock=the_clock, sinks=sinks, previous_points=points,
                     done_steps=done)
     if record is not None and len(done) >= len(runner.steps):
         raise LabkitError(f"--resume {resume}: all {len(runner.steps)} steps are already done")
     if session_root is not None:
         check_writable(session_root)
-    return PreparedRun(rig, protocol, params, the_clock, runner, record, points)
+    return PreparedRun(rig, protocol, params, the_clock, runner, record, points, warnings)
 
 
 def execute(prep: PreparedRun, session_root: str | Path | None = "sessions", notes: str = "",
@@ -104,14 +157,37 @@ def execute(prep: PreparedRun, session_root: str | Path | None = "sessions", not
     ``on_session(runner, session)`` is called once the session exists, before any port
     opens (the CLI adds its rerun sink there).
     """
+    try:
+        return _execute(prep, session_root, notes, on_session)
+    finally:
+        if prep.lock is not None:
+            prep.lock.release()
+
+
+class _StepSeen:
+    """Sink noting whether the run reached its first step (before it, nothing was measured)."""
+
+    def __init__(self) -> None:
+        self.seen = False
+
+    def on_event(self, event: dict[str, Any]) -> None:
+        if event.get("type") == "step":
+            self.seen = True
+
+
+def _execute(prep: PreparedRun, session_root: str | Path | None, notes: str,
+             on_session: Callable[[Runner, Session], None] | None) -> RunOutcome:
     runner = prep.runner
+    step_seen = _StepSeen()
+    runner.bus.add(step_seen)
+    session = None
     if session_root is not None:
         session = Session.create(
             session_root, protocol=prep.protocol.name, params=_jsonable(prep.params), rig_name=prep.rig.name,
             rig_text=prep.rig.text, clock="virtual" if prep.clock.is_virtual else "real", notes=notes,
             resumed_from=str(prep.resumed_from.path) if prep.resumed_from else None)
         session.update_meta(carried_points=prep.carried_points,
-                            steps_planned=len(runner.steps))
+                            steps_planned=len(runner.steps), resume_warnings=prep.warnings)
         runner.session = session
         runner.bus.add(session)
         if on_session is not None:
@@ -119,7 +195,14 @@ def execute(prep: PreparedRun, session_root: str | Path | None = "sessions", not
     if prep.clock.is_virtual:
         fresh_emulators(prep.rig)
     with use_clock(prep.clock):
-        return runner.run()
+        outcome = runner.run()
+    if outcome.status == "failed" and not step_seen.seen and session is not None:
+        # nothing was measured (a port did not open, the balance did not answer...): the
+        # session holds nothing to resume, so it is removed and the message says what to fix
+        shutil.rmtree(session.path, ignore_errors=True)
+        outcome.session = None
+        outcome.reason = f"{outcome.reason} (before the first step: nothing measured, no session kept)"
+    return outcome
 
 
 def _jsonable(params: dict[str, Any]) -> dict[str, Any]:
@@ -137,6 +220,8 @@ class ReplayOutcome:
     recorded: dict[str, Any] | None
     identical: bool
     differences: list[str]
+    #: ``file:line: reason`` of damaged lines skipped while reading the session
+    warnings: list[str] = field(default_factory=list)
 
 
 #: Derived numbers (fits) may differ between CPUs in their last digits: BLAS and LAPACK pick
@@ -193,8 +278,9 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None) -> ReplayO
     rig = load_rig(record.rig_path())
     protocol = get_protocol(record.protocol)
     params = resolve_params(protocol.defaults, record.params, protocol.name)
-    points = list(record.meta.get("carried_points") or [])
-    done = {int(p["step"]) for p in points if "step" in p}
+    carried = [(where, p) for where, p in recorded_points(record) if "carried_points" in where]
+    points, dropped = check_carried_points(carried, protocol.plan(rig, params))
+    done = {int(p["step"]) for p in points}
     clock = VirtualClock()
     runner = Runner(protocol, rig, params, clock=clock, sinks=sinks, previous_points=points,
                     done_steps=done, port_override=lambda dev: replay_url(record.path, dev.role))
@@ -203,4 +289,4 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None) -> ReplayO
     replayed = normalise(outcome.results)
     recorded = record.results
     diffs = diff_results(replayed, recorded) if recorded is not None else ["recording has no results.json"]
-    return ReplayOutcome(outcome, recorded, not diffs, diffs)
+    return ReplayOutcome(outcome, recorded, not diffs, diffs, record.problems + dropped)

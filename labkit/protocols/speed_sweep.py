@@ -20,7 +20,7 @@ from typing import Any
 
 from labkit import documents as doc
 from labkit.errors import LabkitError
-from labkit.protocols.params import ParamError
+from labkit.protocols.params import MAX_PLAN_STEPS, ParamError, check_count
 from labkit.protocols.quickfit import quick_fit_power_law
 from labkit.protocols.runner import ProtocolDef, RunContext, Step
 from labkit.rig import Rig
@@ -37,10 +37,37 @@ def reading_force_n(reading: Any) -> float:
 
 
 def mean_stderr(values: list[float]) -> tuple[float, float]:
+    """Mean and its standard error; LabkitError for a non-finite value (never a NaN point)."""
+    if not all(math.isfinite(v) for v in values):
+        raise LabkitError(f"balance: {sum(1 for v in values if not math.isfinite(v))} of {len(values)} "
+                          "readings are not numbers; no force can be averaged")
     mean = statistics.fmean(values)
     if len(values) < 2:
         return mean, math.nan
     return mean, statistics.stdev(values) / math.sqrt(len(values))
+
+
+def finite_std(values: list[float]) -> float:
+    """Sample standard deviation of the finite values (NaN with fewer than two)."""
+    finite = [v for v in values if math.isfinite(v)]
+    return statistics.stdev(finite) if len(finite) > 1 else math.nan
+
+
+def check_overload(ctx: RunContext, role: str, readings: list[Any], speed_rad_s: float) -> None:
+    """Raise one line naming the balance, the speed and its capacity when any reading was an
+    overload (value NaN, ``overload=True``): the run ends, motors to zero, and that is its
+    stop reason. An overloaded reading has no value, so no force may be averaged from it."""
+    over = [r for r in readings if getattr(r, "overload", False)]
+    if not over:
+        return
+    device = ctx.devices[role]
+    capacity = getattr(device, "capacity", None)
+    unit = getattr(device, "unit", "") or ""
+    capacity_text = (f"capacity {capacity:g} {unit}".strip() if isinstance(capacity, int | float)
+                     else "capacity of the balance exceeded; `labkit probe balance` shows its rating")
+    speed = "at rest" if speed_rad_s < 1.0 else f"at {rad_s_to_rpm(speed_rad_s):.0f} RPM"
+    raise LabkitError(f"{role}: balance overload {speed} ({capacity_text}; {len(over)} of {len(readings)} "
+                      "readings): lower the speeds or use a balance with a larger range; motors at zero")
 
 
 class SpeedSweep(ProtocolDef):
@@ -69,6 +96,8 @@ class SpeedSweep(ProtocolDef):
         legs = [("up", speeds)]
         if params["up_down"]:
             legs.append(("down", list(reversed(speeds))[1:]))
+        n_steps = sum(len(leg) for _, leg in legs) * int(params["repeats"])
+        check_count("repeats", n_steps, "steps", MAX_PLAN_STEPS)
         steps: list[Step] = []
         ramp = rig.limits.max_ramp_rad_s2
         for repeat in range(int(params["repeats"])):
@@ -92,6 +121,7 @@ class SpeedSweep(ProtocolDef):
         ctx.wait_stopped("rotor")
         reading = ctx.devices["balance"].read_stable()
         ctx.emit_reading("balance", reading)
+        check_overload(ctx, "balance", [reading], 0.0)
         return reading.t, reading_force_n(reading)
 
     def run_step(self, ctx: RunContext, step: Step) -> dict[str, Any]:
@@ -104,6 +134,9 @@ class SpeedSweep(ProtocolDef):
         readings = ctx.record("balance", float(p["record_s"]), int(p["min_samples"]))
         t_end = ctx.now()
         speeds = [r.value for r in ctx.tach_readings("rotor_tach", t_start) if r.t <= t_end]
+        finite_speeds = [v for v in speeds if math.isfinite(v)]
+        check_overload(ctx, "balance", readings,
+                       statistics.fmean(finite_speeds) if finite_speeds else step.targets_rad_s["rotor"])
         rest1 = self._rest(ctx) if each else None
         forces = [reading_force_n(r) for r in readings]
         drift = 0.0
@@ -112,8 +145,8 @@ class SpeedSweep(ProtocolDef):
             frac = (t_mid - rest0[0]) / (rest1[0] - rest0[0]) if rest1[0] > rest0[0] else 0.5
             drift = rest0[1] + frac * (rest1[1] - rest0[1])
         force, stderr = mean_stderr([f - drift for f in forces])
-        speed = statistics.fmean(speeds) if speeds else math.nan
-        speed_std = statistics.stdev(speeds) if len(speeds) > 1 else math.nan
+        speed = statistics.fmean(finite_speeds) if finite_speeds else math.nan
+        speed_std = finite_std(speeds)
         return {
             "direction": step.data["direction"], "repeat": step.data["repeat"],
             "target_rpm": step.data["target_rpm"],

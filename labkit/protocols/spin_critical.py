@@ -23,7 +23,7 @@ from typing import Any
 from labkit import documents as doc
 from labkit.errors import LabkitError
 from labkit.protocols.drop_spin import drop_instant, fresh_samples, line_spacing, spin_at
-from labkit.protocols.params import ParamError
+from labkit.protocols.params import MAX_PLAN_STEPS, ParamError, check_count
 from labkit.protocols.quickfit import fit_spin_critical_c
 from labkit.protocols.runner import ProtocolDef, RunContext, Step
 from labkit.protocols.speed_sweep import reading_force_n
@@ -59,6 +59,7 @@ class SpinCritical(ProtocolDef):
             raise ParamError(f"spin-critical: need 0 < start_rpm <= stop_rpm, got {start:g}, {stop:g}")
         if pct <= 0:
             raise ParamError("--set step_pct: must be > 0")
+        check_count("step_pct", math.log(stop / start) / math.log1p(pct / 100.0) + 1, "steps", MAX_PLAN_STEPS)
         if params["max_trials"] < 1 or params["consistent_n"] < 1:
             raise ParamError("--set max_trials/consistent_n: must be >= 1")
         mass = params["floator_mass_g"] * 1e-3

@@ -14,7 +14,7 @@ import numpy as np
 
 from labkit import __version__
 from labkit.errors import DataFileError, LabkitError
-from labkit.fit.data import Table, load_table
+from labkit.fit.data import Table, load_table, read_json
 from labkit.fit.overlay import Overlay
 from labkit.fit.table_fit import FitReport, fit_table
 from labkit.report import markdown as md
@@ -34,17 +34,17 @@ def floator_inertia(session: Path) -> float | None:
     import tomllib
 
     from labkit.errors import RigFileError
-    from labkit.rig import parse_body
+    from labkit.rig import parse_body, read_rig_text
 
     rig_path = session / "rig.toml"
     if not rig_path.is_file():
         return None
     try:
-        table = tomllib.loads(rig_path.read_text()).get("bodies", {}).get("floator")
+        table = tomllib.loads(read_rig_text(rig_path)).get("bodies", {}).get("floator")
         if not isinstance(table, dict):
             return None
         floator = parse_body(str(rig_path), "floator", table)
-    except (tomllib.TOMLDecodeError, RigFileError):
+    except (tomllib.TOMLDecodeError, RigFileError, RecursionError):
         return None
     return floator.inertia_radial_kg_m2 or floator.inertia_axial_kg_m2
 
@@ -93,10 +93,8 @@ def _now() -> str:
 
 
 def _read_json(path: Path):
-    try:
-        return json.loads(path.read_text())
-    except json.JSONDecodeError as exc:
-        raise DataFileError(str(path), "", f"invalid JSON ({exc.msg} at line {exc.lineno})") from None
+    """Bounded in size and nesting; DataFileError naming the file (labkit.fit.data.read_json)."""
+    return read_json(path)
 
 
 def _metadata_section(table: Table, run: dict, protocol: str | None, inertia: float | None) -> list[str]:
@@ -127,13 +125,16 @@ def _events_section(path: Path) -> list[str]:
     """Event counts by type, and the notable ones (interlocks, faults, drops) listed."""
     if not path.is_file():
         return []
+    from labkit.session.reader import read_jsonl
+    from labkit.session.writer import SessionError
+
     counts: dict[str, int] = {}
     notable: list[dict] = []
-    for line in path.read_text(errors="replace").splitlines():
-        try:
-            ev = json.loads(line)
-        except json.JSONDecodeError:
-            continue  # a line cut by a crash
+    try:
+        events = read_jsonl(path)  # bounded; damaged lines (and a line cut by a crash) skipped
+    except SessionError:
+        return []
+    for ev in events:
         kind = str(ev.get("type", "?"))
         counts[kind] = counts.get(kind, 0) + 1
         if any(k in kind for k in NOTABLE_EVENTS) and len(notable) < 20:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import csv
-import json
 from pathlib import Path
 
 COLUMNS = ("t", "quantity", "value", "unit", "stable", "overload", "flags")
@@ -11,19 +10,13 @@ COLUMNS = ("t", "quantity", "value", "unit", "stable", "overload", "flags")
 PARQUET_COLUMNS = (*COLUMNS, "raw")
 
 
-def read_jsonl(path: Path) -> list[dict]:
-    """Lines of a JSONL file; a torn last line (crash mid-write) is skipped."""
-    rows = []
-    with open(path, encoding="utf-8") as f:
-        for line in f:
-            line = line.strip()
-            if not line:
-                continue
-            try:
-                rows.append(json.loads(line))
-            except json.JSONDecodeError:
-                continue  # only the last line of a killed run can be torn
-    return rows
+def read_jsonl(path: Path, problems: list[str] | None = None) -> list[dict]:
+    """Objects of a JSONL file, bounded; a torn last line (crash mid-write) is skipped, any
+    other damaged line too, reported in ``problems`` as ``file:line: reason``
+    (:func:`labkit.session.reader.read_jsonl_lines`)."""
+    from labkit.session.reader import read_jsonl as read_checked
+
+    return read_checked(path, problems)
 
 
 def readings_to_parquet(src: Path, dest: Path) -> None:
@@ -39,9 +32,10 @@ def readings_to_parquet(src: Path, dest: Path) -> None:
     pq.write_table(table, dest)
 
 
-def readings_to_csv(src: Path, dest: Path) -> int:
-    """Write ``src`` (readings JSONL) as CSV; returns the number of rows."""
-    rows = read_jsonl(src)
+def readings_to_csv(src: Path, dest: Path, problems: list[str] | None = None) -> int:
+    """Write ``src`` (readings JSONL) as CSV; returns the number of rows. Damaged lines are
+    skipped and reported in ``problems``."""
+    rows = read_jsonl(src, problems)
     with open(dest, "w", newline="", encoding="utf-8") as f:
         writer = csv.writer(f)
         writer.writerow(COLUMNS)
@@ -50,11 +44,12 @@ def readings_to_csv(src: Path, dest: Path) -> int:
     return len(rows)
 
 
-def export_csv(session: Path) -> list[Path]:
-    """Export every device's readings of a session to ``readings/ROLE.csv``."""
+def export_csv(session: Path, problems: list[str] | None = None) -> list[Path]:
+    """Export every device's readings of a session to ``readings/ROLE.csv`` (damaged lines
+    skipped, reported in ``problems`` as ``file:line: reason``)."""
     out = []
     for src in sorted((session / "readings").glob("*.jsonl")):
         dest = src.with_suffix(".csv")
-        readings_to_csv(src, dest)
+        readings_to_csv(src, dest, problems)
         out.append(dest)
     return out

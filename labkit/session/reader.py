@@ -1,14 +1,135 @@
-"""Reading a session back (complete, or cut short by a crash) for resume, replay and analysis."""
+"""Reading a session back (complete, or cut short by a crash) for resume, replay and analysis.
+
+Every file is read inside the session directory only (:func:`labkit.session.paths.session_file`),
+with a size bound, and never raises anything but :class:`SessionError` naming the file:
+
+* ``run.json`` and ``results.json``: one JSON document each, at most :data:`MAX_JSON_BYTES`;
+  unreadable (bad bytes, bad JSON, nested deeper than :data:`MAX_JSON_DEPTH`) is an error.
+* ``events.jsonl`` and ``readings/ROLE.jsonl``: one JSON object per line. A torn last line
+  (a crash mid-write: no newline at its end) is skipped silently. Any other damaged line (not
+  UTF-8, not JSON, not an object, longer than :data:`MAX_LINE_BYTES`) is skipped and reported as
+  ``file:line: damaged line skipped (reason)`` in :attr:`SessionRecord.problems`. A skipped
+  event is never guessed at: a point it held is missing, so ``--resume`` measures that step
+  again. Documented in docs/protocols.md (Resume).
+"""
 
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from labkit.session.export import read_jsonl
+from labkit.session.paths import session_file
 from labkit.session.writer import SessionError
+
+MAX_JSON_BYTES = 64_000_000        # run.json, results.json
+MAX_JSONL_BYTES = 4_000_000_000    # events.jsonl, readings/ROLE.jsonl
+MAX_LINE_BYTES = 1_000_000         # one event or reading
+MAX_JSON_DEPTH = 64                # nesting of any document or line
+
+
+def _depth_ok(raw: bytes) -> bool:
+    """Nesting depth of a JSON text below :data:`MAX_JSON_DEPTH` (counted outside strings)."""
+    depth, in_string, escaped = 0, False, False
+    for byte in raw:
+        if in_string:
+            if escaped:
+                escaped = False
+            elif byte == 0x5C:      # backslash
+                escaped = True
+            elif byte == 0x22:      # quote
+                in_string = False
+        elif byte == 0x22:
+            in_string = True
+        elif byte in (0x5B, 0x7B):
+            depth += 1
+            if depth > MAX_JSON_DEPTH:
+                return False
+        elif byte in (0x5D, 0x7D):
+            depth -= 1
+    return True
+
+
+def parse_json_bytes(raw: bytes) -> Any:
+    """JSON from bytes; ValueError with a short reason for anything that is not usable JSON."""
+    if not _depth_ok(raw):
+        raise ValueError(f"nested deeper than {MAX_JSON_DEPTH} levels")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"not UTF-8 text (byte {exc.start})") from None
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"not JSON ({exc.msg} at line {exc.lineno} column {exc.colno})") from None
+    except RecursionError:
+        raise ValueError("nested too deeply") from None
+
+
+def _regular_file(path: Path, limit: int) -> None:
+    if not path.is_file():
+        raise SessionError(f"{path}: not a regular file")
+    size = path.stat().st_size
+    if size > limit:
+        raise SessionError(f"{path}: {size} bytes, more than the limit of {limit}")
+
+
+def read_json_file(path: Path, limit: int = MAX_JSON_BYTES) -> Any:
+    """One JSON document, bounded. SessionError as ``file: reason``."""
+    _regular_file(path, limit)
+    try:
+        with open(path, "rb") as f:
+            raw = f.read(limit + 1)
+    except OSError as exc:
+        raise SessionError(f"{path}: unreadable: {exc.strerror or exc}") from None
+    try:
+        return parse_json_bytes(raw)
+    except ValueError as exc:
+        raise SessionError(f"{path}: unreadable: {exc}") from None
+
+
+def read_jsonl_lines(path: Path, problems: list[str] | None = None,
+                     limit: int = MAX_JSONL_BYTES) -> list[tuple[int, dict[str, Any]]]:
+    """``(line number, object)`` for each good line of a JSONL file (see the module docstring).
+
+    Damaged lines are skipped; each is reported in ``problems`` as ``file:line: reason``."""
+    _regular_file(path, limit)
+    rows: list[tuple[int, dict[str, Any]]] = []
+    try:
+        with open(path, "rb") as f:
+            number = 0
+            while True:
+                raw = f.readline(MAX_LINE_BYTES + 1)
+                if not raw:
+                    break
+                number += 1
+                torn = not raw.endswith(b"\n")
+                if torn and len(raw) > MAX_LINE_BYTES:
+                    f.readline()  # skip the rest of the over-long line (bounded by the file size)
+                    if problems is not None:
+                        problems.append(f"{path}:{number}: damaged line skipped "
+                                        f"(longer than {MAX_LINE_BYTES} bytes)")
+                    continue
+                if not raw.strip():
+                    continue
+                try:
+                    value = parse_json_bytes(raw)
+                    if not isinstance(value, dict):
+                        raise ValueError(f"a JSON {type(value).__name__}, not an object")
+                except ValueError as exc:
+                    if not torn and problems is not None:  # a torn line is the last (crash mid-write)
+                        problems.append(f"{path}:{number}: damaged line skipped ({exc})")
+                    continue
+                rows.append((number, value))
+    except OSError as exc:
+        raise SessionError(f"{path}: unreadable: {exc.strerror or exc}") from None
+    return rows
+
+
+def read_jsonl(path: Path, problems: list[str] | None = None) -> list[dict[str, Any]]:
+    """The good lines of a JSONL file as objects (damaged ones reported in ``problems``)."""
+    return [row for _, row in read_jsonl_lines(Path(path), problems)]
 
 
 @dataclass
@@ -17,6 +138,10 @@ class SessionRecord:
     meta: dict[str, Any]
     events: list[dict[str, Any]]
     results: dict[str, Any] | None
+    #: line number in events.jsonl of each event (same order as ``events``)
+    event_lines: list[int] = field(default_factory=list)
+    #: ``file:line: reason`` of every damaged line skipped while reading
+    problems: list[str] = field(default_factory=list)
 
     @property
     def protocol(self) -> str:
@@ -27,36 +152,48 @@ class SessionRecord:
         return dict(self.meta.get("params") or {})
 
     def rig_path(self) -> Path:
-        return self.path / str(self.meta.get("rig_file", "rig.toml"))
+        """The session's rig copy; SessionError if run.json points outside the session."""
+        name = self.meta.get("rig_file", "rig.toml")
+        if not isinstance(name, str):
+            raise SessionError(f"{self.path / 'run.json'}: rig_file must be a file name, got {name!r}")
+        return session_file(self.path, name)
 
     def completed_points(self) -> list[dict[str, Any]]:
-        """Result rows of the steps this session (and the sessions it resumed) finished."""
+        """Result rows of the steps this session finished (``point`` events), as recorded."""
         return [e["point"] for e in self.events if e.get("type") == "point"]
 
+    def point_events(self) -> list[tuple[str, Any]]:
+        """``(where, point)`` of every ``point`` event: where = ``events.jsonl:LINE``."""
+        lines = self.event_lines or [0] * len(self.events)
+        return [(f"{self.path / 'events.jsonl'}:{n}", e.get("point"))
+                for n, e in zip(lines, self.events, strict=True) if e.get("type") == "point"]
+
     def readings(self, role: str) -> list[dict[str, Any]]:
-        path = self.path / "readings" / f"{role}.jsonl"
-        return read_jsonl(path) if path.exists() else []
+        path = session_file(self.path, "readings", f"{role}.jsonl")
+        return read_jsonl(path, self.problems) if path.exists() else []
 
 
 def load_session(path: str | Path) -> SessionRecord:
     """Read ``run.json``, ``events.jsonl`` and ``results.json`` (if any). Raises SessionError."""
     p = Path(path)
     run = p / "run.json"
-    if not run.is_file():
+    if not run.exists():
         raise SessionError(f"{p}: not a labkit session (no run.json)")
-    try:
-        meta = json.loads(run.read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError) as exc:
-        raise SessionError(f"{run}: unreadable: {exc}") from None
+    meta = read_json_file(session_file(p, "run.json"))
+    if not isinstance(meta, dict):
+        raise SessionError(f"{run}: must be a JSON object, got a {type(meta).__name__}")
     for key in ("protocol", "params"):
         if key not in meta:
             raise SessionError(f"{run}: missing key {key!r}")
-    events_path = p / "events.jsonl"
-    events = read_jsonl(events_path) if events_path.exists() else []
+    if not isinstance(meta["protocol"], str) or not isinstance(meta["params"], dict):
+        raise SessionError(f"{run}: protocol must be a name and params an object")
+    problems: list[str] = []
+    events_path = session_file(p, "events.jsonl")
+    lines = read_jsonl_lines(events_path, problems) if events_path.exists() else []
     results = None
-    if (p / "results.json").is_file():
-        try:
-            results = json.loads((p / "results.json").read_text(encoding="utf-8"))
-        except json.JSONDecodeError as exc:
-            raise SessionError(f"{p / 'results.json'}: unreadable: {exc}") from None
-    return SessionRecord(p, meta, events, results)
+    results_path = session_file(p, "results.json")
+    if results_path.exists():
+        results = read_json_file(results_path)
+        if not isinstance(results, dict):
+            raise SessionError(f"{results_path}: must be a JSON object, got a {type(results).__name__}")
+    return SessionRecord(p, meta, [e for _, e in lines], results, [n for n, _ in lines], problems)

@@ -176,7 +176,9 @@ class Session:
             role = event.device or "unknown"
             f = self._readings.get(role)
             if f is None:
-                f = self._readings[role] = open(self.readings_dir / f"{role}.jsonl", "a",  # noqa: SIM115
+                from labkit.session.paths import session_file
+
+                f = self._readings[role] = open(session_file(self.path, "readings", f"{role}.jsonl"), "a",  # noqa: SIM115
                                                 encoding="utf-8")
             f.write(dumps(event.reading.as_json()) + "\n")
             self._maybe_flush()

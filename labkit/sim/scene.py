@@ -451,10 +451,25 @@ def load_scene(path: str | Path) -> Scene:
         else:
             raise SceneError(str(path), "", "no such scene file (nor a bundled scene of that name)")
     try:
-        data = tomllib.loads(p.read_text())
+        with open(p, "rb") as fh:
+            raw = fh.read(MAX_SCENE_FILE_BYTES + 1)  # bounded: a scene path of /dev/zero
+    except OSError as exc:
+        raise SceneError(str(p), "", f"cannot read: {exc.strerror or exc}") from None
+    if len(raw) > MAX_SCENE_FILE_BYTES:
+        raise SceneError(str(p), "", f"larger than {MAX_SCENE_FILE_BYTES // 1000} kB; not a scene file")
+    try:
+        data = tomllib.loads(raw.decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        raise SceneError(str(p), "", f"not UTF-8 text (byte {exc.start})") from None
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(str(p), "", f"not valid TOML: {exc}") from None
+    except RecursionError:
+        raise SceneError(str(p), "", "not valid TOML: nested too deeply") from None
     return scene_from_dict(data, source=str(p))
+
+
+#: A scene file is a few kB; a bigger one is refused before it is read.
+MAX_SCENE_FILE_BYTES = 1_000_000
 
 
 def bundled_scenes() -> list[str]:

@@ -1,0 +1,199 @@
+"""Validation helpers of rig files (:mod:`labkit.rig`): unit suffixes, absolute sanity caps,
+role names, bounded reading, and :class:`_Section`, which reads one TOML table.
+
+Imports no device code except to check an emulated port URL. Caps and role names are
+documented in docs/rig-files.md ("Finite values and caps", ``[devices.ROLE]``).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import urllib.parse
+from pathlib import Path
+from typing import Any
+
+from labkit.errors import RigFileError
+from labkit.units import G0, RAD_S_PER_RPM
+
+#: key suffix -> (SI unit, factor to SI). The longest matching suffix wins.
+UNIT_SUFFIXES: dict[str, tuple[str, float]] = {
+    "rpm_per_s": ("rad/s^2", RAD_S_PER_RPM),
+    "rad_s2": ("rad/s^2", 1.0),
+    "rpm": ("rad/s", RAD_S_PER_RPM),
+    "rad_s": ("rad/s", 1.0),
+    "kg_m2": ("kg m^2", 1.0),
+    "g_mm2": ("kg m^2", 1e-9),
+    "a_m2": ("A m^2", 1.0),
+    "kg": ("kg", 1.0),
+    "g": ("kg", 1e-3),
+    "mm": ("m", 1e-3),
+    "m": ("m", 1.0),
+    "deg": ("rad", math.pi / 180.0),
+    "rad": ("rad", 1.0),
+    "ms": ("s", 1e-3),
+    "s": ("s", 1.0),
+    "gf": ("N", 1e-3 * G0),
+    "n": ("N", 1.0),
+}
+
+#: Absolute sanity caps, whatever a rig file says (docs/rig-files.md, "Caps"). A value beyond
+#: one is a typo or a unit mistake, never a setting: the fastest rotor of the paper turns at
+#: 100 000 RPM, and an interlock that waits an hour is no interlock.
+MAX_SPEED_RPM = 150_000.0             # every speed (limits, control, ...)
+MAX_RAMP_RPM_PER_S = 150_000.0        # every acceleration
+MAX_DURATION_S = 3600.0               # every time: settle timeouts, serial timeouts, ...
+MAX_TACH_TIMEOUT_S = 10.0             # tachometer silent longer than this cannot be allowed
+MAX_CONTROL_PERIOD_S = 1.0            # a speed loop slower than 1 Hz cannot hold a ramp
+MAX_RIG_FILE_BYTES = 1_000_000        # a rig file is a few kB; /dev/zero is not a rig file
+#: Device roles and loop names become file names inside a session (``readings/ROLE.jsonl``).
+ROLE_PATTERN = re.compile(r"[a-z][a-z0-9_]{0,63}")
+_CAPS_SI: dict[str, tuple[float, str]] = {
+    "rad/s": (MAX_SPEED_RPM * RAD_S_PER_RPM, f"{MAX_SPEED_RPM:.0f} RPM"),
+    "rad/s^2": (MAX_RAMP_RPM_PER_S * RAD_S_PER_RPM, f"{MAX_RAMP_RPM_PER_S:.0f} RPM/s"),
+    "s": (MAX_DURATION_S, f"{MAX_DURATION_S:.0f} s"),
+}
+
+def split_unit(key: str) -> tuple[str, str, float] | None:
+    """``"mass_g"`` -> ``("mass", "kg", 1e-3)``; None when the key has no unit suffix."""
+    lowered = key.lower()
+    for suffix in sorted(UNIT_SUFFIXES, key=len, reverse=True):
+        if lowered.endswith("_" + suffix):
+            unit, factor = UNIT_SUFFIXES[suffix]
+            return key[: -len(suffix) - 1], unit, factor
+    return None
+
+
+class _Section:
+    """Reads one TOML table, converting unit suffixes and remembering unknown keys."""
+
+    def __init__(self, file: str, prefix: str, table: Any) -> None:
+        self.file, self.prefix = file, prefix
+        if not isinstance(table, dict):
+            raise RigFileError(file, prefix, f"must be a table, got {type(table).__name__}")
+        self.table = dict(table)
+        self.used: set[str] = set()
+
+    def key(self, name: str) -> str:
+        return f"{self.prefix}.{name}" if self.prefix else name
+
+    def error(self, key: str, reason: str) -> RigFileError:
+        return RigFileError(self.file, self.key(key), reason)
+
+    def raw(self, name: str, typ: type | tuple[type, ...], required: bool = False,
+            default: Any = None) -> Any:
+        if name not in self.table:
+            if required:
+                raise self.error(name, "missing (required)")
+            return default
+        self.used.add(name)
+        value = self.table[name]
+        ok = isinstance(value, typ) and not (isinstance(value, bool) and typ in (int, float, (int, float)))
+        if not ok:
+            want = typ.__name__ if isinstance(typ, type) else " or ".join(t.__name__ for t in typ)
+            raise self.error(name, f"must be {want}, got {value!r}")
+        if isinstance(value, float) and not math.isfinite(value):
+            raise self.error(name, f"must be a finite number, got {value!r}")
+        return value
+
+    def quantity(self, base: str, si_unit: str, required: bool = False, default: float | None = None,
+                 positive: bool = True, allow_zero: bool = False,
+                 cap: tuple[float, str] | None = None) -> float | None:
+        """Find ``base_<suffix>`` with a suffix of ``si_unit``; return the SI value.
+
+        The value must be finite and at most ``cap`` (SI value, text), by default the
+        absolute cap of its unit (:data:`MAX_SPEED_RPM`, :data:`MAX_DURATION_S`, ...)."""
+        found = [k for k in self.table if (s := split_unit(k)) and s[0] == base]
+        if len(found) > 1:
+            raise self.error(found[1], f"given twice (also as {found[0]})")
+        if not found:
+            if base in self.table:
+                raise self.error(base, f"needs a unit suffix, e.g. {base}_{_example_suffix(si_unit)}")
+            if required:
+                raise self.error(f"{base}_{_example_suffix(si_unit)}", "missing (required)")
+            return default
+        key = found[0]
+        _, unit, factor = split_unit(key)  # type: ignore[misc]
+        self.used.add(key)
+        if unit != si_unit:
+            raise self.error(key, f"wrong unit: {base} is a {si_unit} quantity")
+        value = self.table[key]
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise self.error(key, f"must be a number, got {value!r}")
+        if not math.isfinite(value):
+            raise self.error(key, f"must be a finite number, got {value!r}")
+        if positive and (value < 0 or (value == 0 and not allow_zero)):
+            raise self.error(key, f"must be {'>= 0' if allow_zero else '> 0'}, got {value!r}")
+        si = float(value) * factor
+        limit = cap if cap is not None else _CAPS_SI.get(si_unit)
+        if limit is not None and abs(si) > limit[0] * (1 + 1e-12):
+            raise self.error(key, f"{value!r} is beyond the sanity cap of {limit[1]}")
+        return si
+
+    def finish(self) -> None:
+        for k in self.table:
+            if k not in self.used:
+                raise self.error(k, "unknown key")
+
+
+def _example_suffix(si_unit: str) -> str:
+    return {"rad/s": "rpm", "rad/s^2": "rpm_per_s", "kg": "g", "m": "mm", "rad": "deg",
+            "s": "s", "kg m^2": "kg_m2", "A m^2": "a_m2", "N": "n"}.get(si_unit, "si")
+
+
+def _check_port_url(sec: _Section, url: str) -> None:
+    if not url.strip():
+        raise sec.error("port", "empty port URL")
+    scheme = urllib.parse.urlsplit(url).scheme
+    if scheme == "" and not url.startswith("/") and not url.upper().startswith("COM"):
+        raise sec.error("port", f"{url!r} is neither a device path nor a URL (sim://, socket://, ...)")
+    if scheme == "sim":
+        # an emulated device is checked whole here (emulator, seed, fault names), before any
+        # port opens, so a typo is a file:key error and not a failed, "resumable" session
+        from labkit.emulators.base import emulator_class
+        from labkit.errors import PortURLError
+        from labkit.emulators.urls import parse_sim_url
+
+        try:
+            emulator_class(parse_sim_url(url).protocol)
+        except PortURLError as exc:
+            raise sec.error("port", exc.reason) from None
+        except KeyError as exc:
+            raise sec.error("port", str(exc.args[0])) from None
+
+
+def _check_finite(sec: _Section, key: str, value: Any) -> None:
+    """Every number inside ``value`` (a driver's options, nested) is finite: a NaN timeout or
+    gain handed to a driver is a wait that never ends or a duty that means full power."""
+    if isinstance(value, float) and not math.isfinite(value):
+        raise sec.error(key, f"must be a finite number, got {value!r}")
+    if isinstance(value, dict):
+        for k, v in value.items():
+            _check_finite(sec, f"{key}.{k}", v)
+    elif isinstance(value, list):
+        for i, v in enumerate(value):
+            _check_finite(sec, f"{key}[{i}]", v)
+
+
+def check_role(file: str, key: str, role: str) -> None:
+    """A device role or loop name is ``[a-z][a-z0-9_]*`` (at most 64 characters): it becomes
+    a file name inside a session, so ``../x`` or ``/tmp/x`` would write outside it."""
+    if not ROLE_PATTERN.fullmatch(role):
+        raise RigFileError(file, key, f"name {role!r} must be lower-case letters, digits and _, "
+                                      "starting with a letter (at most 64 characters)")
+
+
+def read_rig_text(path: Path) -> str:
+    """A rig file's text, read with a bound (:data:`MAX_RIG_FILE_BYTES`). RigFileError otherwise."""
+    try:
+        with open(path, "rb") as f:
+            data = f.read(MAX_RIG_FILE_BYTES + 1)
+    except OSError as exc:
+        raise RigFileError(str(path), "(file)", f"cannot read: {exc.strerror or exc}") from None
+    if len(data) > MAX_RIG_FILE_BYTES:
+        raise RigFileError(str(path), "(file)",
+                           f"larger than {MAX_RIG_FILE_BYTES // 1000} kB; not a rig file")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise RigFileError(str(path), "(file)", f"not UTF-8 text (byte {exc.start})") from None
