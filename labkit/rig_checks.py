@@ -151,8 +151,8 @@ def _check_port_url(sec: _Section, url: str) -> None:
         # an emulated device is checked whole here (emulator, seed, fault names), before any
         # port opens, so a typo is a file:key error and not a failed, "resumable" session
         from labkit.emulators.base import emulator_class
-        from labkit.errors import PortURLError
         from labkit.emulators.urls import parse_sim_url
+        from labkit.errors import PortURLError
 
         try:
             emulator_class(parse_sim_url(url).protocol)
