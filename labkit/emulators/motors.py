@@ -385,6 +385,8 @@ class VescEmulator(_MotorEmulator):
     Options: ``pole_pairs`` (1), ``max_erpm`` (100000), ``timeout_ms`` (1000: release the
     motor when no set/alive packet arrives), ``vin_v`` (24.0), ``firmware`` (``6.02``),
     ``hardware`` (``labkit-emu``), ``reboot_s`` (0.5), ``motor`` (``rotor``).
+    Firmware before 3.07 answers GET_VALUES in the old layout (six MOSFET temperatures and
+    a PCB temperature; vedderb/bldc tag 3.00 ``commands.c``).
     """
 
     protocol = "vesc"
@@ -498,13 +500,15 @@ class VescEmulator(_MotorEmulator):
         duty = self.plant.motor(self.motor_name).duty
         erpm = speed * 60.0 / TWO_PI * self.pole_pairs
         i_motor = 0.5 + 4.0 * abs(duty) if duty else 0.0
-        head = struct.pack(
-            ">hhiiiihihiiiiiiB",
-            round(25.0 * 10 + abs(duty) * 100), round(30.0 * 10), round(i_motor * 100),
-            round(i_motor * abs(duty) * 100), 0, round(i_motor * 100), round(duty * 1000),
-            round(erpm), round(self.vin_v * 10), 0, 0, 0, 0,
-            0, 0, self.fault,
-        )
+        t_fet = round(25.0 * 10 + abs(duty) * 100)
+        i_mot, i_in = round(i_motor * 100), round(i_motor * abs(duty) * 100)
+        from_duty = (round(duty * 1000), round(erpm), round(self.vin_v * 10), 0, 0, 0, 0,
+                     0, 0, self.fault)
+        if self.fw < (3, 7):  # bldc 3.00 commands.c: MOS1..MOS6, PCB, then no id/iq
+            temps = (t_fet, t_fet - 3, t_fet - 1, t_fet - 2, t_fet - 4, t_fet - 5, 280)
+            return bytes([4]) + struct.pack(">7hiihihiiiiiiB", *temps, i_mot, i_in, *from_duty)
+        head = struct.pack(">hhiiiihihiiiiiiB", t_fet, round(30.0 * 10), i_mot, i_in, 0, i_mot,
+                           *from_duty)
         tail = struct.pack(">iB", 0, 0) + struct.pack(">hhh", 250, 250, 250) + struct.pack(">ii", 0, 0)
         status = 1 if self.timed_out else 0
         return bytes([4]) + head + tail + bytes([status])
