@@ -105,7 +105,8 @@ SERIAL_FORMAT, SERIAL_CRC = 1 << 4, 1 << 5
 class PololuSmcEmulator(_MotorEmulator):
     """Pololu SMC G2 (USB command port: baud does not matter).
 
-    Options: ``device_number`` (13), ``crc`` (0/1), ``command_timeout_ms`` (0 = off),
+    Options: ``device_number`` (13), ``crc`` (0/1: commands carry a CRC-7 byte),
+    ``crc_responses`` (0/1: replies carry one, user's guide section 6.5), ``command_timeout_ms`` (0 = off),
     ``motor`` (plant motor, ``rotor``), ``vin_mv`` (12000), ``temperature_c`` (25),
     ``product_id`` (0xA1), ``firmware`` (``1.04``), ``latency_s`` (0.001).
     """
@@ -120,6 +121,7 @@ class PololuSmcEmulator(_MotorEmulator):
         super().__post_init__()
         self.device_number = int(self.options.get("device_number", 13))
         self.crc = _flag(self.options, "crc", False) and self.pololu_form
+        self.crc_responses = _flag(self.options, "crc_responses", False) and self.pololu_form
         self.command_timeout_ms = float(self.options.get("command_timeout_ms", self.default_timeout_ms))
         self.vin_mv = int(self.options.get("vin_mv", 12000))
         self.temperature_c = float(self.options.get("temperature_c", 25.0))
@@ -252,12 +254,16 @@ class PololuSmcEmulator(_MotorEmulator):
             self.safe_start = True
             self.apply(t)
         elif cmd == 0xA1:
-            self.reply(struct.pack("<H", self.variable(data[0], t) & 0xFFFF), t, self.latency_s)
+            self.answer(struct.pack("<H", self.variable(data[0], t) & 0xFFFF), t)
         elif cmd == 0xA2:
-            self.reply(b"\x00", t, self.latency_s)
+            self.answer(b"\x00", t)
         elif cmd == 0xC2:
             minor, major = self.firmware_bcd
-            self.reply(struct.pack("<HBB", self.product_id, minor, major), t, self.latency_s)
+            self.answer(struct.pack("<HBB", self.product_id, minor, major), t)
+
+    def answer(self, data: bytes, t: float) -> None:
+        """Reply bytes, with the CRC-7 byte appended when CRC for responses is on."""
+        self.reply(data + (bytes([_smc_crc7(data)]) if self.crc_responses else b""), t, self.latency_s)
 
     def variable(self, vid: int, t: float) -> int:
         if self.variables is not None and vid not in self.variables:
