@@ -277,10 +277,21 @@ class BalanceEmulator(Emulator):
 
 @register_emulator
 class MtSicsEmulator(BalanceEmulator):
-    """Mettler Toledo MT-SICS level 0/1 (+ ``SIR``, ``TA``, ``TAC``), 9600 8N1, CR LF."""
+    """Mettler Toledo MT-SICS level 0/1 (+ ``SIR``, ``TA``, ``TAC``), 9600 8N1, CR LF.
+
+    Identification as the MT-SICS reference manual gives it: ``I1`` (levels and versions),
+    ``I2``, ``I3`` (software version), ``I4`` (serial number), ``I5`` (software ID).
+    ``ZI``/``TI`` act at once and say whether the weight was stable (``S``) or not (``D``).
+    """
 
     protocol = "mtsics"
     model = "XS205 DualRange"
+    #: replies to I1, I3, I5 (levels 0 and 1 implemented; versions as an XS balance's)
+    info_lines: ClassVar[dict[str, str]] = {
+        "I1": 'I1 A "01" "2.20" "2.20" "1.00" "1.50"',
+        "I3": 'I3 A "4.00 10.28.0.493.142"',
+        "I5": 'I5 A "11671158C"',
+    }
 
     def banner(self, t: float) -> None:
         self._queue(f'I4 A "{self.serial_number}"\r\n'.encode("ascii"), t)
@@ -315,6 +326,8 @@ class MtSicsEmulator(BalanceEmulator):
                        t, 0.02)
         elif cmd == "I4":
             self.reply(f'I4 A "{self.serial_number}"\r\n'.encode("ascii"), t, 0.02)
+        elif cmd in self.info_lines:
+            self.reply(self.info_lines[cmd].encode("ascii") + b"\r\n", t, 0.02)
         elif cmd in ("SI", "SIR"):
             self.streaming = cmd == "SIR"
             status, value = self.weigh(tick)
@@ -342,6 +355,15 @@ class MtSicsEmulator(BalanceEmulator):
             self.reply(f"{cid} I\r\n".encode("ascii"), tick.t, 0.02)
             return
         status, value = self.weigh(tick)
+        if immediate and status not in "+-":  # ZI S / ZI D, TI S / TI D: stable or not
+            done = "S" if status == "S" else "D"
+            if cmd == "Z":
+                self.zero_now(tick)
+                self.reply(f"ZI {done}\r\n".encode("ascii"), tick.t, 0.05)
+            else:
+                self.tare_now(tick)
+                self.reply(self._weight_line("TI", done, self.to_unit(self.tare_n)), tick.t, 0.05)
+            return
         if cmd == "S":
             status = status if status in "+-" else "S"
             self.reply(self._weight_line("S", status, value), tick.t, 0.02)
@@ -386,9 +408,8 @@ class AndStdEmulator(BalanceEmulator):
 
     def _data(self, status: str, value: float | None) -> bytes:
         unit = f"{self.unit:>3}"
-        if value is None:
-            filler = "+999999.9" if status == "+" else "-999999.9"
-            return f"OL,{filler}{unit}\r\n".encode("ascii")
+        if value is None:  # the manuals' overload line (HR-A, FX-i, GX-A): no unit field
+            return b"OL,+9999999E+19\r\n" if status == "+" else b"OL,-9999999E+19\r\n"
         header = "ST" if status == "S" else "US"
         digits = f"{abs(value):08.{self.decimals}f}"[-8:]
         sign = "-" if value < 0 and float(digits) != 0 else "+"
@@ -456,7 +477,12 @@ class AndStdEmulator(BalanceEmulator):
         self.reply(self._data(*self.weigh(tick)), tick.t)
 
 
-HX711_BAUD = {"hx711_adc": 57600, "bogde": 38400, "bare_float": 115200}
+HX711_BAUD = {"hx711_adc": 57600, "bogde": 57600, "bogde_full": 38400, "bare_float": 115200}
+#: line rate of sketches slower than the ADC (bogde/HX711 0.7.5 examples): basic example
+#: delay(1000) + one 10 SPS conversion; full example 11 conversions + delay(5000)
+HX711_LINE_HZ = {"bogde": 1 / 1.1, "bogde_full": 1 / 6.2}
+#: sketches that read the serial port (tare with ``t``); bogde's examples never do
+HX711_TARES = frozenset({"hx711_adc", "bare_float"})
 #: the HX711's 24-bit two's complement rails (datasheet: output saturates there) and the
 #: emulated bridge's zero offset in counts
 ADC_MAX, ADC_MIN, ADC_ZERO = 0x7FFFFF, -0x800000, 81234
@@ -465,7 +491,8 @@ ADC_MAX, ADC_MIN, ADC_ZERO = 0x7FFFFF, -0x800000, 81234
 @register_emulator
 class Hx711SketchEmulator(BalanceEmulator):
     """An Arduino + HX711 running a third-party sketch (``preset``): boot banner, then one
-    value line per conversion at ``rate_hz`` (10 SPS), ``t`` tares. With ``unit=raw`` it
+    value line per conversion at ``rate_hz`` (10 SPS; bogde 1/1.1 Hz, bogde_full 1/6.2 Hz),
+    ``t`` tares (not the bogde examples: they never read the port). With ``unit=raw`` it
     prints ADC counts (``calibration`` counts/g) that saturate at 0x7FFFFF / -0x800000.
 
     The ADC saturates in every mode: a load beyond the rail (about 19.8 kg at the default
@@ -480,10 +507,11 @@ class Hx711SketchEmulator(BalanceEmulator):
     default_rate_hz = 10.0
 
     def __post_init__(self) -> None:
-        super().__post_init__()
         self.preset = str(self.options.get("preset", "hx711_adc"))
         if self.preset not in HX711_BAUD:
             raise ValueError(f"preset {self.preset!r}: known {', '.join(HX711_BAUD)}")
+        self.default_rate_hz = HX711_LINE_HZ.get(self.preset, type(self).default_rate_hz)
+        super().__post_init__()
         self.serial_settings = {"baudrate": HX711_BAUD[self.preset], "bytesize": 8,
                                 "parity": "N", "stopbits": 1}
         self.calibration = float(self.options.get("calibration", 420.0))
@@ -497,7 +525,9 @@ class Hx711SketchEmulator(BalanceEmulator):
         if self.preset == "hx711_adc":
             self._queue(b"\r\nStarting...\r\n", t + 0.01)
             self._queue(b"Startup is complete\r\n", self._stream_from)
-        elif self.preset == "bogde":  # HX711_full_example's setup(): numbers that are no weights
+        elif self.preset == "bogde":  # HX711_basic_example: no banner at all
+            pass
+        elif self.preset == "bogde_full":  # HX711_full_example's setup(): numbers, no weights
             raw = int(round(self.to_unit(self.signal.last.gross_n) * self.calibration)) + ADC_ZERO
             self._queue(b"HX711 Demo\r\nInitializing the scale\r\nBefore setting up the scale:\r\n"
                         b"read: \t\t%d\r\nread average: \t\t%d\r\n" % (raw, raw), t + 0.01)
@@ -537,7 +567,7 @@ class Hx711SketchEmulator(BalanceEmulator):
         counts = max(ADC_MIN, min(ADC_MAX, counts))
         if self._chance("overload"):
             counts, saturated = ADC_MAX, True
-        if self.unit == "raw":
+        if self.unit == "raw" or self.preset == "bogde":  # the basic example prints scale.read()
             number = str(counts)
         else:
             if saturated:  # the sketch converts the railed code like any other
@@ -546,6 +576,8 @@ class Hx711SketchEmulator(BalanceEmulator):
         if self.preset == "hx711_adc":
             line = f"Load_cell output val: {number}"
         elif self.preset == "bogde":
+            line = f"HX711 reading: {number}"
+        elif self.preset == "bogde_full":
             line = f"one reading:\t{number}\t| average:\t{number}"
         else:
             line = number
@@ -559,5 +591,5 @@ class Hx711SketchEmulator(BalanceEmulator):
 
     def handle(self, data: bytes, t: float) -> None:
         self.advance(t)
-        if b"t" in data:
+        if b"t" in data and self.preset in HX711_TARES:
             self.pending.append(Pending("T", t))
