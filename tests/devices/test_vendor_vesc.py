@@ -32,11 +32,11 @@ from labkit.devices.motor.vesc import (
     parse_values,
     round_half_away,
 )
-from labkit.emulators.plant import reset_plants, shared_plant
+from labkit.emulators.motors import VescEmulator
+from labkit.emulators.plant import RigPlant, reset_plants
 from labkit.errors import DeviceError
 from labkit.io.clock import RealClock
 from labkit.io.pty_host import PtyHost
-from labkit.io.sim_port import build_emulator
 
 pytestmark = pytest.mark.timeout(30)
 
@@ -128,8 +128,8 @@ def test_current_and_duty_ties_round_like_vesc_tool():
 def test_probe_against_a_vesc_announcing_firmware_3_00_prints_true_values(capsys):
     """``labkit probe`` over a real pty against the emulator set to firmware 3.00."""
     clock = RealClock()
-    emulator = build_emulator("sim://vesc?plant=fw300&firmware=3.00&vin_v=24.3")
-    plant = shared_plant("fw300")
+    plant = RigPlant()
+    emulator = VescEmulator(plant=plant, options={"firmware": "3.00", "vin_v": "24.3"})
     with PtyHost(emulator, clock=clock) as host:
         clock.sleep(0.05)  # the controller powers on with the motor released
         plant.set_duty(0.25, clock.now(), name="rotor")  # as if another client had set it
