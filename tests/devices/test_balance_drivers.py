@@ -9,7 +9,8 @@ import math
 import pytest
 
 from labkit.devices.base import driver_class
-from labkit.emulators.balances import AndStdEmulator, Hx711SketchEmulator, MtSicsEmulator
+from labkit.emulators.balances import AndStdEmulator, MtSicsEmulator
+from labkit.emulators.hx711_sketch import Hx711SketchEmulator
 from labkit.emulators.plant import RigPlant, shared_plant
 from labkit.io.clock import RealClock, VirtualClock
 from labkit.io.ports import open_port

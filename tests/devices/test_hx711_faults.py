@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 from labkit.devices.base import driver_class
 from labkit.devices.loadcell import line_regex
 from labkit.devices.loadcell.linkio import FrameError
-from labkit.emulators.balances import Hx711SketchEmulator
+from labkit.emulators.hx711_sketch import Hx711SketchEmulator
 from labkit.emulators.plant import RigPlant, shared_plant
 from labkit.errors import DeviceTimeout
 from labkit.io.clock import RealClock, VirtualClock

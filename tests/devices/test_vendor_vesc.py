@@ -32,8 +32,8 @@ from labkit.devices.motor.vesc import (
     parse_values,
     round_half_away,
 )
-from labkit.emulators.motors import VescEmulator
 from labkit.emulators.plant import RigPlant, reset_plants
+from labkit.emulators.vesc_emulator import VescEmulator
 from labkit.errors import DeviceError
 from labkit.io.clock import RealClock
 from labkit.io.pty_host import PtyHost
