@@ -9,6 +9,11 @@ controller's 1 s communication timeout, which releases the motor when we fall si
 
 Speeds are electrical: ERPM = mechanical RPM x pole pairs, so a 100 000 RPM rig needs a
 1-pole-pair motor or a raised ERPM limit.
+
+GET_VALUES replies are decoded in the layout of the firmware version that FW_VERSION reports
+(1.x-3.06 old, 3.07-7.x current; others refused: :mod:`labkit.devices.motor.vesc_values`,
+docs/devices-tach-motor.md). Payloads over 512 bytes are refused, and set commands round like
+VESC Tool (half away from zero); docs/hardware-fidelity.md lists the sources.
 """
 
 from __future__ import annotations
