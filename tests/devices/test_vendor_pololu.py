@@ -12,6 +12,8 @@ from __future__ import annotations
 import json
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from labkit.cli import main
 from labkit.devices.base import driver_class
@@ -98,3 +100,14 @@ def test_emulator_appends_the_guide_crc_and_the_driver_refuses_a_corrupt_one():
     with pytest.raises(DeviceError, match="response CRC"):
         motor.get_variable(23)
     motor.close()
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.binary(min_size=1, max_size=8), st.integers(0, 7))
+def test_fuzz_any_reply_with_its_crc_is_stripped_and_any_flipped_bit_is_caught(data, bit):
+    reply = data + bytes([guide_crc7(data)])
+    assert strip_response_crc(reply) == data
+    corrupted = bytearray(reply)
+    corrupted[-1] ^= 1 << bit
+    with pytest.raises(ValueError):
+        strip_response_crc(bytes(corrupted))

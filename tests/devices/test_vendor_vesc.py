@@ -20,6 +20,8 @@ import json
 import struct
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from labkit.cli import main
 from labkit.devices.motor.vesc import (
@@ -171,3 +173,28 @@ def test_firmware_option_overrides_the_announced_version():
     port = open_port("sim://vesc?firmware=3.00&vin_v=12.0", clock=clock, timeout=0, **cls.default_serial)
     with cls(port, clock, name="vesc", firmware="6.02") as motor, pytest.raises(DeviceError):
         motor.status()  # the old 56-byte reply is too short for the layout the user forced
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.binary(max_size=120), st.tuples(st.integers(0, 12), st.integers(0, 120)))
+def test_fuzz_values_decode_or_refuse_for_any_firmware(payload, firmware):
+    """Any bytes under any announced version: a decoded reply or a ValueError, nothing else."""
+    try:
+        values = parse_values(bytes([4]) + payload, firmware=firmware)
+    except ValueError:
+        return
+    assert values.layout in ("legacy", "current")
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.integers(-32768, 32767), min_size=7, max_size=7),
+       st.integers(-(2**31), 2**31 - 1), st.integers(-32768, 32767), st.integers(0, 255))
+def test_fuzz_legacy_layout_round_trips_the_bldc_300_fields(temps, erpm, duty_counts, fault):
+    payload = (bytes([4]) + struct.pack(">7h", *temps) + struct.pack(">ii", 5, -7)
+               + struct.pack(">hih", duty_counts, erpm, 243) + struct.pack(">iiiiii", 1, 2, 3, 4, 9, 10)
+               + bytes([fault]))
+    v = parse_values(payload, firmware=(3, 0))
+    assert v.temp_mosfet_c == max(temps[:6]) / 10 and v.temp_pcb_c == temps[6] / 10
+    assert (v.erpm, v.duty, v.fault_code) == (erpm, duty_counts / 1000, fault)
+    assert (v.current_motor_a, v.current_in_a, v.input_voltage_v) == (0.05, -0.07, 24.3)
+    assert (v.tachometer, v.tachometer_abs) == (9, 10)
