@@ -28,7 +28,7 @@ def probe(capsys, *argv: str) -> tuple[int, list[str], str]:
 @pytest.mark.parametrize("protocol,url,extra", [
     ("mtsics", "sim://mtsics?seed=1", []),
     ("and_std", "sim://and_std?seed=1&unit=N", []),
-    ("line_regex", "sim://hx711?preset=bogde&startup_s=0.1", ["-o", "preset=bogde"]),
+    ("line_regex", "sim://hx711?preset=bogde_full&startup_s=0.1&rate_hz=10", ["-o", "preset=bogde_full"]),
 ])
 def test_probe_prints_one_json_reading_per_line(capsys, protocol, url, extra):
     code, out, err = probe(capsys, "balance", "--protocol", protocol, "--port", url,
@@ -126,8 +126,9 @@ def test_probe_continuous_reads_the_sir_stream(capsys):
 def test_probe_shows_a_device_reset_in_the_reading_flags(capsys):
     """An HX711 sketch that reboots mid-session prints its banner again and re-tares: the next
     reading says so (``flags``), once."""
-    code, out, err = probe(capsys, "balance", "--protocol", "line_regex", "-o", "preset=bogde",
-                           "--port", "sim://hx711?preset=bogde&startup_s=0.1&faults=reset_at:1.5",
+    code, out, err = probe(capsys, "balance", "--protocol", "line_regex", "-o", "preset=bogde_full",
+                           "--port", "sim://hx711?preset=bogde_full&rate_hz=10&startup_s=0.1"
+                           "&faults=reset_at:1.5",
                            "--samples", "40", "--json")
     assert code == 0, err
     flags = [set(json.loads(line)["flags"]) for line in out]

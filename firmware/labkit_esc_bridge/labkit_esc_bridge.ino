@@ -22,15 +22,22 @@
 // The pulse is 1000 us from the first line of setup(): an ESC that sees full throttle while
 // arming starts its throttle calibration. Opening the port resets the Arduino (DTR), the
 // pulses stop for ~1-2 s and the ESC may disarm: labkit expects that.
+//
+// The pulses come from Timer1 compare interrupts (0.5 us steps, as the Servo library does it)
+// but not from the Servo library: Servo is not part of the Arduino AVR core (the sketch must
+// build from the core alone, as CI does) and its constructor presets 1500 us, half throttle.
+// (Hardware fast PWM on OC1A, mode 14, would be jitter-free, but simavr 1.6, which CI runs
+// the sketch on, simulates mode 14 as phase-correct PWM: simavr bug #579.) The AVR
+// watchdog (500 ms) resets a hung sketch; a reset turns pin 9 into an input, so the ESC
+// sees no pulses at all and cuts the motor, as it does on signal loss.
 
-#include <Servo.h>
+#include <avr/wdt.h>
 
-#define ESC_PIN 9
+#define ESC_PIN 9                // PB1
 #define VIN_PIN A0            // optional divider to the battery; VIN_MV_PER_COUNT scales it
 #define VIN_MV_PER_COUNT 0    // e.g. 29 for a 1:5.7 divider at 5 V reference; 0: not wired
 #define TIMEOUT_MS 500
 
-Servo esc;
 int target = 0;                 // 0..3200
 int running = 0;                // what the pulse shows
 bool safeStart = true;
@@ -45,9 +52,45 @@ byte debugLen = 0;
 
 int pulseFor(int speed) { return 1000 + (long)speed * 1000L / 3200L; }
 
+volatile unsigned int highTicks = 2000;  // pulse width in 0.5 us ticks (2000 = 1000 us)
+
+// Timer1 runs free at 0.5 us per tick; each compare match ends or starts a pulse on pin 9
+// and schedules the next edge, 20 ms (40 000 ticks) per period.
+ISR(TIMER1_COMPA_vect) {
+  static bool high = false;
+  static unsigned int width = 2000;
+  if (!high) {
+    PORTB |= _BV(PORTB1);
+    width = highTicks;
+    OCR1A += width;
+  } else {
+    PORTB &= ~_BV(PORTB1);
+    OCR1A += 40000U - width;
+  }
+  high = !high;
+}
+
+void escWriteMicroseconds(int us) {
+  if (us < 1000) us = 1000;
+  if (us > 2000) us = 2000;
+  noInterrupts();
+  highTicks = (unsigned int)us * 2;     // used from the next pulse on
+  interrupts();
+}
+
+void escBegin() {
+  digitalWrite(ESC_PIN, LOW);
+  pinMode(ESC_PIN, OUTPUT);
+  TCCR1A = 0;                    // normal mode, pin 9 driven by the interrupt
+  TCCR1B = _BV(CS11);            // prescaler 8: 0.5 us ticks
+  OCR1A = TCNT1 + 200;
+  TIFR1 = _BV(OCF1A);
+  TIMSK1 |= _BV(OCIE1A);
+}
+
 void apply() {
   running = errors ? 0 : target;
-  esc.writeMicroseconds(pulseFor(running));
+  escWriteMicroseconds(pulseFor(running));
 }
 
 void setError(byte bit) { errors |= (1u << bit); apply(); }
@@ -128,20 +171,20 @@ void receive(byte b) {
 }
 
 void setup() {
-  // Zero throttle before the first pulse: the Servo constructor presets 1500 us (half
-  // throttle!) and attach() starts pulsing with whatever is stored, so store 1000 first.
-  esc.writeMicroseconds(1000);
-  esc.attach(ESC_PIN, 1000, 2000);
   byte mcusr = MCUSR; MCUSR = 0;
+  wdt_disable();                        // a watchdog reset leaves it running: stop it first
+  escBegin();                           // 1000 us pulses before anything else
   if (mcusr & (1 << WDRF)) resetFlags = 0x24;
   else if (mcusr & (1 << EXTRF)) resetFlags = 0x04;
   else if (mcusr & ((1 << PORF) | (1 << BORF))) resetFlags = 0x0C;
   else resetFlags = 0x14;
   Serial.begin(115200);                 // no banner: the port carries binary replies
   lastCommandMs = millis();
+  wdt_enable(WDTO_500MS);
 }
 
 void loop() {
+  wdt_reset();
   while (Serial.available()) receive(Serial.read());
   if (!(errors & (1u << 3)) && millis() - lastCommandMs > TIMEOUT_MS) setError(3);
 }

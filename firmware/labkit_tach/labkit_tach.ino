@@ -6,7 +6,8 @@
 //
 //   T,<seq>,<t_ms>,<rpm>,<period_us>,<pulses>,<flags>\n        115200 8N1
 //   rpm = 60e6 / (period_us * ppr)
-//   flags: 0 ok | Z zero-speed timeout | O too fast (period < 50 us) | N glitch rejected
+//   flags: 0 ok | Z zero-speed timeout | O too fast (period < 50 us) | N glitch rejected or
+//          missing pulse bridged (a period 1.5-4.5 times the last one counts as 2-4 periods)
 //
 // Host commands (LF-terminated): "PPR <n>", "RATE <hz>", "ZTO <ms>" -> "OK" or "ERR <text>",
 // "ID?" -> "ID labkit-tach <ver>". Boot banner: "# labkit-tach <ver> ppr=.. rate=.. zto=..".
@@ -25,6 +26,7 @@ volatile unsigned long sumUs = 0;        // sum of periods in this window
 volatile unsigned long count = 0;        // periods in this window
 volatile bool haveEdge = false;          // lastEdgeUs is valid
 volatile bool glitch = false;            // an edge was rejected in this window
+volatile unsigned long lastDtUs = 0;     // last single period (0: unknown, e.g. after a stop)
 
 unsigned int ppr = 1;
 unsigned int rateHz = 10;
@@ -43,8 +45,22 @@ void onPulse() {
       glitch = true;
       return;
     }
-    sumUs += dt;
-    count++;
+    unsigned long prev = lastDtUs;
+    if (prev && dt > prev + prev / 2) {
+      if (dt < 4 * prev + prev / 2) {      // 1-3 pulses missing (a dirty patch): bridge them
+        byte periods = 2;
+        while (periods < 4 && dt > periods * prev + prev / 2) periods++;
+        sumUs += dt;
+        count += periods;
+        glitch = true;
+      } else {
+        lastDtUs = 0;                      // a restart after a stop: time from this edge
+      }
+    } else {
+      sumUs += dt;
+      count++;
+      lastDtUs = dt;
+    }
   }
   lastEdgeUs = now;
   haveEdge = true;
@@ -81,7 +97,7 @@ void handleCommand(char *cmd) {
   long value = atol(space + 1);
   if (strcmp(cmd, "PPR") == 0) {
     if (value < 1 || value > 64) { reply(F("ERR bad value")); return; }
-    noInterrupts(); ppr = value; sumUs = 0; count = 0; haveEdge = false; interrupts();
+    noInterrupts(); ppr = value; sumUs = 0; count = 0; haveEdge = false; lastDtUs = 0; interrupts();
     lastPeriodUs = 0;
   } else if (strcmp(cmd, "RATE") == 0) {
     if (value < 1 || value > 200) { reply(F("ERR bad value")); return; }

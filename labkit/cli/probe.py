@@ -47,7 +47,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--samples", type=int, default=5, help="number of readings (default 5)")
     p.add_argument("--interval", type=float, default=0.0, metavar="S",
                    help="seconds between readings (default: as fast as the device answers)")
-    p.add_argument("--timeout", type=float, default=3.0, metavar="S", help="per-reading timeout (default 3)")
+    p.add_argument("--timeout", type=float, default=None, metavar="S",
+                   help="per-reading timeout (default 3, or the driver's read_timeout_s: "
+                        "10 for line_regex preset=bogde_full, which prints every 6 s)")
     p.add_argument("-o", "--option", action="append", default=[], metavar="KEY=VALUE",
                    help="driver option, as in a rig file (e.g. preset=bogde, unit=N); repeatable")
     p.add_argument("--continuous", action="store_true",
@@ -90,8 +92,11 @@ def json_safe(obj: dict[str, Any]) -> dict[str, Any]:
     return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in obj.items()}
 
 
-def one_sample(device: Device, timeout: float) -> dict[str, Any]:
-    """One reading from any device class, as the probe prints it."""
+def one_sample(device: Device, timeout: float | None) -> dict[str, Any]:
+    """One reading from any device class, as the probe prints it (``timeout`` None: the
+    driver's ``read_timeout_s`` if it has one, else 3 s)."""
+    if timeout is None:
+        timeout = float(getattr(device, "read_timeout_s", 3.0))
     if device.kind == "balance":
         return device.read(timeout=timeout).as_json()  # type: ignore[attr-defined]
     if device.kind == "tach":

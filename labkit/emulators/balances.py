@@ -1,6 +1,7 @@
-"""Balance and load-cell emulators: MT-SICS, A&D standard format, HX711 Arduino sketches.
+"""Balance emulators: MT-SICS and A&D standard format, and the base every balance and
+load-cell emulator shares (the HX711 sketches are in :mod:`labkit.emulators.hx711_sketch`).
 
-All three weigh the shared plant's PFR force (``plant.force(t)``, N; by default the fitted
+All of them weigh the shared plant's PFR force (``plant.force(t)``, N; by default the fitted
 law of Fig. 5.25, ``y[g] = 224e6 * rpm**-1.9``) sampled at the device's update rate, plus
 seeded Gaussian noise, a linear zero drift and creep (the reading creeps by a fraction of a
 load change with a time constant). A reading is *unstable* while the standard deviation of
@@ -277,10 +278,21 @@ class BalanceEmulator(Emulator):
 
 @register_emulator
 class MtSicsEmulator(BalanceEmulator):
-    """Mettler Toledo MT-SICS level 0/1 (+ ``SIR``, ``TA``, ``TAC``), 9600 8N1, CR LF."""
+    """Mettler Toledo MT-SICS level 0/1 (+ ``SIR``, ``TA``, ``TAC``), 9600 8N1, CR LF.
+
+    Identification as the MT-SICS reference manual gives it: ``I1`` (levels and versions),
+    ``I2``, ``I3`` (software version), ``I4`` (serial number), ``I5`` (software ID).
+    ``ZI``/``TI`` act at once and say whether the weight was stable (``S``) or not (``D``).
+    """
 
     protocol = "mtsics"
     model = "XS205 DualRange"
+    #: replies to I1, I3, I5 (levels 0 and 1 implemented; versions as an XS balance's)
+    info_lines: ClassVar[dict[str, str]] = {
+        "I1": 'I1 A "01" "2.20" "2.20" "1.00" "1.50"',
+        "I3": 'I3 A "4.00 10.28.0.493.142"',
+        "I5": 'I5 A "11671158C"',
+    }
 
     def banner(self, t: float) -> None:
         self._queue(f'I4 A "{self.serial_number}"\r\n'.encode("ascii"), t)
@@ -315,6 +327,8 @@ class MtSicsEmulator(BalanceEmulator):
                        t, 0.02)
         elif cmd == "I4":
             self.reply(f'I4 A "{self.serial_number}"\r\n'.encode("ascii"), t, 0.02)
+        elif cmd in self.info_lines:
+            self.reply(self.info_lines[cmd].encode("ascii") + b"\r\n", t, 0.02)
         elif cmd in ("SI", "SIR"):
             self.streaming = cmd == "SIR"
             status, value = self.weigh(tick)
@@ -342,6 +356,15 @@ class MtSicsEmulator(BalanceEmulator):
             self.reply(f"{cid} I\r\n".encode("ascii"), tick.t, 0.02)
             return
         status, value = self.weigh(tick)
+        if immediate and status not in "+-":  # ZI S / ZI D, TI S / TI D: stable or not
+            done = "S" if status == "S" else "D"
+            if cmd == "Z":
+                self.zero_now(tick)
+                self.reply(f"ZI {done}\r\n".encode("ascii"), tick.t, 0.05)
+            else:
+                self.tare_now(tick)
+                self.reply(self._weight_line("TI", done, self.to_unit(self.tare_n)), tick.t, 0.05)
+            return
         if cmd == "S":
             status = status if status in "+-" else "S"
             self.reply(self._weight_line("S", status, value), tick.t, 0.02)
@@ -386,9 +409,8 @@ class AndStdEmulator(BalanceEmulator):
 
     def _data(self, status: str, value: float | None) -> bytes:
         unit = f"{self.unit:>3}"
-        if value is None:
-            filler = "+999999.9" if status == "+" else "-999999.9"
-            return f"OL,{filler}{unit}\r\n".encode("ascii")
+        if value is None:  # the manuals' overload line (HR-A, FX-i, GX-A): no unit field
+            return b"OL,+9999999E+19\r\n" if status == "+" else b"OL,-9999999E+19\r\n"
         header = "ST" if status == "S" else "US"
         digits = f"{abs(value):08.{self.decimals}f}"[-8:]
         sign = "-" if value < 0 and float(digits) != 0 else "+"
@@ -454,110 +476,3 @@ class AndStdEmulator(BalanceEmulator):
 
     def stream_line(self, tick: Tick) -> None:
         self.reply(self._data(*self.weigh(tick)), tick.t)
-
-
-HX711_BAUD = {"hx711_adc": 57600, "bogde": 38400, "bare_float": 115200}
-#: the HX711's 24-bit two's complement rails (datasheet: output saturates there) and the
-#: emulated bridge's zero offset in counts
-ADC_MAX, ADC_MIN, ADC_ZERO = 0x7FFFFF, -0x800000, 81234
-
-
-@register_emulator
-class Hx711SketchEmulator(BalanceEmulator):
-    """An Arduino + HX711 running a third-party sketch (``preset``): boot banner, then one
-    value line per conversion at ``rate_hz`` (10 SPS), ``t`` tares. With ``unit=raw`` it
-    prints ADC counts (``calibration`` counts/g) that saturate at 0x7FFFFF / -0x800000.
-
-    The ADC saturates in every mode: a load beyond the rail (about 19.8 kg at the default
-    ``calibration`` of 420 counts/g; 4e6 counts/g puts it at 2.1 g) makes a calibrated
-    sketch print the rail's constant value, as the real libraries do (no overload marker).
-    Faults: ``overload`` (probability per line that the ADC sits at its positive rail),
-    ``reset_at`` (the sketch reboots: banner again, tare at start-up with the load on the
-    cell), ``stop_at`` (s after open: the sketch stops printing, the port stays open).
-    """
-
-    protocol = "hx711"
-    default_rate_hz = 10.0
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        self.preset = str(self.options.get("preset", "hx711_adc"))
-        if self.preset not in HX711_BAUD:
-            raise ValueError(f"preset {self.preset!r}: known {', '.join(HX711_BAUD)}")
-        self.serial_settings = {"baudrate": HX711_BAUD[self.preset], "bytesize": 8,
-                                "parity": "N", "stopbits": 1}
-        self.calibration = float(self.options.get("calibration", 420.0))
-        self.startup_s = float(self.options.get("startup_s", 1.0))
-        self.tare_s = float(self.options.get("tare_s", 0.5))
-        self._stream_from = 0.0
-
-    def banner(self, t: float) -> None:
-        self.streaming = False
-        self._stream_from = t + self.startup_s
-        if self.preset == "hx711_adc":
-            self._queue(b"\r\nStarting...\r\n", t + 0.01)
-            self._queue(b"Startup is complete\r\n", self._stream_from)
-        elif self.preset == "bogde":  # HX711_full_example's setup(): numbers that are no weights
-            raw = int(round(self.to_unit(self.signal.last.gross_n) * self.calibration)) + ADC_ZERO
-            self._queue(b"HX711 Demo\r\nInitializing the scale\r\nBefore setting up the scale:\r\n"
-                        b"read: \t\t%d\r\nread average: \t\t%d\r\n" % (raw, raw), t + 0.01)
-            self._queue(b"After setting up the scale:\r\nget units: \t\t0.0\r\nReadings:\r\n",
-                        self._stream_from - 0.01)
-        else:  # a minimal sketch: one line of text, then bare numbers
-            self._queue(b"\r\nHX711 scale ready\r\n", t + 0.01)
-
-    def on_tick(self, tick: Tick) -> None:
-        if not self.streaming and tick.t >= self._stream_from:
-            self.streaming = True
-        for pending in list(self.pending):  # the sketch tares after its averaging settles
-            if tick.t - pending.since >= self.tare_s:
-                self.pending.remove(pending)
-                self.tare_n = tick.gross_n - self.zero_n
-                if self.preset == "hx711_adc":
-                    self.reply(b"Tare complete\r\n", tick.t)
-        if self.streaming:
-            self.stream_line(tick)
-
-    def next_output_time(self, t: float) -> float | None:
-        base = super().next_output_time(t)
-        nxt = self.signal.next_time()
-        return nxt if base is None else min(base, nxt)
-
-    def weigh(self, tick: Tick) -> tuple[str, float | None]:
-        return "S", self.to_unit(tick.gross_n - self.zero_n - self.tare_n)
-
-    def stream_line(self, tick: Tick) -> None:
-        stop = self.faults.get("stop_at")
-        if stop is not None and self.since_open(tick.t) >= stop:
-            return  # switched off / cable pulled at the sketch's end: nothing more
-        _, grams = self.weigh(tick)
-        assert grams is not None
-        counts = int(round(grams * self.calibration)) + ADC_ZERO
-        saturated = not ADC_MIN < counts < ADC_MAX
-        counts = max(ADC_MIN, min(ADC_MAX, counts))
-        if self._chance("overload"):
-            counts, saturated = ADC_MAX, True
-        if self.unit == "raw":
-            number = str(counts)
-        else:
-            if saturated:  # the sketch converts the railed code like any other
-                grams = (counts - ADC_ZERO) / self.calibration
-            number = f"{grams:.{self.decimals}f}"
-        if self.preset == "hx711_adc":
-            line = f"Load_cell output val: {number}"
-        elif self.preset == "bogde":
-            line = f"one reading:\t{number}\t| average:\t{number}"
-        else:
-            line = number
-        self.reply(line.encode("ascii") + b"\r\n", tick.t)
-
-    def to_unit(self, newtons: float) -> float:
-        return newtons / (1e-3 * G0)  # the sketch prints grams (or counts from grams)
-
-    def command(self, line: bytes, t: float) -> None:
-        pass  # sketches read single characters; see handle
-
-    def handle(self, data: bytes, t: float) -> None:
-        self.advance(t)
-        if b"t" in data:
-            self.pending.append(Pending("T", t))

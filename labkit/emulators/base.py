@@ -192,7 +192,8 @@ def register_emulator(cls: type[Emulator]) -> type[Emulator]:
 def emulator_class(protocol: str) -> type[Emulator]:
     import importlib
 
-    for name in ("balances", "motors", "tachometers"):  # importing registers their emulators
+    # importing a module registers its emulators
+    for name in ("balances", "hx711_sketch", "motors", "vesc_emulator", "tachometers"):
         module_name = f"labkit.emulators.{name}"
         try:
             importlib.import_module(module_name)

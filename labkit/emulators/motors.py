@@ -1,4 +1,5 @@
-"""Motor-controller emulators: Pololu SMC G2, the labkit ESC bridge, and a VESC.
+"""Motor-controller emulators: Pololu SMC G2 and the labkit ESC bridge, and the base every
+motor emulator shares (the VESC is in :mod:`labkit.emulators.vesc_emulator`).
 
 Each turns the host's commands into duty on the shared plant
 (``plant.set_duty(duty, t, name=<option motor, default "rotor">)``) and answers queries
@@ -105,7 +106,8 @@ SERIAL_FORMAT, SERIAL_CRC = 1 << 4, 1 << 5
 class PololuSmcEmulator(_MotorEmulator):
     """Pololu SMC G2 (USB command port: baud does not matter).
 
-    Options: ``device_number`` (13), ``crc`` (0/1), ``command_timeout_ms`` (0 = off),
+    Options: ``device_number`` (13), ``crc`` (0/1: commands carry a CRC-7 byte),
+    ``crc_responses`` (0/1: replies carry one, user's guide section 6.5), ``command_timeout_ms`` (0 = off),
     ``motor`` (plant motor, ``rotor``), ``vin_mv`` (12000), ``temperature_c`` (25),
     ``product_id`` (0xA1), ``firmware`` (``1.04``), ``latency_s`` (0.001).
     """
@@ -120,6 +122,7 @@ class PololuSmcEmulator(_MotorEmulator):
         super().__post_init__()
         self.device_number = int(self.options.get("device_number", 13))
         self.crc = _flag(self.options, "crc", False) and self.pololu_form
+        self.crc_responses = _flag(self.options, "crc_responses", False) and self.pololu_form
         self.command_timeout_ms = float(self.options.get("command_timeout_ms", self.default_timeout_ms))
         self.vin_mv = int(self.options.get("vin_mv", 12000))
         self.temperature_c = float(self.options.get("temperature_c", 25.0))
@@ -252,12 +255,16 @@ class PololuSmcEmulator(_MotorEmulator):
             self.safe_start = True
             self.apply(t)
         elif cmd == 0xA1:
-            self.reply(struct.pack("<H", self.variable(data[0], t) & 0xFFFF), t, self.latency_s)
+            self.answer(struct.pack("<H", self.variable(data[0], t) & 0xFFFF), t)
         elif cmd == 0xA2:
-            self.reply(b"\x00", t, self.latency_s)
+            self.answer(b"\x00", t)
         elif cmd == 0xC2:
             minor, major = self.firmware_bcd
-            self.reply(struct.pack("<HBB", self.product_id, minor, major), t, self.latency_s)
+            self.answer(struct.pack("<HBB", self.product_id, minor, major), t)
+
+    def answer(self, data: bytes, t: float) -> None:
+        """Reply bytes, with the CRC-7 byte appended when CRC for responses is on."""
+        self.reply(data + (bytes([_smc_crc7(data)]) if self.crc_responses else b""), t, self.latency_s)
 
     def variable(self, vid: int, t: float) -> int:
         if self.variables is not None and vid not in self.variables:
@@ -358,153 +365,3 @@ class EscBridgeEmulator(PololuSmcEmulator):
             self.reply(b"OK\n", t, self.latency_s)
         else:
             self.reply(b"ERR bad command\n", t, self.latency_s)
-
-
-# ------------------------------------------------------------------------------------------
-# VESC
-# ------------------------------------------------------------------------------------------
-
-def _vesc_crc(data: bytes) -> int:
-    crc = 0
-    for byte in data:
-        crc ^= byte << 8
-        for _ in range(8):
-            crc = (crc << 1) ^ 0x1021 if crc & 0x8000 else crc << 1
-            crc &= 0xFFFF
-    return crc
-
-
-def _vesc_frame(payload: bytes) -> bytes:
-    return bytes([2, len(payload)]) + payload + struct.pack(">H", _vesc_crc(payload)) + b"\x03"
-
-
-@register_emulator
-class VescEmulator(_MotorEmulator):
-    """A VESC on its UART (115200 8N1).
-
-    Options: ``pole_pairs`` (1), ``max_erpm`` (100000), ``timeout_ms`` (1000: release the
-    motor when no set/alive packet arrives), ``vin_v`` (24.0), ``firmware`` (``6.02``),
-    ``hardware`` (``labkit-emu``), ``reboot_s`` (0.5), ``motor`` (``rotor``).
-    """
-
-    protocol = "vesc"
-    serial_settings = {"baudrate": 115200, "bytesize": 8, "parity": "N", "stopbits": 1}
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        self.pole_pairs = int(self.options.get("pole_pairs", 1))
-        self.max_erpm = float(self.options.get("max_erpm", 100_000))
-        self.timeout_ms = float(self.options.get("timeout_ms", 1000))
-        self.vin_v = float(self.options.get("vin_v", 24.0))
-        major, _, minor = self.options.get("firmware", "6.02").partition(".")
-        self.fw = (int(major), int(minor or 0))
-        self.hardware = self.options.get("hardware", "labkit-emu")
-        self.reboot_s = float(self.options.get("reboot_s", 0.5))
-        self.fault = int(self.faults.get("fault_code", 0))
-
-    def power_on(self, t: float) -> None:
-        super().power_on(t)
-        self.rx = bytearray()
-        self.mode: tuple[str, float] | None = None
-        self.last_command_t = t
-        self.timed_out = False
-        self.silent_until = t
-        self.drive(0.0, t)
-
-    def on_reset(self, t: float) -> None:
-        self.power_on(t)
-        self.silent_until = t + self.reboot_s
-        self.fault = 10  # booting from watchdog reset
-
-    def watchdog_deadline(self) -> float | None:
-        if self.mode is None or self.timed_out or self.timeout_ms <= 0:
-            return None
-        return self.last_command_t + self.timeout_ms / 1000.0
-
-    def check_timeout(self, t: float) -> None:
-        if self.mode is None or self.timed_out or self.timeout_ms <= 0:
-            return
-        due = self.last_command_t + self.timeout_ms / 1000.0
-        if t >= due:
-            self.timed_out = True
-            self.mode = None
-            self.drive(0.0, due)
-
-    def handle(self, data: bytes, t: float) -> None:
-        self.produce(t)
-        if t < self.silent_until:
-            return
-        self.rx += data
-        while self.rx:
-            start = self.rx[0]
-            if start != 2 or len(self.rx) >= 2 and self.rx[1] == 0:
-                del self.rx[:1]
-                continue
-            if len(self.rx) < 2 or len(self.rx) < self.rx[1] + 5:
-                return
-            n = self.rx[1]
-            payload = bytes(self.rx[2:2 + n])
-            crc = struct.unpack(">H", self.rx[2 + n:4 + n])[0]
-            if self.rx[4 + n] != 3 or crc != _vesc_crc(payload):
-                del self.rx[:1]  # the firmware drops one byte and rescans; no NAK
-                continue
-            del self.rx[:n + 5]
-            self.execute(payload, t)
-
-    def _run(self, duty: float, t: float) -> None:
-        if self.fault or (self.faults.get("overload") and duty):
-            if self.faults.get("overload") and not self.fault:
-                self.fault = 4
-            self.mode = None
-            self.drive(0.0, t)
-            return
-        self.drive(duty, t)
-
-    def execute(self, payload: bytes, t: float) -> None:
-        cid, body = payload[0], payload[1:]
-        if cid in (5, 6, 7, 8, 30):
-            self.setpoint_times.append(t)
-            self.last_command_t = t
-            self.timed_out = False
-        if cid == 0:
-            reply = (bytes([0, *self.fw]) + self.hardware.encode() + b"\x00" + bytes(12)
-                     + b"\x00\x00\x00")
-            self.reply(_vesc_frame(reply), t, self.latency_s)
-        elif cid == 4:
-            self.reply(_vesc_frame(self.values_payload(t)), t, self.latency_s)
-        elif cid == 5 and len(body) == 4:
-            duty = max(-1.0, min(1.0, struct.unpack(">i", body)[0] / 100_000))
-            self.mode = ("duty", duty)
-            self._run(duty, t)
-        elif cid == 8 and len(body) == 4:
-            erpm = max(-self.max_erpm, min(self.max_erpm, float(struct.unpack(">i", body)[0])))
-            self.mode = ("erpm", erpm)
-            max_speed = self.plant.motor(self.motor_name).max_speed_rad_s
-            target = erpm / self.pole_pairs * TWO_PI / 60.0
-            self._run(max(-1.0, min(1.0, target / max_speed)), t)
-        elif cid == 6 and len(body) == 4:
-            amps = struct.unpack(">i", body)[0] / 1000
-            self.mode = ("current", amps) if amps else None
-            self._run(max(-1.0, min(1.0, amps / 20.0)), t)
-        elif cid == 7 and len(body) == 4:
-            self.mode = ("brake", struct.unpack(">i", body)[0] / 1000)
-            self.drive(0.0, t)
-        elif cid == 29:
-            self.on_reset(t)
-            self.fault = 0
-
-    def values_payload(self, t: float) -> bytes:
-        speed = self.speed_rad_s(t)
-        duty = self.plant.motor(self.motor_name).duty
-        erpm = speed * 60.0 / TWO_PI * self.pole_pairs
-        i_motor = 0.5 + 4.0 * abs(duty) if duty else 0.0
-        head = struct.pack(
-            ">hhiiiihihiiiiiiB",
-            round(25.0 * 10 + abs(duty) * 100), round(30.0 * 10), round(i_motor * 100),
-            round(i_motor * abs(duty) * 100), 0, round(i_motor * 100), round(duty * 1000),
-            round(erpm), round(self.vin_v * 10), 0, 0, 0, 0,
-            0, 0, self.fault,
-        )
-        tail = struct.pack(">iB", 0, 0) + struct.pack(">hhh", 250, 250, 250) + struct.pack(">ii", 0, 0)
-        status = 1 if self.timed_out else 0
-        return bytes([4]) + head + tail + bytes([status])

@@ -25,8 +25,9 @@ from labkit.devices.motor.vesc import (
     format_set_rpm,
     parse_values,
 )
-from labkit.emulators.motors import PololuSmcEmulator, VescEmulator
+from labkit.emulators.motors import PololuSmcEmulator
 from labkit.emulators.plant import RigPlant
+from labkit.emulators.vesc_emulator import VescEmulator
 
 
 def smc(crc: bool) -> PololuSmcEmulator:

@@ -1,7 +1,9 @@
 """A&D standard format (EK-i, FX-i/FZ-i, GX/GF, EJ, GC; PROTOCOLS 1.2): parse/format + driver.
 
 Data lines are 17 bytes: ``ST,+00012.34  g`` CR LF (``ST`` stable, ``US`` unstable, ``QT``
-count, ``OL`` out of range with *filler* digits that are never a reading). The unit can be
+count, ``OL`` out of range with *filler* digits that are never a reading). The manuals' own
+overload line is ``OL,+9999999E+19`` (``OL,-9999999E+19`` below the range): 15 characters
+like a data line, no unit field. The unit can be
 ``  N``: the balance then measures force directly. Control commands are acknowledged with
 ACK (0x06, twice for ``R``/``Z``/``T``: on receipt and on completion) when the balance's
 ``erCd`` menu setting is 1; errors come as ``EC,Exx``. Factory serial settings: 2400 7E1.
@@ -39,9 +41,15 @@ ERROR_CODES = {
 }
 
 _DATA = re.compile(r"(ST|US|QT|OL),(?:(LO|OK|HI|--),)?([+-])([0-9.]{8})([ A-Za-z%]{3})\Z")
+_OVERLOAD_E19 = re.compile(r"OL,[+-]9999999E\+19\Z")
 _DIGITS = re.compile(r"\d*\.?\d*\Z")
 _ERROR = re.compile(r"EC,(E\d\d)\Z")
 _INFO = re.compile(r"(ID|SN|TN),([ -~]*)\Z")
+
+
+#: the overload lines the manuals give (above and below the range)
+OVERLOAD_LINE = b"OL,+9999999E+19\r\n"
+UNDERLOAD_LINE = b"OL,-9999999E+19\r\n"
 
 
 @dataclass(frozen=True)
@@ -93,6 +101,8 @@ def parse_line(line: bytes) -> AndLine:
     if not line or any(b < 0x20 or b > 0x7E for b in line):
         raise FrameError(f"not a printable ASCII line: {line!r}")
     text = line.decode("ascii")
+    if _OVERLOAD_E19.match(text):
+        return AndData("OL", None, "")
     m = _DATA.match(text)
     if m:
         header, comparator, sign, digits, unit_field = m.groups()
@@ -115,7 +125,8 @@ def parse_line(line: bytes) -> AndLine:
 
 
 def format_data(header: str, value: float | None, unit: str = "g", decimals: int = 2) -> bytes:
-    """Format a 17-byte data line; ``OL`` gets the ``+999999.9`` filler."""
+    """Format a 17-byte data line; ``OL`` gets the ``+999999.9`` filler (the manuals' own
+    overload line is :data:`OVERLOAD_LINE`)."""
     if header == "OL" or value is None:
         body = "+999999.9" if (value is None or value >= 0) else "-999999.9"
         return f"OL,{body}{unit:>3}".encode("ascii") + b"\r\n"

@@ -42,7 +42,7 @@ from labkit.devices.base import Balance, Reading, register_driver, register_pars
 from labkit.devices.loadcell.continuous import ContinuousMixin
 from labkit.devices.loadcell.linkio import FrameError, LineLink, LinkTailMixin, eol_bytes
 from labkit.devices.loadcell.units import UnitError, to_si
-from labkit.errors import DeviceReplyError
+from labkit.errors import DeviceError, DeviceReplyError
 from labkit.io.clock import Clock
 
 FLOAT = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d{1,3})?"
@@ -59,9 +59,10 @@ class Preset:
     pattern: str
     baudrate: int
     unit: str = "g"
-    tare_command: str = "t"
+    tare_command: str | None = "t"   # None: the sketch reads no serial input, cannot tare
     tare_reply: str | None = None   # regex of the line confirming a tare (None: none sent)
     boot_pattern: str | None = None  # regex found in the sketch's boot banner lines
+    read_timeout_s: float = 3.0      # default wait for one line: covers the sketch's period
 
 
 PRESETS: dict[str, Preset] = {
@@ -69,10 +70,15 @@ PRESETS: dict[str, Preset] = {
     "hx711_adc": Preset(rf"Load_cell output val:\s*(?P<value>{FLOAT})", 57600, "g", "t",
                         r"Tare complete",
                         r"Starting\.\.\.|Startup is complete|Timeout, check MCU>HX711 wiring"),
-    # bogde/HX711 examples: "one reading:\t1.23\t| average:\t1.25" or "Reading: 1.23 g"
-    "bogde": Preset(rf"(?:one reading:\s*{FLOAT}\s*\|\s*average:\s*(?P<value>{FLOAT}))"
-                    rf"|(?:Reading:\s*(?P<value2>{FLOAT})\s*(?P<unit>[A-Za-z]+)?)", 38400, "g", "t", None,
-                    r"HX711 Demo|Initializing the scale|(?:Before|After) setting up the scale:"),
+    # bogde/HX711 0.7.5 HX711_basic_example (and _retry_, _timeout_): "HX711 reading: 81234",
+    # raw ADC counts at 57600 baud every 1-1.5 s; no banner, never reads serial: no tare
+    "bogde": Preset(r"HX711 reading: (?P<value>-?\d+)", 57600, "raw", None, None, None, 3.0),
+    # bogde/HX711 0.7.5 HX711_full_example: "one reading:\t1.2\t| average:\t1.3" at 38400
+    # baud about every 6.2 s (11 conversions at 10 SPS + delay(5000)); never reads serial
+    "bogde_full": Preset(rf"one reading:\s*{FLOAT}\s*\|\s*average:\s*(?P<value>{FLOAT})",
+                         38400, "g", None, None,
+                         r"HX711 Demo|Initializing the scale|(?:Before|After) setting up the scale:",
+                         10.0),
     # sketches that print one bare number per line; their banner (if any) is text: a
     # printable line with a word of 4+ letters (not Arduino's "nan"/"inf"/"ovf")
     "bare_float": Preset(rf"\s*(?P<value>{FLOAT})\s*", 115200, "g", "t", None,
@@ -153,6 +159,8 @@ def format_value_line(preset: str, value: float, decimals: int = 2) -> bytes:
     if preset == "hx711_adc":
         return f"Load_cell output val: {number}\r\n".encode("ascii")
     if preset == "bogde":
+        return f"HX711 reading: {round(value)}\r\n".encode("ascii")
+    if preset == "bogde_full":
         return f"one reading:\t{number}\t| average:\t{number}\r\n".encode("ascii")
     if preset == "bare_float":
         return f"{number}\r\n".encode("ascii")
@@ -168,21 +176,24 @@ register_parser_benchmark("line_regex", b"Load_cell output val: 12.34\r\n",
 class LineRegexBalance(ContinuousMixin, LinkTailMixin, Balance):
     """A load cell behind a third-party Arduino sketch that prints one value per line.
 
-    Options: ``preset`` (``hx711_adc`` default, ``bogde``, ``bare_float``), ``pattern``
+    Options: ``preset`` (``hx711_adc`` default, ``bogde``, ``bogde_full``, ``bare_float``), ``pattern``
     (regex with ``(?P<value>...)``), ``unit`` (unit of the printed value after
     calibration: ``g`` default, ``kg``, ``N``, or ``raw``), ``scale`` (1), ``offset`` (0),
     ``capacity`` (in ``unit``; beyond it a reading is overload), ``tare_command`` (``t``),
     ``tare_reply`` (regex), ``tare_settle_s`` (1.5, wait after a tare the
     sketch does not confirm), ``stable_std`` and ``stable_window`` (8), ``eol`` (``"CRLF"``),
-    ``boot_pattern`` (regex of the sketch's banner lines; ``""``: none).
+    ``boot_pattern`` (regex of the sketch's banner lines; ``""``: none), ``read_timeout_s``
+    (default wait for a line, the preset's: 10 s for ``bogde_full``). The ``bogde`` presets
+    have no tare command (the sketches never read the port): ``zero()`` refuses; subtract
+    a zero with ``offset``.
 
     ``resets_seen`` counts banners that followed a value line (the device rebooted during
     use); the first reading after one is flagged ``device_reset`` and ``tare_lost``.
     """
 
     protocol = "line_regex"
-    option_names = frozenset({"boot_pattern", "capacity", "eol", "offset", "pattern", "preset", "scale",
-                              "stable_std",
+    option_names = frozenset({"boot_pattern", "capacity", "eol", "offset", "pattern", "preset",
+                              "read_timeout_s", "scale", "stable_std",
                               "stable_window", "tare_command", "tare_reply", "tare_settle_s", "unit"})
     default_serial = {"baudrate": 57600, "bytesize": 8, "parity": "N", "stopbits": 1}
 
@@ -199,7 +210,9 @@ class LineRegexBalance(ContinuousMixin, LinkTailMixin, Balance):
         self.offset = float(options.get("offset", 0.0))
         capacity = options.get("capacity")
         self.capacity = float(capacity) if capacity is not None else None
-        self.tare_command = str(options.get("tare_command", preset.tare_command))
+        tare_command = options.get("tare_command", preset.tare_command)
+        self.tare_command = None if tare_command in (None, "") else str(tare_command)
+        self.read_timeout_s = float(options.get("read_timeout_s", preset.read_timeout_s))
         reply = options.get("tare_reply", preset.tare_reply)
         self.tare_reply = re.compile(str(reply)) if reply else None
         self.tare_settle_s = float(options.get("tare_settle_s", 1.5))
@@ -317,8 +330,10 @@ class LineRegexBalance(ContinuousMixin, LinkTailMixin, Balance):
         """Sketches do not identify themselves: the preset and pattern in use."""
         return {"protocol": self.protocol, "preset": self.preset, "pattern": self.pattern.pattern}
 
-    def read(self, timeout: float = 2.0) -> Reading:
-        """The next value line received after this call (older buffered lines are dropped)."""
+    def read(self, timeout: float | None = None) -> Reading:
+        """The next value line received after this call (older buffered lines are dropped);
+        ``timeout`` defaults to ``read_timeout_s`` (the preset's line period covered)."""
+        timeout = self.read_timeout_s if timeout is None else timeout
         if self.stream is not None:
             return self.stream.wait_new(self.clock.now(), timeout)
         self.link.discard_stale("stream")
@@ -327,12 +342,17 @@ class LineRegexBalance(ContinuousMixin, LinkTailMixin, Balance):
 
     def zero(self, timeout: float = 20.0) -> None:
         """Send the tare command (``t``); wait for the sketch's confirmation line if it has one,
-        else for the next value line."""
+        else for the next value line. A sketch without a tare command: DeviceError."""
+        if self.tare_command is None:
+            raise DeviceError(self.name, "tare", b"",
+                              f"preset {self.preset!r}: the sketch reads no serial input, so it "
+                              "cannot tare; set option offset (in printed units) instead")
         with self.paused():
             self._zero(timeout)
 
     def _zero(self, timeout: float) -> None:
         self.window.clear()
+        assert self.tare_command is not None
         self.link.discard_stale(self.tare_command)
         rx = self.tare_reply
 

@@ -7,7 +7,9 @@ Binary commands, no terminator; every command byte has its MSB set and every dat
 * Pololu (multi-drop): ``AA device cmd&7F data...`` (device number 0..127, default 13)
 
 With the CRC option a CRC-7 byte (poly 0x91 reflected, init 0, LSB first) follows every
-packet; ``crc7(b"\\x83") == 0x1A``. The motor does not run after power-up, an error or
+packet; ``crc7(b"\\x83") == 0x1A``. The controller's separate "CRC for responses" setting
+(SMC G2 user's guide, section 6.5) appends a CRC-7 of the reply bytes to every reply:
+option ``crc_responses``. The motor does not run after power-up, an error or
 ``E0`` until Exit Safe Start (``83``) is received. Speed is -3200..3200 (= -100..100 %
 duty), sent as ``85``/``86`` (forward/reverse) with two 7-bit bytes (low 5 bits, high 7).
 The controller never answers set commands; Get Variable (``A1 id``) answers two bytes
@@ -124,6 +126,16 @@ def parse_firmware_version(reply: bytes) -> dict[str, Any]:
             "firmware": f"{major:X}.{minor:02X}"}  # BCD: hex digits are the decimal digits
 
 
+def strip_response_crc(reply: bytes) -> bytes:
+    """A reply with its CRC-7 byte (SMC G2 guide 6.5) -> the data; ValueError on a mismatch."""
+    if len(reply) < 2:
+        raise ValueError(f"reply of {len(reply)} bytes has no CRC byte")
+    data, crc = reply[:-1], reply[-1]
+    if crc != crc7(data):
+        raise ValueError(f"response CRC 0x{crc:02X} does not match 0x{crc7(data):02X} of the data")
+    return data
+
+
 def _plausible(variable_id: int, value: int) -> bool:
     if variable_id in (VAR_ERROR_STATUS, VAR_ERRORS_OCCURRED):
         return value < 1 << len(ERROR_BITS)
@@ -141,11 +153,14 @@ class PololuSmc(KeepAliveMotor):
     Options: ``device_number`` (0..127: use the Pololu protocol; default: compact),
     ``crc`` (append CRC-7, must match the controller's setting), ``autobaud`` (send 0xAA on
     open so a TTL controller in auto-detect mode learns the rate; default on with the Pololu
-    protocol), ``reply_timeout_s`` (0.1), ``quiet_s`` (0.003: silence required after a reply).
+    protocol), ``crc_responses`` (the controller appends a CRC-7 byte to its replies: its
+    "CRC for responses" setting), ``reply_timeout_s`` (0.1), ``quiet_s`` (0.003: silence
+    required after a reply).
     """
 
     protocol = "pololu_smc"
-    option_names = frozenset({"autobaud", "crc", "device_number", "quiet_s", "reply_timeout_s"})
+    option_names = frozenset({"autobaud", "crc", "crc_responses", "device_number", "quiet_s",
+                              "reply_timeout_s"})
     default_serial = {"baudrate": 9600, "bytesize": 8, "parity": "N", "stopbits": 1}
     #: variables read by status()
     status_variables: ClassVar[tuple[int, ...]] = (
@@ -158,6 +173,7 @@ class PololuSmc(KeepAliveMotor):
         number = options.get("device_number")
         self.device_number = None if number in (None, "") else int(number)
         self.crc = as_bool(options.get("crc", False))
+        self.crc_responses = as_bool(options.get("crc_responses", False))
         self.reply_timeout_s = float(options.get("reply_timeout_s", 0.1))
         self.quiet_s = float(options.get("quiet_s", 0.003))
         self.target_speed = 0
@@ -173,6 +189,26 @@ class PololuSmc(KeepAliveMotor):
     def send(self, cmd: int, data: bytes = b"", label: str = "") -> None:
         self.write(self.packet(cmd, data), label or f"0x{cmd:02X}")
 
+    def read_reply(self, n: int, label: str) -> bytes:
+        """The ``n`` data bytes of a reply, its CRC byte checked and dropped when the
+        controller sends one; a reply one byte too long says which option to set."""
+        extra = 1 if self.crc_responses else 0
+        try:
+            reply = self.read_exact(n + extra, self.reply_timeout_s, label, self.quiet_s)
+        except DeviceError as exc:
+            if type(exc) is DeviceError and not extra and len(exc.last_bytes) == n + 1:
+                raise DeviceError(self.name, label, exc.last_bytes,
+                                  f"garbled reply: {n + 1} bytes where {n} were expected (a "
+                                  "controller with CRC enabled for responses needs option "
+                                  "crc_responses=1)") from None
+            raise
+        if not extra:
+            return reply
+        try:
+            return strip_response_crc(reply)
+        except ValueError as exc:
+            raise DeviceError(self.name, label, reply, str(exc)) from None
+
     def get_variable(self, variable_id: int, attempts: int = 3) -> int:
         """Get Variable ``A1 id``; garbled replies are retried, then raise DeviceError."""
         self.check_keepalive()
@@ -183,7 +219,7 @@ class PololuSmc(KeepAliveMotor):
                 self.flush_input(label)
                 self.send(CMD_GET_VARIABLE, bytes([variable_id]), label)
                 try:
-                    reply = self.read_exact(2, self.reply_timeout_s, label, self.quiet_s)
+                    reply = self.read_reply(2, label)
                 except DeviceError as exc:
                     if type(exc) is not DeviceError:  # timeouts and disconnects go up at once
                         raise
@@ -204,7 +240,7 @@ class PololuSmc(KeepAliveMotor):
         with self.io_lock:
             self.flush_input("get firmware version")
             self.send(CMD_GET_FIRMWARE_VERSION, label="get firmware version")
-            reply = self.read_exact(4, self.reply_timeout_s, "get firmware version", self.quiet_s)
+            reply = self.read_reply(4, "get firmware version")
         try:
             return {"model": "pololu-smc-g2", **parse_firmware_version(reply)}
         except ValueError as exc:

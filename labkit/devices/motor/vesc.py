@@ -9,16 +9,26 @@ controller's 1 s communication timeout, which releases the motor when we fall si
 
 Speeds are electrical: ERPM = mechanical RPM x pole pairs, so a 100 000 RPM rig needs a
 1-pole-pair motor or a raised ERPM limit.
+
+GET_VALUES replies are decoded in the layout of the firmware version that FW_VERSION reports
+(1.x-3.06 old, 3.07-7.x current; others refused: :mod:`labkit.devices.motor.vesc_values`,
+docs/devices-tach-motor.md). Payloads over 512 bytes are refused, and set commands round like
+VESC Tool (half away from zero); docs/hardware-fidelity.md lists the sources.
 """
 
 from __future__ import annotations
 
+import math
 import struct
-from dataclasses import dataclass
 from typing import Any
 
 from labkit.devices.base import MotorStatus, register_driver, register_parser_benchmark
 from labkit.devices.motor.keepalive import KeepAliveMotor
+from labkit.devices.motor.vesc_values import CURRENT_HEAD, layout_for_firmware
+from labkit.devices.motor.vesc_values import FAULT_CODES as FAULT_CODES  # re-exported
+from labkit.devices.motor.vesc_values import VescValues as VescValues
+from labkit.devices.motor.vesc_values import fault_name as fault_name
+from labkit.devices.motor.vesc_values import parse_values as parse_values
 from labkit.errors import DeviceError, DeviceTimeout
 from labkit.units import RAD_S_PER_RPM
 
@@ -31,21 +41,9 @@ COMM_SET_RPM = 8
 COMM_REBOOT = 29
 COMM_ALIVE = 30
 
-MAX_PAYLOAD = 1024
-
-FAULT_CODES = {
-    0: "none", 1: "over_voltage", 2: "under_voltage", 3: "drv", 4: "abs_over_current",
-    5: "over_temp_fet", 6: "over_temp_motor", 7: "gate_driver_over_voltage",
-    8: "gate_driver_under_voltage", 9: "mcu_under_voltage", 10: "booting_from_watchdog_reset",
-    11: "encoder_spi", 12: "encoder_sincos_below_min_amplitude",
-    13: "encoder_sincos_above_max_amplitude", 14: "flash_corruption",
-    15: "high_offset_current_sensor_1", 16: "high_offset_current_sensor_2",
-    17: "high_offset_current_sensor_3", 18: "unbalanced_currents",
-}
-
-
-def fault_name(code: int) -> str:
-    return FAULT_CODES.get(code, f"fault_{code}")
+#: PACKET_MAX_PL_LEN of comm/packet.h (firmware 4.00 on; 3.x allowed 1024): longer
+#: payloads are refused, never framed
+MAX_PAYLOAD = 512
 
 
 def _crc16_bitwise(byte: int) -> int:
@@ -69,8 +67,8 @@ def crc16_xmodem(data: bytes) -> int:
 
 def format_packet(payload: bytes) -> bytes:
     """Frame a payload: start byte, length, payload, CRC-16 (big-endian), 0x03."""
-    if not 0 < len(payload) <= 0xFFFF:
-        raise ValueError(f"payload length {len(payload)} not in 1..65535")
+    if not 0 < len(payload) <= MAX_PAYLOAD:
+        raise ValueError(f"payload length {len(payload)} not in 1..{MAX_PAYLOAD} (PACKET_MAX_PL_LEN)")
     head = bytes([2, len(payload)]) if len(payload) <= 255 else b"\x03" + struct.pack(">H", len(payload))
     return head + payload + struct.pack(">H", crc16_xmodem(payload)) + b"\x03"
 
@@ -142,8 +140,13 @@ class VescFramer:
         return None
 
 
+def round_half_away(value: float) -> int:
+    """Round as VESC Tool does (vbytearray.cpp ``roundDouble``): halves away from zero."""
+    return int(math.ceil(value - 0.5)) if value < 0.0 else int(math.floor(value + 0.5))
+
+
 def _int32(value: float) -> bytes:
-    return struct.pack(">i", max(-(2**31), min(2**31 - 1, round(value))))
+    return struct.pack(">i", max(-(2**31), min(2**31 - 1, round_half_away(value))))
 
 
 def format_set_duty(duty: float) -> bytes:
@@ -169,56 +172,6 @@ def format_request(command_id: int) -> bytes:
     return format_packet(bytes([command_id]))
 
 
-@dataclass(frozen=True)
-class VescValues:
-    """GET_VALUES reply (firmware 3.x..6.x). Fields past ``fault_code`` are None on old firmware."""
-
-    temp_mosfet_c: float
-    temp_motor_c: float
-    current_motor_a: float
-    current_in_a: float
-    id_a: float
-    iq_a: float
-    duty: float
-    erpm: float
-    input_voltage_v: float
-    amp_hours: float
-    amp_hours_charged: float
-    watt_hours: float
-    watt_hours_charged: float
-    tachometer: int
-    tachometer_abs: int
-    fault_code: int
-    pid_pos: float | None = None
-    controller_id: int | None = None
-    timeout_active: bool | None = None
-
-    @property
-    def fault(self) -> str:
-        return fault_name(self.fault_code)
-
-
-_VALUES_HEAD = struct.Struct(">hhiiiihihiiiiiiB")  # fields 0..15 (53 bytes)
-
-
-def parse_values(payload: bytes) -> VescValues:
-    """Decode a GET_VALUES payload (ID 4), tolerating the shorter replies of old firmware."""
-    if not payload or payload[0] != COMM_GET_VALUES:
-        raise ValueError("not a GET_VALUES payload")
-    body = payload[1:]
-    if len(body) < _VALUES_HEAD.size:
-        raise ValueError(f"GET_VALUES payload has {len(body)} bytes, needs at least {_VALUES_HEAD.size}")
-    (t_fet, t_mot, i_mot, i_in, i_d, i_q, duty, erpm, vin, ah, ahc, wh, whc,
-     tach, tach_abs, fault) = _VALUES_HEAD.unpack_from(body)
-    rest = body[_VALUES_HEAD.size:]
-    pid_pos = struct.unpack_from(">i", rest)[0] / 1e6 if len(rest) >= 4 else None
-    controller_id = rest[4] if len(rest) >= 5 else None
-    timeout_active = bool(rest[19] & 1) if len(rest) >= 20 else None
-    return VescValues(t_fet / 10, t_mot / 10, i_mot / 100, i_in / 100, i_d / 100, i_q / 100,
-                      duty / 1000, float(erpm), vin / 10, ah / 1e4, ahc / 1e4, wh / 1e4, whc / 1e4,
-                      tach, tach_abs, fault, pid_pos, controller_id, timeout_active)
-
-
 def parse_fw_version(payload: bytes) -> dict[str, Any]:
     """FW_VERSION payload: major, minor, NUL-terminated hardware name (tail ignored)."""
     if len(payload) < 3 or payload[0] != COMM_FW_VERSION:
@@ -228,17 +181,29 @@ def parse_fw_version(payload: bytes) -> dict[str, Any]:
             "hardware": name.decode("ascii", "replace") if nul else ""}
 
 
+def parse_firmware_option(text: str) -> tuple[int, int]:
+    """``"3.00"`` / ``"6.2"`` -> (major, minor) as FW_VERSION reports them."""
+    major, dot, minor = str(text).strip().partition(".")
+    try:
+        if not dot:
+            raise ValueError
+        return int(major), int(minor)
+    except ValueError:
+        raise ValueError(f"vesc option firmware={text!r}: expected MAJOR.MINOR, e.g. 3.00") from None
+
+
 @register_driver
 class Vesc(KeepAliveMotor):
     """VESC over UART or USB.
 
     Options: ``pole_pairs`` (motor pole pairs, default 1: ERPM = RPM x pole pairs),
     ``brake_current_a`` (stop() brakes with this current; 0 = release/coast; default 2 A),
-    ``reply_timeout_s`` (0.2).
+    ``reply_timeout_s`` (0.2), ``firmware`` (``MAJOR.MINOR``: the GET_VALUES layout to
+    decode; default: asked with FW_VERSION before the first GET_VALUES).
     """
 
     protocol = "vesc"
-    option_names = frozenset({"brake_current_a", "pole_pairs", "reply_timeout_s"})
+    option_names = frozenset({"brake_current_a", "firmware", "pole_pairs", "reply_timeout_s"})
     default_serial = {"baudrate": 115200, "bytesize": 8, "parity": "N", "stopbits": 1}
     supports_speed_command = True
 
@@ -251,6 +216,9 @@ class Vesc(KeepAliveMotor):
         self.reply_timeout_s = float(options.get("reply_timeout_s", 0.2))
         self.framer = VescFramer()
         self.last_reply = b""
+        firmware = options.get("firmware")
+        self.firmware: tuple[int, int] | None = (
+            None if firmware in (None, "") else parse_firmware_option(str(firmware)))
         self.mode: tuple[str, float] | None = None  # ("duty", d) or ("erpm", e)
         self.flush_input("open")
 
@@ -272,19 +240,31 @@ class Vesc(KeepAliveMotor):
                 self.clock.sleep(0.001)
 
     def values(self) -> VescValues:
+        """GET_VALUES decoded in the layout of the controller's firmware (asked once)."""
+        if self.firmware is None:
+            self.identify()
+        assert self.firmware is not None
+        try:
+            layout_for_firmware(*self.firmware)
+        except ValueError as exc:
+            raise DeviceError(self.name, "GET_VALUES", self.last_reply, str(exc)) from None
         payload = self.request(COMM_GET_VALUES, "GET_VALUES")
         self.last_reply = payload
         try:
-            return parse_values(payload)
+            return parse_values(payload, self.firmware)
         except ValueError as exc:
             raise DeviceError(self.name, "GET_VALUES", payload, str(exc)) from None
 
     def identify(self) -> dict[str, Any]:
         payload = self.request(COMM_FW_VERSION, "FW_VERSION")
+        self.last_reply = payload
         try:
-            return {"model": "vesc", **parse_fw_version(payload)}
+            info = parse_fw_version(payload)
         except ValueError as exc:
             raise DeviceError(self.name, "FW_VERSION", payload, str(exc)) from None
+        if self.firmware is None:
+            self.firmware = (payload[1], payload[2])
+        return {"model": "vesc", **info}
 
     def enable(self) -> None:
         """VESC has no safe start: start the 20 Hz keep-alive (ALIVE until a setpoint)."""
@@ -335,7 +315,7 @@ class Vesc(KeepAliveMotor):
 
 
 SAMPLE_VALUES_PACKET = format_packet(
-    bytes([COMM_GET_VALUES]) + _VALUES_HEAD.pack(250, 300, 150, 120, 0, 150, 500, 30000, 243,
+    bytes([COMM_GET_VALUES]) + CURRENT_HEAD.pack(250, 300, 150, 120, 0, 150, 500, 30000, 243,
                                                   0, 0, 0, 0, 1000, 1000, 0) + bytes(20))
 
 

@@ -6,7 +6,8 @@ The meter streams continuously at 9600 8N1; the host never writes. One frame is 
     D15  STX (0x02)
     D14  '4'
     D13  display: '1' main, '2' second ('1'..'9', 'A'..'C' on multi-channel meters)
-    D12 D11  annunciator (unit) code, two digits, meter-specific
+    D12 D11  annunciator (unit) code, two characters, meter-specific (digits on most
+             meters; letters such as ``B2`` on some)
     D10  polarity '0' positive, '1' negative
     D9   decimal point position from the right, '0'..'3'
     D8..D1  reading, 8 digits, most significant first
@@ -37,10 +38,12 @@ DISPLAY_CHARS = b"123456789ABC"
 OVER_RANGE_CHARS = frozenset(b" -OLE")
 
 #: Annunciator codes of the Lutron manuals that are *not* a speed of rotation; a
-#: tachometer driver refuses frames carrying them instead of calling them RPM.
+#: tachometer driver refuses frames carrying them instead of calling them RPM
+#: (03 and 93-98: the unit tables of Lutron's tachometer/vibration manuals).
 NON_ROTATION_ANNUNCIATORS = {
-    "01": "degC", "02": "degF", "08": "m/s", "10": "km/h", "11": "ft/min",
-    "12": "mile/h", "17": "dB", "19": "PPM", "57": "g",
+    "01": "degC", "02": "degF", "03": "%", "08": "m/s", "10": "km/h", "11": "ft/min",
+    "12": "mile/h", "17": "dB", "19": "PPM", "57": "g", "93": "mm/s", "94": "mm",
+    "95": "cm/s", "96": "inch", "98": "inch/s",
 }
 
 #: display unit of the number -> factor to rad/s
@@ -73,8 +76,8 @@ def parse_lutron16(frame: bytes) -> Lutron16Frame:
     if display not in DISPLAY_CHARS or len(display) != 1:
         raise ValueError(f"display byte {display!r} unknown")
     annunciator = frame[3:5]
-    if not (annunciator.isdigit() and annunciator.isascii()):
-        raise ValueError(f"annunciator {annunciator!r} is not two digits")
+    if not (annunciator.isalnum() and annunciator.isascii()):
+        raise ValueError(f"annunciator {annunciator!r} is not two letters or digits")
     polarity, point = frame[5:6], frame[6:7]
     if polarity not in (b"0", b"1"):
         raise ValueError(f"polarity byte {polarity!r} is not '0' or '1'")
@@ -146,7 +149,8 @@ class Lutron16Tachometer(StreamingTachometer):
             raise ValueError(f"lutron16 option unit={unit!r}: expected one of {sorted(ROTATION_UNITS)}")
         self.to_rad_s = ROTATION_UNITS[unit]
         code = options.get("rpm_code")
-        self.rpm_code = None if code in (None, "") else f"{int(code):02d}"
+        code = None if code in (None, "") else str(code).strip()
+        self.rpm_code = f"{int(code):02d}" if code and code.isdigit() else code
         super().__init__(port, clock, name, **options)
 
     def make_framer(self) -> Lutron16Framer:
@@ -190,6 +194,9 @@ class Lutron16Tachometer(StreamingTachometer):
         if decoded.annunciator in NON_ROTATION_ANNUNCIATORS:
             raise ValueError(f"annunciator {decoded.annunciator} is "
                              f"{NON_ROTATION_ANNUNCIATORS[decoded.annunciator]}, not a rotation speed")
+        if self.rpm_code is None and not decoded.annunciator.isdigit():
+            raise ValueError(f"annunciator {decoded.annunciator} is no rotation unit code "
+                             "(set rpm_code if this meter uses it for RPM)")
         if decoded.value is None:
             return Reading(t, "angular_speed", math.nan, "rad/s", stable=False, overload=True,
                            raw=frame, device=self.name, flags=frozenset({"over_range"}))
