@@ -31,7 +31,7 @@ stop           RunStop           status ("completed"|"interrupted"|"failed"), re
 A reading is serialised by :meth:`Reading.as_json` only: the reading files
 (``readings/ROLE.jsonl``), ``labkit probe`` and the rerun sink all see the same keys
 (``t, quantity, value, unit, stable, overload, flags, raw``). Decision record:
-docs/decisions/0001-typed-run-documents.md.
+docs/decisions/0004-typed-run-documents.md.
 """
 
 from __future__ import annotations
