@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import bisect
 import threading
+from collections.abc import Callable
 
 from labkit.devices.base import Reading
 from labkit.devices.loadcell.linkio import FrameError, LineLink
@@ -27,10 +28,12 @@ class ReadingBuffer:
     adding stays cheap): the buffer then holds between 0.9 and 1.0 times ``history``.
     """
 
-    def __init__(self, history: int) -> None:
+    def __init__(self, history: int, before_read: Callable[[], None] | None = None) -> None:
         if history < 1:
             raise ValueError(f"history {history}: must be >= 1")
         self.history = history
+        #: called before every read (the device's reader raises what it hit, e.g. an unplug)
+        self.before_read = before_read
         self._times: list[float] = []
         self._readings: list[Reading] = []
         self._lock = threading.Lock()
@@ -46,11 +49,15 @@ class ReadingBuffer:
 
     def latest(self) -> Reading | None:
         """The newest reading, or None before the first."""
+        if self.before_read is not None:
+            self.before_read()
         with self._lock:
             return self._readings[-1] if self._readings else None
 
     def since(self, t: float) -> list[Reading]:
         """The readings received at clock time > ``t``, oldest first."""
+        if self.before_read is not None:
+            self.before_read()
         with self._lock:
             return self._readings[bisect.bisect_right(self._times, t):]
 

@@ -55,3 +55,14 @@ def test_a_reader_thread_and_a_caller_never_see_a_torn_buffer():
 def test_history_must_be_positive():
     with pytest.raises(ValueError, match="history 0"):
         ReadingBuffer(0)
+
+
+def test_what_the_reader_hit_is_raised_to_the_caller_before_any_read():
+    def unplugged() -> None:
+        raise OSError("device reports readiness to read but returned no data")
+
+    buffer = ReadingBuffer(10, before_read=unplugged)
+    buffer.add(reading(1.0))
+    for read in (buffer.latest, lambda: buffer.since(0.0)):
+        with pytest.raises(OSError, match="returned no data"):
+            read()

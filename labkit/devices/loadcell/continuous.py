@@ -30,11 +30,11 @@ class ContinuousReadings:
         self.clock = clock
         self.device = device
         self.to_reading = to_reading
-        self.buffer = ReadingBuffer(history)
         self.bad_frames = 0
         self.device_errors: list[DeviceError] = []
         self.reader = StreamReader(port, clock, LineFramer(read_eol), self._on_frame,
                                    device=device, period=period)
+        self.buffer = ReadingBuffer(history, before_read=self.reader.check)
 
     def _on_frame(self, t: float, frame: bytes) -> None:
         if not frame:
@@ -61,11 +61,9 @@ class ContinuousReadings:
         self.reader.check()
 
     def latest(self) -> Reading | None:
-        self.check()
         return self.buffer.latest()
 
     def readings_since(self, t: float) -> list[Reading]:
-        self.check()
         return self.buffer.since(t)
 
     def wait_new(self, since: float, timeout: float, poll_s: float = 0.005) -> Reading:

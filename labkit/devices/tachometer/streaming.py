@@ -31,7 +31,7 @@ class StreamingTachometer(Tachometer):
 
     def __init__(self, port: serial.SerialBase, clock: Clock, name: str = "", **options: Any):
         super().__init__(port, clock, name, **options)
-        self.reading_buffer = ReadingBuffer(self.history)
+        self.reading_buffer = ReadingBuffer(self.history, before_read=self._check_reader)
         self.frames_rejected = 0
         self.reader = StreamReader(port, clock, self.make_framer(), self._on_frame,
                                    device=self.name, period=self.reader_period)
@@ -64,11 +64,9 @@ class StreamingTachometer(Tachometer):
         self.reader.check()
 
     def latest(self) -> Reading | None:
-        self._check_reader()
         return self.reading_buffer.latest()
 
     def readings_since(self, t: float) -> list[Reading]:
-        self._check_reader()
         return self.reading_buffer.since(t)
 
     def close(self) -> None:
