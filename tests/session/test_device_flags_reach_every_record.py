@@ -79,7 +79,10 @@ def test_report_lists_the_flag_with_its_time_and_bytes(session, tmp_path):
     cells = [c.strip() for c in row.strip("|").split("|")]
     assert cells[0] == "balance" and cells[2] == "1" and float(cells[3]) > RESET_AT_S
     assert "Load_cell output val:" in cells[4]
-    assert "| tare_lost |" in section and "Warning" in section
+    assert "| tare_lost |" in section
+    [warning] = [line for line in section.splitlines() if "Warning" in line]
+    assert "balance: device_reset" in warning and "balance: tare_lost" in warning
+    assert "stability_unknown" not in warning and "zero_speed" not in warning   # informational
 
 
 def test_replay_prints_the_flag(session, capsys):
