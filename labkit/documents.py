@@ -31,7 +31,7 @@ stop           RunStop           status ("completed"|"interrupted"|"failed"), re
 A reading is serialised by :meth:`Reading.as_json` only: the reading files
 (``readings/ROLE.jsonl``), ``labkit probe`` and the rerun sink all see the same keys
 (``t, quantity, value, unit, stable, overload, flags, raw``). Decision record:
-docs/decisions/0001-typed-run-documents.md.
+docs/decisions/0004-typed-run-documents.md.
 """
 
 from __future__ import annotations
@@ -69,6 +69,8 @@ class RunDocument:
 
 @dataclass(frozen=True, kw_only=True)
 class RunStart(RunDocument):
+    """The run begins: what runs on which rig (``session`` is the directory, None without one)."""
+
     type: ClassVar[str] = "start"
     protocol: str
     params: dict[str, Any]
@@ -81,6 +83,8 @@ class RunStart(RunDocument):
 
 @dataclass(frozen=True, kw_only=True)
 class StepStart(RunDocument):
+    """Step ``index`` of ``n_steps`` begins: its targets per speed loop and estimated duration."""
+
     type: ClassVar[str] = "step"
     index: int
     n_steps: int
@@ -91,6 +95,8 @@ class StepStart(RunDocument):
 
 @dataclass(frozen=True, kw_only=True)
 class Setpoint(RunDocument):
+    """A speed loop got a new target."""
+
     type: ClassVar[str] = "setpoint"
     loop: str
     target_rad_s: float
@@ -98,6 +104,8 @@ class Setpoint(RunDocument):
 
 @dataclass(frozen=True, kw_only=True)
 class Settled(RunDocument):
+    """Every loop held its target for the hold time; ``speeds_rad_s`` as measured then."""
+
     type: ClassVar[str] = "settled"
     index: int | None
     settle_time_s: float
@@ -106,6 +114,8 @@ class Settled(RunDocument):
 
 @dataclass(frozen=True, kw_only=True)
 class ControlSnapshot(RunDocument):
+    """The speed loops' state (every 0.25 s): target, ramped setpoint, measured speed, duty."""
+
     type: ClassVar[str] = "control"
     loops: dict[str, dict[str, Any]]
 
@@ -128,6 +138,8 @@ class ReadingEvent(RunDocument):
 
 @dataclass(frozen=True, kw_only=True)
 class Zeroed(RunDocument):
+    """A balance was zeroed; ``value`` is what it read at rest just before."""
+
     type: ClassVar[str] = "zero"
     device: str
     value: float
@@ -136,6 +148,8 @@ class Zeroed(RunDocument):
 
 @dataclass(frozen=True, kw_only=True)
 class PointDone(RunDocument):
+    """Step ``index`` produced one result row (as written to results.json)."""
+
     type: ClassVar[str] = "point"
     index: int
     point: dict[str, Any]
@@ -143,6 +157,8 @@ class PointDone(RunDocument):
 
 @dataclass(frozen=True, kw_only=True)
 class Drop(RunDocument):
+    """spin-critical: the floator of trial ``trial`` dropped (``cause``: balance, spin_loss, key)."""
+
     type: ClassVar[str] = "drop"
     index: int
     trial: int
@@ -169,6 +185,9 @@ class StopRequest(RunDocument):
 
 @dataclass(frozen=True, kw_only=True)
 class Interlock(RunDocument):
+    """An interlock tripped: every motor was commanded to zero (``stop_failed``: those that did
+    not take the command)."""
+
     type: ClassVar[str] = "interlock"
     reason: str
     stop_failed: tuple[str, ...] = ()
@@ -197,6 +216,8 @@ class Results(RunDocument):
 
 @dataclass(frozen=True, kw_only=True)
 class RunStop(RunDocument):
+    """The run ended: ``status`` completed, interrupted or failed, and why."""
+
     type: ClassVar[str] = "stop"
     status: str
     reason: str | None = None

@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from labkit.devices.base import Reading, driver_class, parser_benchmarks
-from labkit.emulators.plant import reset_plants, shared_plant
+from labkit.emulators import use_emulation
 from labkit.io.clock import Clock, VirtualClock
 from labkit.io.ports import open_port
 
@@ -103,27 +103,23 @@ def count_events(folder: Path) -> int:
     return sum(sum(1 for _ in p.open(encoding="utf-8")) - 1 for p in folder.glob("*.jsonl"))
 
 
+def timed_session(tach_url: str, balance_url: str, seconds: float) -> tuple[Any, float]:
+    """:func:`run_session` on a fresh virtual clock, and the wall seconds it took."""
+    wall = time.perf_counter()
+    result = run_session(VirtualClock(), tach_url, balance_url, seconds)
+    return result, time.perf_counter() - wall
+
+
 def bench_replay(minutes: float, folder: Path) -> dict[str, Any]:
     seconds = minutes * 60.0
     tach_cassette, balance_cassette = folder / "rotor_tach.jsonl", folder / "balance.jsonl"
-    reset_plants()
-    shared_plant("bench-io").set_duty(0.6, 0.0)  # the rotor spins up: readings change
-    wall = time.perf_counter()
-    recorded = run_session(
-        VirtualClock(),
-        f"record://{TACH_URL}&cassette={tach_cassette}&port=rotor_tach",
-        f"record://{BALANCE_URL}&cassette={balance_cassette}&port=balance",
-        seconds,
-    )
-    record_wall = time.perf_counter() - wall
-    wall = time.perf_counter()
-    replayed = run_session(
-        VirtualClock(),
-        f"replay://{tach_cassette}?mode=timed",
-        f"replay://{balance_cassette}?mode=timed",
-        seconds,
-    )
-    replay_wall = time.perf_counter() - wall
+    with use_emulation() as emulation:
+        emulation.plant("bench-io").set_duty(0.6, 0.0)  # the rotor spins up: readings change
+        recorded, record_wall = timed_session(
+            f"record://{TACH_URL}&cassette={tach_cassette}&port=rotor_tach",
+            f"record://{BALANCE_URL}&cassette={balance_cassette}&port=balance", seconds)
+    replayed, replay_wall = timed_session(
+        f"replay://{tach_cassette}?mode=timed", f"replay://{balance_cassette}?mode=timed", seconds)
     return {
         "session_s": seconds,
         "tach_readings": len(recorded.tach_readings),

@@ -109,6 +109,9 @@ def open_device(kind: str, protocol: str, url: str, settings: dict[str, Any],
     """Open ``url`` and build the driver; turns every expected failure into a LabkitError."""
     from labkit.io.ports import open_port
 
+    if url.lower().startswith("sim://"):
+        import labkit.emulators  # noqa: F401 - registers the sim:// URL handler
+
     try:
         cls = driver_class(kind, protocol)
     except KeyError as exc:

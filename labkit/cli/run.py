@@ -14,6 +14,7 @@ from typing import Any
 
 from labkit.errors import LabkitError
 from labkit.protocols import PROTOCOLS, ProgressSink
+from labkit.protocols.events import FlagTally
 from labkit.protocols.launch import execute, prepare_run
 from labkit.stream import add_rerun_argument
 
@@ -70,10 +71,19 @@ def rerun_text(spec: Any) -> str | None:
 
 
 def sinks_for(args: argparse.Namespace) -> list[Any]:
-    sinks: list[Any] = []
+    sinks: list[Any] = [FlagTally()]
     if not args.no_progress:
         sinks.append(ProgressSink())
     return sinks
+
+
+def warn_flags(sinks: list[Any]) -> None:
+    """One line on stderr when a device reading carried a flag that means its value may be wrong."""
+    for sink in sinks:
+        text = sink.summary(suspect_only=True) if isinstance(sink, FlagTally) else ""
+        if text:
+            print(f"labkit run: warning: readings flagged {text} may be wrong; see the report's "
+                  "Device flags (labkit report SESSION)", file=sys.stderr)
 
 
 def attach_rerun(args: argparse.Namespace, runner: Any, session_path: Any) -> Any:
@@ -169,4 +179,5 @@ def main(args: argparse.Namespace) -> int:
         outcome = execute(prep, args.sessions, notes=args.notes, on_session=on_session)
     finally:
         close_sinks(sinks, "run")
+    warn_flags(prep.runner.bus.sinks)
     return report(outcome, args.resume)

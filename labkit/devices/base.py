@@ -19,6 +19,21 @@ import serial
 
 from labkit.io.clock import Clock
 
+#: What each reading flag a driver sets means, and whether the value may be wrong because of
+#: it (``True``: the report warns; ``False``: informational). A flag not listed is treated as
+#: a warning.
+READING_FLAGS: dict[str, tuple[bool, str]] = {
+    "device_reset": (True, "the device rebooted mid-run (its banner came again)"),
+    "reset": (True, "the device restarted (its sequence counter started over)"),
+    "tare_lost": (True, "the device re-tared itself: its zero is no longer the run's zero"),
+    "overload": (True, "above the device's range: no value"),
+    "underload": (True, "below the device's range: no value"),
+    "over_range": (True, "above the tachometer's range: no value"),
+    "noisy": (True, "the device marked the value noisy (not stable)"),
+    "stability_unknown": (False, "the device does not say whether a value is stable"),
+    "zero_speed": (False, "the tachometer sees no rotation (0 RPM)"),
+}
+
 
 @dataclass(frozen=True)
 class Reading:

@@ -3,10 +3,10 @@
 Importing this package registers the ``sim://`` URL handler with pyserial
 (``serial.protocol_handler_packages``), so :func:`labkit.io.open_port` opens
 ``sim://mtsics?plant=fig525`` ports; the transport itself knows no emulator
-(docs/decisions/0002-emulators-own-sim-urls.md).
+(docs/decisions/0005-emulators-own-sim-urls.md).
 
 * :class:`Emulation`, :func:`use_emulation`, :func:`current_emulation` - the plants of one
-  emulated rig, scoped (docs/decisions/0003-scoped-emulations.md);
+  emulated rig, scoped (docs/decisions/0006-scoped-emulations.md);
 * :func:`build_emulator` - the emulator a ``sim://`` URL describes;
 * :func:`emulator_class`, :func:`register_emulator`, :class:`Emulator` - the registry;
 * :class:`RigPlant` - the physics the emulators share; :func:`parse_sim_url`.

@@ -255,7 +255,7 @@ class Emulation:
     plants by name (``plant=fig525`` in their URLs), so a balance sees the speed its motor
     emulator reached. Scope one with ``with use_emulation(Emulation()) as emu:``; each test
     of labkit's suite gets its own (tests/conftest.py). Decision record:
-    docs/decisions/0003-scoped-emulations.md."""
+    docs/decisions/0006-scoped-emulations.md."""
 
     def __init__(self, name: str = "") -> None:
         self.name = name

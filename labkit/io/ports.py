@@ -8,7 +8,7 @@ paths) plus the schemes of the URL-handler packages registered with pyserial
 * ``record://<inner-url>?cassette=PATH&port=NAME`` - tee every byte to a cassette;
 * ``replay://<cassette>?mode=strict|timed`` - serve a cassette (both: this package);
 * ``sim://<protocol>?seed=N&faults=...`` - an emulator: registered by :mod:`labkit.emulators`
-  when it is imported (the transport knows no emulator; docs/decisions/0002-emulators-own-sim-urls.md).
+  when it is imported (the transport knows no emulator; docs/decisions/0005-emulators-own-sim-urls.md).
 
 labkit's ports wait on the given clock (default :func:`labkit.io.clock.current_clock`);
 native ports ignore it.

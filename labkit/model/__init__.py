@@ -9,3 +9,16 @@ linear stability), :mod:`planar` (Eq. 5.56 periodic orbits), :mod:`one_dof` (Eq.
 a tilted rotating dipole: co-rotating steady state and the Eq. 5.85 force parts).
 See docs/model.md.
 """
+
+from labkit.model.cone import cone_angle, cone_angle_spin, cone_angles_axisymmetric
+from labkit.model.dipole import dipole_field, dipole_force, dipole_torque
+from labkit.model.mbs import equilibrium_distance, mbs_force, spin_for_speed
+from labkit.model.pfr_force import cone_angle_at_distance, dipole_constant, pfr_force
+from labkit.model.rc_offset import offset_from_amplitudes
+from labkit.model.stability import criterion_holds, min_static_torque
+
+__all__ = [
+    "cone_angle", "cone_angle_at_distance", "cone_angle_spin", "cone_angles_axisymmetric", "criterion_holds",
+    "dipole_constant", "dipole_field", "dipole_force", "dipole_torque", "equilibrium_distance", "mbs_force",
+    "min_static_torque", "offset_from_amplitudes", "pfr_force", "spin_for_speed",
+]

@@ -111,7 +111,7 @@ def cone_angles_axisymmetric(*, tau_c, tau_s, i_axial, i_radial, omega, k: float
 
     Keyword-only: :func:`labkit.sim.equilibrium.cone_angle_axisymmetric` (a scalar root for
     the simulator) takes the same quantities in another order, so a positional call here is
-    refused rather than silently swapped (docs/decisions/0005-names.md).
+    refused rather than silently swapped (docs/decisions/0007-names.md).
 
     Vectorised Newton iteration started from the isotropic closed form (Eq. 5.24 / 5.68 with
     the inertia the equation has at phi -> 0). Returns NaN where it does not converge.

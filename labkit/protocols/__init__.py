@@ -19,7 +19,19 @@ def get_protocol(name: str) -> ProtocolDef:
         raise LabkitError(f"unknown protocol {name!r}; known: {', '.join(sorted(PROTOCOLS))}") from None
 
 
+#: :mod:`labkit.protocols.launch` (which imports this package) is reached through the package
+_LAUNCH = ("execute", "prepare_run", "replay_session")
+
 __all__ = [
     "PROTOCOLS", "EventBus", "ListSink", "ProgressSink", "ProtocolDef", "RunContext", "RunOutcome",
-    "Runner", "Sink", "SpeedSweep", "SpinCritical", "Step", "StopRequested", "get_protocol",
+    "Runner", "Sink", "SpeedSweep", "SpinCritical", "Step", "StopRequested", "execute", "get_protocol",
+    "prepare_run", "replay_session",
 ]
+
+
+def __getattr__(name: str):
+    if name in _LAUNCH:
+        from labkit.protocols import launch
+
+        return getattr(launch, name)
+    raise AttributeError(f"module 'labkit.protocols' has no attribute {name!r}")

@@ -15,6 +15,7 @@ from __future__ import annotations
 import sys
 from typing import Any, Protocol
 
+from labkit.devices.base import READING_FLAGS
 from labkit.documents import (
     DOCUMENT_TYPES,
     ReadingEvent,
@@ -84,11 +85,13 @@ class FlagTally:
             per_role[flag] = per_role.get(flag, 0) + 1
             self.first_t.setdefault((role, flag), t)
 
-    def summary(self) -> str:
-        """One line, e.g. ``balance: device_reset x1 (first at 7.20 s), tare_lost x1 ...``;
-        empty when no reading carried a flag."""
+    def summary(self, suspect_only: bool = False) -> str:
+        """One line, e.g. ``balance: device_reset x1 (first at 7.20 s); balance: tare_lost x1 ...``;
+        empty when no reading carried a flag. ``suspect_only``: only the flags that mean a value
+        may be wrong (:data:`labkit.devices.base.READING_FLAGS`)."""
         parts = [f"{role}: {flag} x{n} (first at {self.first_t[(role, flag)]:.2f} s)"
-                 for role, flags in sorted(self.counts.items()) for flag, n in sorted(flags.items())]
+                 for role, flags in sorted(self.counts.items()) for flag, n in sorted(flags.items())
+                 if not suspect_only or READING_FLAGS.get(flag, (True, ""))[0]]
         return "; ".join(parts)
 
 

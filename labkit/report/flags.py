@@ -3,14 +3,15 @@
 Every reading in ``readings/ROLE.jsonl`` carries ``flags`` (:meth:`labkit.devices.base.Reading.as_json`):
 ``device_reset`` (the device rebooted mid-run), ``tare_lost`` (its zero is no longer the run's
 zero), ``overload``... A reading with a flag may be wrong in a way its value does not show,
-so the report lists every flag with its count and the first flagged reading (time and raw bytes).
+so the report lists every flag with its count, the first flagged reading (time and raw bytes)
+and its meaning (:data:`labkit.devices.base.READING_FLAGS`), and warns about the suspect ones.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from labkit.devices.base import Reading
+from labkit.devices.base import READING_FLAGS, Reading
 from labkit.protocols.events import FlagTally
 from labkit.report import markdown as md
 from labkit.session.export import read_jsonl
@@ -41,9 +42,20 @@ def flags_section(session: Path) -> list[str]:
     lines = ["## Device flags", ""]
     if not tally.counts:
         return lines + ["No reading carried a flag (no device reset, lost tare or overload).", ""]
-    rows = [[role, flag, n, f"{first[(role, flag)].t:.3f}", f"`{first[(role, flag)].raw!r}`"]
+    rows = [[role, flag, n, f"{first[(role, flag)].t:.3f}", f"`{first[(role, flag)].raw!r}`", meaning(flag)]
             for role, flags in sorted(tally.counts.items()) for flag, n in sorted(flags.items())]
-    lines += [md.table(["device", "flag", "readings", "first at (s)", "first raw bytes"], rows), ""]
-    lines += ["> **Warning:** readings carrying a flag may be wrong in a way their values do not show "
-              "(a device that reset lost its zero); check the points recorded after them.", ""]
+    headers = ["device", "flag", "readings", "first at (s)", "first raw bytes", "meaning"]
+    lines += [md.table(headers, rows), ""]
+    suspect = sorted({f"{role}: {flag}" for role, flags in tally.counts.items() for flag in flags
+                      if READING_FLAGS.get(flag, (True, ""))[0]})
+    if suspect:
+        lines += [f"> **Warning:** readings flagged {', '.join(suspect)} may be wrong in a way their "
+                  "values do not show (a device that reset lost its zero); check the points recorded "
+                  "after them.", ""]
+    else:
+        lines += ["Only informational flags: no reading is suspect.", ""]
     return lines
+
+
+def meaning(flag: str) -> str:
+    return READING_FLAGS.get(flag, (True, "not documented by labkit (treated as a warning)"))[1]

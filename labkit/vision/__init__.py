@@ -9,4 +9,21 @@ rerun (live streams hook in through ``on_frame`` callbacks, see ``labkit.stream.
 * :mod:`~labkit.vision.fit`: geometric fits with drift and classification
 * :mod:`~labkit.vision.laser`: ``analyse_laser`` (the ``labkit analyse laser`` JSON)
 * :mod:`~labkit.vision.strobe`: ``analyse_strobe`` (tilt, lateral amplitude, RC offset, Eq. 5.97)
+
+The public face (imported on first use, so ``import labkit.vision`` does not load OpenCV):
+:func:`analyse_laser`, :func:`analyse_strobe`, :func:`open_frames`, :class:`Pattern`.
 """
+
+from importlib import import_module
+from typing import Any
+
+_PUBLIC = {"analyse_laser": "labkit.vision.laser", "analyse_strobe": "labkit.vision.strobe",
+           "open_frames": "labkit.vision.frames", "Pattern": "labkit.vision.curves"}
+
+__all__ = sorted(_PUBLIC)
+
+
+def __getattr__(name: str) -> Any:
+    if name in _PUBLIC:
+        return getattr(import_module(_PUBLIC[name]), name)
+    raise AttributeError(f"module 'labkit.vision' has no attribute {name!r}")

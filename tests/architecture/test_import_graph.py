@@ -1,7 +1,7 @@
 """The package import graph (read from the source with ``ast``, nothing imported):
 
 * the transport (``labkit.io``) imports nothing from ``labkit.emulators`` (emulators own
-  ``sim://``; docs/decisions/0002-emulators-own-sim-urls.md);
+  ``sim://``; docs/decisions/0005-emulators-own-sim-urls.md);
 * no import cycle between labkit's top-level parts (``labkit.io``, ``labkit.devices``,
   ``labkit.rig``...), deferred imports inside functions included: a cycle means two parts that
   cannot be understood, tested or replaced one without the other.

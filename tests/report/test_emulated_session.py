@@ -35,6 +35,10 @@ def test_report_of_a_real_session(emulated_sweep: Path, tmp_path: Path):
     text = (tmp_path / "r" / "report.md").read_text()
     assert "| protocol | speed-sweep |" in text and "| rig | emulated-fig525 |" in text
     assert "## Events" in text and "| setpoint |" in text
+    # a clean run: the tachometer's zero-speed lines at rest are listed, and nothing is suspect
+    flags = text.split("## Device flags")[1].split("\n## ")[0]
+    assert "| rotor_tach | zero_speed |" in flags and "Only informational flags" in flags
+    assert "Warning" not in flags
     # the rig file's floator inertia gives K and tau_S, not the ratios
     assert "| K |" in text and "| tau_S |" in text and "floator inertia (kg m^2) | 3e-07" in text
     fits = json.loads((tmp_path / "r" / "fits.json").read_text())

@@ -10,6 +10,8 @@ read back with rerun's own reader.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 from pathlib import Path
 
@@ -38,16 +40,29 @@ serial = {{ baudrate = 57600, timeout = 0.5 }}'''
     return path
 
 
+RUN_WARNING: list[str] = []
+
+
 @pytest.fixture(scope="module")
 def session(tmp_path_factory) -> tuple[Path, Path]:
     """(session directory, its .rrd) of the sweep, recorded once for the module's tests."""
     root = tmp_path_factory.mktemp("hx711-reboot")
     rrd = root / "run.rrd"
-    assert main(["run", str(hx711_rig(root)), "speed-sweep", "--set", "speeds_rpm=6000:20000:3500",
-                 "--set", "record_s=1", "--sessions", str(root / "s"), "--no-progress",
-                 "--rerun", f"save:{rrd}"]) == 0
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err):
+        assert main(["run", str(hx711_rig(root)), "speed-sweep", "--set", "speeds_rpm=6000:20000:3500",
+                     "--set", "record_s=1", "--sessions", str(root / "s"), "--no-progress",
+                     "--rerun", f"save:{rrd}"]) == 0
+    RUN_WARNING.append(err.getvalue())
     [path] = (root / "s").iterdir()
     return path, rrd
+
+
+def test_labkit_run_warns_about_the_suspect_flags_only(session):
+    [err] = RUN_WARNING
+    [line] = [x for x in err.splitlines() if "warning: readings flagged" in x]
+    assert "balance: device_reset x1" in line and "balance: tare_lost x1" in line
+    assert "stability_unknown" not in line and "zero_speed" not in line
 
 
 def test_the_reading_file_has_the_flag_and_the_raw_line(session):
@@ -79,7 +94,10 @@ def test_report_lists_the_flag_with_its_time_and_bytes(session, tmp_path):
     cells = [c.strip() for c in row.strip("|").split("|")]
     assert cells[0] == "balance" and cells[2] == "1" and float(cells[3]) > RESET_AT_S
     assert "Load_cell output val:" in cells[4]
-    assert "| tare_lost |" in section and "Warning" in section
+    assert "| tare_lost |" in section
+    [warning] = [line for line in section.splitlines() if "Warning" in line]
+    assert "balance: device_reset" in warning and "balance: tare_lost" in warning
+    assert "stability_unknown" not in warning and "zero_speed" not in warning   # informational
 
 
 def test_replay_prints_the_flag(session, capsys):

@@ -9,15 +9,13 @@ buffer; commands that need the port (zero, tare, identify) pause the stream arou
 
 from __future__ import annotations
 
-import threading
-from collections import deque
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
 import serial
 
 from labkit.devices.base import Reading
-from labkit.devices.loadcell.linkio import FrameError
+from labkit.devices.link import FrameError, ReadingBuffer
 from labkit.devices.stream import LineFramer, StreamReader
 from labkit.errors import DeviceError, DeviceTimeout
 from labkit.io.clock import Clock
@@ -32,12 +30,11 @@ class ContinuousReadings:
         self.clock = clock
         self.device = device
         self.to_reading = to_reading
-        self.buffer: deque[Reading] = deque(maxlen=history)
         self.bad_frames = 0
         self.device_errors: list[DeviceError] = []
-        self._lock = threading.Lock()
         self.reader = StreamReader(port, clock, LineFramer(read_eol), self._on_frame,
                                    device=device, period=period)
+        self.buffer = ReadingBuffer(history, before_read=self.reader.check)
 
     def _on_frame(self, t: float, frame: bytes) -> None:
         if not frame:
@@ -51,8 +48,7 @@ class ContinuousReadings:
             self.device_errors.append(exc)
             return
         if reading is not None:
-            with self._lock:
-                self.buffer.append(reading)
+            self.buffer.add(reading)
 
     def start(self) -> None:
         self.reader.start()
@@ -65,14 +61,10 @@ class ContinuousReadings:
         self.reader.check()
 
     def latest(self) -> Reading | None:
-        self.check()
-        with self._lock:
-            return self.buffer[-1] if self.buffer else None
+        return self.buffer.latest()
 
     def readings_since(self, t: float) -> list[Reading]:
-        self.check()
-        with self._lock:
-            return [r for r in self.buffer if r.t > t]
+        return self.buffer.since(t)
 
     def wait_new(self, since: float, timeout: float, poll_s: float = 0.005) -> Reading:
         """The first reading received after ``since``; DeviceTimeout after ``timeout`` s."""

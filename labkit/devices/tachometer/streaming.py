@@ -3,7 +3,7 @@
 A tachometer talks without being asked. One :class:`~labkit.devices.stream.StreamReader`
 per device (a thread on a real clock, a clock job on a virtual one) cuts the bytes into
 frames and hands each to :meth:`StreamingTachometer.parse_frame`; accepted readings go into
-a bounded, time-ordered buffer that ``latest()``, ``readings_since(t)`` and
+a :class:`~labkit.devices.link.ReadingBuffer` that ``latest()``, ``readings_since(t)`` and
 ``wait_reading(timeout)`` read without ever touching the port. A reader failure (the USB
 adapter unplugged mid-read) surfaces in the caller's thread as
 :class:`~labkit.errors.DeviceDisconnected`.
@@ -11,13 +11,12 @@ adapter unplugged mid-read) surfaces in the caller's thread as
 
 from __future__ import annotations
 
-import bisect
-import threading
 from typing import Any
 
 import serial
 
 from labkit.devices.base import Reading, Tachometer
+from labkit.devices.link import ReadingBuffer
 from labkit.devices.stream import StreamReader
 from labkit.io.clock import Clock
 
@@ -32,9 +31,7 @@ class StreamingTachometer(Tachometer):
 
     def __init__(self, port: serial.SerialBase, clock: Clock, name: str = "", **options: Any):
         super().__init__(port, clock, name, **options)
-        self._times: list[float] = []
-        self._readings: list[Reading] = []
-        self._buffer_lock = threading.Lock()
+        self.reading_buffer = ReadingBuffer(self.history, before_read=self._check_reader)
         self.frames_rejected = 0
         self.reader = StreamReader(port, clock, self.make_framer(), self._on_frame,
                                    device=self.name, period=self.reader_period)
@@ -60,31 +57,17 @@ class StreamingTachometer(Tachometer):
             self.frames_rejected += 1
             return
         if reading is not None:
-            self._store(reading)
-
-    def _store(self, reading: Reading) -> None:
-        with self._buffer_lock:
-            self._times.append(reading.t)
-            self._readings.append(reading)
-            if len(self._readings) > self.history:
-                drop = len(self._readings) - self.history
-                del self._times[:drop]
-                del self._readings[:drop]
+            self.reading_buffer.add(reading)
 
     def _check_reader(self) -> None:
         self.last_bytes = self.reader.last_bytes
         self.reader.check()
 
     def latest(self) -> Reading | None:
-        self._check_reader()
-        with self._buffer_lock:
-            return self._readings[-1] if self._readings else None
+        return self.reading_buffer.latest()
 
     def readings_since(self, t: float) -> list[Reading]:
-        self._check_reader()
-        with self._buffer_lock:
-            start = bisect.bisect_right(self._times, t)
-            return self._readings[start:]
+        return self.reading_buffer.since(t)
 
     def close(self) -> None:
         self.reader.stop()

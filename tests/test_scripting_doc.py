@@ -1,0 +1,65 @@
+"""docs/scripting.md runs: every ```python block, in order, in one namespace, from a folder
+holding the repository's rigs/ and recordings/ (sessions go to a temporary folder), and what
+each prints matches the ```text block after it (words exactly, numbers to a relative 1e-2)."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import math
+import os
+import re
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+PAGE = REPO / "docs" / "scripting.md"
+BLOCK = re.compile(r"```(python|text)\n(.*?)```", re.S)
+NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?")
+
+
+def snippets() -> list[tuple[str, str | None]]:
+    """(code, expected output or None) for every python block of the page."""
+    out: list[tuple[str, str | None]] = []
+    for kind, body in BLOCK.findall(PAGE.read_text()):
+        if kind == "python":
+            out.append((body, None))
+        elif out and out[-1][1] is None:
+            out[-1] = (out[-1][0], body)
+    return out
+
+
+def same_output(got: str, expected: str) -> bool:
+    """Equal text apart from numbers, which agree to a relative 1e-2 (absolute 1e-3)."""
+    if NUMBER.sub("#", got).split() != NUMBER.sub("#", expected).split():
+        return False
+    pairs = zip(NUMBER.findall(got), NUMBER.findall(expected), strict=True)
+    return all(math.isclose(float(a), float(b), rel_tol=1e-2, abs_tol=1e-3) for a, b in pairs)
+
+
+def test_the_page_has_the_five_tasks():
+    text = PAGE.read_text()
+    for heading in ("Open a rig", "Run a protocol", "Fit", "Analyse a clip", "One device"):
+        assert heading in text
+    assert len(snippets()) >= 5 and all(expected is not None for _, expected in snippets())
+
+
+def test_the_comparison_can_fail():
+    assert same_output("b = -1.8985 (4 points)", "b = -1.898 (4 points)")
+    assert not same_output("b = -1.7 (4 points)", "b = -1.898 (4 points)")
+    assert not same_output("b = -1.898 (5 rows)", "b = -1.898 (4 points)")
+
+
+@pytest.mark.timeout(300)
+def test_every_snippet_runs_and_prints_what_the_page_shows(tmp_path, monkeypatch):
+    for name in ("rigs", "recordings"):
+        os.symlink(REPO / name, tmp_path / name)
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {"__name__": "scripting_doc"}
+    for number, (code, expected) in enumerate(snippets(), 1):
+        buffer = io.StringIO()
+        with contextlib.redirect_stdout(buffer):
+            exec(compile(code, f"docs/scripting.md snippet {number}", "exec"), namespace)  # noqa: S102
+        assert same_output(buffer.getvalue(), expected or ""), (
+            f"snippet {number} printed:\n{buffer.getvalue()}\nthe page shows:\n{expected}")
