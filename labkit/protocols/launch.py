@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from labkit.errors import LabkitError
+from labkit.errors import CassetteError, LabkitError
 from labkit.io.clock import Clock, RealClock, VirtualClock, use_clock
 from labkit.protocols import get_protocol
 from labkit.protocols.events import Sink
@@ -285,6 +285,8 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None) -> ReplayO
                     done_steps=done, port_override=lambda dev: replay_url(record.path, dev.role))
     with use_clock(clock):
         outcome = runner.run()
+    if isinstance(outcome.error, CassetteError):
+        raise outcome.error  # a damaged recording: nothing to compare, one line naming file:line
     replayed = normalise(outcome.results)
     recorded = record.results
     diffs = diff_results(replayed, recorded) if recorded is not None else ["recording has no results.json"]

@@ -19,7 +19,7 @@ import statistics
 from typing import Any
 
 from labkit.errors import LabkitError
-from labkit.protocols.params import MAX_PLAN_STEPS, ParamError, check_count
+from labkit.protocols.params import ParamError
 from labkit.protocols.quickfit import fit_power_law
 from labkit.protocols.runner import ProtocolDef, RunContext, Step
 from labkit.rig import Rig
@@ -95,6 +95,8 @@ class SpeedSweep(ProtocolDef):
         legs = [("up", speeds)]
         if params["up_down"]:
             legs.append(("down", list(reversed(speeds))[1:]))
+        from labkit.protocols.params import MAX_PLAN_STEPS, check_count
+
         n_steps = sum(len(leg) for _, leg in legs) * int(params["repeats"])
         check_count("repeats", n_steps, "steps", MAX_PLAN_STEPS)
         steps: list[Step] = []
