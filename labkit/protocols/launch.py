@@ -169,8 +169,10 @@ class _StepSeen:
     def __init__(self) -> None:
         self.seen = False
 
-    def on_event(self, event: dict[str, Any]) -> None:
-        if event.get("type") == "step":
+    def on_event(self, event: Any) -> None:
+        # a plain dict or a typed run document (``.type``); never raises, never converts
+        kind = event.get("type") if isinstance(event, dict) else getattr(event, "type", None)
+        if kind == "step":
             self.seen = True
 
 
