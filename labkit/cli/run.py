@@ -119,7 +119,7 @@ def close_sinks(sinks: list[Any], command: str) -> None:
                   file=sys.stderr)
 
 
-def report(outcome: Any, resumed_from: Any = None) -> int:
+def report(outcome: Any) -> int:
     where = f" (session {outcome.session})" if outcome.session else ""
     fit = (outcome.results or {}).get("fit") or {}
     params = ", ".join(
@@ -135,9 +135,6 @@ def report(outcome: Any, resumed_from: Any = None) -> int:
     print(f"labkit run: {outcome.status}: {outcome.reason}{where}", file=sys.stderr)
     if outcome.session:
         print(f"resume with: labkit run --resume {outcome.session}", file=sys.stderr)
-    elif resumed_from is not None:
-        print(f"fix the cause, then resume again: labkit run --resume {resumed_from} "
-              "[--rig FIXED.toml to change ports]", file=sys.stderr)
     return 130 if outcome.status == "interrupted" else 2
 
 
@@ -169,4 +166,4 @@ def main(args: argparse.Namespace) -> int:
         outcome = execute(prep, args.sessions, notes=args.notes, on_session=on_session)
     finally:
         close_sinks(sinks, "run")
-    return report(outcome, args.resume)
+    return report(outcome)

@@ -203,6 +203,9 @@ def _execute(prep: PreparedRun, session_root: str | Path | None, notes: str,
         shutil.rmtree(session.path, ignore_errors=True)
         outcome.session = None
         outcome.reason = f"{outcome.reason} (before the first step: nothing measured, no session kept)"
+        if prep.resumed_from is not None:
+            old = prep.resumed_from.path
+            outcome.reason += f"; fix the cause, then: labkit run --resume {old} [--rig FIXED.toml]"
     return outcome
 
 
