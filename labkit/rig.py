@@ -31,7 +31,6 @@ from labkit.rig_checks import (  # noqa: F401 - re-exported: labkit.rig is the p
     ROLE_PATTERN,
     UNIT_SUFFIXES,
     _check_finite,
-    _check_port_url,
     _Section,
     check_role,
     read_rig_text,
@@ -140,6 +139,27 @@ class Rig:
             raise RigFileError(str(self.path), f"devices.{role}",
                                f"{needed_by} needs a {kind} device called {role!r}")
         return dev
+
+
+def _check_port_url(sec: _Section, url: str) -> None:
+    if not url.strip():
+        raise sec.error("port", "empty port URL")
+    scheme = urllib.parse.urlsplit(url).scheme
+    if scheme == "" and not url.startswith("/") and not url.upper().startswith("COM"):
+        raise sec.error("port", f"{url!r} is neither a device path nor a URL (sim://, socket://, ...)")
+    if scheme == "sim":
+        # an emulated device is checked whole here (emulator, seed, fault names), before any
+        # port opens, so a typo is a file:key error and not a failed, "resumable" session
+        from labkit.emulators.base import emulator_class
+        from labkit.emulators.urls import parse_sim_url
+        from labkit.errors import PortURLError
+
+        try:
+            emulator_class(parse_sim_url(url).protocol)
+        except PortURLError as exc:
+            raise sec.error("port", exc.reason) from None
+        except KeyError as exc:
+            raise sec.error("port", str(exc.args[0])) from None
 
 
 def _device(file: str, role: str, table: Any, check_protocols: bool) -> DeviceConfig:

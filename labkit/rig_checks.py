@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 import re
-import urllib.parse
 from pathlib import Path
 from typing import Any
 
@@ -139,27 +138,6 @@ class _Section:
 def _example_suffix(si_unit: str) -> str:
     return {"rad/s": "rpm", "rad/s^2": "rpm_per_s", "kg": "g", "m": "mm", "rad": "deg",
             "s": "s", "kg m^2": "kg_m2", "A m^2": "a_m2", "N": "n"}.get(si_unit, "si")
-
-
-def _check_port_url(sec: _Section, url: str) -> None:
-    if not url.strip():
-        raise sec.error("port", "empty port URL")
-    scheme = urllib.parse.urlsplit(url).scheme
-    if scheme == "" and not url.startswith("/") and not url.upper().startswith("COM"):
-        raise sec.error("port", f"{url!r} is neither a device path nor a URL (sim://, socket://, ...)")
-    if scheme == "sim":
-        # an emulated device is checked whole here (emulator, seed, fault names), before any
-        # port opens, so a typo is a file:key error and not a failed, "resumable" session
-        from labkit.emulators.base import emulator_class
-        from labkit.emulators.urls import parse_sim_url
-        from labkit.errors import PortURLError
-
-        try:
-            emulator_class(parse_sim_url(url).protocol)
-        except PortURLError as exc:
-            raise sec.error("port", exc.reason) from None
-        except KeyError as exc:
-            raise sec.error("port", str(exc.args[0])) from None
 
 
 def _check_finite(sec: _Section, key: str, value: Any) -> None:

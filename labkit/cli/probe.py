@@ -81,12 +81,6 @@ def serial_settings(defaults: dict[str, Any], args: argparse.Namespace) -> dict[
     return settings
 
 
-def settings_text(settings: dict[str, Any]) -> str:
-    """``9600 8N1`` style summary of pyserial settings, for messages."""
-    return (f"{settings.get('baudrate', '?')} {settings.get('bytesize', 8)}{settings.get('parity', 'N')}"
-            f"{settings.get('stopbits', 1)}")
-
-
 def json_safe(obj: dict[str, Any]) -> dict[str, Any]:
     """NaN/inf (an overload has no value) become null, so every line is valid JSON."""
     return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in obj.items()}
@@ -120,7 +114,7 @@ def open_device(kind: str, protocol: str, url: str, settings: dict[str, Any],
     try:
         port = open_port(url, clock=clock, timeout=0, **settings)
     except (serial.SerialException, OSError, ValueError, TermiosError) as exc:
-        raise DeviceError(name, "open", b"", f"cannot open port ({settings_text(settings)}): {exc}") from None
+        raise DeviceError(name, "open", b"", f"cannot open port: {exc}") from None
     try:
         return cls(port, clock, name=name, **options)
     except ValueError as exc:  # a bad option value
@@ -146,34 +140,29 @@ def probe(args: argparse.Namespace, out=None, err=None, clock: Clock | None = No
     defaults = getattr(cls, "serial_defaults", None)  # drivers whose settings depend on options
     settings = serial_settings(defaults(options) if defaults else dict(cls.default_serial), args)
     device = open_device(args.kind, args.protocol, args.port, settings, options, clock)
+    start = clock.now()
     try:
-        return _probe_device(device, args, settings, out, err, clock)
+        info = device.identify()
+        header = {"device": device.name, "settings": settings, **info}
+        if args.json:
+            print(json.dumps(header), file=err)
+        else:
+            print("# " + json.dumps(header), file=out)
+        if getattr(args, "continuous", False):
+            if not hasattr(device, "start_continuous"):
+                raise LabkitError(f"{device.name}: --continuous is for balances with continuous output")
+            device.start_continuous()  # type: ignore[attr-defined]
+        for i in range(args.samples):
+            if i and args.interval > 0:
+                clock.sleep(args.interval)
+            sample = json_safe(one_sample(device, args.timeout))
+            sample["t"] = round(sample["t"] - start, 6)
+            print(json.dumps(sample), file=out, flush=True)
     except TermiosError as exc:
-        raise DeviceError(device.name, "configure port", b"",
-                          f"the port refused the serial settings {settings_text(settings)}: {exc}") from None
+        raise DeviceError(device.name, "configure port", b"", f"the port refused the serial settings "
+                          f"{settings}: {exc}") from None
     finally:
         device.close()
-
-
-def _probe_device(device: Device, args: argparse.Namespace, settings: dict[str, Any], out: Any, err: Any,
-                  clock: Clock) -> int:
-    start = clock.now()
-    info = device.identify()
-    header = {"device": device.name, "settings": settings, **info}
-    if args.json:
-        print(json.dumps(header), file=err)
-    else:
-        print("# " + json.dumps(header), file=out)
-    if getattr(args, "continuous", False):
-        if not hasattr(device, "start_continuous"):
-            raise LabkitError(f"{device.name}: --continuous is for balances with continuous output")
-        device.start_continuous()  # type: ignore[attr-defined]
-    for i in range(args.samples):
-        if i and args.interval > 0:
-            clock.sleep(args.interval)
-        sample = json_safe(one_sample(device, args.timeout))
-        sample["t"] = round(sample["t"] - start, 6)
-        print(json.dumps(sample), file=out, flush=True)
     return 0
 
 

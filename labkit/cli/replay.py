@@ -13,7 +13,6 @@ import sys
 from pathlib import Path
 
 from labkit.cli.run import close_sinks
-from labkit.errors import CassetteError
 from labkit.protocols.events import FlagTally
 from labkit.protocols.launch import replay_session
 from labkit.session import export_csv, load_session
@@ -54,8 +53,7 @@ def main(args: argparse.Namespace) -> int:
     out = result.outcome
     if flags.counts:
         print(f"device flags: {flags.summary()}")
-    if out.status != "completed" and (isinstance(out.error, CassetteError) or
-                                      (out.error is not None and result.recorded is None)):
+    if out.status != "completed" and out.error is not None and result.recorded is None:
         print(f"labkit replay: {out.status}: {out.reason}", file=sys.stderr)
         return 2
     if result.identical:

@@ -129,7 +129,7 @@ def close_sinks(sinks: list[Any], command: str) -> None:
                   file=sys.stderr)
 
 
-def report(outcome: Any, resumed_from: Any = None) -> int:
+def report(outcome: Any) -> int:
     where = f" (session {outcome.session})" if outcome.session else ""
     fit = (outcome.results or {}).get("fit") or {}
     params = ", ".join(
@@ -145,9 +145,6 @@ def report(outcome: Any, resumed_from: Any = None) -> int:
     print(f"labkit run: {outcome.status}: {outcome.reason}{where}", file=sys.stderr)
     if outcome.session:
         print(f"resume with: labkit run --resume {outcome.session}", file=sys.stderr)
-    elif resumed_from is not None:
-        print(f"fix the cause, then resume again: labkit run --resume {resumed_from} "
-              "[--rig FIXED.toml to change ports]", file=sys.stderr)
     return 130 if outcome.status == "interrupted" else 2
 
 
@@ -180,4 +177,4 @@ def main(args: argparse.Namespace) -> int:
     finally:
         close_sinks(sinks, "run")
     warn_flags(prep.runner.bus.sinks)
-    return report(outcome, args.resume)
+    return report(outcome)

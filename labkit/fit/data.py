@@ -81,7 +81,7 @@ def load_table(path: str | Path) -> Table:
     """Load a CSV, a results JSON or a session directory (``results.json`` inside)."""
     path = Path(path)
     if path.is_dir():
-        results = path / "results.json"
+        results = _inside(path, "results.json")
         if not results.exists():
             analyses = _analysis_files(path)
             if analyses:
@@ -90,7 +90,7 @@ def load_table(path: str | Path) -> Table:
                                 "(did the run finish? `labkit run --resume` completes it), and no "
                                 "`labkit analyse --json` files either")
         table = _load_json(results)
-        run = path / "run.json"
+        run = _inside(path, "run.json")
         if run.exists():
             table.meta["run"] = _read_json(run)
         table.meta["session"] = str(path)
@@ -100,6 +100,17 @@ def load_table(path: str | Path) -> Table:
     if path.suffix.lower() == ".json":
         return _load_json(path)
     return _load_csv(path)
+
+
+def _inside(session: Path, name: str) -> Path:
+    """``session/name``, refused (DataFileError) when a symlink leads it out of the session."""
+    from labkit.session.paths import session_file
+    from labkit.session.writer import SessionError
+
+    try:
+        return session_file(session, name)
+    except SessionError as exc:
+        raise DataFileError(str(session / name), "", str(exc)) from None
 
 
 def _read_bounded(path: Path) -> bytes:

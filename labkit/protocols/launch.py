@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from labkit.errors import LabkitError
+from labkit.errors import CassetteError, LabkitError
 from labkit.io.clock import Clock, RealClock, VirtualClock, use_clock
 from labkit.protocols import get_protocol
 from labkit.protocols.events import Sink
@@ -170,8 +170,10 @@ class _StepSeen:
     def __init__(self) -> None:
         self.seen = False
 
-    def on_event(self, event: dict[str, Any]) -> None:
-        if event.get("type") == "step":
+    def on_event(self, event: Any) -> None:
+        # a plain dict or a typed run document (``.type``); never raises, never converts
+        kind = event.get("type") if isinstance(event, dict) else getattr(event, "type", None)
+        if kind == "step":
             self.seen = True
 
 
@@ -202,6 +204,9 @@ def _execute(prep: PreparedRun, session_root: str | Path | None, notes: str,
         shutil.rmtree(session.path, ignore_errors=True)
         outcome.session = None
         outcome.reason = f"{outcome.reason} (before the first step: nothing measured, no session kept)"
+        if prep.resumed_from is not None:
+            old = prep.resumed_from.path
+            outcome.reason += f"; fix the cause, then: labkit run --resume {old} [--rig FIXED.toml]"
     return outcome
 
 
@@ -286,6 +291,8 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None) -> ReplayO
                     done_steps=done, port_override=lambda dev: replay_url(record.path, dev.role))
     with use_clock(clock):
         outcome = runner.run()
+    if isinstance(outcome.error, CassetteError):
+        raise outcome.error  # a damaged recording: nothing to compare, one line naming file:line
     replayed = normalise(outcome.results)
     recorded = record.results
     diffs = diff_results(replayed, recorded) if recorded is not None else ["recording has no results.json"]

@@ -112,7 +112,11 @@ def _first_difference(a: Any, b: Any, path: str = "") -> str:
         for k in sorted(set(a) | set(b), key=str):
             if a.get(k) != b.get(k):
                 return _first_difference(a.get(k), b.get(k), f"{path}.{k}" if path else str(k))
-    return f"{path}: {a!r} -> {b!r}"
+    return f"{path}: {_shown(a)} -> {_shown(b)}"
+
+
+def _shown(value: Any) -> str:
+    return f"{value:.6g}" if isinstance(value, float) else repr(value)
 
 
 class ResumeLock:

@@ -20,7 +20,7 @@ from typing import Any
 
 from labkit import documents as doc
 from labkit.errors import LabkitError
-from labkit.protocols.params import MAX_PLAN_STEPS, ParamError, check_count
+from labkit.protocols.params import ParamError
 from labkit.protocols.quickfit import quick_fit_power_law
 from labkit.protocols.runner import ProtocolDef, RunContext, Step
 from labkit.rig import Rig
@@ -96,6 +96,8 @@ class SpeedSweep(ProtocolDef):
         legs = [("up", speeds)]
         if params["up_down"]:
             legs.append(("down", list(reversed(speeds))[1:]))
+        from labkit.protocols.params import MAX_PLAN_STEPS, check_count
+
         n_steps = sum(len(leg) for _, leg in legs) * int(params["repeats"])
         check_count("repeats", n_steps, "steps", MAX_PLAN_STEPS)
         steps: list[Step] = []

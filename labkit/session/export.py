@@ -47,8 +47,11 @@ def readings_to_csv(src: Path, dest: Path, problems: list[str] | None = None) ->
 def export_csv(session: Path, problems: list[str] | None = None) -> list[Path]:
     """Export every device's readings of a session to ``readings/ROLE.csv`` (damaged lines
     skipped, reported in ``problems`` as ``file:line: reason``)."""
+    from labkit.session.paths import session_file
+
     out = []
-    for src in sorted((session / "readings").glob("*.jsonl")):
+    for found in sorted((session / "readings").glob("*.jsonl")):
+        src = session_file(session, "readings", found.name)  # a symlink out of the session is refused
         dest = src.with_suffix(".csv")
         readings_to_csv(src, dest, problems)
         out.append(dest)

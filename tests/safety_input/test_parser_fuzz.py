@@ -73,3 +73,26 @@ def test_rig_text_parses_or_names_file_and_key(data):
         parse_rig(text, "fuzz.toml", check_protocols=False)
     except RigFileError as exc:
         assert str(exc).startswith("fuzz.toml:")
+
+
+SET_KEYS = ["speeds_rpm", "up_down", "repeats", "record_s", "min_samples", "zero", "settle_timeout_s"]
+SET_TEXT = st.one_of(
+    st.text(alphabet="0123456789.:,;-+eEnaifINF ", max_size=30),
+    st.sampled_from(["nan", "inf", "-inf", "1e308", "1e999", "0:1e9:1", "9" * 30, "true", "each", ""]),
+)
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.sampled_from(SET_KEYS), SET_TEXT)
+def test_any_set_value_is_a_plan_or_one_line(capsys, key, text):
+    from labkit.cli import main
+
+    from .conftest import FIG525
+
+    code = main(["run", str(FIG525), "speed-sweep", "--set", f"{key}={text}", "--dry-run"])
+    out, err = capsys.readouterr()
+    assert code in (0, 2)
+    if code == 2:
+        assert err.count("\n") == 1 and err.startswith("labkit run: "), err
+    else:
+        assert "all targets within the rig's limits" in out

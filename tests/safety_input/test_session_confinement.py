@@ -83,3 +83,21 @@ def test_session_file_never_leaves_the_session(tmp_path_factory, parts):
         assert str(root) in str(exc)
         return
     assert root.resolve() in path.parents
+
+
+@pytest.mark.parametrize("argv_of, linked", [
+    (lambda s, tmp: ["replay", s, "--export-csv"], "readings/balance.jsonl"),
+    (lambda s, tmp: ["fit", s, "--model", "power-law"], "results.json"),
+    (lambda s, tmp: ["report", s, "--out", tmp / "report"], "results.json"),
+], ids=["export-csv", "fit", "report"])
+def test_session_files_that_are_symlinks_out_are_refused(argv_of, linked, complete_session, tmp_path, capsys):
+    import shutil
+
+    session = tmp_path / "S"
+    shutil.copytree(complete_session, session)
+    secret = tmp_path / "secret.json"
+    secret.write_text(json.dumps({"points": [{"speed_rpm": 1.0, "force_g": 1.0}]}))
+    (session / linked).unlink()
+    (session / linked).symlink_to(secret)
+    code, out, err = run_cli(argv_of(session, tmp_path), capsys)
+    assert_one_line(code, err, "leads outside the session")
