@@ -450,17 +450,23 @@ class OpenRig:
         self.clock = clock
         self.devices: dict[str, Any] = {}
         self.port_urls: dict[str, str] = {}
+        self.stop_failures: dict[str, str] = {}
 
     def motors(self) -> dict[str, Any]:
         return {r: d for r, d in self.devices.items() if self.rig.devices[r].kind == "motor"}
 
     def stop_motors(self) -> list[str]:
-        """Command every motor to zero; never raises. Returns the roles that failed."""
+        """Command every motor to zero; never raises. Returns the roles whose STOP was not
+        delivered (their reason is in ``stop_failures``)."""
         failed = []
         for role, motor in self.motors().items():
             try:
                 motor.stop()
-            except Exception:  # noqa: BLE001 - keep stopping the others
+                problem = getattr(motor, "stop_error", None)
+            except Exception as exc:  # noqa: BLE001 - keep stopping the others
+                problem = str(exc)
+            if problem:
+                self.stop_failures[role] = problem
                 failed.append(role)
         return failed
 

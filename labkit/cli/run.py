@@ -16,6 +16,9 @@ from labkit.protocols import PROTOCOLS, ProgressSink
 from labkit.protocols.launch import execute, prepare_run
 from labkit.stream import add_rerun_argument
 
+#: exit status when a STOP could not be delivered to a motor controller (docs/safety.md)
+EXIT_STOP_FAILED = 3
+
 
 def add_common(p: argparse.ArgumentParser) -> None:
     p.add_argument(
@@ -129,6 +132,8 @@ def report(outcome: Any) -> int:
             print(f"quick fit ({fit.get('model')}): {params}")
         return 0
     print(f"labkit run: {outcome.status}: {outcome.reason}{where}", file=sys.stderr)
+    if getattr(outcome, "stop_failed", None):
+        return EXIT_STOP_FAILED  # no resume hint: the rotor may still be turning
     if outcome.session:
         print(f"resume with: labkit run --resume {outcome.session}", file=sys.stderr)
     return 130 if outcome.status == "interrupted" else 2

@@ -124,6 +124,9 @@ class SpeedLoop:
         if self.enabled:
             duty = pi_step(self.gains, self.state, self.setpoint,
                            measured if measured is not None else 0.0, dt)
+            if not math.isfinite(duty):
+                raise Tripped(f"{self.name}: controller output duty {duty!r} is not a finite number "
+                              "(check kp, ki and full_speed in the rig file)")
             self.motor.set_duty(duty)
         error = (measured if measured is not None else math.inf) - self.target
         settled = self.setpoint == self.target and self.settle.update(t, error)
@@ -146,6 +149,10 @@ class SpeedControl:
         self.zero_requested = False
         self.zeroed_at: float | None = None
         self.stopped = False
+        #: motors whose STOP could not be delivered: {name: reason}
+        self.stop_failures: dict[str, str] = {}
+        #: checked every tick; a returned reason trips the interlock (e.g. a recorder failed)
+        self.guards: list[Callable[[], str | None]] = []
         self._lock = threading.RLock()
         self._job: Any = None
 
@@ -166,12 +173,20 @@ class SpeedControl:
             self._zero_all()
 
     def _zero_all(self) -> list[str]:
+        """Command every motor to zero; the ``name: reason`` of each STOP not delivered."""
         failed = []
         for motor in self.all_motors:
+            name = str(getattr(motor, "name", motor))
             try:
                 motor.stop()
+                problem = getattr(motor, "stop_error", None)
             except Exception as exc:  # noqa: BLE001 - keep stopping the others
-                failed.append(f"{getattr(motor, 'name', motor)}: {exc}")
+                problem = str(exc)
+            if problem:
+                self.stop_failures[name] = problem
+                failed.append(f"{name}: {problem}")
+            else:
+                self.stop_failures.pop(name, None)
         return failed
 
     def trip(self, reason: str) -> None:
@@ -213,6 +228,10 @@ class SpeedControl:
                     self.zeroed_at = t
                 return
             try:
+                for guard in self.guards:
+                    problem = guard()
+                    if problem:
+                        raise Tripped(problem)
                 for loop in self.loops.values():
                     loop.tick(t)
             except Tripped as exc:

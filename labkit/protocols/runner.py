@@ -8,8 +8,10 @@ parameters, then runs each with plain Python using the :class:`RunContext` verbs
   against the rig's speed limit, the session directory (``--dry-run`` stops here and
   prints the plan);
 * opens the rig (every port recorded into the session's cassettes), starts the speed loops;
-* on the first Ctrl-C commands every motor to zero at the next control tick and stops at
-  the next checkpoint; on a second Ctrl-C trips the interlock at once (ANCHORS 9.2.7);
+* on the first Ctrl-C - or SIGTERM (``kill``), SIGHUP (terminal closed), SIGQUIT (Ctrl-\\) -
+  commands every motor to zero at the next control tick and stops at the next checkpoint;
+  on a second Ctrl-C trips the interlock at once (ANCHORS 9.2.7); ``run.json`` names the
+  signal (docs/safety.md);
 * whatever happens (interlock, exception, Ctrl-C, normal end) stops the loops, zeroes
   every motor, closes the ports and writes ``results.json`` and the exit status.
 """
@@ -43,8 +45,21 @@ def normalise(value: Any) -> Any:
     return value
 
 
+#: the signals that take the Ctrl-C path (motors to zero, stop at the next checkpoint)
+STOP_SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT")
+                     if hasattr(signal, name))
+
+
+def signal_name(signum: int) -> str:
+    try:
+        return signal.Signals(signum).name
+    except ValueError:
+        return f"signal {signum}"
+
+
 class StopRequested(LabkitError):
-    """The operator asked to stop (Ctrl-C); the run ended at a checkpoint, motors at zero."""
+    """The operator asked to stop (Ctrl-C or a stop signal); the run ended at a checkpoint,
+    motors at zero."""
 
 
 @dataclass
@@ -167,10 +182,11 @@ class RunContext:
 
     # ---- verbs --------------------------------------------------------------------------
     def checkpoint(self) -> None:
-        """Raise if an interlock tripped or the operator asked to stop."""
+        """Raise if an interlock tripped, a recorder failed or the operator asked to stop."""
+        self.runner.check_health()
         self.control.check()
         if self.runner.stop_count:
-            raise StopRequested("stopped by Ctrl-C at a checkpoint; motors at zero")
+            raise StopRequested(f"stopped by {self.runner.stop_cause} at a checkpoint; motors at zero")
 
     def set(self, **targets_rad_s: float) -> None:
         """Set speed-loop targets in rad/s (ramped at the rig's limit), e.g. ``set(rotor=1000)``."""
@@ -261,6 +277,34 @@ class RunContext:
         return list(self.devices[role].readings_since(since))
 
 
+class SessionGuard:
+    """The session as an event sink that stops the run when it cannot write (disk full,
+    permissions) instead of being dropped while the motor keeps turning unrecorded."""
+
+    def __init__(self, session: Any, on_failure: Any) -> None:
+        self.session = session
+        self.on_failure = on_failure
+        self.problem: str | None = None
+
+    def on_event(self, event: dict[str, Any]) -> None:
+        if self.problem is not None:
+            return
+        try:
+            self.session.on_event(event)
+        except (OSError, LabkitError) as exc:
+            self.problem = sink_failure_text(self.session, event, exc)
+            self.on_failure(self.problem)
+
+
+def sink_failure_text(session: Any, event: dict[str, Any], exc: BaseException) -> str:
+    """``cannot write SESSION/events.jsonl: No space left on device``."""
+    if isinstance(exc, LabkitError):
+        return str(exc)
+    name = (f"readings/{event.get('device')}.jsonl" if event.get("type") == "reading"
+            else "events.jsonl")
+    return f"cannot write {Path(session.path) / name}: {exc.strerror or exc}"
+
+
 @dataclass
 class RunOutcome:
     status: str                  # "completed" | "interrupted" | "failed" | "dry-run"
@@ -268,6 +312,14 @@ class RunOutcome:
     session: Path | None
     results: dict[str, Any] | None
     error: BaseException | None = None
+    #: motors whose STOP could not be delivered: {role: reason} (the operator must cut power)
+    stop_failed: dict[str, str] = field(default_factory=dict)
+
+
+def stop_failed_text(stop_failed: dict[str, str]) -> str:
+    """``could not stop rotor_motor: port gone (...); cut the motor's power``."""
+    return "; ".join(f"could not stop {role}: {why}; cut the motor's power"
+                     for role, why in stop_failed.items())
 
 
 class Runner:
@@ -289,6 +341,10 @@ class Runner:
         self.done_steps = set(done_steps or ())
         self.port_override = port_override
         self.stop_count = 0
+        self.stop_signal: str | None = None   # "SIGTERM", ... (None: Ctrl-C or not stopped)
+        #: a recorder or the session writer failed (disk full...): the run stops safely
+        self.health_problem: str | None = None
+        self._recording_ports: list[Any] = []
         self._saving = False
         self.control: SpeedControl | None = None
         self.steps = protocol.plan(rig, params)
@@ -297,12 +353,27 @@ class Runner:
     def dry_run(self) -> str:
         return format_plan(self.protocol, self.rig, self.steps, self.done_steps)
 
-    # ---- Ctrl-C -------------------------------------------------------------------------
-    def request_stop(self) -> None:
+    # ---- Ctrl-C and stop signals --------------------------------------------------------
+    @property
+    def stop_cause(self) -> str:
+        return "Ctrl-C" if self.stop_signal in (None, "SIGINT") else self.stop_signal
+
+    def request_stop(self, signum: int = signal.SIGINT) -> None:
         """What Ctrl-C does: 1st - motors to zero at the next tick, stop at next checkpoint;
-        2nd - interlock now (every motor zero) and KeyboardInterrupt."""
+        2nd - interlock now (every motor zero) and KeyboardInterrupt.
+
+        SIGTERM, SIGHUP and SIGQUIT do what the first Ctrl-C does; repeating them (a shell
+        and a supervisor may both pass on one SIGHUP) never escalates: only Ctrl-C does.
+        """
+        name = signal_name(signum)
+        first = self.stop_count == 0
+        if first:
+            self.stop_signal = name
+        if not first and signum != signal.SIGINT:
+            return
         self.stop_count += 1
-        self.bus.emit({"type": "stop_request", "t": self.clock.now(), "count": self.stop_count})
+        self.bus.emit({"type": "stop_request", "t": self.clock.now(), "count": self.stop_count,
+                       "signal": name})
         if self._saving:
             return  # motors are already at zero; let results.json and run.json be written whole
         if self.stop_count == 1:
@@ -313,10 +384,48 @@ class Runner:
                 self.control.trip("Ctrl-C pressed twice")
             raise KeyboardInterrupt
 
-    def _install_sigint(self) -> Any:
+    def _install_signal_handlers(self) -> dict[int, Any]:
+        """Ctrl-C, SIGTERM, SIGHUP and SIGQUIT -> :meth:`request_stop`; the previous handlers."""
         if threading.current_thread() is not threading.main_thread():
-            return None
-        return signal.signal(signal.SIGINT, lambda signum, frame: self.request_stop())
+            return {}
+        previous = {}
+        for signum in STOP_SIGNALS:
+            previous[signum] = signal.signal(signum, lambda number, frame: self.request_stop(number))
+        return previous
+
+    # ---- recorder and session health -----------------------------------------------------
+    def _guard_session(self) -> None:
+        for i, sink in enumerate(self.bus.sinks):
+            if sink is self.session:
+                self.bus.sinks[i] = SessionGuard(self.session, self._sink_failed)
+
+    def _sink_failed(self, problem: str) -> None:
+        """A sink could not write: motors to zero now (interlock), the run stops."""
+        if self.health_problem is None:
+            self.health_problem = problem
+        if self.control is not None and self.control.tripped is None and not self._saving:
+            self.control.trip(problem)
+
+    def health(self) -> str | None:
+        """The first recorder/session failure, or None. Never raises (called in the control tick)."""
+        if self.health_problem is None:
+            for port in self._recording_ports:
+                problem = getattr(port, "record_error", None)
+                if problem:
+                    self.health_problem = problem
+                    break
+        return self.health_problem
+
+    def check_health(self) -> None:
+        """Raise SafetyError (motors zeroed first) when a recorder or the session failed."""
+        problem = self.health()
+        if problem is None:
+            return
+        if self.control is not None:
+            if self.control.tripped is None:
+                self.control.trip(problem)
+            self.control.check()
+        raise SafetyError(f"{problem}; motors commanded to zero")
 
     # ---- the run ------------------------------------------------------------------------
     def run(self) -> RunOutcome:
@@ -324,7 +433,8 @@ class Runner:
         new_points: list[dict[str, Any]] = []
         opened = None
         ctx: RunContext | None = None
-        previous_handler = self._install_sigint()
+        previous_handlers = self._install_signal_handlers()
+        self._guard_session()
         cassettes = self.session.cassette_dir if self.session is not None else None
         self.bus.emit({"type": "start", "t": self.clock.now(), "protocol": self.protocol.name,
                        "params": self.params, "rig": self.rig.name, "n_steps": len(self.steps),
@@ -333,7 +443,10 @@ class Runner:
                        "dry_run": False})
         try:
             opened = open_rig(self.rig, self.clock, record_to=cassettes, port_override=self.port_override)
+            self._recording_ports = [dev.port for dev in opened.devices.values()
+                                     if hasattr(getattr(dev, "port", None), "record_error")]
             self.control = build_speed_control(opened, self.clock, emit=self.bus.emit)
+            self.control.guards.append(self.health)
             ctx = RunContext(self, opened.devices, self.control)
             self.protocol.setup(ctx)
             for step in self.steps:
@@ -365,14 +478,21 @@ class Runner:
                 self.control.stop()
             if opened is not None:
                 opened.close()
+        stop_failed = dict(opened.stop_failures) if opened is not None else {}
+        if stop_failed:
+            self.bus.emit({"type": "stop_failed", "t": self.clock.now(), "devices": stop_failed})
+            reason = stop_failed_text(stop_failed) + (f" ({reason})" if reason else "")
+            status = "failed" if status == "completed" else status
         try:
-            return self._save(status, reason, error, ctx, new_points)
+            outcome = self._save(status, reason, error, ctx, new_points, stop_failed)
+            outcome.stop_failed = stop_failed
+            return outcome
         finally:
-            if previous_handler is not None:
-                signal.signal(signal.SIGINT, previous_handler)
+            for signum, handler in previous_handlers.items():
+                signal.signal(signum, handler)
 
     def _save(self, status: str, reason: str | None, error: BaseException | None, ctx: RunContext | None,
-              new_points: list[dict[str, Any]]) -> RunOutcome:
+              new_points: list[dict[str, Any]], stop_failed: dict[str, str] | None = None) -> RunOutcome:
         if ctx is not None:
             ctx.log_tach_readings()
         points = self.previous_points + new_points
@@ -382,8 +502,19 @@ class Runner:
         self.bus.emit({"type": "stop", "t": self.clock.now(), "status": status, "reason": reason,
                        "steps_done": steps_done})
         if self.session is not None:
-            self.session.write_results(results)
-            self.session.finish(status, reason)
+            if self.stop_signal is not None:
+                self.session.meta["signal"] = self.stop_signal
+            if stop_failed:
+                self.session.meta["stop_failed"] = stop_failed
+            try:
+                self.session.write_results(results)
+                self.session.finish(status, reason)
+            except (OSError, LabkitError) as exc:
+                # the motors are already stopped; what is on disk stays readable and resumable
+                problem = str(exc) if isinstance(exc, LabkitError) else (
+                    f"cannot write {exc.filename or self.session.path}: {exc.strerror or exc}")
+                reason = f"{reason}; {problem}" if reason and problem not in reason else (reason or problem)
+                status = "failed" if status == "completed" else status
         return RunOutcome(status, reason, self.session.path if self.session else None, results, error)
 
     def _fit(self, points: list[dict[str, Any]]) -> dict[str, Any]:

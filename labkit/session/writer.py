@@ -200,16 +200,20 @@ class Session:
         write_json_atomic(self.path / "run.json", self.meta)
 
     def finish(self, status: str, reason: str | None = None) -> None:
-        """Close files, export Parquet, and record the exit status (never raises)."""
+        """Close files, export Parquet, and record the exit status. Raises SessionError only when
+        the disk refuses the last writes (the files keep their whole lines: resumable)."""
         if self.closed:
             return
-        try:
-            self.flush()
-        finally:
-            self._events.close()
-            for f in self._readings.values():
-                f.close()
-            self.closed = True
+        self.closed = True
+        failure: OSError | None = None
+        for f in (self._events, *self._readings.values()):
+            try:
+                f.close()  # flushes; on a full disk the file is closed all the same
+            except OSError as exc:
+                failure = failure or exc
+        if failure is not None:
+            raise SessionError(f"cannot write {self.path}: {failure.strerror or failure}; the session "
+                               "keeps what was written before (resumable)") from None
         try:
             from labkit.session.export import readings_to_parquet
 
