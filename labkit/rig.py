@@ -282,6 +282,11 @@ def _device(file: str, role: str, table: Any, check_protocols: bool) -> DeviceCo
         unknown = unknown_options(cls, options)
         if unknown:
             raise sec.error(f"options.{unknown[0]}", unknown_options_message(cls, unknown))
+        watchdog = getattr(cls, "watchdog_problem", None)  # motors: the controller's own timeout
+        if watchdog is not None:
+            problem = watchdog(options, required=not port.startswith(("sim://", "replay://")))
+            if problem is not None:
+                raise sec.error(*problem)
     sec.finish()
     return DeviceConfig(role, kind, protocol, port, serial, options)
 

@@ -62,13 +62,18 @@ class KeepAliveMotor(MotorController):
     watchdog_advice: ClassVar[str] = ""
 
     @classmethod
-    def watchdog_problem(cls, options: dict[str, Any]) -> tuple[str, str] | None:
-        """``(key, reason)`` when ``options`` do not declare a usable command timeout, else None."""
+    def watchdog_problem(cls, options: dict[str, Any], required: bool = True) -> tuple[str, str] | None:
+        """``(key, reason)`` when ``options`` do not declare a usable command timeout, else None.
+
+        ``required``: real hardware (emulated ``sim://`` controllers may leave it out).
+        """
         if cls.builtin_watchdog_ms is not None or cls.watchdog_option is None:
             return None
         key = f"options.{cls.watchdog_option}"
         value = options.get(cls.watchdog_option)
         low = cls.keepalive_period_s * 1000 * WATCHDOG_MIN_PERIODS
+        if value is None and not required:
+            return None
         if value is None:
             return key, (f"required for real hardware: the {cls.protocol} controller's own command "
                          f"timeout stops the motor when labkit dies (SIGKILL, crash, power cut of the "
