@@ -148,8 +148,8 @@ class PololuSmc(KeepAliveMotor):
     option_names = frozenset({"autobaud", "command_timeout_ms", "crc", "device_number", "quiet_s",
                               "reply_timeout_s"})
     watchdog_option = "command_timeout_ms"
-    watchdog_advice = ("set the SMC's 'Command timeout' (Pololu Simple Motor Control Center: "
-                       "Input Settings tab, or `SmcCmd --set`) to 500 ms and apply")
+    watchdog_advice = ("set 'Command timeout' to 500 ms in the Pololu Simple Motor Control Center G2 "
+                       "(Input settings tab) and click Apply settings")
     default_serial = {"baudrate": 9600, "bytesize": 8, "parity": "N", "stopbits": 1}
     #: variables read by status()
     status_variables: ClassVar[tuple[int, ...]] = (
