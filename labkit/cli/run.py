@@ -139,6 +139,15 @@ def report(outcome: Any) -> int:
     return 130 if outcome.status == "interrupted" else 2
 
 
+def check_ports_free(rig: Any) -> None:
+    """Refuse (PortBusy: "port busy, held by PID N") before a session exists when another
+    process holds one of the rig's serial devices (labkit.io.port_lock)."""
+    from labkit.io.port_lock import check_free
+
+    for device in rig.devices.values():
+        check_free(device.port)
+
+
 def main(args: argparse.Namespace) -> int:
     prep = prepare_run(
         args.rig,
@@ -152,6 +161,7 @@ def main(args: argparse.Namespace) -> int:
     if args.dry_run:
         print(prep.runner.dry_run())
         return 0
+    check_ports_free(prep.rig)
     sinks: list[Any] = []
 
     def on_session(runner: Any, session: Any) -> None:

@@ -9,7 +9,8 @@ paths) plus labkit's own schemes, registered once with pyserial:
 * ``replay://<cassette>?mode=strict|timed`` - serve a cassette.
 
 labkit's ports wait on the given clock (default :func:`labkit.io.clock.current_clock`);
-native ports ignore it.
+native ports ignore it. A serial device is held by one process at a time
+(:mod:`labkit.io.port_lock`): a second opener gets ``PortBusy`` naming the holder's PID.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from typing import Any
 import serial
 
 from labkit.io.clock import Clock, current_clock
+from labkit.io.port_lock import lock_device, unlock
 
 HANDLER_PACKAGE = "labkit.io.urlhandlers"
 _register_lock = threading.Lock()
@@ -42,8 +44,28 @@ def open_port(url: str, *, clock: Clock | None = None, **serial_settings: Any) -
     port = serial.serial_for_url(url, do_not_open=True, **serial_settings)
     if hasattr(port, "clock"):
         port.clock = clock if clock is not None else current_clock()
-    port.open()
+    lock = lock_device(str(getattr(port, "port", None) or url))  # PortBusy if another run has it
+    try:
+        port.open()
+    except BaseException:
+        unlock(lock)
+        raise
+    if lock is not None:
+        _release_on_close(port, lock)
     return port
+
+
+def _release_on_close(port: serial.SerialBase, lock: int) -> None:
+    """``port.close()`` also drops the device lock (the process's exit always does)."""
+    close = port.close
+
+    def close_and_unlock() -> None:
+        try:
+            close()
+        finally:
+            unlock(lock)
+
+    port.close = close_and_unlock  # type: ignore[method-assign]
 
 
 register_url_handlers()
