@@ -162,6 +162,15 @@ def main(args: argparse.Namespace) -> int:
         print(prep.runner.dry_run())
         return 0
     check_ports_free(prep.rig)
+    from labkit.control.supervisor import needs_supervisor, supervised
+
+    if needs_supervisor(prep.rig):  # real motor ports: a supervisor stops them if this run dies
+        return supervised(prep.rig, lambda: run_prepared(args, prep))
+    return run_prepared(args, prep)
+
+
+def run_prepared(args: argparse.Namespace, prep: Any) -> int:
+    """Execute a prepared run into a session and report it (the worker, when supervised)."""
     sinks: list[Any] = []
 
     def on_session(runner: Any, session: Any) -> None:

@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from labkit.control.pi import PIGains, PIState, SettleDetector, pi_step, ramp_toward
-from labkit.errors import SafetyError
+from labkit.errors import LabkitError, SafetyError
 
 Emit = Callable[[dict[str, Any]], None]
 
@@ -235,6 +235,8 @@ class SpeedControl:
                 for loop in self.loops.values():
                     loop.tick(t)
             except Tripped as exc:
+                self.trip(str(exc))
+            except LabkitError as exc:  # a device fault names device, command and bytes itself
                 self.trip(str(exc))
             except Exception as exc:  # noqa: BLE001 - any fault in a tick is an interlock
                 self.trip(f"control fault: {type(exc).__name__}: {exc}")

@@ -83,6 +83,7 @@ class PtyHost:
         self.paths: list[str] = []  # every path this device has had, oldest first
         self._lock = threading.Lock()
         self._stop = threading.Event()
+        self._pulled = False  # unplug(): gone for good
         self._pty: _Pty | None = _Pty()
         self._spare: _Pty | None = None
         self.path = self._pty.path
@@ -97,6 +98,10 @@ class PtyHost:
     def connected(self) -> bool:
         return self._pty is not None
 
+    def unplug(self) -> None:
+        """Pull the cable now: the pty hangs up and stays gone (a controller unplugged mid-run)."""
+        self._pulled = True
+
     # -- pump ---------------------------------------------------------------------------
     def _run(self) -> None:
         try:
@@ -108,6 +113,12 @@ class PtyHost:
     def _step(self) -> None:
         now = self.clock.now()
         with self._lock:
+            if self._pulled:
+                if self._pty is not None:
+                    self._pty.close()
+                    self._pty = None
+                self._stop.wait(PUMP_PERIOD_S)
+                return
             if self._pty is None:
                 if self.emulator.connected(now):
                     self._replug(now)

@@ -481,7 +481,9 @@ class Runner:
         stop_failed = dict(opened.stop_failures) if opened is not None else {}
         if stop_failed:
             self.bus.emit({"type": "stop_failed", "t": self.clock.now(), "devices": stop_failed})
-            reason = stop_failed_text(stop_failed) + (f" ({reason})" if reason else "")
+            if reason:  # "motors commanded to zero" is not the whole truth any more
+                reason = reason.replace("; motors commanded to zero", "").replace("; motors at zero", "")
+            reason = stop_failed_text(stop_failed) + (f" (after: {reason})" if reason else "")
             status = "failed" if status == "completed" else status
         try:
             outcome = self._save(status, reason, error, ctx, new_points, stop_failed)

@@ -28,6 +28,14 @@ from labkit.devices.base import MotorController
 from labkit.errors import DeviceDisconnected, DeviceError, DeviceTimeout, SafetyError
 from labkit.io.clock import Clock, PeriodicJob
 
+try:  # a hung-up pty raises termios.error (not an OSError) from tcflush
+    from termios import error as _TermiosError
+except ImportError:  # pragma: no cover - Windows
+    _TermiosError = OSError  # type: ignore[assignment,misc]
+
+#: what a dead port raises
+PORT_ERRORS = (serial.SerialException, OSError, _TermiosError)
+
 KEEPALIVE_PERIOD_S = 0.05  # 20 Hz
 #: the controller's command timeout must be at least this many keep-alive periods ...
 WATCHDOG_MIN_PERIODS = 4
@@ -45,7 +53,7 @@ def as_bool(value: Any) -> bool:
 def stop_failure_text(exc: BaseException) -> str:
     """Why a STOP did not reach the controller, in words a person acts on."""
     cause = exc.__cause__ if exc.__cause__ is not None else exc
-    if isinstance(exc, DeviceDisconnected) or isinstance(cause, (serial.SerialException, OSError)):
+    if isinstance(exc, DeviceDisconnected) or isinstance(cause, PORT_ERRORS):
         return f"port gone ({cause})"
     return f"{type(exc).__name__}: {exc}"
 
@@ -128,14 +136,14 @@ class KeepAliveMotor(MotorController):
         with self._write_lock:
             try:
                 self.port.write(data)
-            except (serial.SerialException, OSError) as exc:
+            except PORT_ERRORS as exc:
                 raise DeviceDisconnected(self.name, command, self.last_bytes, str(exc)) from exc
 
     def read_available(self, command: str) -> bytes:
         try:
             waiting = self.port.in_waiting
             data = self.port.read(waiting) if waiting else b""
-        except (serial.SerialException, OSError) as exc:
+        except PORT_ERRORS as exc:
             raise DeviceDisconnected(self.name, command, self.last_bytes, str(exc)) from exc
         if data:
             self.last_bytes = (self.last_bytes + data)[-64:]
@@ -144,7 +152,7 @@ class KeepAliveMotor(MotorController):
     def flush_input(self, command: str) -> None:
         try:
             self.port.reset_input_buffer()
-        except (serial.SerialException, OSError) as exc:
+        except PORT_ERRORS as exc:
             raise DeviceDisconnected(self.name, command, self.last_bytes, str(exc)) from exc
 
     def read_exact(self, n: int, timeout: float, command: str, quiet_s: float = 0.0) -> bytes:
