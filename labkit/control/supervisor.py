@@ -1,7 +1,7 @@
 """A supervising process for ``labkit run`` on real ports: the rotor stops when either dies.
 
 No signal handler runs on SIGKILL, the OOM killer or a crashed interpreter. So ``labkit run``
-on a rig with a real motor port forks (docs/decisions/2026-11-24-supervisor-and-watchdogs.md):
+on a rig with a real motor port forks (docs/decisions/0004-safe-exit-supervisor-and-watchdogs.md):
 
 * the **worker** (the child) runs the protocol exactly as before and owns every port; when
   the supervisor dies the kernel sends the worker SIGTERM (``PR_SET_PDEATHSIG``), which takes

@@ -515,7 +515,8 @@ class Runner:
                 # the motors are already stopped; what is on disk stays readable and resumable
                 problem = str(exc) if isinstance(exc, LabkitError) else (
                     f"cannot write {exc.filename or self.session.path}: {exc.strerror or exc}")
-                reason = f"{reason}; {problem}" if reason and problem not in reason else (reason or problem)
+                if self.health_problem is None:  # a sink failure already named the file
+                    reason = f"{reason}; {problem}" if reason else problem
                 status = "failed" if status == "completed" else status
         return RunOutcome(status, reason, self.session.path if self.session else None, results, error)
 

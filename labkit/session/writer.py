@@ -86,8 +86,12 @@ def dumps(obj: Any) -> str:
 
 def write_json_atomic(path: Path, data: Any) -> None:
     tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(data, default=_json_default, indent=2) + "\n", encoding="utf-8")
-    os.replace(tmp, path)
+    try:
+        tmp.write_text(json.dumps(data, default=_json_default, indent=2) + "\n", encoding="utf-8")
+        os.replace(tmp, path)
+    except OSError:
+        tmp.unlink(missing_ok=True)  # a full disk leaves the old file, never a torn one
+        raise
 
 
 def new_session_dir(root: str | Path, protocol: str) -> Path:

@@ -46,6 +46,7 @@ def test_stop_signal_to_labkit_run_stops_the_rotor(lab, tmp_path, name):
     sent = run.signal_when_holding(name)
     stderr = run.finish()
     rpm = lab.rotor_rpm_at(sent + AFTER_S)
+    print(f"matrix: {name} to labkit run: rotor {rpm:.0f} RPM {AFTER_S:.0f} s later")
     assert rpm < STOPPED_RPM, f"{name}: rotor at {rpm:.0f} RPM {AFTER_S} s later"
     assert run.proc.returncode == 130
     assert_clean(stderr)
@@ -60,6 +61,7 @@ def test_sigkill_of_labkit_run_stops_the_rotor(lab, tmp_path):
     sent = run.signal_when_holding("SIGKILL")
     run.finish()
     rpm = lab.rotor_rpm_at(sent + AFTER_S)
+    print(f"matrix: SIGKILL to labkit run: rotor {rpm:.0f} RPM {AFTER_S:.0f} s later")
     assert rpm < STOPPED_RPM, f"rotor at {rpm:.0f} RPM {AFTER_S} s later"
     wait_for(lambda: run.run_json()["status"] == "interrupted", 30, "the worker closed the session")
     assert "supervisor" not in run.run_json()["reason"]
@@ -71,6 +73,7 @@ def test_sigkill_of_the_worker_the_supervisor_stops_the_rotor(lab, tmp_path):
     sent = run.signal_when_holding("SIGKILL", target="worker")
     stderr = run.finish()
     rpm = lab.rotor_rpm_at(sent + AFTER_S)
+    print(f"matrix: SIGKILL to the worker: rotor {rpm:.0f} RPM {AFTER_S:.0f} s later")
     assert rpm < STOPPED_RPM, f"rotor at {rpm:.0f} RPM {AFTER_S} s later"
     assert_clean(stderr)
     assert "was killed by SIGKILL; the supervisor commanded rotor_motor to zero" in stderr
@@ -83,6 +86,7 @@ def test_sigkill_of_every_labkit_process_leaves_the_controllers_watchdog(lab, tm
     sent = run.signal_when_holding("SIGKILL", target="group")
     run.finish()
     rpm = lab.rotor_rpm_at(sent + AFTER_S)
+    print(f"matrix: SIGKILL to every labkit process: rotor {rpm:.0f} RPM {AFTER_S:.0f} s later")
     assert rpm < STOPPED_RPM, f"rotor at {rpm:.0f} RPM {AFTER_S} s later"
 
 
@@ -91,6 +95,7 @@ def test_full_sessions_disk_stops_the_rotor_and_keeps_a_valid_session(lab, tmp_p
     sent = run.fill_disk_when_holding()
     stderr = run.finish()
     rpm = lab.rotor_rpm_at(sent + AFTER_S)
+    print(f"matrix: sessions disk full: rotor {rpm:.0f} RPM {AFTER_S:.0f} s later")
     assert rpm < STOPPED_RPM, f"rotor at {rpm:.0f} RPM {AFTER_S} s later"
     assert_clean(stderr)
     first = stderr.strip().splitlines()[0]
@@ -146,4 +151,5 @@ def test_without_the_controllers_watchdog_sigkill_of_everything_leaves_it_spinni
         sent = run.signal_when_holding("SIGKILL", target="group")
         run.finish()
         rpm = rig.rotor_rpm_at(sent + AFTER_S)
+    print(f"matrix: SIGKILL to everything, watchdog off: rotor {rpm:.0f} RPM {AFTER_S:.0f} s later")
     assert rpm > 10000, f"rotor at {rpm:.0f} RPM: expected it still turning"
