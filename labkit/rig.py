@@ -448,17 +448,36 @@ def _record_url(inner: str, cassette: Path, role: str) -> str:
 
 
 class OpenRig:
-    """A rig with open ports and live drivers, by role. ``close()`` zeroes motors first."""
+    """A rig with open ports and live drivers, by role. ``close()`` zeroes motors first.
+
+    ``devices[role]`` is the driver for balances and tachometers and a rig-aware
+    :class:`labkit.control.handle.RigMotor` for motors (speeds within the rig's limits and
+    interlocks); ``devices[role].raw_driver`` (or ``drivers[role]``) is the bare motor driver.
+    """
 
     def __init__(self, rig: Rig, clock: Any) -> None:
         self.rig = rig
         self.clock = clock
-        self.devices: dict[str, Any] = {}
+        self.drivers: dict[str, Any] = {}
         self.port_urls: dict[str, str] = {}
         self.stop_failures: dict[str, str] = {}
+        self._handles: dict[str, Any] = {}
+
+    @property
+    def devices(self) -> dict[str, Any]:
+        from labkit.control.handle import RigMotor
+
+        out = {}
+        for role, driver in self.drivers.items():
+            if self.rig.devices[role].kind == "motor":
+                out[role] = self._handles.setdefault(role, RigMotor(self, role))
+            else:
+                out[role] = driver
+        return out
 
     def motors(self) -> dict[str, Any]:
-        return {r: d for r, d in self.devices.items() if self.rig.devices[r].kind == "motor"}
+        """The motor drivers themselves (raw), by role."""
+        return {r: d for r, d in self.drivers.items() if self.rig.devices[r].kind == "motor"}
 
     def stop_motors(self) -> list[str]:
         """Command every motor to zero; never raises. Returns the roles whose STOP was not
@@ -476,13 +495,16 @@ class OpenRig:
         return failed
 
     def close(self) -> None:
+        for handle in self._handles.values():
+            if handle._control is not None:
+                handle._control.stop("rig closed")
         self.stop_motors()
-        for role in sorted(self.devices, key=lambda r: self.rig.devices[r].kind != "motor"):
+        for role in sorted(self.drivers, key=lambda r: self.rig.devices[r].kind != "motor"):
             try:
-                self.devices[role].close()
+                self.drivers[role].close()
             except Exception:  # noqa: BLE001 - closing must reach every device
                 pass
-        self.devices.clear()
+        self.drivers.clear()
 
     def __enter__(self) -> OpenRig:
         return self
@@ -514,7 +536,7 @@ def open_rig(rig: Rig, clock: Any, record_to: str | Path | None = None,
             settings = {**getattr(cls, "default_serial", {}), **dev.serial}
             port = open_port(url, clock=clock, **settings)
             opened.port_urls[role] = url
-            opened.devices[role] = cls(port, clock, name=role, **dev.options)
+            opened.drivers[role] = cls(port, clock, name=role, **dev.options)
     except BaseException:
         opened.close()
         raise

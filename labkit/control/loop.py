@@ -272,7 +272,7 @@ def build_speed_control(open_rig: Any, clock: Any, emit: Emit | None = None,
         if loops is not None and cfg.name not in loops:
             continue
         built.append(SpeedLoop(
-            cfg.name, open_rig.devices[cfg.motor], open_rig.devices[cfg.tach],
+            cfg.name, open_rig.drivers[cfg.motor], open_rig.drivers[cfg.tach],
             period_s=c.period_s, gains=gains, max_speed_rad_s=lim.max_speed_rad_s,
             max_ramp_rad_s2=lim.max_ramp_rad_s2, overspeed_margin=lim.overspeed_margin,
             settle_tolerance_rad_s=c.settle_tolerance_rad_s, settle_hold_s=c.settle_hold_s,

@@ -443,11 +443,11 @@ class Runner:
                        "dry_run": False})
         try:
             opened = open_rig(self.rig, self.clock, record_to=cassettes, port_override=self.port_override)
-            self._recording_ports = [dev.port for dev in opened.devices.values()
+            self._recording_ports = [dev.port for dev in opened.drivers.values()
                                      if hasattr(getattr(dev, "port", None), "record_error")]
             self.control = build_speed_control(opened, self.clock, emit=self.bus.emit)
             self.control.guards.append(self.health)
-            ctx = RunContext(self, opened.devices, self.control)
+            ctx = RunContext(self, opened.drivers, self.control)
             self.protocol.setup(ctx)
             for step in self.steps:
                 if step.index in self.done_steps:
