@@ -58,12 +58,14 @@ def open_port(url: str, *, clock: Clock | None = None, **serial_settings: Any) -
 def _release_on_close(port: serial.SerialBase, lock: int) -> None:
     """``port.close()`` also drops the device lock (the process's exit always does)."""
     close = port.close
+    held = [lock]  # released once: a second close must never close an fd reused since
 
     def close_and_unlock() -> None:
         try:
             close()
         finally:
-            unlock(lock)
+            if held:
+                unlock(held.pop())
 
     port.close = close_and_unlock  # type: ignore[method-assign]
 
