@@ -83,7 +83,8 @@ class PtyHost:
         self.paths: list[str] = []  # every path this device has had, oldest first
         self._lock = threading.Lock()
         self._stop = threading.Event()
-        self._pulled = False  # unplug(): gone for good
+        self._pulled = False  # unplug(): gone until _back_at (None: for good)
+        self._back_at: float | None = None
         self._pty: _Pty | None = _Pty()
         self._spare: _Pty | None = None
         self.path = self._pty.path
@@ -98,8 +99,11 @@ class PtyHost:
     def connected(self) -> bool:
         return self._pty is not None
 
-    def unplug(self) -> None:
-        """Pull the cable now: the pty hangs up and stays gone (a controller unplugged mid-run)."""
+    def unplug(self, back_after_s: float | None = None) -> None:
+        """Pull the cable now: the pty hangs up; it comes back under a new path after
+        ``back_after_s`` (clock seconds), or never (None). Tests use this instead of a fault
+        scheduled at a clock time, which a loaded machine may reach before the test is ready."""
+        self._back_at = None if back_after_s is None else self.clock.now() + back_after_s
         self._pulled = True
 
     # -- pump ---------------------------------------------------------------------------
@@ -115,9 +119,12 @@ class PtyHost:
         with self._lock:
             if self._pulled:
                 if self._pty is not None:
-                    self._pty.close()
-                    self._pty = None
-                self._stop.wait(PUMP_PERIOD_S)
+                    self._unplug()
+                if self._back_at is None or now < self._back_at:
+                    self._stop.wait(PUMP_PERIOD_S)
+                    return
+                self._pulled = False
+                self._replug(now)
                 return
             if self._pty is None:
                 if self.emulator.connected(now):
