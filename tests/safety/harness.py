@@ -91,6 +91,12 @@ class EmulatedRig:
                 line_start = text.index('port = "sim://', start)
                 line_end = text.index("\n", line_start)
                 text = text[:line_start] + f'port = "{path}"' + text[line_end:]
+            # labkit's side on a loaded CI box: generous reply and tachometer timeouts (the
+            # matrix is about how a run ends, not about those interlocks; the controller's
+            # command timeout stays as shipped)
+            text = (text.replace("options = { command_timeout_ms = 500 }",
+                                 "options = { command_timeout_ms = 500, reply_timeout_s = 1.0 }")
+                    .replace("tach_timeout_s = 0.5", "tach_timeout_s = 2.0"))
             self.rig_file.write_text(text)
         except BaseException:
             end_process(self.proc)
