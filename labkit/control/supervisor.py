@@ -7,8 +7,9 @@ on a rig with a real motor port forks (docs/decisions/0004-safe-exit-supervisor-
   the supervisor dies the kernel sends the worker SIGTERM (``PR_SET_PDEATHSIG``), which takes
   the Ctrl-C path: motors to zero, session closed;
 * the **supervisor** (the parent, the PID the user sees) holds no port. It passes SIGTERM,
-  SIGHUP, SIGQUIT and SIGINT sent to it with ``kill`` on to the worker (signals from the
-  terminal reach both, and are not passed twice), and when the worker ends abnormally
+  SIGHUP and SIGQUIT on to the worker, and SIGINT when sent with ``kill`` (Ctrl-C typed on
+  the terminal reaches both and is not passed twice: a second one would force the safe
+  state at once), and when the worker ends abnormally
   (killed by a signal, a crash) it re-opens every motor port of the rig and sends STOP;
 * below both, the controller's own command timeout (``options.command_timeout_ms`` /
   ``timeout_ms``, required for real hardware by the rig file) stops the motor if the whole
@@ -31,7 +32,7 @@ from typing import Any
 CLEAN_EXITS = frozenset({0, 2, 3, 130})
 FORWARDED = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT)
 PR_SET_PDEATHSIG = 1
-SI_KERNEL = 0x80  # si_code of a signal the kernel (a terminal) sent, not kill()
+SI_KERNEL = 0x80  # si_code of a signal the kernel (a terminal's Ctrl-C) sent, not kill()
 
 
 def needs_supervisor(rig: Any) -> bool:
@@ -93,8 +94,11 @@ def _watch(worker: int, sigset: set[int]) -> int:
     while True:
         info = signal.sigtimedwait(sigset, 0.5)
         if info is not None and info.si_signo != signal.SIGCHLD:
-            from_terminal = info.si_code == SI_KERNEL  # the worker, in the same group, got it too
-            if not from_terminal and info.si_pid != worker:
+            # Ctrl-C typed on the terminal reached the worker (same process group) already, and a
+            # second one would mean "safe state now"; the others are idempotent in the worker, and
+            # a hang-up may reach only the session's leader: always pass those on
+            typed_ctrl_c = info.si_signo == signal.SIGINT and info.si_code == SI_KERNEL
+            if not typed_ctrl_c and info.si_pid != worker:
                 try:
                     os.kill(worker, info.si_signo)
                 except ProcessLookupError:

@@ -112,12 +112,22 @@ class EmulatedRig:
         assert self.proc is not None
         os.kill(self.proc.pid, signal.SIGUSR1)
 
-    def start_run(self, sessions: Path, record_s: float = 60.0) -> LabkitRun:
-        return LabkitRun(subprocess.Popen(
-            labkit("run", str(self.rig_file), "speed-sweep", "--set", f"speeds_rpm={HOLD_RPM}",
-                   "--set", f"record_s={record_s}", "--sessions", str(sessions), "--no-progress"),
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=REPO,
-            start_new_session=True), sessions)  # its own process group: killpg ends all of labkit
+    def start_run(self, sessions: Path, record_s: float = 60.0, terminal: bool = False) -> LabkitRun:
+        """`labkit run` in its own session and process group (killpg ends all of labkit); with
+        ``terminal`` a pseudo-terminal is its controlling terminal, as in a lab's shell window."""
+        master = slave = None
+        if terminal:
+            master, slave = os.openpty()
+        try:
+            proc = subprocess.Popen(
+                labkit("run", str(self.rig_file), "speed-sweep", "--set", f"speeds_rpm={HOLD_RPM}",
+                       "--set", f"record_s={record_s}", "--sessions", str(sessions), "--no-progress"),
+                stdin=slave, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=REPO,
+                start_new_session=True, preexec_fn=_take_terminal if terminal else None)
+        finally:
+            if slave is not None:
+                os.close(slave)
+        return LabkitRun(proc, sessions, master)
 
     def rotor_rpm_at(self, when: float, timeout: float = 20.0) -> float:
         """The rotor speed from its tachometer at the first reading after ``when`` (monotonic)."""
@@ -139,6 +149,14 @@ class EmulatedRig:
             tach.close()
 
 
+def _take_terminal() -> None:
+    """In the child, after setsid(): stdin (a pty) becomes the controlling terminal."""
+    import fcntl
+    import termios
+
+    fcntl.ioctl(0, termios.TIOCSCTTY, 0)
+
+
 def _try_open(open_port, path: str, clock):
     from labkit.io.port_lock import PortBusy
 
@@ -151,10 +169,30 @@ def _try_open(open_port, path: str, clock):
 class LabkitRun:
     """One `labkit run` process (the supervisor) and its session folder."""
 
-    def __init__(self, proc: subprocess.Popen, sessions: Path) -> None:
+    def __init__(self, proc: subprocess.Popen, sessions: Path, terminal: int | None = None) -> None:
         self.proc = proc
         self.sessions = sessions
+        self.terminal = terminal  # master side of its controlling terminal, if it has one
         self.stderr = ""
+
+    def type_on_terminal(self, keys: bytes) -> float:
+        """Type on the run's terminal once it holds its speed (b"\x03" is Ctrl-C)."""
+        assert self.terminal is not None
+        self.wait_holding()
+        self.worker()
+        sent = time.monotonic()
+        os.write(self.terminal, keys)
+        return sent
+
+    def close_terminal(self) -> float:
+        """Close the run's terminal window (the kernel hangs up its session) once it holds."""
+        assert self.terminal is not None
+        self.wait_holding()
+        self.worker()
+        sent = time.monotonic()
+        os.close(self.terminal)
+        self.terminal = None
+        return sent
 
     def session(self) -> Path | None:
         found = sorted(self.sessions.glob("*/events.jsonl"))
@@ -217,6 +255,9 @@ class LabkitRun:
             _, self.stderr = self.proc.communicate(timeout=timeout)
         finally:
             end_process(self.proc)
+            if self.terminal is not None:
+                os.close(self.terminal)
+                self.terminal = None
         return self.stderr
 
     def run_json(self) -> dict:

@@ -55,6 +55,30 @@ def test_stop_signal_to_labkit_run_stops_the_rotor(lab, tmp_path, name):
     assert meta["status"] == "interrupted" and meta["signal"] == name
 
 
+def test_ctrl_c_typed_on_the_terminal_stops_the_rotor_once(lab, tmp_path):
+    # the terminal's Ctrl-C reaches supervisor and worker; it must count once, not twice
+    run = lab.start_run(tmp_path, terminal=True)
+    sent = run.type_on_terminal(b"\x03")
+    stderr = run.finish()
+    rpm = lab.rotor_rpm_at(sent + AFTER_S)
+    print(f"matrix: Ctrl-C on the terminal: rotor {rpm:.0f} RPM {AFTER_S:.0f} s later")
+    assert rpm < STOPPED_RPM, f"rotor at {rpm:.0f} RPM {AFTER_S} s later"
+    assert_clean(stderr)
+    assert "stopped by Ctrl-C at a checkpoint" in stderr and run.proc.returncode == 130
+    assert [e["count"] for e in run.events() if e["type"] == "stop_request"] == [1]
+
+
+def test_terminal_closed_stops_the_rotor(lab, tmp_path):
+    run = lab.start_run(tmp_path, terminal=True)
+    sent = run.close_terminal()
+    run.finish()
+    rpm = lab.rotor_rpm_at(sent + AFTER_S)
+    print(f"matrix: terminal closed: rotor {rpm:.0f} RPM {AFTER_S:.0f} s later")
+    assert rpm < STOPPED_RPM, f"rotor at {rpm:.0f} RPM {AFTER_S} s later"
+    meta = wait_for(lambda: (m := run.run_json())["status"] != "running" and m, 30, "session closed")
+    assert meta["status"] == "interrupted" and meta["signal"] == "SIGHUP"
+
+
 def test_sigkill_of_labkit_run_stops_the_rotor(lab, tmp_path):
     # the supervisor (the PID the user sees) dies: the worker gets SIGTERM from the kernel
     run = lab.start_run(tmp_path)
