@@ -28,6 +28,7 @@ from typing import Any
 from labkit.control.loop import SpeedControl, build_speed_control
 from labkit.errors import LabkitError, SafetyError
 from labkit.protocols.events import EventBus, Sink
+from labkit.protocols.exit_paths import STOP_SIGNALS, SessionGuard, signal_name, stop_failed_text
 from labkit.rig import Rig, open_rig
 from labkit.units import rad_s_to_rpm
 
@@ -43,18 +44,6 @@ def normalise(value: Any) -> Any:
     if isinstance(value, (list, tuple)):
         return [normalise(v) for v in value]
     return value
-
-
-#: the signals that take the Ctrl-C path (motors to zero, stop at the next checkpoint)
-STOP_SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT")
-                     if hasattr(signal, name))
-
-
-def signal_name(signum: int) -> str:
-    try:
-        return signal.Signals(signum).name
-    except ValueError:
-        return f"signal {signum}"
 
 
 class StopRequested(LabkitError):
@@ -277,34 +266,6 @@ class RunContext:
         return list(self.devices[role].readings_since(since))
 
 
-class SessionGuard:
-    """The session as an event sink that stops the run when it cannot write (disk full,
-    permissions) instead of being dropped while the motor keeps turning unrecorded."""
-
-    def __init__(self, session: Any, on_failure: Any) -> None:
-        self.session = session
-        self.on_failure = on_failure
-        self.problem: str | None = None
-
-    def on_event(self, event: dict[str, Any]) -> None:
-        if self.problem is not None:
-            return
-        try:
-            self.session.on_event(event)
-        except (OSError, LabkitError) as exc:
-            self.problem = sink_failure_text(self.session, event, exc)
-            self.on_failure(self.problem)
-
-
-def sink_failure_text(session: Any, event: dict[str, Any], exc: BaseException) -> str:
-    """``cannot write SESSION/events.jsonl: No space left on device``."""
-    if isinstance(exc, LabkitError):
-        return str(exc)
-    name = (f"readings/{event.get('device')}.jsonl" if event.get("type") == "reading"
-            else "events.jsonl")
-    return f"cannot write {Path(session.path) / name}: {exc.strerror or exc}"
-
-
 @dataclass
 class RunOutcome:
     status: str                  # "completed" | "interrupted" | "failed" | "dry-run"
@@ -314,12 +275,6 @@ class RunOutcome:
     error: BaseException | None = None
     #: motors whose STOP could not be delivered: {role: reason} (the operator must cut power)
     stop_failed: dict[str, str] = field(default_factory=dict)
-
-
-def stop_failed_text(stop_failed: dict[str, str]) -> str:
-    """``could not stop rotor_motor: port gone (...); cut the motor's power``."""
-    return "; ".join(f"could not stop {role}: {why}; cut the motor's power"
-                     for role, why in stop_failed.items())
 
 
 class Runner:
