@@ -239,6 +239,25 @@ class LabkitRun:
         os.kill(pid, signum)
         return sent
 
+    def fill_filesystem_when_holding(self, filler: Path) -> float:
+        """Fill the sessions' file system (a small tmpfs) to the last byte: ENOSPC for the run."""
+        import errno
+
+        self.wait_holding()
+        self.worker()
+        sent = time.monotonic()
+        chunk = b"\0" * 65536
+        with open(filler, "wb", buffering=0) as f:
+            while True:
+                try:
+                    f.write(chunk)
+                except OSError as exc:
+                    if exc.errno != errno.ENOSPC:
+                        raise
+                    if len(chunk) == 1:
+                        return sent
+                    chunk = chunk[: len(chunk) // 2]
+
     def fill_disk_when_holding(self) -> float:
         """Make every further write of the run fail with EFBIG, as a full sessions disk does
         with ENOSPC (RLIMIT_FSIZE of the worker set to 0: needs no root, no tmpfs)."""

@@ -10,6 +10,7 @@ its own tachometer, must be below 300 RPM 3 s later, with no traceback (docs/saf
 from __future__ import annotations
 
 import json
+import os
 import signal
 import sys
 
@@ -132,6 +133,37 @@ def test_full_sessions_disk_stops_the_rotor_and_keeps_a_valid_session(lab, tmp_p
     for cassette in (session / "cassettes").glob("*.jsonl"):
         assert load_cassette(cassette).events     # ... every cassette line whole ...
     assert main(["run", "--resume", str(session), "--dry-run"]) == 0   # ... and resumable
+
+
+@pytest.fixture
+def small_disk(tmp_path):
+    """A 4 MB tmpfs for the sessions (needs root and mount; skipped elsewhere)."""
+    import subprocess as sp
+
+    mount = tmp_path / "disk"
+    mount.mkdir()
+    if os.geteuid() != 0 or sp.run(["mount", "-t", "tmpfs", "-o", "size=4m", "tmpfs", str(mount)],
+                                   capture_output=True).returncode != 0:
+        pytest.skip("needs root to mount a small tmpfs")
+    try:
+        yield mount
+    finally:
+        sp.run(["umount", "-l", str(mount)], check=False)
+
+
+def test_really_full_disk_enospc_stops_the_rotor(lab, small_disk):
+    run = lab.start_run(small_disk / "sessions")
+    sent = run.fill_filesystem_when_holding(small_disk / "filler")
+    stderr = run.finish()
+    rpm = lab.rotor_rpm_at(sent + AFTER_S)
+    print(f"matrix: tmpfs full (ENOSPC): rotor {rpm:.0f} RPM {AFTER_S:.0f} s later")
+    assert rpm < STOPPED_RPM, f"rotor at {rpm:.0f} RPM {AFTER_S} s later"
+    assert_clean(stderr)
+    first = stderr.strip().splitlines()[0]
+    assert "cannot write " in first and "No space left on device" in first, first
+    (small_disk / "filler").unlink()          # room again: the session is whole and resumable
+    assert load_session(run.session()).events[0]["type"] == "start"
+    assert main(["run", "--resume", str(run.session()), "--dry-run"]) == 0
 
 
 def test_controller_unplugged_says_the_stop_could_not_be_delivered(tmp_path):
