@@ -74,6 +74,10 @@ def test_spawned_viewer_binds_localhost_and_spawn_address_is_explicit(tmp_path, 
                 continue
             if str(port).encode() in argv and b"--serve-grpc" in argv:
                 os.kill(int(pid), 15)
+                try:
+                    os.waitpid(int(pid), 0)  # our child (detached into its own session): reap it
+                except ChildProcessError:
+                    pass
     assert parse_rerun_spec("spawn").target == ""
     assert parse_rerun_spec("spawn:0.0.0.0").target == "0.0.0.0"
 
