@@ -178,9 +178,13 @@ class Checkpoint(RunDocument):
 
 @dataclass(frozen=True, kw_only=True)
 class StopRequest(RunDocument):
+    """The operator or the system asked the run to stop (Ctrl-C, SIGTERM, SIGHUP, SIGQUIT)."""
+
     type: ClassVar[str] = "stop_request"
     #: how many times Ctrl-C was pressed: 1 stops at the next checkpoint, 2 zeroes every motor now
     count: int
+    #: which signal asked ("SIGINT" for Ctrl-C, "SIGTERM", ...)
+    signal: str = "SIGINT"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -197,6 +201,18 @@ class Interlock(RunDocument):
         if self.stop_failed:
             out["stop_failed"] = list(self.stop_failed)
         return out
+
+
+@dataclass(frozen=True, kw_only=True)
+class StopFailed(RunDocument):
+    """A STOP could not be delivered to these motors (port gone, controller silent): the rotor
+    may still turn, and the person at the rig must cut the motor's power (docs/safety.md)."""
+
+    type: ClassVar[str] = "stop_failed"
+    devices: tuple[str, ...] = ()
+
+    def to_json(self) -> dict[str, Any]:
+        return {"type": self.type, "t": self.t, "devices": list(self.devices)}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -226,7 +242,7 @@ class RunStop(RunDocument):
 
 DOCUMENT_TYPES: dict[str, type[RunDocument]] = {
     cls.type: cls for cls in (RunStart, StepStart, Setpoint, Settled, ControlSnapshot, ReadingEvent,
-                              Zeroed, PointDone, Drop, Checkpoint, StopRequest, Interlock, Fault,
+                              Zeroed, PointDone, Drop, Checkpoint, StopRequest, Interlock, StopFailed, Fault,
                               Results, RunStop)
 }
 
@@ -253,7 +269,7 @@ def document_from_json(obj: dict[str, Any]) -> RunDocument:
         if f.name == "t":
             continue
         if f.name in obj:
-            kwargs[f.name] = tuple(obj[f.name]) if f.name == "stop_failed" else obj[f.name]
+            kwargs[f.name] = tuple(obj[f.name]) if f.name in ("stop_failed", "devices") else obj[f.name]
         elif f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
             raise UnknownDocument(f"{kind} document without {f.name!r}: {obj}")
     return cls(**kwargs)

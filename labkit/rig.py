@@ -210,6 +210,11 @@ def _device(file: str, role: str, table: Any, check_protocols: bool) -> DeviceCo
         unknown = unknown_options(cls, options)
         if unknown:
             raise sec.error(f"options.{unknown[0]}", unknown_options_message(cls, unknown))
+        watchdog = getattr(cls, "watchdog_problem", None)  # motors: the controller's own timeout
+        if watchdog is not None:
+            problem = watchdog(options, required=not port.startswith(("sim://", "replay://")))
+            if problem is not None:
+                raise sec.error(*problem)
     sec.finish()
     return DeviceConfig(role, kind, protocol, port, serial, options)
 
@@ -373,35 +378,63 @@ def _record_url(inner: str, cassette: Path, role: str) -> str:
 
 
 class OpenRig:
-    """A rig with open ports and live drivers, by role. ``close()`` zeroes motors first."""
+    """A rig with open ports and live drivers, by role. ``close()`` zeroes motors first.
+
+    ``devices[role]`` is the driver for balances and tachometers and a rig-aware
+    :class:`labkit.control.handle.RigMotor` for motors (speeds within the rig's limits and
+    interlocks); ``devices[role].raw_driver`` (or ``drivers[role]``) is the bare motor driver.
+    """
 
     def __init__(self, rig: Rig, clock: Any) -> None:
         self.rig = rig
         self.clock = clock
-        self.devices: dict[str, Any] = {}
+        self.drivers: dict[str, Any] = {}
         self.port_urls: dict[str, str] = {}
+        self.stop_failures: dict[str, str] = {}
+        self._handles: dict[str, Any] = {}
+
+    @property
+    def devices(self) -> dict[str, Any]:
+        from labkit.control.handle import RigMotor
+
+        out = {}
+        for role, driver in self.drivers.items():
+            if self.rig.devices[role].kind == "motor":
+                out[role] = self._handles.setdefault(role, RigMotor(self, role))
+            else:
+                out[role] = driver
+        return out
 
     def motors(self) -> dict[str, Any]:
-        return {r: d for r, d in self.devices.items() if self.rig.devices[r].kind == "motor"}
+        """The motor drivers themselves (raw), by role."""
+        return {r: d for r, d in self.drivers.items() if self.rig.devices[r].kind == "motor"}
 
     def stop_motors(self) -> list[str]:
-        """Command every motor to zero; never raises. Returns the roles that failed."""
+        """Command every motor to zero; never raises. Returns the roles whose STOP was not
+        delivered (their reason is in ``stop_failures``)."""
         failed = []
         for role, motor in self.motors().items():
             try:
                 motor.stop()
-            except Exception:  # noqa: BLE001 - keep stopping the others
+                problem = getattr(motor, "stop_error", None)
+            except Exception as exc:  # noqa: BLE001 - keep stopping the others
+                problem = str(exc)
+            if problem:
+                self.stop_failures[role] = problem
                 failed.append(role)
         return failed
 
     def close(self) -> None:
+        for handle in self._handles.values():
+            if handle._control is not None:
+                handle._control.stop("rig closed")
         self.stop_motors()
-        for role in sorted(self.devices, key=lambda r: self.rig.devices[r].kind != "motor"):
+        for role in sorted(self.drivers, key=lambda r: self.rig.devices[r].kind != "motor"):
             try:
-                self.devices[role].close()
+                self.drivers[role].close()
             except Exception:  # noqa: BLE001 - closing must reach every device
                 pass
-        self.devices.clear()
+        self.drivers.clear()
 
     def __enter__(self) -> OpenRig:
         return self
@@ -433,7 +466,7 @@ def open_rig(rig: Rig, clock: Any, record_to: str | Path | None = None,
             settings = {**getattr(cls, "default_serial", {}), **dev.serial}
             port = open_port(url, clock=clock, **settings)
             opened.port_urls[role] = url
-            opened.devices[role] = cls(port, clock, name=role, **dev.options)
+            opened.drivers[role] = cls(port, clock, name=role, **dev.options)
     except BaseException:
         opened.close()
         raise

@@ -62,7 +62,7 @@ def main(args: argparse.Namespace) -> int:
         close_sinks(sinks, "demo")
     if outcome.status != "completed":
         print(f"labkit demo: {outcome.status}: {outcome.reason}", file=sys.stderr)
-        return 2
+        return 3 if outcome.stop_failed else 130 if outcome.status == "interrupted" else 2
     fit = outcome.results["fit"]
     b = fit.get("params", {}).get("b")
     print(f"session: {outcome.session}")

@@ -12,8 +12,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import signal
 import sys
 import threading
+from typing import Any
 
 from labkit.emulators.sim_port import build_emulator
 from labkit.errors import PortURLError
@@ -48,6 +50,23 @@ def emulated_devices(rig_path: str | None, extra: list[str]) -> tuple[dict[str, 
     return devices, skipped
 
 
+def unplug_on_signal(roles: list[str], hosts: dict[str, PtyHost], announce: Any) -> None:
+    """SIGUSR1 pulls the cable of each role in ``roles`` (their pty hangs up for good)."""
+    for role in roles:
+        if role not in hosts:
+            raise PortURLError(role, f"--unplug-on-usr1: no emulated device {role!r} "
+                                     f"(have {', '.join(hosts)})")
+    if not roles or not hasattr(signal, "SIGUSR1"):
+        return
+
+    def pull(signum: int, frame: Any) -> None:
+        for role in roles:
+            hosts[role].unplug()
+            announce(role, hosts[role].path, "unplugged")
+
+    signal.signal(signal.SIGUSR1, pull)
+
+
 def run(args: argparse.Namespace) -> int:
     devices, skipped = emulated_devices(args.rig, args.device or [])
     for role in skipped:
@@ -78,6 +97,7 @@ def run(args: argparse.Namespace) -> int:
         else:
             for role, host in hosts.items():
                 announce(role, host.path)
+        unplug_on_signal(args.unplug_on_usr1 or [], hosts, announce)
         if sys.stderr.isatty():
             print("Ctrl-C to stop", file=sys.stderr)
         deadline = None if args.seconds is None else clock.now() + args.seconds
@@ -104,6 +124,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         help="stop after this many seconds (default: run until Ctrl-C)")
     parser.add_argument("--json", action="store_true",
                         help="print {role: path} as one JSON line (reconnects: one object each)")
+    parser.add_argument("--unplug-on-usr1", action="append", metavar="ROLE",
+                        help="on SIGUSR1 (kill -USR1 PID), unplug ROLE's pty for good, e.g. to see what "
+                             "a run does when its motor controller's cable is pulled (repeatable)")
     parser.set_defaults(func=run)
 
 

@@ -18,6 +18,9 @@ from labkit.protocols.events import FlagTally
 from labkit.protocols.launch import execute, prepare_run
 from labkit.stream import add_rerun_argument
 
+#: exit status when a STOP could not be delivered to a motor controller (docs/safety.md)
+EXIT_STOP_FAILED = 3
+
 
 def add_common(p: argparse.ArgumentParser) -> None:
     p.add_argument(
@@ -143,9 +146,20 @@ def report(outcome: Any) -> int:
             print(f"quick fit ({fit.get('model')}): {params}")
         return 0
     print(f"labkit run: {outcome.status}: {outcome.reason}{where}", file=sys.stderr)
+    if getattr(outcome, "stop_failed", None):
+        return EXIT_STOP_FAILED  # no resume hint: the rotor may still be turning
     if outcome.session:
         print(f"resume with: labkit run --resume {outcome.session}", file=sys.stderr)
     return 130 if outcome.status == "interrupted" else 2
+
+
+def check_ports_free(rig: Any) -> None:
+    """Refuse (PortBusy: "port busy, held by PID N") before a session exists when another
+    process holds one of the rig's serial devices (labkit.io.port_lock)."""
+    from labkit.io.port_lock import check_free
+
+    for device in rig.devices.values():
+        check_free(device.port)
 
 
 def main(args: argparse.Namespace) -> int:
@@ -167,6 +181,16 @@ def main(args: argparse.Namespace) -> int:
     if args.dry_run:
         print(prep.runner.dry_run())
         return 0
+    check_ports_free(prep.rig)
+    from labkit.control.supervisor import needs_supervisor, supervised
+
+    if needs_supervisor(prep.rig):  # real motor ports: a supervisor stops them if this run dies
+        return supervised(prep.rig, lambda: run_prepared(args, prep))
+    return run_prepared(args, prep)
+
+
+def run_prepared(args: argparse.Namespace, prep: Any) -> int:
+    """Execute a prepared run into a session and report it (the worker, when supervised)."""
     sinks: list[Any] = []
 
     def on_session(runner: Any, session: Any) -> None:

@@ -26,7 +26,7 @@ from typing import Any
 
 from labkit.control.pi import PIGains, PIState, SettleDetector, pi_step, ramp_toward
 from labkit.documents import Interlock, RunDocument
-from labkit.errors import SafetyError
+from labkit.errors import LabkitError, SafetyError
 
 Emit = Callable[[RunDocument], None]
 
@@ -125,6 +125,9 @@ class SpeedLoop:
         if self.enabled:
             duty = pi_step(self.gains, self.state, self.setpoint,
                            measured if measured is not None else 0.0, dt)
+            if not math.isfinite(duty):
+                raise Tripped(f"{self.name}: controller output duty {duty!r} is not a finite number "
+                              "(check kp, ki and full_speed in the rig file)")
             self.motor.set_duty(duty)
         error = (measured if measured is not None else math.inf) - self.target
         settled = self.setpoint == self.target and self.settle.update(t, error)
@@ -147,6 +150,10 @@ class SpeedControl:
         self.zero_requested = False
         self.zeroed_at: float | None = None
         self.stopped = False
+        #: motors whose STOP could not be delivered: {name: reason}
+        self.stop_failures: dict[str, str] = {}
+        #: checked every tick; a returned reason trips the interlock (e.g. a recorder failed)
+        self.guards: list[Callable[[], str | None]] = []
         self._lock = threading.RLock()
         self._job: Any = None
 
@@ -167,12 +174,20 @@ class SpeedControl:
             self._zero_all()
 
     def _zero_all(self) -> list[str]:
+        """Command every motor to zero; the ``name: reason`` of each STOP not delivered."""
         failed = []
         for motor in self.all_motors:
+            name = str(getattr(motor, "name", motor))
             try:
                 motor.stop()
+                problem = getattr(motor, "stop_error", None)
             except Exception as exc:  # noqa: BLE001 - keep stopping the others
-                failed.append(f"{getattr(motor, 'name', motor)}: {exc}")
+                problem = str(exc)
+            if problem:
+                self.stop_failures[name] = problem
+                failed.append(f"{name}: {problem}")
+            else:
+                self.stop_failures.pop(name, None)
         return failed
 
     def trip(self, reason: str) -> None:
@@ -211,9 +226,15 @@ class SpeedControl:
                     self.zeroed_at = t
                 return
             try:
+                for guard in self.guards:
+                    problem = guard()
+                    if problem:
+                        raise Tripped(problem)
                 for loop in self.loops.values():
                     loop.tick(t)
             except Tripped as exc:
+                self.trip(str(exc))
+            except LabkitError as exc:  # a device fault names device, command and bytes itself
                 self.trip(str(exc))
             except Exception as exc:  # noqa: BLE001 - any fault in a tick is an interlock
                 self.trip(f"control fault: {type(exc).__name__}: {exc}")
@@ -249,7 +270,7 @@ def build_speed_control(open_rig: Any, clock: Any, emit: Emit | None = None,
         if loops is not None and cfg.name not in loops:
             continue
         built.append(SpeedLoop(
-            cfg.name, open_rig.devices[cfg.motor], open_rig.devices[cfg.tach],
+            cfg.name, open_rig.drivers[cfg.motor], open_rig.drivers[cfg.tach],
             period_s=c.period_s, gains=gains, max_speed_rad_s=lim.max_speed_rad_s,
             max_ramp_rad_s2=lim.max_ramp_rad_s2, overspeed_margin=lim.overspeed_margin,
             settle_tolerance_rad_s=c.settle_tolerance_rad_s, settle_hold_s=c.settle_hold_s,

@@ -32,6 +32,7 @@ from __future__ import annotations
 import base64
 import binascii
 import json
+import os
 import threading
 from dataclasses import dataclass
 from datetime import UTC, datetime
@@ -96,11 +97,28 @@ class CassetteWriter:
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._lock = threading.Lock()
         self._file = self.path.open("w", encoding="utf-8")
+        self._good_bytes = 0  # length of the file up to its last whole line
         self._write_line(header)
 
     def _write_line(self, obj: dict[str, Any]) -> None:
-        self._file.write(json.dumps(obj, ensure_ascii=False) + "\n")
-        self._file.flush()
+        """Append one whole line. On a full disk the torn line is cut off again, the file is
+        closed and the OSError raised: what was written stays a valid cassette."""
+        line = json.dumps(obj, ensure_ascii=False) + "\n"
+        try:
+            self._file.write(line)
+            self._file.flush()
+        except OSError:
+            fd = self._file.fileno()
+            try:
+                os.ftruncate(fd, self._good_bytes)
+            except OSError:
+                pass
+            try:
+                self._file.close()  # flushing the rest fails again; the file is closed anyway
+            except OSError:
+                pass
+            raise
+        self._good_bytes += len(line.encode("utf-8"))
 
     def event(self, t: float, port: str, direction: str, data: bytes | None = None,
               **fields: Any) -> None:
@@ -123,6 +141,7 @@ class CassetteWriter:
         with self._lock:
             if self._file.closed:
                 self._file = self.path.open("a", encoding="utf-8")
+                self._good_bytes = self.path.stat().st_size
 
 
 @dataclass(frozen=True)

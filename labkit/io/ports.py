@@ -11,7 +11,8 @@ paths) plus the schemes of the URL-handler packages registered with pyserial
   when it is imported (the transport knows no emulator; docs/decisions/0005-emulators-own-sim-urls.md).
 
 labkit's ports wait on the given clock (default :func:`labkit.io.clock.current_clock`);
-native ports ignore it.
+native ports ignore it. A serial device is held by one process at a time
+(:mod:`labkit.io.port_lock`): a second opener gets ``PortBusy`` naming the holder's PID.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import serial
 
 from labkit.errors import PortURLError
 from labkit.io.clock import Clock, current_clock
+from labkit.io.port_lock import lock_device, unlock
 
 HANDLER_PACKAGE = "labkit.io.urlhandlers"
 _register_lock = threading.Lock()
@@ -51,8 +53,30 @@ def open_port(url: str, *, clock: Clock | None = None, **serial_settings: Any) -
         raise
     if hasattr(port, "clock"):
         port.clock = clock if clock is not None else current_clock()
-    port.open()
+    lock = lock_device(str(getattr(port, "port", None) or url))  # PortBusy if another run has it
+    try:
+        port.open()
+    except BaseException:
+        unlock(lock)
+        raise
+    if lock is not None:
+        _release_on_close(port, lock)
     return port
+
+
+def _release_on_close(port: serial.SerialBase, lock: int) -> None:
+    """``port.close()`` also drops the device lock (the process's exit always does)."""
+    close = port.close
+    held = [lock]  # released once: a second close must never close an fd reused since
+
+    def close_and_unlock() -> None:
+        try:
+            close()
+        finally:
+            if held:
+                unlock(held.pop())
+
+    port.close = close_and_unlock  # type: ignore[method-assign]
 
 
 register_url_handlers()

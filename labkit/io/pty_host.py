@@ -59,6 +59,8 @@ BAUD_OF_SPEED = {
 
 #: how often the pump looks at the emulator when nothing arrives (s)
 PUMP_PERIOD_S = 0.002
+#: a pump wake this long after the last look was late (the process was not scheduled)
+LATE_WAKE_S = 0.02
 
 
 class _Pty:
@@ -103,6 +105,9 @@ class PtyHost:
         self.paths: list[str] = []  # every path this device has had, oldest first
         self._lock = threading.Lock()
         self._stop = threading.Event()
+        self._pulled = False  # unplug(): gone until _back_at (None: for good)
+        self._back_at: float | None = None
+        self._looked_at: float | None = None  # when the pump last looked for host bytes
         self._pty: _Pty | None = _Pty()
         self._spare: _Pty | None = None
         self.path = self._pty.path
@@ -117,6 +122,13 @@ class PtyHost:
     def connected(self) -> bool:
         return self._pty is not None
 
+    def unplug(self, back_after_s: float | None = None) -> None:
+        """Pull the cable now: the pty hangs up; it comes back under a new path after
+        ``back_after_s`` (clock seconds), or never (None). Tests use this instead of a fault
+        scheduled at a clock time, which a loaded machine may reach before the test is ready."""
+        self._back_at = None if back_after_s is None else self.clock.now() + back_after_s
+        self._pulled = True
+
     # -- pump ---------------------------------------------------------------------------
     def _run(self) -> None:
         try:
@@ -128,6 +140,15 @@ class PtyHost:
     def _step(self) -> None:
         now = self.clock.now()
         with self._lock:
+            if self._pulled:
+                if self._pty is not None:
+                    self._unplug()
+                if self._back_at is None or now < self._back_at:
+                    self._stop.wait(PUMP_PERIOD_S)
+                    return
+                self._pulled = False
+                self._replug(now)
+                return
             if self._pty is None:
                 if self.emulator.connected(now):
                     self._replug(now)
@@ -152,10 +173,20 @@ class PtyHost:
                         raise
                     data = b""
                 if data:
-                    self.emulator.receive(garble(data, self._garble_rng) if wrong_baud else data, now)
+                    self.emulator.receive(garble(data, self._garble_rng) if wrong_baud else data,
+                                          self._arrival_time(now))
             out = self.emulator.emit(now)
             if out:
                 self._write(pty, garble(out, self._garble_rng) if wrong_baud else out)
+            self._looked_at = now
+
+    def _arrival_time(self, now: float) -> float:
+        """When bytes found waiting arrived: ``now`` after a prompt wake; after a late one (this
+        process was not scheduled for a while) the earliest they could have, when the pump last
+        looked. A real device reads its UART as bytes come: host commands that were sent on time
+        must not look late to its command timeout because the emulator's thread was starved."""
+        looked = self._looked_at
+        return looked if looked is not None and now - looked > LATE_WAKE_S else now
 
     def wrong_baud(self, pty: _Pty) -> bool:
         """True when the emulated device expects another baud rate than the program set."""

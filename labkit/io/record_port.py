@@ -65,6 +65,8 @@ class RecordSerial(ClockedSerial):
         self.cassette_path = ""
         self._t0: float | None = None
         self._failed = False  # after the first wire error of a session nothing more is recorded
+        #: why recording stopped (disk full, permissions...): the wire keeps working without it
+        self.record_error: str | None = None
         super().__init__(*args, **kwargs)
 
     # -- events -------------------------------------------------------------------------
@@ -73,8 +75,13 @@ class RecordSerial(ClockedSerial):
         return self.clock.now() - self._t0
 
     def _event(self, direction: str, data: bytes | None = None, **fields: Any) -> None:
-        if self.writer is not None and not self._failed:
-            self.writer.event(self._t(), self.port_name, direction, data, **fields)
+        """Record one event. A cassette that cannot be written (disk full) never stops the
+        wire: the failure is kept in ``record_error`` for the runner to stop the run safely."""
+        if self.writer is not None and not self._failed and self.record_error is None:
+            try:
+                self.writer.event(self._t(), self.port_name, direction, data, **fields)
+            except OSError as exc:
+                self.record_error = f"cannot write {self.cassette_path}: {exc.strerror or exc}"
 
     def _error(self, exc: BaseException, call: str, **extra: Any) -> None:
         """Record the session's first wire error; a dead port's later failures add nothing."""
@@ -120,7 +127,10 @@ class RecordSerial(ClockedSerial):
                 self._failed = False  # the close itself is always recorded
                 self._event("ctl", event="close", call=current_call("close"))
         if self.writer is not None:
-            self.writer.close()
+            try:
+                self.writer.close()
+            except OSError as exc:
+                self.record_error = self.record_error or f"cannot write {self.cassette_path}: {exc}"
         self.is_open = False
 
     def _reconfigure_port(self) -> None:
@@ -155,7 +165,8 @@ class RecordSerial(ClockedSerial):
     # -- traffic ------------------------------------------------------------------------
     def write(self, data: bytes) -> int:
         """Record, then write: a reply read by another thread can never precede its command
-        in the cassette. A failed write is followed by its ``error`` (``tx_recorded``)."""
+        in the cassette. A failed write is followed by its ``error`` (``tx_recorded``). A
+        failed *recording* never keeps the bytes off the wire (a STOP is always sent)."""
         inner = self._live()
         data = to_bytes(data)
         self._event("tx", data, call=current_call("write"))

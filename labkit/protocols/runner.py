@@ -8,8 +8,10 @@ parameters, then runs each with plain Python using the :class:`RunContext` verbs
   against the rig's speed limit, the session directory (``--dry-run`` stops here and
   prints the plan);
 * opens the rig (every port recorded into the session's cassettes), starts the speed loops;
-* on the first Ctrl-C commands every motor to zero at the next control tick and stops at
-  the next checkpoint; on a second Ctrl-C trips the interlock at once (ANCHORS 9.2.7);
+* on the first Ctrl-C - or SIGTERM (``kill``), SIGHUP (terminal closed), SIGQUIT (Ctrl-\\) -
+  commands every motor to zero at the next control tick and stops at the next checkpoint;
+  on a second Ctrl-C trips the interlock at once (ANCHORS 9.2.7); ``run.json`` names the
+  signal (docs/safety.md);
 * whatever happens (interlock, exception, Ctrl-C, normal end) stops the loops, zeroes
   every motor, closes the ports and writes ``results.json`` and the exit status.
 """
@@ -27,6 +29,7 @@ from labkit import documents as doc
 from labkit.control.loop import SpeedControl, build_speed_control
 from labkit.errors import LabkitError, SafetyError
 from labkit.protocols.events import EventBus, Sink
+from labkit.protocols.exit_paths import STOP_SIGNALS, SessionGuard, signal_name, stop_failed_text
 from labkit.protocols.operator import Operator, default_operator
 from labkit.rig import Rig, open_rig
 from labkit.units import rad_s_to_rpm
@@ -46,7 +49,8 @@ def normalise(value: Any) -> Any:
 
 
 class StopRequested(LabkitError):
-    """The operator asked to stop (Ctrl-C); the run ended at a checkpoint, motors at zero."""
+    """The operator asked to stop (Ctrl-C or a stop signal); the run ended at a checkpoint,
+    motors at zero."""
 
 
 @dataclass
@@ -177,10 +181,11 @@ class RunContext:
         self.runner.operator.discard()
 
     def checkpoint(self) -> None:
-        """Raise if an interlock tripped or the operator asked to stop."""
+        """Raise if an interlock tripped, a recorder failed or the operator asked to stop."""
+        self.runner.check_health()
         self.control.check()
         if self.runner.stop_count:
-            raise StopRequested("stopped by Ctrl-C at a checkpoint; motors at zero")
+            raise StopRequested(f"stopped by {self.runner.stop_cause} at a checkpoint; motors at zero")
 
     def set(self, **targets_rad_s: float) -> None:
         """Set speed-loop targets in rad/s (ramped at the rig's limit), e.g. ``set(rotor=1000)``."""
@@ -278,6 +283,8 @@ class RunOutcome:
     session: Path | None
     results: dict[str, Any] | None
     error: BaseException | None = None
+    #: motors whose STOP could not be delivered: {role: reason} (the operator must cut power)
+    stop_failed: dict[str, str] = field(default_factory=dict)
 
 
 class Runner:
@@ -300,6 +307,10 @@ class Runner:
         self.port_override = port_override
         self.operator = operator if operator is not None else default_operator(clock)
         self.stop_count = 0
+        self.stop_signal: str | None = None   # "SIGTERM", ... (None: Ctrl-C or not stopped)
+        #: a recorder or the session writer failed (disk full...): the run stops safely
+        self.health_problem: str | None = None
+        self._recording_ports: list[Any] = []
         self._saving = False
         self.control: SpeedControl | None = None
         self.steps = protocol.plan(rig, params)
@@ -308,12 +319,26 @@ class Runner:
     def dry_run(self) -> str:
         return format_plan(self.protocol, self.rig, self.steps, self.done_steps)
 
-    # ---- Ctrl-C -------------------------------------------------------------------------
-    def request_stop(self) -> None:
+    # ---- Ctrl-C and stop signals --------------------------------------------------------
+    @property
+    def stop_cause(self) -> str:
+        return "Ctrl-C" if self.stop_signal in (None, "SIGINT") else self.stop_signal
+
+    def request_stop(self, signum: int = signal.SIGINT) -> None:
         """What Ctrl-C does: 1st - motors to zero at the next tick, stop at next checkpoint;
-        2nd - interlock now (every motor zero) and KeyboardInterrupt."""
+        2nd - interlock now (every motor zero) and KeyboardInterrupt.
+
+        SIGTERM, SIGHUP and SIGQUIT do what the first Ctrl-C does; repeating them (a shell
+        and a supervisor may both pass on one SIGHUP) never escalates: only Ctrl-C does.
+        """
+        name = signal_name(signum)
+        first = self.stop_count == 0
+        if first:
+            self.stop_signal = name
+        if not first and signum != signal.SIGINT:
+            return
         self.stop_count += 1
-        self.bus.emit(doc.StopRequest(t=self.clock.now(), count=self.stop_count))
+        self.bus.emit(doc.StopRequest(t=self.clock.now(), count=self.stop_count, signal=name))
         if self._saving:
             return  # motors are already at zero; let results.json and run.json be written whole
         if self.stop_count == 1:
@@ -324,10 +349,48 @@ class Runner:
                 self.control.trip("Ctrl-C pressed twice")
             raise KeyboardInterrupt
 
-    def _install_sigint(self) -> Any:
+    def _install_signal_handlers(self) -> dict[int, Any]:
+        """Ctrl-C, SIGTERM, SIGHUP and SIGQUIT -> :meth:`request_stop`; the previous handlers."""
         if threading.current_thread() is not threading.main_thread():
-            return None
-        return signal.signal(signal.SIGINT, lambda signum, frame: self.request_stop())
+            return {}
+        previous = {}
+        for signum in STOP_SIGNALS:
+            previous[signum] = signal.signal(signum, lambda number, frame: self.request_stop(number))
+        return previous
+
+    # ---- recorder and session health -----------------------------------------------------
+    def _guard_session(self) -> None:
+        for i, sink in enumerate(self.bus.sinks):
+            if sink is self.session:
+                self.bus.sinks[i] = SessionGuard(self.session, self._sink_failed)
+
+    def _sink_failed(self, problem: str) -> None:
+        """A sink could not write: motors to zero now (interlock), the run stops."""
+        if self.health_problem is None:
+            self.health_problem = problem
+        if self.control is not None and self.control.tripped is None and not self._saving:
+            self.control.trip(problem)
+
+    def health(self) -> str | None:
+        """The first recorder/session failure, or None. Never raises (called in the control tick)."""
+        if self.health_problem is None:
+            for port in self._recording_ports:
+                problem = getattr(port, "record_error", None)
+                if problem:
+                    self.health_problem = problem
+                    break
+        return self.health_problem
+
+    def check_health(self) -> None:
+        """Raise SafetyError (motors zeroed first) when a recorder or the session failed."""
+        problem = self.health()
+        if problem is None:
+            return
+        if self.control is not None:
+            if self.control.tripped is None:
+                self.control.trip(problem)
+            self.control.check()
+        raise SafetyError(f"{problem}; motors commanded to zero")
 
     # ---- the run ------------------------------------------------------------------------
     def run(self) -> RunOutcome:
@@ -335,7 +398,8 @@ class Runner:
         new_points: list[dict[str, Any]] = []
         opened = None
         ctx: RunContext | None = None
-        previous_handler = self._install_sigint()
+        previous_handlers = self._install_signal_handlers()
+        self._guard_session()
         cassettes = self.session.cassette_dir if self.session is not None else None
         self.bus.emit(doc.RunStart(
             t=self.clock.now(), protocol=self.protocol.name, params=self.params, rig=self.rig.name,
@@ -343,8 +407,11 @@ class Runner:
             resumed_from=(self.session.meta.get("resumed_from") if self.session else None)))
         try:
             opened = open_rig(self.rig, self.clock, record_to=cassettes, port_override=self.port_override)
+            self._recording_ports = [dev.port for dev in opened.drivers.values()
+                                     if hasattr(getattr(dev, "port", None), "record_error")]
             self.control = build_speed_control(opened, self.clock, emit=self.bus.emit)
-            ctx = RunContext(self, opened.devices, self.control)
+            self.control.guards.append(self.health)
+            ctx = RunContext(self, opened.drivers, self.control)
             self.protocol.setup(ctx)
             for step in self.steps:
                 if step.index in self.done_steps:
@@ -375,14 +442,23 @@ class Runner:
                 self.control.stop()
             if opened is not None:
                 opened.close()
+        stop_failed = dict(opened.stop_failures) if opened is not None else {}
+        if stop_failed:
+            self.bus.emit(doc.StopFailed(t=self.clock.now(), devices=tuple(stop_failed)))
+            if reason:  # "motors commanded to zero" is not the whole truth any more
+                reason = reason.replace("; motors commanded to zero", "").replace("; motors at zero", "")
+            reason = stop_failed_text(stop_failed) + (f" (after: {reason})" if reason else "")
+            status = "failed" if status == "completed" else status
         try:
-            return self._save(status, reason, error, ctx, new_points)
+            outcome = self._save(status, reason, error, ctx, new_points, stop_failed)
+            outcome.stop_failed = stop_failed
+            return outcome
         finally:
-            if previous_handler is not None:
-                signal.signal(signal.SIGINT, previous_handler)
+            for signum, handler in previous_handlers.items():
+                signal.signal(signum, handler)
 
     def _save(self, status: str, reason: str | None, error: BaseException | None, ctx: RunContext | None,
-              new_points: list[dict[str, Any]]) -> RunOutcome:
+              new_points: list[dict[str, Any]], stop_failed: dict[str, str] | None = None) -> RunOutcome:
         if ctx is not None:
             ctx.log_tach_readings()
         points = self.previous_points + new_points
@@ -391,8 +467,20 @@ class Runner:
         steps_done = len(self.done_steps) + len(new_points)
         self.bus.emit(doc.RunStop(t=self.clock.now(), status=status, reason=reason, steps_done=steps_done))
         if self.session is not None:
-            self.session.write_results(results)
-            self.session.finish(status, reason)
+            if self.stop_signal is not None:
+                self.session.meta["signal"] = self.stop_signal
+            if stop_failed:
+                self.session.meta["stop_failed"] = stop_failed
+            try:
+                self.session.write_results(results)
+                self.session.finish(status, reason)
+            except (OSError, LabkitError) as exc:
+                # the motors are already stopped; what is on disk stays readable and resumable
+                problem = str(exc) if isinstance(exc, LabkitError) else (
+                    f"cannot write {exc.filename or self.session.path}: {exc.strerror or exc}")
+                if self.health_problem is None:  # a sink failure already named the file
+                    reason = f"{reason}; {problem}" if reason else problem
+                status = "failed" if status == "completed" else status
         return RunOutcome(status, reason, self.session.path if self.session else None, results, error)
 
     def _fit(self, points: list[dict[str, Any]]) -> dict[str, Any]:

@@ -88,8 +88,12 @@ def dumps(obj: Any) -> str:
 
 def write_json_atomic(path: Path, data: Any) -> None:
     tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(data, default=_json_default, indent=2) + "\n", encoding="utf-8")
-    os.replace(tmp, path)
+    try:
+        tmp.write_text(json.dumps(data, default=_json_default, indent=2) + "\n", encoding="utf-8")
+        os.replace(tmp, path)
+    except OSError:
+        tmp.unlink(missing_ok=True)  # a full disk leaves the old file, never a torn one
+        raise
 
 
 def new_session_dir(root: str | Path, protocol: str) -> Path:
@@ -204,16 +208,20 @@ class Session:
         write_json_atomic(self.path / "run.json", self.meta)
 
     def finish(self, status: str, reason: str | None = None) -> None:
-        """Close files, export Parquet, and record the exit status (never raises)."""
+        """Close files, export Parquet, and record the exit status. Raises SessionError only when
+        the disk refuses the last writes (the files keep their whole lines: resumable)."""
         if self.closed:
             return
-        try:
-            self.flush()
-        finally:
-            self._events.close()
-            for f in self._readings.values():
-                f.close()
-            self.closed = True
+        self.closed = True
+        failure: OSError | None = None
+        for f in (self._events, *self._readings.values()):
+            try:
+                f.close()  # flushes; on a full disk the file is closed all the same
+            except OSError as exc:
+                failure = failure or exc
+        if failure is not None:
+            raise SessionError(f"cannot write {self.path}: {failure.strerror or failure}; the session "
+                               "keeps what was written before (resumable)") from None
         try:
             from labkit.session.export import readings_to_parquet
 

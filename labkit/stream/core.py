@@ -4,7 +4,9 @@
 * ``connect`` / ``connect:ADDR`` streams to a running viewer over gRPC; the default address
   is the viewer's on localhost (``rerun+http://127.0.0.1:9876/proxy``); ``ADDR`` may be
   ``HOST:PORT`` or a full ``rerun+http://...`` URL.
-* ``spawn`` starts a viewer. With no display (no ``DISPLAY``/``WAYLAND_DISPLAY``) a viewer
+* ``spawn`` starts a viewer listening on 127.0.0.1 only (``spawn:ADDRESS``, e.g.
+  ``spawn:0.0.0.0``, to let other machines connect; see labkit.stream.viewer). With no
+  display (no ``DISPLAY``/``WAYLAND_DISPLAY``) a viewer
   cannot start (RERUN-OPENCV.md 1.2: it dies and ``spawn`` still blocks ~11 s), so labkit
   says so and saves to a fallback file instead, which ``rerun FILE`` opens later.
 """
@@ -35,14 +37,21 @@ class RerunSpec:
             return f"saved to {self.target} (open with: rerun {self.target})"
         if self.mode == "connect":
             return f"streamed to the viewer at {self.target}"
-        return "streamed to a spawned viewer"
+        return f"streamed to a spawned viewer (listening on {self.target or '127.0.0.1'})"
 
 
 def parse_rerun_spec(text: str) -> RerunSpec:
     """Parse ``spawn | connect[:ADDR] | save:FILE``; raises LabkitError with the reason."""
     mode, _, rest = text.partition(":")
-    if mode == "spawn" and not rest:
-        return RerunSpec("spawn")
+    if mode == "spawn":
+        if not rest:
+            return RerunSpec("spawn")
+        from labkit.stream.viewer import check_bind_address
+
+        try:
+            return RerunSpec("spawn", check_bind_address(rest))
+        except LabkitError as exc:
+            raise LabkitError(f"--rerun {text}: {exc}") from None
     if mode == "connect":
         if not rest:
             return RerunSpec("connect", DEFAULT_CONNECT_URL)
@@ -72,7 +81,8 @@ def add_rerun_argument(parser: argparse.ArgumentParser) -> None:
     """Add the common ``--rerun spawn|connect[:ADDR]|save:FILE`` option to a sub-command."""
     parser.add_argument(
         "--rerun", type=_rerun_spec_type, default=None, metavar="SPEC",
-        help="stream to rerun: spawn | connect[:HOST:PORT] | save:FILE.rrd",
+        help="stream to rerun: spawn[:BIND_IP] (viewer on 127.0.0.1 by default) | "
+             "connect[:HOST:PORT] | save:FILE.rrd",
     )
 
 
@@ -107,7 +117,10 @@ def open_stream(spec: RerunSpec | str | None, app_id: str, *, recording_id: str 
     elif spec.mode == "connect":
         rec.connect_grpc(spec.target, default_blueprint=blueprint)
     elif has_display():
-        rec.spawn(default_blueprint=blueprint, memory_limit="25%")
+        from labkit.stream.viewer import LOCALHOST, spawn_viewer
+
+        # not rec.spawn(): that viewer listens on 0.0.0.0 (rerun-sdk 0.41)
+        rec.connect_grpc(spawn_viewer(spec.target or LOCALHOST), default_blueprint=blueprint)
     else:
         print(f"labkit: no display for a rerun viewer; saving to {fallback_file} instead "
               f"(open it with: rerun {fallback_file})", file=sys.stderr)

@@ -1,9 +1,11 @@
 """Exit paths over real pseudo-terminals: emulators served by PtyHost, drivers on /dev/pts/N,
 a real clock and the control loop in its own thread (the closest thing to hardware in CI).
 
-Timing bounds are a control period plus scheduling slack for a loaded CI machine; the exact
-"within one period" bounds are checked on the virtual clock in test_interlocks.py and
-tests/protocols/test_runner_safety.py.
+Event-driven, so they hold on a loaded machine: faults are injected when the run reports it
+is holding its speed (not at a clock time after open), device timeouts are generous, and
+each check is an order of events - the motor's last command is zero, received after the
+cause (the STOP having left before the run returned). The exact "within one control period" bounds are checked
+on the virtual clock in test_interlocks.py and tests/protocols/test_runner_safety.py.
 """
 
 import sys
@@ -22,88 +24,126 @@ from labkit.rig import parse_rig
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from protocols.holdproto import Hold  # noqa: E402
 
-RIG = (Path(__file__).resolve().parents[2] / "rigs" / "emulated-fig525.toml").read_text().replace(
-    "settle_hold_s = 1.0", "settle_hold_s = 0.2")
-SLACK = 0.05 + 0.25  # one control period + scheduling on a shared 2-core CI box
+# generous device timeouts: a loaded CI box may starve the in-process emulators for a while;
+# the emulated controller's own command timeout is off (these tests are not about it)
+RIG = ((Path(__file__).resolve().parents[2] / "rigs" / "emulated-fig525.toml").read_text()
+       .replace("settle_hold_s = 1.0", "settle_hold_s = 0.2")
+       .replace("tach_timeout_s = 0.5", "tach_timeout_s = 5.0")
+       .replace("command_timeout_ms=500", "command_timeout_ms=0")
+       .replace("options = { command_timeout_ms = 500 }", "options = { reply_timeout_s = 2.0 }"))
 
 
-def run_on_ptys(rig_text, **overrides):
+class OnSettled(ListSink):
+    """Collects events; calls ``action()`` once, when the rotor first holds its speed."""
+
+    def __init__(self, action=None):
+        super().__init__()
+        self.action = action
+
+    def on_event(self, event):
+        super().on_event(event)
+        if event["type"] == "settled" and self.action is not None:
+            action, self.action = self.action, None
+            action()
+
+
+def run_on_ptys(rig_text, on_settled=None, **overrides):
     rig = parse_rig(rig_text, "pty-rig.toml")
     clock = RealClock()
     hosts = {role: PtyHost(build_emulator(dev.port), clock=clock) for role, dev in rig.devices.items()}
     proto = Hold()
-    sink = ListSink()
+    sink = OnSettled(on_settled and (lambda: on_settled(hosts, clock)))
     params = resolve_params(proto.defaults, {"speed_rpm": 5000.0, "hold_s": 0.4, "steps": 1, **overrides})
     try:
         with use_clock(clock):
             runner = Runner(proto, rig, params, clock=clock, sinks=[sink],
                             port_override=lambda dev: hosts[dev.role].path)
             outcome = runner.run()
+            marks = {**proto.marks, "returned": clock.now()}
+            # the STOP left before run() returned; wait (event-driven) for the controller to read it
+            motor = shared_plant("fig525").motor("rotor")
+            deadline = clock.now() + 10.0
+            while motor.duty != 0.0 and clock.now() < deadline:
+                clock.sleep(0.01)
+            marks["received_by"] = clock.now()
     finally:
         for host in hosts.values():
             host.close()
-    return outcome, proto.marks, sink, shared_plant("fig525").motor("rotor"), hosts
+    return outcome, marks, sink, shared_plant("fig525").motor("rotor"), hosts
 
 
-@pytest.mark.timeout(60)
+def assert_stopped_between(motor, after: float, before: float) -> None:
+    """The motor's last command was zero, received after ``after`` and by ``before``
+    (``marks["received_by"]``: the controller read the STOP that left before run() returned)."""
+    assert motor.duty == 0.0
+    last_t, last_duty = motor.duty_changes[-1]
+    assert last_duty == 0.0 and after <= last_t <= before, (after, last_t, before)
+    assert any(duty > 0 for _, duty in motor.duty_changes), "the motor never ran"
+
+
+@pytest.mark.timeout(120)
 def test_normal_end_over_ptys():
     outcome, marks, sink, motor, hosts = run_on_ptys(RIG)
     assert outcome.status == "completed", outcome.reason
     assert all(h.path.startswith("/dev/pts/") for h in hosts.values())
-    zeroed = motor.zeroed_since(marks["end_0"])
-    assert zeroed is not None and zeroed - marks["end_0"] <= SLACK
+    assert_stopped_between(motor, marks["end_0"], marks["received_by"])
 
 
-@pytest.mark.timeout(60)
+@pytest.mark.timeout(120)
 def test_exception_in_a_step_over_ptys():
     outcome, marks, sink, motor, _ = run_on_ptys(RIG, fail_in_step=0)
-    assert outcome.status == "failed" and "ValueError" in outcome.reason
-    zeroed = motor.zeroed_since(marks["raised_at"])
-    assert zeroed is not None and zeroed - marks["raised_at"] <= SLACK
+    assert outcome.status == "failed" and "ValueError" in outcome.reason, outcome.reason
+    assert_stopped_between(motor, marks["raised_at"], marks["received_by"])
 
 
-@pytest.mark.timeout(60)
+@pytest.mark.timeout(120)
 def test_tachometer_unplugged_over_ptys():
-    # the pty of the tachometer disappears 2 s after open (mid-hold): real I/O errors
-    text = RIG.replace("role=rotor_tach&", "role=rotor_tach&faults=disconnect_at:2&")
-    outcome, marks, sink, motor, hosts = run_on_ptys(text, hold_s=6.0)
-    assert outcome.status == "failed"
+    # the tachometer's pty hangs up while the rotor holds its speed: real I/O errors
+    pulled = {}
+
+    def unplug(hosts, clock):
+        pulled["t"] = clock.now()
+        hosts["rotor_tach"].unplug()
+
+    outcome, marks, sink, motor, hosts = run_on_ptys(RIG, on_settled=unplug, hold_s=30.0)
+    assert outcome.status == "failed", (outcome.status, outcome.reason)
     interlock = sink.of_type("interlock")
-    assert interlock and "rotor_tach" in interlock[0]["reason"]
-    zeroed = motor.zeroed_since(interlock[0]["t"] - SLACK)
-    assert zeroed is not None and abs(zeroed - interlock[0]["t"]) <= SLACK
-    assert motor.duty == 0.0
+    assert interlock and "rotor_tach" in interlock[0]["reason"], interlock
+    assert_stopped_between(motor, pulled["t"], marks["received_by"])
 
 
-@pytest.mark.timeout(60)
+@pytest.mark.timeout(120)
 def test_sigint_over_ptys():
     outcome, marks, sink, motor, _ = run_on_ptys(RIG, sigint_in_step=0)
-    assert outcome.status == "interrupted"
-    zeroed = motor.zeroed_since(marks["signalled_at"])
-    assert zeroed is not None and zeroed - marks["signalled_at"] <= SLACK
+    assert outcome.status == "interrupted", outcome.reason
+    assert_stopped_between(motor, marks["signalled_at"], marks["received_by"])
 
 
-@pytest.mark.timeout(60)
+@pytest.mark.timeout(120)
 def test_over_speed_over_ptys():
     # feed-forward calibrated for half the real full speed: the rotor overshoots to ~2x target
     text = RIG.replace("full_speed_rpm = 23873", "full_speed_rpm = 11000").replace(
         "max_speed_rpm = 24000", "max_speed_rpm = 12000")
     outcome, marks, sink, motor, _ = run_on_ptys(text, speed_rpm=11500.0, hold_s=6.0)
-    assert outcome.status == "failed"
+    assert outcome.status == "failed", (outcome.status, outcome.reason)
     interlock = sink.of_type("interlock")
-    assert interlock and interlock[0]["reason"].startswith("over-speed")
-    zeroed = motor.zeroed_since(interlock[0]["t"] - SLACK)
-    assert zeroed is not None and abs(zeroed - interlock[0]["t"]) <= SLACK
+    assert interlock and interlock[0]["reason"].startswith("over-speed"), interlock
+    assert_stopped_between(motor, 0.0, marks["received_by"])
+    assert interlock[0]["t"] <= marks["returned"]
 
 
-@pytest.mark.timeout(60)
+@pytest.mark.timeout(120)
 def test_controller_error_over_ptys():
-    # the controller resets 1.5 s after open (mid-run): it re-arms safe start, an error flag
-    text = RIG.replace("role=rotor_motor", "role=rotor_motor&faults=reset_at:1.5")
-    outcome, marks, sink, motor, _ = run_on_ptys(text, hold_s=6.0)
-    assert outcome.status == "failed"
+    # the controller resets while the rotor holds its speed: it re-arms safe start, an error flag
+    reset = {}
+
+    def reset_controller(hosts, clock):
+        emulator = hosts["rotor_motor"].emulator
+        reset["t"] = clock.now()
+        emulator.faults["reset_at"] = emulator.since_open(reset["t"])
+
+    outcome, marks, sink, motor, _ = run_on_ptys(RIG, on_settled=reset_controller, hold_s=30.0)
+    assert outcome.status == "failed", (outcome.status, outcome.reason)
     interlock = sink.of_type("interlock")
     assert interlock and "reports errors" in interlock[0]["reason"], interlock
-    zeroed = motor.zeroed_since(interlock[0]["t"] - SLACK)
-    assert zeroed is not None and abs(zeroed - interlock[0]["t"]) <= SLACK
-    assert motor.duty == 0.0
+    assert_stopped_between(motor, reset["t"], marks["received_by"])

@@ -58,7 +58,14 @@ def test_enter_on_the_terminal_registers_the_drop(tmp_path, monkeypatch):
     monkeypatch.setattr(sys, "stdin", terminal)
     # 9000 RPM: the plant would drop the floator only after ~7 s of spin-up, so the key comes first
     operator = Operator(master)
-    prep = prepare_run(RIGS / "emulated-fig618.toml", "spin-critical",
+    # a loaded CI box may starve the in-process emulators: generous device timeouts (the test
+    # is about the key, not about the tachometer's silence interlock)
+    rig = tmp_path / "fig618.toml"
+    rig.write_text((RIGS / "emulated-fig618.toml").read_text()
+                   .replace("command_timeout_ms=500", "command_timeout_ms=0")
+                   .replace("options = { command_timeout_ms = 500 }", "options = { reply_timeout_s = 2.0 }")
+                   .replace("tach_timeout_s = 0.5", "tach_timeout_s = 5.0"))
+    prep = prepare_run(rig, "spin-critical",
                        ["start_rpm=9000", "stop_rpm=9000", "max_trials=1"], clock="real",
                        session_root=tmp_path, sinks=[operator])
     typing = threading.Thread(target=operator.run, daemon=True)

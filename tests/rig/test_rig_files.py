@@ -137,7 +137,7 @@ def test_open_rig_instantiates_drivers_and_close_zeroes_the_motor():
     with use_clock(clock):
         opened = open_rig(rig, clock)
         assert set(opened.devices) == {"rotor_motor", "rotor_tach", "balance"}
-        motor = opened.devices["rotor_motor"]
+        motor = opened.devices["rotor_motor"].raw_driver  # bare driver: no limits (bring-up)
         motor.enable()
         motor.set_duty(0.3)
         clock.sleep(0.5)

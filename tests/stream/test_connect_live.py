@@ -7,7 +7,6 @@ from __future__ import annotations
 import json
 import socket
 import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -15,7 +14,8 @@ import pytest
 
 from labkit.cli import main
 from labkit.stream.readback import column, entity_paths
-from labkit.testing.processes import start_group, stop_group
+from labkit.stream.viewer import start_rerun
+from labkit.testing.processes import stop_group
 
 RECORDINGS = Path(__file__).resolve().parents[2] / "recordings" / "videos"
 
@@ -36,17 +36,16 @@ def wait_listening(port: int, timeout_s: float = 20.0) -> None:
     raise TimeoutError(f"nothing listens on port {port} after {timeout_s} s")
 
 
-def rerun(*args: str) -> subprocess.Popen:
-    """``python -m rerun`` runs the rerun binary as its child: started as a process group so
-    that :func:`stop_group` ends both (``terminate()`` alone left the binary running)."""
-    return start_group([sys.executable, "-m", "rerun", *args], stdout=subprocess.DEVNULL,
-                       stderr=subprocess.DEVNULL)
+def rerun(*args: str, port: int) -> subprocess.Popen:
+    """The rerun binary itself on 127.0.0.1 (``python -m rerun`` is a wrapper whose binary child
+    outlived ``terminate()``), leading its own process group so :func:`stop_group` ends it whole."""
+    return start_rerun(*args, port=port, detach=True)
 
 
 @pytest.fixture
 def grpc_server():
     port = free_port()
-    server = rerun("--serve-grpc", "--port", str(port))
+    server = rerun("--serve-grpc", port=port)
     try:
         wait_listening(port)
         yield port
@@ -62,8 +61,7 @@ def test_laser_analysis_streams_to_a_running_server(grpc_server, tmp_path, capsy
                  "--rerun", f"connect:127.0.0.1:{grpc_server}"]) == 0
     frames_analysed = json.loads(out.read_text())["quality"]["frames_analysed"]
     saved = tmp_path / "received.rrd"
-    saver = rerun(f"rerun+http://127.0.0.1:{grpc_server}/proxy", "--save", str(saved),
-                  "--port", str(free_port()))
+    saver = rerun(f"rerun+http://127.0.0.1:{grpc_server}/proxy", "--save", str(saved), port=free_port())
     try:  # the server buffers what it was sent for late subscribers; wait until all of it is saved
         deadline, frames = time.monotonic() + 30, []
         while time.monotonic() < deadline and len(frames) < frames_analysed:

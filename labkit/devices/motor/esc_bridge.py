@@ -32,6 +32,8 @@ class EscBridge(PololuSmc):
         VAR_ERROR_STATUS, VAR_TARGET_SPEED, VAR_SPEED, VAR_INPUT_VOLTAGE)
     allow_reverse: ClassVar[bool] = False
     has_firmware_version: ClassVar[bool] = False
+    builtin_watchdog_ms = 500.0  # the sketch's serial command timeout (always on)
+    watchdog_advice = "the labkit ESC bridge sketch has a fixed 500 ms command timeout"
 
     def __init__(self, port: Any, clock: Any, name: str = "", **options: Any):
         for unsupported in ("device_number", "crc"):

@@ -6,12 +6,21 @@ real clock) re-sends the setpoint at 20 Hz so the controller's own command timeo
 fires while we are alive and always fires when we are not; ``stop()`` cancels the job and
 commands zero without ever raising; ``close()`` and any exception leaving a ``with`` block
 call ``stop()``.
+
+The controller's own watchdog (its command timeout) is what stops the motor when nothing
+in labkit is left to do it (SIGKILL, the OOM killer, a crash: docs/safety.md). A driver
+names the option that declares it (``watchdog_option``) and says how to switch it on
+(``watchdog_advice``); :func:`watchdog_problem` refuses a real-hardware rig without it.
+A duty or speed that is not a finite number never reaches the wire: the motor is commanded
+to zero and :class:`SafetyError` raised (:meth:`KeepAliveMotor.finite`). ``stop()`` never
+raises but remembers why a STOP could not be delivered (``stop_error``).
 """
 
 from __future__ import annotations
 
+import math
 import threading
-from typing import Any
+from typing import Any, ClassVar
 
 import serial
 
@@ -19,7 +28,19 @@ from labkit.devices.base import MotorController
 from labkit.errors import DeviceDisconnected, DeviceError, DeviceTimeout, SafetyError
 from labkit.io.clock import Clock, PeriodicJob
 
+try:  # a hung-up pty raises termios.error (not an OSError) from tcflush
+    from termios import error as _TermiosError
+except ImportError:  # pragma: no cover - Windows
+    _TermiosError = OSError  # type: ignore[assignment,misc]
+
+#: what a dead port raises
+PORT_ERRORS = (serial.SerialException, OSError, _TermiosError)
+
 KEEPALIVE_PERIOD_S = 0.05  # 20 Hz
+#: the controller's command timeout must be at least this many keep-alive periods ...
+WATCHDOG_MIN_PERIODS = 4
+#: ... and at most this long, so a dead labkit releases the motor within a second
+WATCHDOG_MAX_MS = 1000.0
 
 
 def as_bool(value: Any) -> bool:
@@ -29,10 +50,53 @@ def as_bool(value: Any) -> bool:
     return bool(value)
 
 
+def stop_failure_text(exc: BaseException) -> str:
+    """Why a STOP did not reach the controller, in words a person acts on."""
+    cause = exc.__cause__ if exc.__cause__ is not None else exc
+    if isinstance(exc, DeviceDisconnected) or isinstance(cause, PORT_ERRORS):
+        return f"port gone ({cause})"
+    return f"{type(exc).__name__}: {exc}"
+
+
 class KeepAliveMotor(MotorController):
     """Base of the motor drivers: subclasses implement ``send_setpoint`` and ``send_zero``."""
 
     keepalive_period_s: float = KEEPALIVE_PERIOD_S
+    #: driver option declaring the controller's command timeout in ms (None: built in)
+    watchdog_option: ClassVar[str | None] = None
+    #: the controller's built-in command timeout in ms, if it has one that cannot be turned off
+    builtin_watchdog_ms: ClassVar[float | None] = None
+    #: how to switch the controller's command timeout on (shown by rig checks and probe)
+    watchdog_advice: ClassVar[str] = ""
+
+    @classmethod
+    def watchdog_problem(cls, options: dict[str, Any], required: bool = True) -> tuple[str, str] | None:
+        """``(key, reason)`` when ``options`` do not declare a usable command timeout, else None.
+
+        ``required``: real hardware (emulated ``sim://`` controllers may leave it out).
+        """
+        if cls.builtin_watchdog_ms is not None or cls.watchdog_option is None:
+            return None
+        key = f"options.{cls.watchdog_option}"
+        value = options.get(cls.watchdog_option)
+        low = cls.keepalive_period_s * 1000 * WATCHDOG_MIN_PERIODS
+        if value is None and not required:
+            return None
+        if value is None:
+            return key, (f"required for real hardware: the {cls.protocol} controller's own command "
+                         f"timeout stops the motor when labkit dies (SIGKILL, crash, power cut of the "
+                         f"PC); {cls.watchdog_advice}, then declare it here, e.g. "
+                         f"options = {{ {cls.watchdog_option} = 500 }} (docs/safety.md)")
+        try:
+            ms = float(value)
+        except (TypeError, ValueError):
+            return key, f"{value!r} is not a number of milliseconds"
+        if not math.isfinite(ms) or not low <= ms <= WATCHDOG_MAX_MS:
+            period_ms = cls.keepalive_period_s * 1000
+            return key, (f"{value!r} ms: must be {low:.0f}..{WATCHDOG_MAX_MS:.0f} ms (at least "
+                         f"{WATCHDOG_MIN_PERIODS} keep-alive periods of {period_ms:.0f} ms, "
+                         f"at most {WATCHDOG_MAX_MS / 1000:.0f} s); {cls.watchdog_advice}")
+        return None
 
     def __init__(self, port: serial.SerialBase, clock: Clock, name: str = "", **options: Any):
         super().__init__(port, clock, name, **options)
@@ -43,6 +107,24 @@ class KeepAliveMotor(MotorController):
         self._job: PeriodicJob | None = None
         self._keepalive_error: BaseException | None = None
         self._closed = False
+        #: why the last STOP could not be delivered (None: delivered)
+        self.stop_error: str | None = None
+
+    def finite(self, value: float, command: str) -> float:
+        """``value`` if it is a finite number; else command zero and raise SafetyError.
+
+        NaN/inf gains or speeds upstream must never become full duty at the wire
+        (``min(1.0, nan)`` is 1.0).
+        """
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            number = math.nan
+        if math.isfinite(number):
+            return number
+        self.stop()
+        raise SafetyError(f"{self.name}: {command} {value!r} is not a finite number; refused, "
+                          "motor commanded to zero")
 
     # ---- byte I/O -----------------------------------------------------------------------
     def write(self, data: bytes, command: str) -> None:
@@ -54,14 +136,14 @@ class KeepAliveMotor(MotorController):
         with self._write_lock:
             try:
                 self.port.write(data)
-            except (serial.SerialException, OSError) as exc:
+            except PORT_ERRORS as exc:
                 raise DeviceDisconnected(self.name, command, self.last_bytes, str(exc)) from exc
 
     def read_available(self, command: str) -> bytes:
         try:
             waiting = self.port.in_waiting
             data = self.port.read(waiting) if waiting else b""
-        except (serial.SerialException, OSError) as exc:
+        except PORT_ERRORS as exc:
             raise DeviceDisconnected(self.name, command, self.last_bytes, str(exc)) from exc
         if data:
             self.last_bytes = (self.last_bytes + data)[-64:]
@@ -70,7 +152,7 @@ class KeepAliveMotor(MotorController):
     def flush_input(self, command: str) -> None:
         try:
             self.port.reset_input_buffer()
-        except (serial.SerialException, OSError) as exc:
+        except PORT_ERRORS as exc:
             raise DeviceDisconnected(self.name, command, self.last_bytes, str(exc)) from exc
 
     def read_exact(self, n: int, timeout: float, command: str, quiet_s: float = 0.0) -> bytes:
@@ -137,15 +219,18 @@ class KeepAliveMotor(MotorController):
             raise SafetyError(f"{self.name}: {command} refused: the motor is not enabled (call enable())")
 
     def stop(self) -> None:
-        """Cancel the keep-alive and command zero. Never raises (a dead port is ignored)."""
+        """Cancel the keep-alive and command zero. Never raises: when the STOP cannot be
+        delivered (a dead port) the reason is kept in ``stop_error`` for the caller to report."""
         self.enabled = False
         if self._job is not None:
             self._job.cancel()
             self._job = None
         try:
             self.send_zero()
-        except Exception:  # noqa: BLE001 - stop() must not raise; the port may be dead
-            pass
+        except Exception as exc:  # noqa: BLE001 - stop() must not raise; the port may be dead
+            self.stop_error = stop_failure_text(exc)
+        else:
+            self.stop_error = None
 
     def close(self) -> None:
         if self._closed:

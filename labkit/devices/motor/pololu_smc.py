@@ -159,8 +159,11 @@ class PololuSmc(KeepAliveMotor):
     """
 
     protocol = "pololu_smc"
-    option_names = frozenset({"autobaud", "crc", "crc_responses", "device_number", "quiet_s",
+    option_names = frozenset({"autobaud", "command_timeout_ms", "crc", "crc_responses", "device_number", "quiet_s",
                               "reply_timeout_s"})
+    watchdog_option = "command_timeout_ms"
+    watchdog_advice = ("set 'Command timeout' to 500 ms in the Pololu Simple Motor Control Center G2 "
+                       "(Input settings tab) and click Apply settings")
     default_serial = {"baudrate": 9600, "bytesize": 8, "parity": "N", "stopbits": 1}
     #: variables read by status()
     status_variables: ClassVar[tuple[int, ...]] = (
@@ -256,7 +259,7 @@ class PololuSmc(KeepAliveMotor):
 
     def set_duty(self, duty: float) -> None:
         self.require_enabled("set_duty")
-        speed = duty_to_speed(duty)
+        speed = duty_to_speed(self.finite(duty, "set_duty"))
         if speed < 0 and not self.allow_reverse:
             raise ValueError(f"{self.name}: duty {duty} < 0 but {self.protocol} drives one direction only")
         self.target_speed = speed

@@ -203,7 +203,10 @@ class Vesc(KeepAliveMotor):
     """
 
     protocol = "vesc"
-    option_names = frozenset({"brake_current_a", "firmware", "pole_pairs", "reply_timeout_s"})
+    option_names = frozenset({"brake_current_a", "firmware", "pole_pairs", "reply_timeout_s", "timeout_ms"})
+    watchdog_option = "timeout_ms"
+    watchdog_advice = ("set VESC Tool > App Settings > General > 'Timeout' to 500-1000 ms "
+                       "(firmware default 1000 ms) and write the app configuration")
     default_serial = {"baudrate": 115200, "bytesize": 8, "parity": "N", "stopbits": 1}
     supports_speed_command = True
 
@@ -276,13 +279,13 @@ class Vesc(KeepAliveMotor):
 
     def set_duty(self, duty: float) -> None:
         self.require_enabled("SET_DUTY")
-        self.mode = ("duty", max(-1.0, min(1.0, duty)))
+        self.mode = ("duty", max(-1.0, min(1.0, self.finite(duty, "SET_DUTY"))))
         self.send_setpoint()
 
     def set_speed(self, speed_rad_s: float) -> None:
         """Closed-loop speed in the controller: SET_RPM with ERPM = RPM x pole pairs."""
         self.require_enabled("SET_RPM")
-        self.mode = ("erpm", speed_rad_s / RAD_S_PER_RPM * self.pole_pairs)
+        self.mode = ("erpm", self.finite(speed_rad_s, "SET_RPM") / RAD_S_PER_RPM * self.pole_pairs)
         self.send_setpoint()
 
     def send_setpoint(self) -> None:
