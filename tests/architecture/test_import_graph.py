@@ -43,7 +43,7 @@ def imported_modules(path: Path) -> set[str]:
 
 
 def part(module: str) -> str:
-    """``labkit.io.sim_port`` -> ``io``; ``labkit.errors`` -> ``errors``."""
+    """``labkit.emulators.sim_port`` -> ``io``; ``labkit.errors`` -> ``errors``."""
     pieces = module.split(".")
     return pieces[1] if len(pieces) > 1 else ""
 

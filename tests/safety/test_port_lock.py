@@ -8,8 +8,8 @@ import subprocess
 import sys
 
 import pytest
-from labkit.io.sim_port import build_emulator
 
+from labkit.emulators.sim_port import build_emulator
 from labkit.io.clock import RealClock
 from labkit.io.port_lock import PortBusy, device_path
 from labkit.io.ports import open_port

@@ -159,8 +159,8 @@ class PololuSmc(KeepAliveMotor):
     """
 
     protocol = "pololu_smc"
-    option_names = frozenset({"autobaud", "command_timeout_ms", "crc", "crc_responses", "device_number", "quiet_s",
-                              "reply_timeout_s"})
+    option_names = frozenset({"autobaud", "command_timeout_ms", "crc", "crc_responses", "device_number",
+                              "quiet_s", "reply_timeout_s"})
     watchdog_option = "command_timeout_ms"
     watchdog_advice = ("set 'Command timeout' to 500 ms in the Pololu Simple Motor Control Center G2 "
                        "(Input settings tab) and click Apply settings")
