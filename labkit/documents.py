@@ -209,10 +209,8 @@ class StopFailed(RunDocument):
     may still turn, and the person at the rig must cut the motor's power (docs/safety.md)."""
 
     type: ClassVar[str] = "stop_failed"
-    devices: tuple[str, ...] = ()
-
-    def to_json(self) -> dict[str, Any]:
-        return {"type": self.type, "t": self.t, "devices": list(self.devices)}
+    #: role -> why the STOP did not arrive ("port gone ...")
+    devices: dict[str, str] = field(default_factory=dict)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -269,7 +267,7 @@ def document_from_json(obj: dict[str, Any]) -> RunDocument:
         if f.name == "t":
             continue
         if f.name in obj:
-            kwargs[f.name] = tuple(obj[f.name]) if f.name in ("stop_failed", "devices") else obj[f.name]
+            kwargs[f.name] = tuple(obj[f.name]) if f.name == "stop_failed" else obj[f.name]
         elif f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
             raise UnknownDocument(f"{kind} document without {f.name!r}: {obj}")
     return cls(**kwargs)

@@ -444,7 +444,7 @@ class Runner:
                 opened.close()
         stop_failed = dict(opened.stop_failures) if opened is not None else {}
         if stop_failed:
-            self.bus.emit(doc.StopFailed(t=self.clock.now(), devices=tuple(stop_failed)))
+            self.bus.emit(doc.StopFailed(t=self.clock.now(), devices=dict(stop_failed)))
             if reason:  # "motors commanded to zero" is not the whole truth any more
                 reason = reason.replace("; motors commanded to zero", "").replace("; motors at zero", "")
             reason = stop_failed_text(stop_failed) + (f" (after: {reason})" if reason else "")

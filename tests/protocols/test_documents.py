@@ -29,7 +29,8 @@ SAMPLES = [
     doc.PointDone(t=3.0, index=0, point={"step": 0, "force_g": 4.0}),
     doc.Drop(t=3.1, index=0, trial=1, rotor_rad_s=900.0, spin_rad_s=1200.0, cause="key", hold_s=2.0),
     doc.Checkpoint(t=3.2, index=0),
-    doc.StopRequest(t=3.3, count=1),
+    doc.StopRequest(t=3.3, count=1, signal="SIGTERM"),
+    doc.StopFailed(t=3.45, devices={"rotor_motor": "port gone (readiness to read but no data)"}),
     doc.Interlock(t=3.4, reason="tach silent", stop_failed=("rotor_motor: port gone",)),
     doc.Fault(t=3.5, reason="boom"),
     doc.Results(t=3.6, results={"points": [], "fit": {}}),
@@ -38,7 +39,7 @@ SAMPLES = [
 
 
 def test_there_is_one_sample_per_document_type():
-    assert {type(d) for d in SAMPLES} == set(doc.DOCUMENT_TYPES.values()) and len(doc.DOCUMENT_TYPES) == 15
+    assert {type(d) for d in SAMPLES} == set(doc.DOCUMENT_TYPES.values()) and len(doc.DOCUMENT_TYPES) == 16
 
 
 def test_every_document_round_trips_through_its_json_line():
