@@ -14,8 +14,7 @@ import json
 import math
 import sys
 
-from labkit.sim import DEFAULT_INTEGRATOR, INTEGRATORS, bundled_scenes, compile_scene, load_scene
-from labkit.sim.run import simulate
+from labkit.sim.integrators import DEFAULT_INTEGRATOR, INTEGRATORS
 
 SINK_MODULE = "labkit.stream.sim_sink"
 
@@ -62,6 +61,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from labkit.sim import bundled_scenes, compile_scene, load_scene, simulate
+
     if args.list:
         for name in bundled_scenes():
             print(name)

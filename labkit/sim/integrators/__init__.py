@@ -13,10 +13,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from labkit.errors import LabkitError
+
+if TYPE_CHECKING:  # annotations only: `labkit simulate --help` reads the names below without numpy
+    import numpy as np
 
 SPLITTINGS = {
     "splitting4": "suzuki4",
