@@ -18,16 +18,16 @@ from labkit.cli.bench import BENCHES
 
 HEAVY = ("scipy", "numba", "matplotlib", "cv2", "rerun", "PIL", "numpy")
 
-PROBE = """
+PROBE = f"""
 import json, sys
 from labkit.cli import main
 try:
     code = main(sys.argv[1:])
 except SystemExit as exc:
     code = exc.code
-print("\\n@@MODULES@@" + json.dumps(sorted(m for m in sys.modules if m.split(".")[0] in {heavy!r})))
+print("\\n@@MODULES@@" + json.dumps(sorted(m for m in sys.modules if m.split(".")[0] in {set(HEAVY)!r})))
 sys.exit(code or 0)
-""".format(heavy=set(HEAVY))
+"""
 
 ARGVS = [["--help"]] + [[c, "--help"] for c in COMMANDS] + [["bench", b, "--help"] for b in BENCHES] + [
     ["analyse", "laser", "--help"], ["analyse", "strobe", "--help"],

@@ -1,0 +1,157 @@
+"""labkit against the fair peer: a compiled DOP853 on the same equations, state and error metric.
+
+The peer is CyRK's C++ DOP853 with a numba right-hand side (``cyrk-dop853``,
+:mod:`labkit.sim.integrators.compiled_reference`); scipy's DOP853 runs the same compiled
+right-hand side from Python. Both are measured in the same work-precision sweep as labkit's
+splittings (same reference, same stroboscopic error, docs/numerics.md), and compared:
+
+* **cost at equal error**: peer wall time / labkit wall time at every error target 1e-4 ... 1e-10
+  that both reach (labkit: its cheapest splitting at that target; Pareto interpolation);
+* **drift at equal cost**: labkit's default run over 1e4 cycles against the peer at the
+  tolerance whose cost per cycle (from the sweep) matches it, run over the same 1e4 cycles.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from labkit.numerics import metrics
+from labkit.numerics.workprecision import Ladder, SceneReport, timed_run, work_precision
+from labkit.sim import compile_scene, load_scene
+from labkit.sim.integrators import SPLITTINGS
+
+PEER = "cyrk-dop853"
+SCIPY = "dop853"
+PEER_TARGETS = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10)
+PEER_SCENES = ("conical_5_1", "mbs_fig6_1")  # one body; two bodies in a bound state
+PEER_RTOLS = [1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13]
+LONG_CYCLES = 10_000
+
+
+def peer_available() -> bool:
+    """Whether CyRK (the ``bench`` extra) is installed."""
+    from labkit.sim.integrators.compiled_reference import available
+
+    return available()
+
+
+def peer_ladder(quick: bool) -> Ladder:
+    """The sweep for the comparison: labkit's splittings, the peer and scipy's DOP853."""
+    steps = {"splitting4": [16, 32, 64, 128, 256, 512], "yoshida6": [8, 16, 32, 64, 128, 256]}
+    rtols = {PEER: list(PEER_RTOLS), SCIPY: [1e-6, 1e-9, 1e-12] if quick else list(PEER_RTOLS)}
+    return Ladder(steps=steps, rtols=rtols)
+
+
+@dataclass
+class PeerComparison:
+    """The comparison for one scene (rows of ``labkit bench sim``'s peer section)."""
+
+    scene: str
+    cycles: float
+    by_target: dict = field(default_factory=dict)  # target -> {labkit, labkit_s, peer_s, scipy_s, ratio}
+    min_ratio: float = math.nan
+    drift: dict = field(default_factory=dict)
+    report: SceneReport | None = field(default=None, repr=False)
+
+    def to_json(self) -> dict:
+        return {"scene": self.scene, "cycles": self.cycles, "by_target": self.by_target,
+                "min_ratio_peer_over_labkit": self.min_ratio, "drift_1e4_cycles_at_equal_cost": self.drift}
+
+
+def _cheapest_labkit(report: SceneReport, target: float) -> tuple[str | None, float | None]:
+    best: tuple[str | None, float | None] = (None, None)
+    for name in SPLITTINGS:
+        pts = [(p.wall_s, p.error) for p in report.points if p.integrator == name]
+        cost = metrics.cost_to_reach(pts, target) if pts else None
+        if cost and (best[1] is None or cost < best[1]):
+            best = (name, cost)
+    return best
+
+
+def _cost(report: SceneReport, integrator: str, target: float) -> float | None:
+    pts = [(p.wall_s, p.error) for p in report.points if p.integrator == integrator]
+    return metrics.cost_to_reach(pts, target) if pts else None
+
+
+def ratios_at_targets(report: SceneReport, targets=PEER_TARGETS) -> tuple[dict, float]:
+    """Peer / labkit (and scipy / labkit) wall-time ratio at each target both reach; the minimum."""
+    rows = {}
+    for t in targets:
+        name, labkit_s = _cheapest_labkit(report, t)
+        peer_s, scipy_s = _cost(report, PEER, t), _cost(report, SCIPY, t)
+        rows[f"{t:g}"] = {
+            "labkit": name,
+            "labkit_s": labkit_s,
+            "peer_s": peer_s,
+            "scipy_s": scipy_s,
+            "ratio": peer_s / labkit_s if peer_s and labkit_s else None,
+            "scipy_ratio": scipy_s / labkit_s if scipy_s and labkit_s else None,
+        }
+    common = [r["ratio"] for r in rows.values() if r["ratio"] is not None]
+    return rows, (min(common) if common else math.nan)
+
+
+def _rtol_at_cost(report: SceneReport, wall_per_cycle: float) -> float:
+    """The peer's rtol whose cost per cycle in the sweep matches ``wall_per_cycle`` (log-log)."""
+    pts = sorted((p.wall_s / report.cycles, p.rtol) for p in report.points
+                 if p.integrator == PEER and p.rtol and math.isfinite(p.wall_s))
+    if not pts:
+        return math.nan
+    costs = np.log([c for c, _ in pts])
+    rtols = np.log([r for _, r in pts])
+    return float(np.exp(np.interp(math.log(wall_per_cycle), costs, rtols)))
+
+
+def drift_at_equal_cost(scene_name: str, report: SceneReport, cycles: float = LONG_CYCLES) -> dict:
+    """labkit's default over ``cycles`` and the peer at the same cost per cycle over the same cycles."""
+    scene = load_scene(scene_name)
+    system = compile_scene(scene)
+    ours = timed_run(scene, system, cycles, "splitting4")
+    rtol = _rtol_at_cost(report, ours.wall_s / cycles)
+    if not math.isfinite(rtol):
+        return {}
+    peer = timed_run(scene, system, cycles, PEER, rtol=rtol)
+    return {
+        "labkit": {"integrator": "splitting4", "setting": ours.setting, "wall_s": ours.wall_s,
+                   "invariant_drift": ours.invariant_drift},
+        "peer": {"integrator": PEER, "rtol": rtol, "wall_s": peer.wall_s,
+                 "invariant_drift": peer.invariant_drift, "status": peer.status},
+        "cost_ratio_peer_over_labkit": peer.wall_s / ours.wall_s,
+    }
+
+
+def compare(scene_name: str, cycles: float, quick: bool, long_cycles: float = LONG_CYCLES,
+            progress=None) -> PeerComparison:
+    """The whole comparison for one scene: sweep, ratios at targets, drift at equal cost."""
+    report = work_precision(scene_name, cycles, peer_ladder(quick), progress=progress)
+    rows, low = ratios_at_targets(report)
+    drift = drift_at_equal_cost(scene_name, report, long_cycles)
+    return PeerComparison(scene_name, cycles, rows, low, drift, report)
+
+
+def peer_lines(comp: PeerComparison) -> list[str]:
+    """The printed table of one comparison."""
+    lines = [f"against a compiled DOP853 (CyRK C++ DOP853, numba RHS) on {comp.scene}, "
+             f"{comp.cycles:g} cycles, same state and error metric:",
+             "  target   labkit (cheapest)        labkit s   CyRK s     scipy s    CyRK/labkit  scipy/labkit"]
+
+    def f(x, spec=".3g"):
+        return "-" if x is None or not math.isfinite(x) else format(x, spec)
+
+    for t, r in comp.by_target.items():
+        lines.append(f"  {t:7s}  {str(r['labkit'] or '-'):22s}  {f(r['labkit_s'], '.2e'):9s}  "
+                     f"{f(r['peer_s'], '.2e'):9s}  {f(r['scipy_s'], '.2e'):9s}  {f(r['ratio']):11s}  "
+                     f"{f(r['scipy_ratio'])}")
+    lines.append(f"  smallest CyRK/labkit ratio over the targets both reach: {f(comp.min_ratio)}"
+                 + ("  (labkit slower where < 1)" if comp.min_ratio < 1 else ""))
+    d = comp.drift
+    if d:
+        lines.append(
+            f"  1e4 cycles at equal cost: labkit splitting4 {d['labkit']['wall_s']:.3g} s, drift "
+            f"{f(d['labkit']['invariant_drift'], '.2e')}; CyRK rtol={d['peer']['rtol']:.2g} "
+            f"{d['peer']['wall_s']:.3g} s, drift {f(d['peer']['invariant_drift'], '.2e')}"
+        )
+    return lines
