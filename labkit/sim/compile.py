@@ -80,6 +80,16 @@ class CompiledSystem:
     reduced: ReducedForm | None = None
     wz: float = 0.0  # signed drive speed in the Jacobi constant K = E - wz J_z
 
+    def kernel_args(self) -> tuple:
+        """The step kernels' scene arguments, packed once: ``(bf, bi, src, fld, flags, g, axis,
+        r_escape, wz)`` (the layout of :mod:`labkit.sim.integrators.kernels`)."""
+        packed = self.__dict__.get("_kernel_args")
+        if packed is None:
+            packed = (self.bf, self.bi, self.src, self.fld, self.flags, self.g, self.axis,
+                      float(self.r_escape), float(self.wz))
+            self.__dict__["_kernel_args"] = packed
+        return packed
+
     def summary(self) -> dict:
         """JSON-ready description of the compiled system."""
         out = {

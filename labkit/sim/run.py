@@ -17,11 +17,13 @@ from labkit.sim import equilibrium
 from labkit.sim.compile import CompiledSystem, compile_scene
 from labkit.sim.integrators import DEFAULT_INTEGRATOR, RawRun, get_integrator
 from labkit.sim.integrators.kernels import invariants_over_samples
+from labkit.sim.integrators.status import LABELS, MESSAGES, Status
 from labkit.sim.result import SimResult
 from labkit.sim.rotations import orthonormality_residual, rot_x, rot_z, zenith_angle
 from labkit.sim.scene import Scene, load_scene
 
-RAW_STATUS = {0: "ok", 1: "nan", 2: "blowup", 3: "contact", 4: "escape", 5: "solver_failed"}
+#: kernel status code -> ``SimResult.status`` (kept for callers; :mod:`.integrators.status` names them)
+RAW_STATUS = {int(code): label for code, label in LABELS.items()}
 
 
 def simulate(
@@ -66,16 +68,10 @@ def assemble(
         parts = _reduced_parts(system, raw)
     else:
         parts = _rigid_parts(system, raw)
-    status = RAW_STATUS[raw.status]
-    detail = {
-        "ok": "",
-        "nan": "non-finite state",
-        "blowup": "state ran away (|omega| > 1e9 rad/s or |v| > 1e6 m/s)",
-        "contact": "bodies touched",
-        "escape": f"a body went beyond {system.r_escape:.4g} m from the others",
-        "solver_failed": f"solver failed: {raw.message}",
-    }[status]
-    if raw.status in (1, 2, 3, 4):
+    code = Status(raw.status)
+    status = code.label
+    detail = MESSAGES[code].format(r_escape=system.r_escape, message=raw.message)
+    if code in (Status.NONFINITE, Status.BLOWUP, Status.CONTACT, Status.ESCAPE):
         detail += f" at t = {raw.event_time:.9g} s (cycle {raw.event_time / system.period:.4g})"
     drift = parts["drift"]
     if status == "ok" and drift is not None and not (drift <= drift_threshold):
