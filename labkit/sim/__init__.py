@@ -27,7 +27,8 @@ _HOME = {
     "simulate": "labkit.sim.run",
     **{name: "labkit.sim.scene" for name in (
         "Body", "Rotator", "Scene", "SceneError", "Shape", "UniformField", "bundled_scenes",
-        "load_scene", "scene_from_dict", "validate_scene")},
+        "load_scene", "scene_from_dict")},
+    "validate_scene": "labkit.sim.scene_checks",
 }
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -45,8 +46,8 @@ if TYPE_CHECKING:  # pragma: no cover
         bundled_scenes,
         load_scene,
         scene_from_dict,
-        validate_scene,
     )
+    from labkit.sim.scene_checks import validate_scene
 
 
 def __getattr__(name: str):
