@@ -49,7 +49,8 @@ def register(benches: argparse._SubParsersAction) -> None:
     p.add_argument("--scene", action="append", help="scene (bundled name or TOML); repeatable")
     p.add_argument("--quick", action="store_true", help="short horizons and ladders (under a minute)")
     p.add_argument("--cycles", type=float, help="work-precision horizon in drive cycles")
-    p.add_argument("--stress", default="all", help="stress cases to run: all, none or e.g. S1,S7")
+    p.add_argument("--stress", default="all",
+                   help="stress cases to run: all, none, or names or S-numbers, e.g. conical-exact,S7")
     p.add_argument("--target-error", type=float, help="also name the cheapest setting reaching this error")
     p.add_argument("--peer-scene", action="append",
                    help="scene for the compiled-DOP853 comparison (default conical_5_1 and mbs_fig6_1)")
@@ -200,7 +201,7 @@ def run(args: argparse.Namespace) -> int:
     from labkit.numerics import Ladder, require_target, work_precision
     from labkit.numerics.checks import NumericsError, check_horizon, check_rtol
     from labkit.numerics.report import fmt, machine, plot, scene_lines, verdict_lines
-    from labkit.numerics.stress import CASES, run_stress_cases
+    from labkit.numerics.stress import CASES, NAMES, case_id, run_stress_cases
 
     if args.target_error is not None:
         check_rtol(max(args.target_error, 1e-14))
@@ -212,9 +213,11 @@ def run(args: argparse.Namespace) -> int:
     stress = (
         [] if args.stress == "none" else (list(CASES) if args.stress == "all" else args.stress.split(","))
     )
-    unknown = [s for s in stress if s not in CASES]
+    unknown = [s for s in stress if case_id(s) is None]
     if unknown:
-        raise NumericsError(f"unknown stress case(s) {', '.join(unknown)} (choose from {', '.join(CASES)})")
+        known = ", ".join(f"{k}/{NAMES[k]}" for k in CASES)
+        raise NumericsError(f"unknown stress case(s) {', '.join(unknown)} (choose from {known})")
+    stress = [case_id(s) for s in stress]
     quick = args.quick
     scenes = args.scene or (QUICK_SCENES if quick else FULL_SCENES)
     cycles = args.cycles or (10 if quick else 20)
