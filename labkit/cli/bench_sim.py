@@ -251,7 +251,30 @@ def run(args: argparse.Namespace) -> int:
         print("\n".join(verdict_lines(verdicts)))
 
     kernel_info = _kernel_section(quick)
-    k = kernel_info
+    _print_kernels(kernel_info)
+
+    peers = _peer_section(cycles, quick, None if args.peer_scene is None else args.peer_scene)
+    headline, notes = _headline(reports, verdicts, quick)
+    headline.update(_peer_headline(peers, notes))
+    targets = target_verdicts(headline)
+    print("headline:")
+    for k, v in headline.items():
+        note = notes.get(k)
+        mark = f"[{'met' if targets[k]['met'] else 'NOT MET'}: target {targets[k]['target']}]"
+        print(f"  {k} = {fmt(v, '.3g')}  {mark}" + (f"  ({note})" if note else ""))
+    if "secular_growth" in notes:
+        print(f"  secular growth: {notes['secular_growth']}")
+    print(f"bench sim finished in {time.perf_counter() - started:.1f} s")
+
+    if args.json:
+        _write_json(args.json, reports, headline, notes, targets, verdicts, peers, kernel_info, compile_info,
+                    quick)
+    if args.plot and reports:
+        plot(reports, args.plot)
+    return 0
+
+
+def _print_kernels(k: dict) -> None:
     print(
         f"batch kernels on Table 5.3's {k['batch']} rows x {k['periods']} periods x 64 steps: "
         f"numba {k['numba_ns_per_trajectory_step']:.0f} ns/trajectory-step, numpy "
@@ -271,52 +294,41 @@ def run(args: argparse.Namespace) -> int:
         f"{k['projected_1e4_points_1e3_cycles_min']:.1f} min (NUMERICS.md T5 target: 15 min)"
     )
 
-    peers = _peer_section(cycles, quick, None if args.peer_scene is None else args.peer_scene)
-    headline, notes = _headline(reports, verdicts, quick)
-    headline.update(_peer_headline(peers, notes))
-    targets = target_verdicts(headline)
-    print("headline:")
-    for k, v in headline.items():
-        note = notes.get(k)
-        mark = f"[{'met' if targets[k]['met'] else 'NOT MET'}: target {targets[k]['target']}]"
-        print(f"  {k} = {fmt(v, '.3g')}  {mark}" + (f"  ({note})" if note else ""))
-    if "secular_growth" in notes:
-        print(f"  secular growth: {notes['secular_growth']}")
-    print(f"bench sim finished in {time.perf_counter() - started:.1f} s")
 
-    if args.json:
-        doc = {
-            "scenes": [p.row() for rep in reports for p in rep.points],
-            "headline": {
-                k: (v if isinstance(v, float) and math.isfinite(v) else None) for k, v in headline.items()
-            },
-            "headline_notes": {k: v for k, v in notes.items() if k != "speedup_detail"},
-            "headline_targets": targets,
-            "speedup": notes["speedup_detail"],
-            "references": {
-                rep.scene: {
-                    "description": rep.reference.description,
-                    "agreement": rep.reference.agreement,
-                    "dop853_agreement": rep.reference.dop853_agreement,
-                    "cross_checked": rep.reference.cross_checked,
-                }
-                for rep in reports
-            },
-            "orders": {rep.scene: rep.orders for rep in reports},
-            "cost_to_reach": {rep.scene: rep.cost for rep in reports},
-            "stress": [v.to_json() for v in verdicts],
-            "compiled_dop853": [c.to_json() for c in peers],
-            "kernels": kernel_info,
-            "compile": compile_info,
-            "machine": machine(),
-            "quick": quick,
-        }
-        with open(args.json, "w") as fh:
-            json.dump(_finite(doc), fh, indent=2)
-            fh.write("\n")
-    if args.plot and reports:
-        plot(reports, args.plot)
-    return 0
+def _write_json(path, reports, headline, notes, targets, verdicts, peers, kernel_info, compile_info,
+                quick) -> None:
+    """The ``--json`` document (schema in docs/numerics.md)."""
+    from labkit.numerics.report import machine
+
+    doc = {
+        "scenes": [p.row() for rep in reports for p in rep.points],
+        "headline": {
+            k: (v if isinstance(v, float) and math.isfinite(v) else None) for k, v in headline.items()
+        },
+        "headline_notes": {k: v for k, v in notes.items() if k != "speedup_detail"},
+        "headline_targets": targets,
+        "speedup": notes["speedup_detail"],
+        "references": {
+            rep.scene: {
+                "description": rep.reference.description,
+                "agreement": rep.reference.agreement,
+                "dop853_agreement": rep.reference.dop853_agreement,
+                "cross_checked": rep.reference.cross_checked,
+            }
+            for rep in reports
+        },
+        "orders": {rep.scene: rep.orders for rep in reports},
+        "cost_to_reach": {rep.scene: rep.cost for rep in reports},
+        "stress": [v.to_json() for v in verdicts],
+        "compiled_dop853": [c.to_json() for c in peers],
+        "kernels": kernel_info,
+        "compile": compile_info,
+        "machine": machine(),
+        "quick": quick,
+    }
+    with open(path, "w") as fh:
+        json.dump(_finite(doc), fh, indent=2)
+        fh.write("\n")
 
 
 def _finite(obj):
