@@ -40,7 +40,8 @@ def peer_available() -> bool:
 
 def peer_ladder(quick: bool) -> Ladder:
     """The sweep for the comparison: labkit's splittings, the peer and scipy's DOP853."""
-    steps = {"splitting4": [16, 32, 64, 128, 256, 512], "yoshida6": [8, 16, 32, 64, 128, 256]}
+    steps = {"splitting4": [16, 32, 64, 128, 256, 512], "yoshida6": [8, 16, 32, 64, 128, 256],
+             "kahanli8": [8, 12, 16, 24, 32, 48]}
     rtols = {PEER: list(PEER_RTOLS), SCIPY: [1e-6, 1e-9, 1e-12] if quick else list(PEER_RTOLS)}
     return Ladder(steps=steps, rtols=rtols)
 

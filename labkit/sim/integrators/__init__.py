@@ -27,6 +27,9 @@ SPLITTINGS = {
     "suzuki4": "suzuki4",
     "yoshida4": "yoshida4",
     "yoshida6": "yoshida6",
+    "kahanli6": "kahanli6",
+    "yoshida8": "yoshida8",
+    "kahanli8": "kahanli8",
     "strang": "strang",
 }
 REFERENCES = {"dop853": "DOP853", "radau": "Radau", "lsoda": "LSODA"}

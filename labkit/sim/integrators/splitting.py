@@ -12,7 +12,9 @@ The base method is a symmetric Strang splitting (Dullweber-Leimkuhler-McLachlan 
   ``pi_i *= exp(-c h / I_i)``).
 
 Symmetric compositions raise the order: Yoshida's triple jump and Suzuki's 5-stage (order 4),
-Yoshida's 7-stage (order 6). With ``h = T/N`` the Jacobi-type invariant of a uniformly driven
+Yoshida's 7-stage and Kahan-Li's 9-stage (order 6), Yoshida's 15-stage and Kahan-Li's 17-stage
+(order 8; Kahan and Li 1997, the coefficients tabulated in Hairer, Lubich and Wanner, Geometric
+Numerical Integration, V.3.2). With ``h = T/N`` the Jacobi-type invariant of a uniformly driven
 scene has no secular drift (NUMERICS.md 2.2). Force evaluations are shared between adjacent
 kicks (first-same-as-last), so a step of an s-stage method costs s force evaluations.
 
@@ -57,12 +59,33 @@ _P = 1.0 / (4.0 - 4.0 ** (1.0 / 3.0))
 _Y6 = [0.784513610477560, 0.235573213359357, -1.17767998417887]  # Yoshida (1990) solution A: w3, w2, w1
 _Y6_0 = 1.0 - 2.0 * sum(_Y6)
 
+#: Yoshida (1990) 8th order, solution D: w7 ... w1 (w0 = 1 - 2 sum)
+_Y8 = [0.914844246229740, 0.253693336566229, -1.44485223686048, -0.158240635368243, 1.93813913762276,
+       -1.96061023297549, 0.102799849391985]
+_Y8_0 = 1.0 - 2.0 * sum(_Y8)
+#: Kahan and Li (1997) s9odr6a: 9 stages, order 6 (gamma_1 ... gamma_5, symmetric)
+_KL6 = [0.39216144400731413928, 0.33259913678935943860, -0.70624617255763935981, 0.08221359629355080023,
+        0.79854399093482996340]
+#: Kahan and Li (1997) s17odr8a: 17 stages, order 8 (gamma_1 ... gamma_9, symmetric)
+_KL8 = [0.13020248308889008088, 0.56116298177510838456, -0.38947496264484728641, 0.15884190655515560090,
+        -0.39590389413323757734, 0.18453964097831570709, 0.25837438768632204729, 0.29501172360931029887,
+        -0.60550853383003451170]
+
+
+def _symmetric(half: list[float]) -> np.ndarray:
+    """Weights g_1 ... g_m, g_{m-1} ... g_1 from their first half (the middle one last)."""
+    return np.array(half + half[-2::-1])
+
+
 #: name -> (stage weights of the symmetric base method, order)
 COMPOSITIONS: dict[str, tuple[np.ndarray, int]] = {
     "strang": (np.array([1.0]), 2),
     "yoshida4": (np.array(_yoshida_triple([1.0], 2)), 4),
     "suzuki4": (np.array([_P, _P, 1.0 - 4.0 * _P, _P, _P]), 4),
     "yoshida6": (np.array([_Y6[0], _Y6[1], _Y6[2], _Y6_0, _Y6[2], _Y6[1], _Y6[0]]), 6),
+    "kahanli6": (_symmetric(_KL6), 6),
+    "yoshida8": (_symmetric(_Y8 + [_Y8_0]), 8),
+    "kahanli8": (_symmetric(_KL8), 8),
 }
 
 
