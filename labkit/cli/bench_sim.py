@@ -52,6 +52,9 @@ def register(benches: argparse._SubParsersAction) -> None:
     p.add_argument("--stress", default="all",
                    help="stress cases to run: all, none, or names or S-numbers, e.g. conical-exact,S7")
     p.add_argument("--target-error", type=float, help="also name the cheapest setting reaching this error")
+    p.add_argument("--memory-cycles", type=float, metavar="N",
+                   help="peak memory of `labkit simulate conical_5_1 --cycles N --decimate 1000` in a child "
+                   "process (default 1e6 in the full bench, skipped with --quick; 0 skips)")
     p.add_argument("--peer-scene", action="append",
                    help="scene for the compiled-DOP853 comparison (default conical_5_1 and mbs_fig6_1)")
     p.add_argument("--json", metavar="OUT", help="write the report as JSON")
@@ -95,6 +98,26 @@ def _kernel_section(quick: bool) -> dict:
     out["projected_1e4_points_1e3_cycles_min"] = (
         1e4 * 1e3 * 64 * out["large_batch"]["numba_ns_per_trajectory_step"] * 1e-9 / 60.0
     )
+    return out
+
+
+def _memory_section(cycles: float) -> dict:
+    """Peak resident memory of a long decimated ``labkit simulate`` run (a child process)."""
+    import resource
+    import subprocess
+    import sys
+
+    argv = [sys.executable, "-m", "labkit", "simulate", "conical_5_1", "--cycles", f"{cycles:g}",
+            "--decimate", "1000"]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    start = time.perf_counter()
+    proc = subprocess.run(argv, capture_output=True, text=True)
+    wall = time.perf_counter() - start
+    peak_mb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0  # kB on Linux
+    out = {"command": " ".join(["labkit"] + argv[3:]), "exit": proc.returncode, "wall_s": wall,
+           "peak_rss_mb": peak_mb, "peak_is_this_run": peak_mb * 1024.0 > before}
+    print(f"memory: `{out['command']}` peak RSS {peak_mb:.0f} MB in {wall:.1f} s (exit {proc.returncode}; "
+          "issue 15 target < 300 MB)")
     return out
 
 
@@ -253,9 +276,12 @@ def run(args: argparse.Namespace) -> int:
     kernel_info = _kernel_section(quick)
     _print_kernels(kernel_info)
 
+    memory_cycles = args.memory_cycles if args.memory_cycles is not None else (0 if quick else 1e6)
+    memory = _memory_section(memory_cycles) if memory_cycles > 0 else {}
     peers = _peer_section(cycles, quick, None if args.peer_scene is None else args.peer_scene)
     headline, notes = _headline(reports, verdicts, quick)
     headline.update(_peer_headline(peers, notes))
+    notes["memory"] = memory
     targets = target_verdicts(headline)
     print("headline:")
     for k, v in headline.items():

@@ -44,6 +44,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--samples-per-period", type=int, default=8, help="stored samples per period (default 8)")
     p.add_argument(
+        "--decimate",
+        type=int,
+        default=1,
+        metavar="K",
+        help="store every K-th sample only (and the last): K times less memory for long runs; the "
+        "invariant and quantities of interest are then taken on the stored samples",
+    )
+    p.add_argument(
         "--target-error",
         type=float,
         metavar="E",
@@ -93,6 +101,7 @@ def run(args: argparse.Namespace) -> int:
         rtol=args.rtol,
         drift_threshold=args.drift_threshold,
         system=system,
+        decimate=args.decimate,
     )
     if args.rerun:
         result.spec["rerun"] = args.rerun

@@ -15,7 +15,7 @@ import numpy as np
 
 from labkit.sim import equilibrium
 from labkit.sim.compile import CompiledSystem, compile_scene
-from labkit.sim.integrators import DEFAULT_INTEGRATOR, RawRun, get_integrator
+from labkit.sim.integrators import DEFAULT_INTEGRATOR, RawRun, SimulationError, get_integrator
 from labkit.sim.integrators.kernels import invariants_over_samples
 from labkit.sim.integrators.status import LABELS, MESSAGES, Status
 from labkit.sim.result import SimResult
@@ -36,11 +36,16 @@ def simulate(
     drift_threshold: float = 1e-6,
     rotation_threshold: float = 1e-6,
     system: CompiledSystem | None = None,
+    decimate: int = 1,
 ) -> SimResult:
     """Simulate ``cycles`` drive periods of ``scene`` (a :class:`Scene`, a TOML path or a bundled name).
 
     ``steps_per_period`` applies to splittings (automatic if None), ``rtol`` to scipy references.
+    ``decimate`` keeps every ``decimate``-th of the ``samples_per_period`` samples (and the last):
+    memory then grows as ``cycles * samples_per_period / decimate`` (long runs, docs/simulator.md).
     """
+    if not (isinstance(decimate, int) and decimate >= 1):
+        raise SimulationError(f"decimate must be a whole number >= 1, got {decimate!r}")
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
     system = system or compile_scene(scene)
@@ -48,7 +53,8 @@ def simulate(
     run = get_integrator(integrator)
     start = time.perf_counter()
     raw = run(
-        system, cycles, steps_per_period=steps_per_period, samples_per_period=samples_per_period, rtol=rtol
+        system, cycles, steps_per_period=steps_per_period, samples_per_period=samples_per_period, rtol=rtol,
+        decimate=decimate,
     )
     wall = time.perf_counter() - start - raw.extra.get("compile_s", 0.0)
     return assemble(scene, system, raw, cycles, wall, drift_threshold, rotation_threshold)

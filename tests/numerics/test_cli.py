@@ -23,6 +23,8 @@ def test_bench_sim_json_follows_the_issue_schema(tmp_path, capsys):
             "S9",
             "--peer-scene",
             "conical_5_1",
+            "--memory-cycles",
+            "200",
             "--json",
             str(out),
             "--plot",
@@ -39,6 +41,8 @@ def test_bench_sim_json_follows_the_issue_schema(tmp_path, capsys):
         "speedup_vs_compiled_dop853_at_equal_error",
         "compiled_dop853_drift_at_equal_cost_1e4_cycles",
     }
+    memory = doc["headline_notes"]["memory"]
+    assert memory["exit"] == 0 and memory["peak_rss_mb"] > 10 and "--decimate 1000" in memory["command"]
     peer = doc["compiled_dop853"]
     assert [c["scene"] for c in peer] == ["conical_5_1"]
     rows = peer[0]["by_target"]

@@ -26,7 +26,7 @@ from numba import carray, cfunc, njit, types
 from labkit.sim.compile import CompiledSystem
 from labkit.sim.integrators import RawRun, SimulationError, check_memory
 from labkit.sim.integrators.kernels import B_CLIN, B_CROT, B_MASS, I_TRANS, compute_forces
-from labkit.sim.integrators.reference import STRIDE, tolerance_scale
+from labkit.sim.integrators.reference import STRIDE, sample_times, tolerance_scale
 
 #: header of ``args``: body count, source count, gravity (3), wz, axis point (3), call count
 NB, NS, G, WZ, AXIS, COUNT, HEADER = 0, 1, 2, 5, 6, 9, 10
@@ -228,6 +228,7 @@ def run(
     rtol: float = 1e-10,
     samples_per_period: int = 8,
     t0: float = 0.0,
+    decimate: int = 1,
     **_: object,
 ) -> RawRun:
     """Integrate with CyRK's compiled DOP853; samples at exact multiples of ``T / samples_per_period``."""
@@ -236,8 +237,7 @@ def run(
                               f"({system.scene.name} compiles to {system.kind})")
     t_end = t0 + cycles * system.period
     n = int(round(cycles * samples_per_period))
-    t_eval = t0 + np.arange(n + 1) * (system.period / samples_per_period)
-    t_eval[-1] = min(t_eval[-1], t_end)
+    t_eval = sample_times(t0, t_end, n, system.period / samples_per_period, decimate)
     nb = system.bf.shape[0]
     check_memory(n + 2, nb)
     state0 = np.concatenate([system.x0, system.v0, system.R0.reshape(nb, 9), system.L0], axis=1).ravel()

@@ -47,6 +47,16 @@ def _rigid_rhs(system: CompiledSystem, counter: list[int]):
     return rhs
 
 
+def sample_times(t0: float, t_end: float, n: int, dt: float, decimate: int = 1) -> np.ndarray:
+    """Every ``decimate``-th of the ``n + 1`` sample times ``t0 + k dt``, and the last one (<= t_end)."""
+    k = np.arange(0, n + 1, decimate)
+    if k[-1] != n:
+        k = np.append(k, n)
+    t_eval = t0 + k * dt
+    t_eval[-1] = min(t_eval[-1], t_end)
+    return t_eval
+
+
 def tolerance_scale(system: CompiledSystem) -> np.ndarray:
     """Scale per state component (length, length * omega, 1, I * omega; inf for the extras, which
     are outputs, not steered): absolute tolerances are ``rtol`` times this (NUMERICS.md 3.1)."""
@@ -104,13 +114,13 @@ def run(
     rtol: float = 1e-10,
     samples_per_period: int = 8,
     t0: float = 0.0,
+    decimate: int = 1,
     **_: object,
 ) -> RawRun:
     """Integrate with ``solve_ivp(method)``; samples at exact multiples of ``T / samples_per_period``."""
     t_end = t0 + cycles * system.period
     n = int(round(cycles * samples_per_period))
-    t_eval = t0 + np.arange(n + 1) * (system.period / samples_per_period)
-    t_eval[-1] = min(t_eval[-1], t_end)
+    t_eval = sample_times(t0, t_end, n, system.period / samples_per_period, decimate)
     counter = [0]
     setting = {"method": method, "rtol": rtol, "samples_per_period": samples_per_period}
     if system.reduced is not None:

@@ -18,6 +18,7 @@ def run(
     steps_per_period: int | None = None,
     samples_per_period: int = 8,
     t0: float = 0.0,
+    decimate: int = 1,
     **_: object,
 ) -> RawRun:
     """Integrate ``cycles`` drive periods with ``h = T / steps_per_period`` (automatic if None)."""
@@ -35,7 +36,7 @@ def run(
         )
     h = system.period / steps_per_period
     n_steps = int(round(cycles * steps_per_period))
-    sample_every = steps_per_period // samples_per_period
+    sample_every = steps_per_period // samples_per_period * decimate
     n_out = n_steps // sample_every + 2
     setting = {
         "steps_per_period": steps_per_period,
@@ -44,6 +45,7 @@ def run(
         "order": order,
         "stages": len(weights),
         "samples_per_period": samples_per_period,
+        "decimate": decimate,
     }
     if system.reduced is not None:
         rf = system.reduced
