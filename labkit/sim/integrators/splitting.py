@@ -307,7 +307,7 @@ def store_sample(n, t, x, v, R, L, budget, out):
 
 
 @njit(cache=True, _nrt=False)
-def _health(x, v, L, bf):
+def health(x, v, L, bf):
     """ST_NONFINITE, ST_BLOWUP (|omega| > 1e9 rad/s or |v| > 1e6 m/s) or ST_OK."""
     big = False
     for b in range(x.shape[0]):
@@ -321,7 +321,7 @@ def _health(x, v, L, bf):
 
 
 @njit(cache=True, _nrt=False)
-def _event(x, v, xp, vp, bf, bi, src, r_escape, t, h):
+def step_event(x, v, xp, vp, bf, bi, src, r_escape, t, h):
     """(status, time) of a contact (Hermite root of the gap over the step) or an escape, else ST_OK."""
     gmin, ga, gk, go, far = _events(x, v, bf, bi, src)
     if ga >= 0 and gmin < 0.0:
@@ -384,9 +384,9 @@ def run_rigid(state, t0, h, n_steps, sample_every, weights, args, out, check_eve
                 damping_flow(x, v, R, L, bf, bi, 0.5 * hw, pi, wz, axis, acc)
         t = t0 + (step + 1) * h
         steps_done = step + 1
-        status = _health(x, v, L, bf)
+        status = health(x, v, L, bf)
         if status == ST_OK and check_events:
-            status, event_time = _event(x, v, xp, vp, bf, bi, src, r_escape, t, h)
+            status, event_time = step_event(x, v, xp, vp, bf, bi, src, r_escape, t, h)
         elif status != ST_OK:
             event_time = t
         if status != ST_OK:

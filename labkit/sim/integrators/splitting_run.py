@@ -6,7 +6,7 @@ import numpy as np
 
 from labkit.sim.compile import CompiledSystem
 from labkit.sim.integrators import RawRun, SimulationError, auto_steps_per_period, check_memory
-from labkit.sim.integrators.shapes import run_fixed_top, scene_shape
+from labkit.sim.integrators.shapes import run_fixed_top, run_free_pair, scene_shape
 from labkit.sim.integrators.splitting import COMPOSITIONS, run_reduced, run_rigid
 
 
@@ -108,6 +108,8 @@ def _integrate_rigid(
     args = system.kernel_args()
     if shape == "fixed_top":
         result = run_fixed_top(state, t0, h, n_steps, sample_every, weights, args, out, np.zeros(6))
+    elif shape == "free_pair":
+        result = run_free_pair(state, t0, h, n_steps, sample_every, weights, args, out, np.zeros((8, 3)))
     else:
         check_events = bool(system.bi[:, 0].any())
         result = run_rigid(state, t0, h, n_steps, sample_every, weights, args, out, check_events)
