@@ -96,14 +96,15 @@ def ratios_at_targets(report: SceneReport, targets=PEER_TARGETS) -> tuple[dict, 
 
 
 def _rtol_at_cost(report: SceneReport, wall_per_cycle: float) -> float:
-    """The peer's rtol whose cost per cycle in the sweep matches ``wall_per_cycle`` (log-log)."""
-    pts = sorted((p.wall_s / report.cycles, p.rtol) for p in report.points
-                 if p.integrator == PEER and p.rtol and math.isfinite(p.wall_s))
-    if not pts:
-        return math.nan
-    costs = np.log([c for c, _ in pts])
-    rtols = np.log([r for _, r in pts])
-    return float(np.exp(np.interp(math.log(wall_per_cycle), costs, rtols)))
+    """The peer's rtol whose cost per cycle matches ``wall_per_cycle``: a power law (log rtol
+    linear in log cost) fitted to the sweep, so a cost outside the sweep is extrapolated, not
+    clamped to its last rtol."""
+    pts = [(p.wall_s / report.cycles, p.rtol) for p in report.points
+           if p.integrator == PEER and p.rtol and math.isfinite(p.wall_s) and p.wall_s > 0]
+    if len(pts) < 2:
+        return pts[0][1] if pts else math.nan
+    slope, intercept = np.polyfit(np.log([c for c, _ in pts]), np.log([r for _, r in pts]), 1)
+    return float(np.clip(np.exp(intercept + slope * math.log(wall_per_cycle)), 1e-15, 1e-3))
 
 
 def drift_at_equal_cost(scene_name: str, report: SceneReport, cycles: float = LONG_CYCLES) -> dict:
