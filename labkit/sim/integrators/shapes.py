@@ -39,9 +39,14 @@ from labkit.sim.integrators.kernels import (
     I_DIPOLE,
     I_FREE,
     I_TRANS,
+    S_AXIS,
+    S_MOM,
+    S_OMEGA,
+    S_RAMP,
+    S_SHIFT,
+    S_TILT,
     dipole_force_torque,
-    source_state,
-    uniform_field,
+    source_angle,
 )
 from labkit.sim.integrators.splitting import (
     ST_BLOWUP,
@@ -74,8 +79,42 @@ def scene_shape(system) -> str:
 
 
 @njit(cache=True, _nrt=False)
-def _top_torque(t, M, bf, src, fld, flags, x, ft):
-    """Force and torque about the CM on the one body (into ``ft[0:6]``); fused, no loops over bodies."""
+def _drive_phases(t, src, fld, ph):
+    """cos and sin of every drive angle at ``t``: row 0 the field's, row 1 + s rotator s's."""
+    th = fld[4] + fld[3] * t
+    ph[0, 0], ph[0, 1] = math.cos(th), math.sin(th)
+    for s in range(src.shape[0]):
+        th = source_angle(src, s, t)
+        ph[1 + s, 0], ph[1 + s, 1] = math.cos(th), math.sin(th)
+
+
+@njit(cache=True, _nrt=False)
+def _advance_phases(base, turn, i, t, src, ph):
+    """Drive phases at stage ``i`` of a step: the step's ``base`` phases turned by the stage's
+    precomputed angle (``turn[d, i]``: cos, sin of rate x stage offset), two products instead
+    of a cos and a sin; a ramped rotator is evaluated directly at ``t``."""
+    for d in range(base.shape[0]):
+        if d > 0 and src[d - 1, S_RAMP] != 0.0:
+            th = source_angle(src, d - 1, t)
+            ph[d, 0], ph[d, 1] = math.cos(th), math.sin(th)
+            continue
+        c0, s0, c1, s1 = base[d, 0], base[d, 1], turn[d, i, 0], turn[d, i, 1]
+        ph[d, 0] = c0 * c1 - s0 * s1
+        ph[d, 1] = s0 * c1 + c0 * s1
+
+
+def stage_turns(weights, h, src, fld) -> np.ndarray:
+    """(drives, stages, 2): cos and sin of each drive's rate times each stage's offset in the step."""
+    offsets = np.cumsum(weights) * h
+    rates = np.concatenate([[fld[3]], src[:, S_OMEGA]])
+    angles = rates[:, None] * offsets[None, :]
+    return np.stack([np.cos(angles), np.sin(angles)], axis=-1)
+
+
+@njit(cache=True, _nrt=False)
+def _top_torque(M, bf, src, fld, flags, x, ft, ph):
+    """Force and torque about the CM on the one body (into ``ft[0:6]``) with the drive phases
+    ``ph`` (:func:`_drive_phases`); fused, no loops over bodies."""
     mx = M[0, 0] * bf[0, B_M] + M[0, 1] * bf[0, B_M + 1] + M[0, 2] * bf[0, B_M + 2]
     my = M[1, 0] * bf[0, B_M] + M[1, 1] * bf[0, B_M + 1] + M[1, 2] * bf[0, B_M + 2]
     mz = M[2, 0] * bf[0, B_M] + M[2, 1] * bf[0, B_M + 1] + M[2, 2] * bf[0, B_M + 2]
@@ -83,16 +122,23 @@ def _top_torque(t, M, bf, src, fld, flags, x, ft):
     oy = M[1, 0] * bf[0, B_OFF] + M[1, 1] * bf[0, B_OFF + 1] + M[1, 2] * bf[0, B_OFF + 2]
     oz = M[2, 0] * bf[0, B_OFF] + M[2, 1] * bf[0, B_OFF + 1] + M[2, 2] * bf[0, B_OFF + 2]
     fx = fy = fz = tx = ty = tz = 0.0
-    if flags[F_FIELD]:
-        bx, by, bz = uniform_field(fld, t)
+    if flags[F_FIELD]:  # Eq. 5.21 (rotating or static) or Eq. 5.481 (oscillating), as uniform_field
+        c, sn = ph[0, 0], ph[0, 1]
+        bx, by, bz = (-fld[1] * sn, fld[1] * c, fld[2]) if fld[0] == 1.0 else (0.0, fld[1] * c, fld[2])
         tx += my * bz - mz * by
         ty += mz * bx - mx * bz
         tz += mx * by - my * bx
     if flags[F_SOURCES]:
         px, py, pz = x[0, 0] + ox, x[0, 1] + oy, x[0, 2] + oz
         for s in range(src.shape[0]):
-            smx, smy, smz, spx, spy, spz = source_state(src, s, t)
-            f = dipole_force_torque(smx, smy, smz, mx, my, mz, px - spx, py - spy, pz - spz)
+            c, sn = ph[1 + s, 0], ph[1 + s, 1]  # Eq. 5.25, as source_state
+            mom, tilt = src[s, S_MOM], src[s, S_TILT]
+            m0y, m0z = -mom * math.cos(tilt), mom * math.sin(tilt)
+            sx, sy, sz = src[s, S_SHIFT], src[s, S_SHIFT + 1], src[s, S_SHIFT + 2]
+            spx = src[s, S_AXIS] + c * sx - sn * sy
+            spy = src[s, S_AXIS + 1] + sn * sx + c * sy
+            spz = src[s, S_AXIS + 2] + sz
+            f = dipole_force_torque(-sn * m0y, c * m0y, m0z, mx, my, mz, px - spx, py - spy, pz - spz)
             fx += f[0]
             fy += f[1]
             fz += f[2]
@@ -116,30 +162,37 @@ def _top_rotation(M, L, i_r, i_a, h):
 
 
 @njit(cache=True)
-def run_fixed_top(state, t0, h, n_steps, sample_every, weights, args, out, ft):
-    """The ``fixed_top`` kernel; ``state = (x, v, R, L)`` updated in place, ``ft`` scratch (6,)."""
+def run_fixed_top(state, t0, h, n_steps, sample_every, weights, args, out, turn):
+    """The ``fixed_top`` kernel; ``state = (x, v, R, L)`` updated in place; ``turn`` from
+    :func:`stage_turns` (the drive phases of each stage relative to its step's start)."""
     x, v, R, L = state
     bf, bi, src, fld, flags, g, axis, r_escape, wz = args
-    out_t, out_x, out_v, out_R, out_L, out_acc, impulse = out
+    impulse = out[6]
     M = R[0]
     i_r, i_a = bf[0, B_I], bf[0, B_I + 2]
+    ft = np.zeros(6)
+    base = np.empty((1 + src.shape[0], 2))
+    ph = np.empty((1 + src.shape[0], 2))
     t = t0
-    _top_torque(t, M, bf, src, fld, flags, x, ft)
+    _drive_phases(t, src, fld, ph)
+    _top_torque(M, bf, src, fld, flags, x, ft, ph)
     n_force = 1
     n_s = store_sample(0, t, x, v, R, L, 0.0, out)
     status = ST_OK
     event_time = math.nan
     steps_done = 0
     for step in range(n_steps):
-        for w in weights:
-            hw = w * h
+        _drive_phases(t, src, fld, base)
+        for i in range(weights.shape[0]):
+            hw = weights[i] * h
             half = 0.5 * hw
             for k in range(3):
                 L[0, k] += half * ft[3 + k]
                 impulse[0, k] += half * ft[k]
             _top_rotation(M, L, i_r, i_a, hw)
             t += hw
-            _top_torque(t, M, bf, src, fld, flags, x, ft)
+            _advance_phases(base, turn, i, t, src, ph)
+            _top_torque(M, bf, src, fld, flags, x, ft, ph)
             n_force += 1
             for k in range(3):
                 L[0, k] += half * ft[3 + k]

@@ -6,7 +6,7 @@ import numpy as np
 
 from labkit.sim.compile import CompiledSystem
 from labkit.sim.integrators import RawRun, SimulationError, auto_steps_per_period, check_memory
-from labkit.sim.integrators.shapes import run_fixed_top, run_free_pair, scene_shape
+from labkit.sim.integrators.shapes import run_fixed_top, run_free_pair, scene_shape, stage_turns
 from labkit.sim.integrators.splitting import COMPOSITIONS, run_reduced, run_rigid
 
 
@@ -107,7 +107,8 @@ def _integrate_rigid(
            np.empty((n_out, nb, 3)), np.zeros(n_out), np.zeros((nb, 3)))
     args = system.kernel_args()
     if shape == "fixed_top":
-        result = run_fixed_top(state, t0, h, n_steps, sample_every, weights, args, out, np.zeros(6))
+        turn = stage_turns(weights, h, system.src, system.fld)
+        result = run_fixed_top(state, t0, h, n_steps, sample_every, weights, args, out, turn)
     elif shape == "free_pair":
         result = run_free_pair(state, t0, h, n_steps, sample_every, weights, args, out, np.zeros((8, 3)))
     else:
