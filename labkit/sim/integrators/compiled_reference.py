@@ -167,9 +167,9 @@ def _solve(system: CompiledSystem, y0, t_span, t_eval, rtol: float, atols: np.nd
     """Run CyRK's C++ DOP853 through its C API; returns (t, y (n, len(y0)), success, message, calls)."""
     try:
         from CyRK.nb import numba_solver as cy
-    except ImportError:
+    except ImportError as exc:  # not installed, or a CPU its wheel cannot run on (CyRK says which)
         raise SimulationError(
-            "the compiled DOP853 needs CyRK: pip install 'labkit[bench]' (or pip install CyRK)"
+            f"the compiled DOP853 needs CyRK (pip install 'labkit[bench]'): {exc}"
         ) from None
     address = _rhs_address(len(y0), len(args))
     y0 = np.ascontiguousarray(y0, dtype=float)
