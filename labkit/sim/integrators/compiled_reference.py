@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import ctypes
 import math
+import sys
+import time
 
 import numpy as np
 from numba import carray, cfunc, njit, types
@@ -146,9 +148,11 @@ _SIGNATURE = types.void(types.CPointer(types.float64), types.float64, types.CPoi
 _RHS = None
 
 
-def _rhs_address(n_state: int, n_args: int) -> int:
-    """Address of the C right-hand side (compiled once per process; sizes are read from args)."""
+def _rhs_address() -> tuple[int, float]:
+    """Address of the C right-hand side (compiled or loaded once per process; sizes are read from
+    args) and the seconds that took on this call (0 after the first)."""
     global _RHS
+    start = time.perf_counter()
     if _RHS is None:
 
         @cfunc(_SIGNATURE, cache=True)
@@ -160,18 +164,24 @@ def _rhs_address(n_state: int, n_args: int) -> int:
             rigid_derivative(t, carray(y_ptr, (n,)), carray(dy_ptr, (n,)), carray(args_ptr, (total,)))
 
         _RHS = rhs
-    return _RHS.address
+        return _RHS.address, time.perf_counter() - start
+    return _RHS.address, 0.0
 
 
 def _solve(system: CompiledSystem, y0, t_span, t_eval, rtol: float, atols: np.ndarray, args: np.ndarray):
-    """Run CyRK's C++ DOP853 through its C API; returns (t, y (n, len(y0)), success, message, calls)."""
+    """Run CyRK's C++ DOP853 through its C API; returns (t, y (n, len(y0)), success, message, calls,
+    seconds spent compiling or loading the right-hand side)."""
+    start = time.perf_counter()
+    first = "CyRK.nb.numba_solver" not in sys.modules
     try:
         from CyRK.nb import numba_solver as cy
     except ImportError as exc:  # not installed, or a CPU its wheel cannot run on (CyRK says which)
         raise SimulationError(
             f"the compiled DOP853 needs CyRK (pip install 'labkit[bench]'): {exc}"
         ) from None
-    address = _rhs_address(len(y0), len(args))
+    address, compile_s = _rhs_address()
+    if first:  # importing CyRK's numba layer is a one-off cost, like compiling the right-hand side
+        compile_s = time.perf_counter() - start
     y0 = np.ascontiguousarray(y0, dtype=float)
     t_eval = np.ascontiguousarray(t_eval, dtype=float)
     rtols = np.array([rtol])
@@ -197,7 +207,7 @@ def _solve(system: CompiledSystem, y0, t_span, t_eval, rtol: float, atols: np.nd
         message = bytes(buf).split(b"\0", 1)[0].decode(errors="replace")
     finally:
         cy.c_free(ptr)
-    return t, y, success, message, calls
+    return t, y, success, message, calls, compile_s
 
 
 def _sample_events(system: CompiledSystem, x: np.ndarray) -> tuple[int, int]:
@@ -245,7 +255,7 @@ def run(
     scale = tolerance_scale(system)
     atols = np.where(np.isfinite(scale), rtol * scale, 1e300)
     args = pack_args(system)
-    t, full, success, message, calls = _solve(system, y0, (t0, t_end), t_eval, rtol, atols, args)
+    t, full, success, message, calls, compile_s = _solve(system, y0, (t0, t_end), t_eval, rtol, atols, args)
     setting = {"method": "CyRK " + method, "rtol": rtol, "samples_per_period": samples_per_period}
     ys = full[:, : nb * STRIDE].reshape(-1, nb, STRIDE)
     status, event_time = (0 if success else 5), math.nan
@@ -259,4 +269,5 @@ def run(
     x, v, R, L = ys[..., 0:3], ys[..., 3:6], ys[..., 6:15].reshape(-1, nb, 3, 3), ys[..., 15:18]
     impulse = full[-1, nb * STRIDE: nb * STRIDE + 3 * nb].reshape(nb, 3) if len(full) else np.zeros((nb, 3))
     return RawRun(name, setting, status, event_time, calls, t, x=x.copy(), v=v.copy(), R=R.copy(),
-                  L=L.copy(), impulse=impulse.copy(), budget=full[:, -1].copy(), message=message)
+                  L=L.copy(), impulse=impulse.copy(), budget=full[:, -1].copy(), message=message,
+                  extra={"compile_s": compile_s})
