@@ -22,6 +22,9 @@ TARGETS = {
     "max_invariant_drift_1e4_cycles": ("<=", 1e-10),
     "one_body_1e4_cycles_s": ("<=", 1.0),
     "two_body_1e4_cycles_s": ("<=", 5.0),
+    # issue 15: labkit faster than a compiled DOP853 at every target both reach
+    "speedup_vs_compiled_dop853_at_equal_error": (">=", 1.0),
+    "compiled_dop853_drift_at_equal_cost_1e4_cycles": ("report", math.inf),
 }
 
 
@@ -30,6 +33,9 @@ def target_verdicts(headline: dict) -> dict:
     out = {}
     for key, (op, bound) in TARGETS.items():
         v = headline.get(key)
+        if op == "report":  # a number to compare, no target of its own
+            out[key] = {"target": "reported", "met": v is not None and math.isfinite(v)}
+            continue
         ok = v is not None and math.isfinite(v) and (v >= bound if op == ">=" else v <= bound)
         out[key] = {"target": f"{op} {bound:g}", "met": bool(ok)}
     return out
@@ -43,8 +49,14 @@ def register(benches: argparse._SubParsersAction) -> None:
     p.add_argument("--scene", action="append", help="scene (bundled name or TOML); repeatable")
     p.add_argument("--quick", action="store_true", help="short horizons and ladders (under a minute)")
     p.add_argument("--cycles", type=float, help="work-precision horizon in drive cycles")
-    p.add_argument("--stress", default="all", help="stress cases to run: all, none or e.g. S1,S7")
+    p.add_argument("--stress", default="all",
+                   help="stress cases to run: all, none, or names or S-numbers, e.g. conical-exact,S7")
     p.add_argument("--target-error", type=float, help="also name the cheapest setting reaching this error")
+    p.add_argument("--memory-cycles", type=float, metavar="N",
+                   help="peak memory of `labkit simulate conical_5_1 --cycles N --decimate 1000` in a child "
+                   "process (default 1e6 in the full bench, skipped with --quick; 0 skips)")
+    p.add_argument("--peer-scene", action="append",
+                   help="scene for the compiled-DOP853 comparison (default conical_5_1 and mbs_fig6_1)")
     p.add_argument("--json", metavar="OUT", help="write the report as JSON")
     p.add_argument("--plot", metavar="OUT.png", help="plot wall time against error")
     p.set_defaults(func=run)
@@ -87,6 +99,63 @@ def _kernel_section(quick: bool) -> dict:
         1e4 * 1e3 * 64 * out["large_batch"]["numba_ns_per_trajectory_step"] * 1e-9 / 60.0
     )
     return out
+
+
+def _memory_section(cycles: float) -> dict:
+    """Peak resident memory of a long decimated ``labkit simulate`` run (a child process)."""
+    import resource
+    import subprocess
+    import sys
+
+    argv = [sys.executable, "-m", "labkit", "simulate", "conical_5_1", "--cycles", f"{cycles:g}",
+            "--decimate", "1000"]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    start = time.perf_counter()
+    proc = subprocess.run(argv, capture_output=True, text=True)
+    wall = time.perf_counter() - start
+    peak_mb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0  # kB on Linux
+    out = {"command": " ".join(["labkit"] + argv[3:]), "exit": proc.returncode, "wall_s": wall,
+           "peak_rss_mb": peak_mb, "peak_is_this_run": peak_mb * 1024.0 > before}
+    print(f"memory: `{out['command']}` peak RSS {peak_mb:.0f} MB in {wall:.1f} s (exit {proc.returncode}; "
+          "issue 15 target < 300 MB)")
+    return out
+
+
+def _peer_section(cycles: float, quick: bool, scenes: list[str] | None) -> list:
+    """labkit against CyRK's compiled DOP853 (the ``bench`` extra); [] when CyRK is missing."""
+    from labkit.numerics.peer import PEER_SCENES, compare, peer_available, peer_lines
+
+    if not peer_available():
+        print("compiled DOP853 peer skipped: CyRK is not installed (pip install 'labkit[bench]')")
+        return []
+    out = []
+    for name in scenes or PEER_SCENES:
+        comp = compare(name, cycles, quick)
+        print("\n".join(peer_lines(comp)))
+        print(f"  reference: {comp.report.reference.description}")
+        out.append(comp)
+    return out
+
+
+def _peer_headline(peers: list, notes: dict) -> dict:
+    """The two headline keys of the comparison with the compiled DOP853 (NaN without CyRK)."""
+    if not peers:
+        notes["speedup_vs_compiled_dop853_at_equal_error"] = "CyRK not installed: not measured"
+        return {"speedup_vs_compiled_dop853_at_equal_error": math.nan,
+                "compiled_dop853_drift_at_equal_cost_1e4_cycles": math.nan}
+    ratios = {c.scene: c.min_ratio for c in peers}
+    drifts = {c.scene: c.drift.get("peer", {}).get("invariant_drift", math.nan) for c in peers}
+    ours = {c.scene: c.drift.get("labkit", {}).get("invariant_drift", math.nan) for c in peers}
+    notes["speedup_vs_compiled_dop853_at_equal_error"] = (
+        "CyRK DOP853 / labkit's cheapest splitting wall time, smallest over the targets 1e-4..1e-10 "
+        f"both reach and over the scenes: {json.dumps({k: round(v, 2) for k, v in ratios.items()})}"
+    )
+    notes["compiled_dop853_drift_at_equal_cost_1e4_cycles"] = (
+        f"largest over the scenes {json.dumps({k: float(f'{v:.3g}') for k, v in drifts.items()})}; "
+        f"labkit splitting4 at the same cost: {json.dumps({k: float(f'{v:.3g}') for k, v in ours.items()})}"
+    )
+    return {"speedup_vs_compiled_dop853_at_equal_error": min(ratios.values()),
+            "compiled_dop853_drift_at_equal_cost_1e4_cycles": max(drifts.values())}
 
 
 def _headline(reports, verdicts, quick: bool) -> tuple[dict, dict]:
@@ -138,8 +207,8 @@ def _headline(reports, verdicts, quick: bool) -> tuple[dict, dict]:
             speed["at_default_setting_error"] = at_default["by_target"]
         by_target = json.dumps({k: round(v, 1) for k, v in speed["by_target"].items()})
         notes["speedup_vs_dop853_at_equal_error"] = (
-            f"{first.scene} over {first.cycles:g} cycles: smallest DOP853/splitting4 wall-time ratio "
-            f"over the targets both reach; by target {by_target}"
+            f"{first.scene} over {first.cycles:g} cycles: smallest scipy DOP853 (compiled right-hand "
+            f"side)/splitting4 wall-time ratio over the targets both reach; by target {by_target}"
         )
     headline = {
         "speedup_vs_dop853_at_equal_error": speed["headline"],
@@ -155,7 +224,7 @@ def run(args: argparse.Namespace) -> int:
     from labkit.numerics import Ladder, require_target, work_precision
     from labkit.numerics.checks import NumericsError, check_horizon, check_rtol
     from labkit.numerics.report import fmt, machine, plot, scene_lines, verdict_lines
-    from labkit.numerics.stress import CASES, run_stress_cases
+    from labkit.numerics.stress import CASES, NAMES, case_id, run_stress_cases
 
     if args.target_error is not None:
         check_rtol(max(args.target_error, 1e-14))
@@ -167,9 +236,11 @@ def run(args: argparse.Namespace) -> int:
     stress = (
         [] if args.stress == "none" else (list(CASES) if args.stress == "all" else args.stress.split(","))
     )
-    unknown = [s for s in stress if s not in CASES]
+    unknown = [s for s in stress if case_id(s) is None]
     if unknown:
-        raise NumericsError(f"unknown stress case(s) {', '.join(unknown)} (choose from {', '.join(CASES)})")
+        known = ", ".join(f"{k}/{NAMES[k]}" for k in CASES)
+        raise NumericsError(f"unknown stress case(s) {', '.join(unknown)} (choose from {known})")
+    stress = [case_id(s) for s in stress]
     quick = args.quick
     scenes = args.scene or (QUICK_SCENES if quick else FULL_SCENES)
     cycles = args.cycles or (10 if quick else 20)
@@ -203,7 +274,33 @@ def run(args: argparse.Namespace) -> int:
         print("\n".join(verdict_lines(verdicts)))
 
     kernel_info = _kernel_section(quick)
-    k = kernel_info
+    _print_kernels(kernel_info)
+
+    memory_cycles = args.memory_cycles if args.memory_cycles is not None else (0 if quick else 1e6)
+    memory = _memory_section(memory_cycles) if memory_cycles > 0 else {}
+    peers = _peer_section(cycles, quick, None if args.peer_scene is None else args.peer_scene)
+    headline, notes = _headline(reports, verdicts, quick)
+    headline.update(_peer_headline(peers, notes))
+    notes["memory"] = memory
+    targets = target_verdicts(headline)
+    print("headline:")
+    for k, v in headline.items():
+        note = notes.get(k)
+        mark = f"[{'met' if targets[k]['met'] else 'NOT MET'}: target {targets[k]['target']}]"
+        print(f"  {k} = {fmt(v, '.3g')}  {mark}" + (f"  ({note})" if note else ""))
+    if "secular_growth" in notes:
+        print(f"  secular growth: {notes['secular_growth']}")
+    print(f"bench sim finished in {time.perf_counter() - started:.1f} s")
+
+    if args.json:
+        _write_json(args.json, reports, headline, notes, targets, verdicts, peers, kernel_info, compile_info,
+                    quick)
+    if args.plot and reports:
+        plot(reports, args.plot)
+    return 0
+
+
+def _print_kernels(k: dict) -> None:
     print(
         f"batch kernels on Table 5.3's {k['batch']} rows x {k['periods']} periods x 64 steps: "
         f"numba {k['numba_ns_per_trajectory_step']:.0f} ns/trajectory-step, numpy "
@@ -223,49 +320,41 @@ def run(args: argparse.Namespace) -> int:
         f"{k['projected_1e4_points_1e3_cycles_min']:.1f} min (NUMERICS.md T5 target: 15 min)"
     )
 
-    headline, notes = _headline(reports, verdicts, quick)
-    targets = target_verdicts(headline)
-    print("headline:")
-    for k, v in headline.items():
-        note = notes.get(k)
-        mark = f"[{'met' if targets[k]['met'] else 'NOT MET'}: target {targets[k]['target']}]"
-        print(f"  {k} = {fmt(v, '.3g')}  {mark}" + (f"  ({note})" if note else ""))
-    if "secular_growth" in notes:
-        print(f"  secular growth: {notes['secular_growth']}")
-    print(f"bench sim finished in {time.perf_counter() - started:.1f} s")
 
-    if args.json:
-        doc = {
-            "scenes": [p.row() for rep in reports for p in rep.points],
-            "headline": {
-                k: (v if isinstance(v, float) and math.isfinite(v) else None) for k, v in headline.items()
-            },
-            "headline_notes": {k: v for k, v in notes.items() if k != "speedup_detail"},
-            "headline_targets": targets,
-            "speedup": notes["speedup_detail"],
-            "references": {
-                rep.scene: {
-                    "description": rep.reference.description,
-                    "agreement": rep.reference.agreement,
-                    "dop853_agreement": rep.reference.dop853_agreement,
-                    "cross_checked": rep.reference.cross_checked,
-                }
-                for rep in reports
-            },
-            "orders": {rep.scene: rep.orders for rep in reports},
-            "cost_to_reach": {rep.scene: rep.cost for rep in reports},
-            "stress": [v.to_json() for v in verdicts],
-            "kernels": kernel_info,
-            "compile": compile_info,
-            "machine": machine(),
-            "quick": quick,
-        }
-        with open(args.json, "w") as fh:
-            json.dump(_finite(doc), fh, indent=2)
-            fh.write("\n")
-    if args.plot and reports:
-        plot(reports, args.plot)
-    return 0
+def _write_json(path, reports, headline, notes, targets, verdicts, peers, kernel_info, compile_info,
+                quick) -> None:
+    """The ``--json`` document (schema in docs/numerics.md)."""
+    from labkit.numerics.report import machine
+
+    doc = {
+        "scenes": [p.row() for rep in reports for p in rep.points],
+        "headline": {
+            k: (v if isinstance(v, float) and math.isfinite(v) else None) for k, v in headline.items()
+        },
+        "headline_notes": {k: v for k, v in notes.items() if k != "speedup_detail"},
+        "headline_targets": targets,
+        "speedup": notes["speedup_detail"],
+        "references": {
+            rep.scene: {
+                "description": rep.reference.description,
+                "agreement": rep.reference.agreement,
+                "dop853_agreement": rep.reference.dop853_agreement,
+                "cross_checked": rep.reference.cross_checked,
+            }
+            for rep in reports
+        },
+        "orders": {rep.scene: rep.orders for rep in reports},
+        "cost_to_reach": {rep.scene: rep.cost for rep in reports},
+        "stress": [v.to_json() for v in verdicts],
+        "compiled_dop853": [c.to_json() for c in peers],
+        "kernels": kernel_info,
+        "compile": compile_info,
+        "machine": machine(),
+        "quick": quick,
+    }
+    with open(path, "w") as fh:
+        json.dump(_finite(doc), fh, indent=2)
+        fh.write("\n")
 
 
 def _finite(obj):

@@ -19,16 +19,16 @@ import tempfile
 import time
 from dataclasses import replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from labkit.synth import laser_truth, render_laser, write_clip
-from labkit.synth.presets import laser_pattern, laser_preset
-from labkit.vision.curves import rotation_error_deg
-from labkit.vision.frames import open_frames
-from labkit.vision.laser import LaserQuality, accumulate, analyse_laser
+if TYPE_CHECKING:  # OpenCV and the vision stack load when the benchmark runs, not for --help
+    from labkit.vision.laser import LaserQuality
 
 
 def settings(roi: tuple[int, int, int, int]) -> list[tuple[str, LaserQuality]]:
     """The quality settings compared; ``roi`` is a box around the pattern (as a user would set)."""
+    from labkit.vision.laser import LaserQuality
+
     return [
         ("full (stride 1, whole frame, sub-pixel, auto)", LaserQuality()),
         ("stride 1, luma forced (no colour probe)", LaserQuality(luma=True)),
@@ -86,6 +86,8 @@ def _spread(values: list[float]) -> str:
 
 
 def _errors(result: dict, truth: dict) -> str:
+    from labkit.vision.curves import rotation_error_deg
+
     p, t = result["pattern"], truth["pattern"]
     if p["type"] == "none":
         return f"no pattern ({p['reason']})"
@@ -102,6 +104,11 @@ def _errors(result: dict, truth: dict) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    from labkit.synth import laser_truth, render_laser, write_clip
+    from labkit.synth.presets import laser_pattern, laser_preset
+    from labkit.vision.frames import open_frames
+    from labkit.vision.laser import LaserQuality, accumulate, analyse_laser
+
     w, h = args.size
     kw = {"ellipticity": 0.3, "rotation_deg": 35} if args.pattern == "ellipse" else {"loops": 4, "b": 0.3}
     spec = replace(

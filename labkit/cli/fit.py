@@ -18,11 +18,8 @@ import math
 import sys
 from pathlib import Path
 
+from labkit.cli.names import FIT_MODELS, PAPER_OMEGA_C
 from labkit.errors import FitError
-from labkit.fit.data import load_tables, write_table
-from labkit.fit.models import MODELS, PAPER_OMEGA_C
-from labkit.fit.table_fit import FitOptions, fit_table
-from labkit.fit.text import format_report
 from labkit.stream.core import add_rerun_argument
 
 
@@ -32,7 +29,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("input", nargs="+",
                    help="session directory, results JSON, CSV with a header row, or `labkit analyse "
                    "--json` files (several, a folder of them or a glob pattern: one row per clip)")
-    p.add_argument("--model", required=True, choices=list(MODELS), help="model to fit")
+    p.add_argument("--model", required=True, choices=list(FIT_MODELS), help="model to fit")
     p.add_argument("--x", help="x column (default per model, see docs/fitting.md)")
     p.add_argument("--y", help="y column")
     p.add_argument("--sigma", help="column of y uncertainties (default: <y>_stderr if present)")
@@ -86,6 +83,10 @@ def parse_fixes(items: list[str]) -> dict[str, float]:
 
 
 def run(args: argparse.Namespace) -> int:
+    from labkit.fit.data import load_tables, write_table
+    from labkit.fit.table_fit import FitOptions, fit_table
+    from labkit.fit.text import format_report
+
     inertia = args.inertia
     if inertia is None and len(args.input) == 1 and Path(args.input[0]).is_dir():
         from labkit.report.build import floator_inertia

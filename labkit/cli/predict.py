@@ -21,17 +21,19 @@ import json
 import math
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from labkit.predict.estimate import Estimate
 from labkit.predict.inputs import (
     PredictInputError,
     check_remanence,
     magnet_option,
     magnets_from_rig,
 )
-from labkit.predict.pair import Pair
-from labkit.predict.predictor import RPM, Prediction, predict
-from labkit.predict.stability_map import MapSpecError, evaluate_points, grid_points, parse_axis, render_map
+
+if TYPE_CHECKING:  # the modules behind these import scipy and numba: loaded when a command runs
+    from labkit.predict.estimate import Estimate
+    from labkit.predict.pair import Pair
+    from labkit.predict.predictor import Prediction
 
 ORDER = ("bound", "r_eq_mm", "axial_stiffness_N_m", "axial_stiffness_sim_N_m", "lateral_stiffness_N_m",
          "cone_angle_deg", "cone_angle_steady_deg", "lateral_circle_mm", "pfr_force_N", "attraction_N",
@@ -70,6 +72,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _pair(args: argparse.Namespace) -> Pair:
+    from labkit.predict.pair import Pair
+
     remanence = check_remanence(args.remanence_t, args.grade)
     grade = args.grade or ""
     rotator = floator = None
@@ -95,6 +99,8 @@ def _pair(args: argparse.Namespace) -> Pair:
 
 
 def run(args: argparse.Namespace) -> int:
+    from labkit.predict.predictor import RPM, predict
+
     pair = _pair(args)
     if args.speed_rpm is not None and not (math.isfinite(args.speed_rpm) and args.speed_rpm > 0):
         raise PredictInputError(f"--speed-rpm: must be positive, got {args.speed_rpm}")
@@ -187,6 +193,13 @@ def format_prediction(pred: Prediction) -> str:
 
 def _run_map(args: argparse.Namespace, pair: Pair) -> int:
     from labkit.numerics.sweep import run_sweep
+    from labkit.predict.stability_map import (
+        MapSpecError,
+        evaluate_points,
+        grid_points,
+        parse_axis,
+        render_map,
+    )
 
     try:
         axes = dict(parse_axis(a) for a in args.map)

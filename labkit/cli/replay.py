@@ -16,7 +16,7 @@ from labkit.cli.run import close_sinks
 from labkit.protocols.events import FlagTally
 from labkit.protocols.launch import replay_session
 from labkit.session import export_csv, load_session
-from labkit.stream import add_rerun_argument, run_sink
+from labkit.stream import add_rerun_argument
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -32,6 +32,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
+    from labkit.stream import run_sink
+
     if args.export_csv:
         record = load_session(args.session)
         problems: list[str] = []

@@ -9,9 +9,7 @@ from __future__ import annotations
 
 import argparse
 
-from labkit.fit.models import MODELS
-from labkit.fit.overlay import overlays_from_csv
-from labkit.report.build import build_report
+from labkit.cli.names import FIT_MODELS
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -19,7 +17,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("source", help="session directory, results JSON, CSV, or video analysis JSON")
     p.add_argument("--out", help="output folder (default: SESSION/report or RESULT-report)")
-    p.add_argument("--model", choices=list(MODELS), help="fit this model only (needed for plain CSVs "
+    p.add_argument("--model", choices=list(FIT_MODELS), help="fit this model only (needed for plain CSVs "
                    "whose columns do not say what they are)")
     p.add_argument("--x", help="x column for --model")
     p.add_argument("--y", help="y column for --model")
@@ -32,6 +30,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from labkit.fit.overlay import overlays_from_csv
+    from labkit.report.build import build_report
+
     overlays = tuple(ov for csv in args.overlay for ov in overlays_from_csv(csv))
     path = build_report(args.source, args.out, model=args.model, x=args.x, y=args.y,
                         inertia=args.inertia, overlays=overlays)

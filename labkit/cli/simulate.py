@@ -14,8 +14,7 @@ import json
 import math
 import sys
 
-from labkit.sim import DEFAULT_INTEGRATOR, INTEGRATORS, bundled_scenes, compile_scene, load_scene
-from labkit.sim.run import simulate
+from labkit.sim.integrators import DEFAULT_INTEGRATOR, INTEGRATORS
 
 SINK_MODULE = "labkit.stream.sim_sink"
 
@@ -44,6 +43,21 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="fixed steps per drive period for splittings (default: automatic)",
     )
     p.add_argument("--samples-per-period", type=int, default=8, help="stored samples per period (default 8)")
+    p.add_argument(
+        "--decimate",
+        type=int,
+        default=1,
+        metavar="K",
+        help="store every K-th sample only (and the last): K times less memory for long runs; the "
+        "invariant and quantities of interest are then taken on the stored samples",
+    )
+    p.add_argument(
+        "--target-error",
+        type=float,
+        metavar="E",
+        help="choose the splitting (order 4, 6 or 8) and steps per period that reach this stroboscopic "
+        "error over the run, from short pilot runs (overrides --integrator and --steps-per-period)",
+    )
     p.add_argument("--rtol", type=float, default=1e-10, help="relative tolerance of scipy references")
     p.add_argument(
         "--drift-threshold",
@@ -62,6 +76,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from labkit.sim import bundled_scenes, compile_scene, load_scene, simulate
+
     if args.list:
         for name in bundled_scenes():
             print(name)
@@ -74,6 +90,8 @@ def run(args: argparse.Namespace) -> int:
     if args.compile_only:
         print(json.dumps(system.summary(), indent=2))
         return 0
+    if args.target_error is not None:
+        _choose(args, scene, system)
     result = simulate(
         scene,
         cycles=args.cycles,
@@ -83,6 +101,7 @@ def run(args: argparse.Namespace) -> int:
         rtol=args.rtol,
         drift_threshold=args.drift_threshold,
         system=system,
+        decimate=args.decimate,
     )
     if args.rerun:
         result.spec["rerun"] = args.rerun
@@ -91,6 +110,20 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         result.write_json(args.json, series=args.series)
     return 0 if result.ok else 1
+
+
+def _choose(args: argparse.Namespace, scene, system) -> None:
+    """Set ``args.integrator`` and ``args.steps_per_period`` for ``--target-error``."""
+    from labkit.numerics.checks import NumericsError
+    from labkit.numerics.choose import choose
+
+    target = args.target_error
+    if not (math.isfinite(target) and 0 < target < 1):
+        raise NumericsError(f"--target-error must be between 0 and 1, got {target:g}")
+    cycles = float(args.cycles if args.cycles is not None else scene.cycles)
+    choice = choose(scene, system, cycles, target, samples_per_period=args.samples_per_period)
+    print(choice.line())
+    args.integrator, args.steps_per_period = choice.integrator, choice.steps_per_period
 
 
 def _stream(result, spec: str) -> None:

@@ -12,10 +12,12 @@ import argparse
 import math
 from dataclasses import replace
 from pathlib import Path
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from labkit.errors import VideoError
+
+if TYPE_CHECKING:  # numpy loads when a clip is written, not for --help
+    import numpy as np
 
 
 def _size(text: str) -> tuple[int, int]:
@@ -103,6 +105,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def load_angles(path: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(t_s, tilt_x_rad, tilt_y_rad)`` from a CSV (optional header), .npy (N, 3) or .npz."""
+    import numpy as np
+
     p = Path(path)
     if not p.exists():
         raise VideoError(path, "no such file")
@@ -125,6 +129,8 @@ def load_angles(path: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def run_laser(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from labkit.synth import laser_truth, positions_from_angles, render_laser, write_clip
     from labkit.synth.presets import laser_pattern, laser_preset
 

@@ -10,18 +10,44 @@ Sweeps (stability maps) live in :mod:`labkit.numerics.sweep`; the batch kernels 
 :mod:`labkit.numerics.kernels`. ``labkit bench sim`` and ``labkit sweep`` are the commands.
 """
 
-from labkit.numerics.checks import NumericsError, check_horizon, check_rtol, check_steps
-from labkit.numerics.workprecision import (
-    TARGETS,
-    Ladder,
-    Point,
-    Reference,
-    SceneReport,
-    reference,
-    require_target,
-    speedup_at_equal_error,
-    work_precision,
-)
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING
+
+#: where each public name lives; imported on first use (PEP 562) so that importing
+#: ``labkit.numerics.checks`` (argument checks of ``labkit sweep``) does not load numba and scipy.
+_HOME = {
+    **{name: "labkit.numerics.checks" for name in (
+        "NumericsError", "check_horizon", "check_rtol", "check_steps")},
+    **{name: "labkit.numerics.workprecision" for name in (
+        "TARGETS", "Ladder", "Point", "Reference", "SceneReport", "reference", "require_target",
+        "speedup_at_equal_error", "work_precision")},
+}
+
+if TYPE_CHECKING:  # pragma: no cover
+    from labkit.numerics.checks import NumericsError, check_horizon, check_rtol, check_steps
+    from labkit.numerics.workprecision import (
+        TARGETS,
+        Ladder,
+        Point,
+        Reference,
+        SceneReport,
+        reference,
+        require_target,
+        speedup_at_equal_error,
+        work_precision,
+    )
+
+
+def __getattr__(name: str):
+    home = _HOME.get(name)
+    if home is None:
+        raise AttributeError(f"module 'labkit.numerics' has no attribute {name!r}")
+    value = getattr(importlib.import_module(home), name)
+    globals()[name] = value
+    return value
+
 
 __all__ = [
     "TARGETS",

@@ -64,7 +64,8 @@ def scene_lines(rep: SceneReport) -> list[str]:
 def verdict_lines(verdicts: list[Verdict]) -> list[str]:
     lines = ["stress cases (NUMERICS.md 5.4):"]
     for v in verdicts:
-        lines.append(f"  {v.id:<4} {'met    ' if v.met else 'NOT MET'}  {v.case}")
+        label = f"{v.name} ({v.id})" if v.name else v.id
+        lines.append(f"  {label:<36} {'met    ' if v.met else 'NOT MET'}  {v.case}")
         lines.append(f"       criterion: {v.criterion}")
         nums = ", ".join(f"{k}={_short(x)}" for k, x in v.measured.items())
         lines.append(f"       measured ({v.cycles:g} cycles, {v.wall_s:.2g} s): {nums}")

@@ -10,22 +10,54 @@ Public interface::
 ``SimResult.poses()``.
 """
 
-from labkit.sim.compile import CompiledSystem, compile_scene
-from labkit.sim.integrators import DEFAULT_INTEGRATOR, INTEGRATORS, SimulationError
-from labkit.sim.result import SimResult
-from labkit.sim.run import simulate
-from labkit.sim.scene import (
-    Body,
-    Rotator,
-    Scene,
-    SceneError,
-    Shape,
-    UniformField,
-    bundled_scenes,
-    load_scene,
-    scene_from_dict,
-    validate_scene,
-)
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING
+
+#: where each public name lives; imported on first use (PEP 562) so that ``labkit --help``
+#: and ``import labkit.sim.scene`` do not pay for numba and scipy.
+_HOME = {
+    "CompiledSystem": "labkit.sim.compile",
+    "compile_scene": "labkit.sim.compile",
+    "DEFAULT_INTEGRATOR": "labkit.sim.integrators",
+    "INTEGRATORS": "labkit.sim.integrators",
+    "SimulationError": "labkit.sim.integrators",
+    "SimResult": "labkit.sim.result",
+    "simulate": "labkit.sim.run",
+    **{name: "labkit.sim.scene" for name in (
+        "Body", "Rotator", "Scene", "SceneError", "Shape", "UniformField", "bundled_scenes",
+        "load_scene", "scene_from_dict")},
+    "validate_scene": "labkit.sim.scene_checks",
+}
+
+if TYPE_CHECKING:  # pragma: no cover
+    from labkit.sim.compile import CompiledSystem, compile_scene
+    from labkit.sim.integrators import DEFAULT_INTEGRATOR, INTEGRATORS, SimulationError
+    from labkit.sim.result import SimResult
+    from labkit.sim.run import simulate
+    from labkit.sim.scene import (
+        Body,
+        Rotator,
+        Scene,
+        SceneError,
+        Shape,
+        UniformField,
+        bundled_scenes,
+        load_scene,
+        scene_from_dict,
+    )
+    from labkit.sim.scene_checks import validate_scene
+
+
+def __getattr__(name: str):
+    home = _HOME.get(name)
+    if home is None:
+        raise AttributeError(f"module 'labkit.sim' has no attribute {name!r}")
+    value = getattr(importlib.import_module(home), name)
+    globals()[name] = value
+    return value
+
 
 __all__ = [
     "Body",

@@ -15,6 +15,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -79,6 +80,16 @@ class CompiledSystem:
     length_scale: float = 1e-3
     reduced: ReducedForm | None = None
     wz: float = 0.0  # signed drive speed in the Jacobi constant K = E - wz J_z
+
+    def kernel_args(self) -> tuple:
+        """The step kernels' scene arguments, packed once: ``(bf, bi, src, fld, flags, g, axis,
+        r_escape, wz)`` (the layout of :mod:`labkit.sim.integrators.kernels`)."""
+        packed = self.__dict__.get("_kernel_args")
+        if packed is None:
+            packed = (self.bf, self.bi, self.src, self.fld, self.flags, self.g, self.axis,
+                      float(self.r_escape), float(self.wz))
+            self.__dict__["_kernel_args"] = packed
+        return packed
 
     def summary(self) -> dict:
         """JSON-ready description of the compiled system."""
@@ -163,66 +174,86 @@ def _try_reduced(scene: Scene) -> tuple[ReducedForm | None, str]:
     return None, "dipole or spin not confined to the field's plane"
 
 
+Note = Callable[[str, str, str], None]
+
+
 def compile_scene(scene: Scene, reduce: bool = True) -> CompiledSystem:
     """Compile ``scene`` (see module docstring); the result's ``report`` lists every decision.
 
     ``reduce=False`` keeps the full rigid-body system even when a reduced form applies
-    (to cross-check the reduction or to benchmark it).
+    (to cross-check the reduction or to benchmark it). Each decision is one function below.
     """
     report: list[dict] = []
 
     def note(item: str, action: str, reason: str) -> None:
         report.append({"item": item, "action": action, "reason": reason})
 
-    omega = scene.drive_omega()
-    period = scene.period()
     reduced, why_not = _try_reduced(scene) if reduce else (None, "switched off (reduce=False)")
     if reduced is not None:
-        kind = "reduced_1dof" if reduced.form == 0 else "planar"
-        note(
-            "rotation",
-            "reduced",
-            f"one isotropic body with dipole and spin in the field's plane: "
-            f"integrating {reduced.equation} (one angle, one rate)",
-        )
-        note("translation", "dropped", "uniform field exerts no force; the CM moves in closed form")
-        for absent in ("gravity", "damping"):
-            note(absent, "dropped", "acts on translation only, which is not integrated")
-        inv, why = (
-            ("jacobi", "planar Jacobi constant K = p^2/2 + J_C cos(theta - wt) - w p (Eq. 5.56)")
-            if reduced.form == 1
-            else ("none", "an oscillating drive is not a rigid rotation: no exact invariant")
-        )
-        w_max = max(omega, math.sqrt(abs(reduced.jc) + abs(reduced.js)), abs(reduced.yd0))
-        return CompiledSystem(
-            scene,
-            kind,
-            report,
-            omega,
-            period,
-            w_max,
-            inv,
-            why,
-            body_names=[scene.bodies[0].name],
-            reduced=reduced,
-        )
+        return _compile_reduced(scene, reduced, report, note)
     note("reduced forms", "not used", why_not)
+    has_dipole = [float(np.linalg.norm(b.moment_Am2)) > 0 for b in scene.bodies]
+    pairs = sum(has_dipole) >= 2
+    forces = len(scene.rotators) > 0 or pairs
+    if not forces:
+        note("translation", "dropped",
+             "no rotator and fewer than two dipole bodies: no magnetic force; the CM moves in closed form")
+    bodies = _body_tables(scene, forces, has_dipole, note)
+    bf, bi = bodies["bf"], bodies["bi"]
+    src = _rotator_table(scene, note)
+    fvec = _field_vector(scene, note)
+    note("body pairs", "kept" if pairs else "dropped",
+         "dipole-dipole force and torque between free bodies (Eq. 4.2-4.3)" if pairs
+         else "fewer than two dipole bodies")
+    translating = bool(np.any(bi[:, 0]))
+    gravity = _decide_gravity(scene, translating, note)
+    damping = _decide_damping(bf, bi, note)
+    flags = np.zeros(6, dtype=np.int64)
+    flags[[F_FIELD, F_SOURCES, F_PAIRS, F_GRAVITY, F_DAMPING, F_FORCES]] = [
+        int(fvec[0] != 0), int(len(scene.rotators) > 0), int(pairs), int(gravity), int(damping), int(forces)]
+    g = np.asarray(scene.gravity_m_s2, dtype=float) if gravity else np.zeros(3)
+    length, seps = _length_scale(scene)
+    omega = scene.drive_omega()
+    omega_max = _fastest_rate(scene, bf, bi, fvec, has_dipole, omega)
+    inv, why, axis = _invariant(scene, fvec, gravity, damping, translating)
+    note("invariant", "monitored" if inv != "none" else "none", why)
+    r_escape = scene.escape_radius_m or (20.0 * max(seps) if seps and translating else 0.0)
+    system = CompiledSystem(
+        scene, "rigid", report, omega, scene.period(), omega_max, inv, why, [b.name for b in scene.bodies],
+        bf, bi, src, fvec, flags, g, bodies["x0"], bodies["v0"], bodies["R0"], bodies["L0"],
+        bodies["frames"], axis, r_escape, length,
+    )
+    if inv.startswith("jacobi"):
+        system.wz = _drive_rate(fvec, src)
+    return system
 
-    nb, ns = len(scene.bodies), len(scene.rotators)
+
+def _compile_reduced(scene: Scene, reduced: ReducedForm, report: list[dict], note: Note) -> CompiledSystem:
+    """The one-DoF system of Eq. 5.484 or Eq. 5.56 (one angle, one rate)."""
+    omega = scene.drive_omega()
+    kind = "reduced_1dof" if reduced.form == 0 else "planar"
+    note("rotation", "reduced", "one isotropic body with dipole and spin in the field's plane: "
+         f"integrating {reduced.equation} (one angle, one rate)")
+    note("translation", "dropped", "uniform field exerts no force; the CM moves in closed form")
+    for absent in ("gravity", "damping"):
+        note(absent, "dropped", "acts on translation only, which is not integrated")
+    inv, why = (
+        ("jacobi", "planar Jacobi constant K = p^2/2 + J_C cos(theta - wt) - w p (Eq. 5.56)")
+        if reduced.form == 1
+        else ("none", "an oscillating drive is not a rigid rotation: no exact invariant")
+    )
+    w_max = max(omega, math.sqrt(abs(reduced.jc) + abs(reduced.js)), abs(reduced.yd0))
+    return CompiledSystem(scene, kind, report, omega, scene.period(), w_max, inv, why,
+                          body_names=[scene.bodies[0].name], reduced=reduced)
+
+
+def _body_tables(scene: Scene, forces: bool, has_dipole: list[bool], note: Note) -> dict[str, np.ndarray]:
+    """Per body: the ``bf``/``bi`` kernel rows, principal frames and the initial state."""
+    nb = len(scene.bodies)
     bf = np.zeros((nb, BF_WIDTH))
     bi = np.zeros((nb, 4), dtype=np.int64)
     frames = np.zeros((nb, 3, 3))
     x0, v0, L0, R0 = np.zeros((nb, 3)), np.zeros((nb, 3)), np.zeros((nb, 3)), np.zeros((nb, 3, 3))
-    has_dipole = [float(np.linalg.norm(b.moment_Am2)) > 0 for b in scene.bodies]
-    pairs = sum(has_dipole) >= 2
-    forces = ns > 0 or pairs
-    fld = scene.field
-    if not forces:
-        note(
-            "translation",
-            "dropped",
-            "no rotator and fewer than two dipole bodies: no magnetic force; the CM moves in closed form",
-        )
     for i, b in enumerate(scene.bodies):
         eig, vec, free_kind, label = _principal(b)
         frames[i] = vec
@@ -238,127 +269,83 @@ def compile_scene(scene: Scene, reduce: bool = True) -> CompiledSystem:
         inertia_lab = b.rotation @ np.asarray(b.inertia_kg_m2, dtype=float) @ b.rotation.T
         L0[i] = inertia_lab @ np.asarray(b.angular_velocity_rad_s, dtype=float)
         note(f"rotation of {b.name}", "kept", label)
-        if forces:
-            if b.pinned:
-                note(
-                    f"translation of {b.name}",
-                    "dropped",
-                    "pinned; its force is evaluated for the average, not applied",
-                )
-            else:
-                note(f"translation of {b.name}", "kept", "magnetic forces act on it")
-    src = np.zeros((ns, SRC_WIDTH))
+        if forces and b.pinned:
+            note(f"translation of {b.name}", "dropped",
+                 "pinned; its force is evaluated for the average, not applied")
+        elif forces:
+            note(f"translation of {b.name}", "kept", "magnetic forces act on it")
+    return {"bf": bf, "bi": bi, "frames": frames, "x0": x0, "v0": v0, "R0": R0, "L0": L0}
+
+
+def _rotator_table(scene: Scene, note: Note) -> np.ndarray:
+    """The ``src`` kernel rows of the driven rotators (prescribed, not integrated)."""
+    src = np.zeros((len(scene.rotators), SRC_WIDTH))
     for j, r in enumerate(scene.rotators):
         src[j, :5] = [r.moment_Am2, r.tilt_rad, r.omega_rad_s, r.phase_rad, r.ramp_rad_s2]
         src[j, 5:8], src[j, 8:11], src[j, 11] = r.shift_m, r.axis_point_m, r.contact_radius_m
-        note(
-            f"rotator {r.name}",
-            "prescribed",
-            "driven at omega(t) = omega + ramp t (Eq. 5.25): not integrated",
-        )
-    fvec = np.zeros(5)
+        note(f"rotator {r.name}", "prescribed",
+             "driven at omega(t) = omega + ramp t (Eq. 5.25): not integrated")
+    return src
+
+
+def _field_vector(scene: Scene, note: Note) -> np.ndarray:
+    """The ``fld`` kernel row: kind, B_c, B_s, omega, phase (zeros when there is no field)."""
+    fld, fvec = scene.field, np.zeros(5)
     if fld is not None and (fld.B_c_T != 0.0 or fld.B_s_T != 0.0):
         w = 0.0 if fld.kind == "static" else fld.omega_rad_s
         fvec[:] = [2.0 if fld.kind == "oscillating" else 1.0, fld.B_c_T, fld.B_s_T, w, fld.phase_rad]
         note("uniform field", "kept", f"{fld.kind}: torque only")
     else:
         note("uniform field", "dropped", "absent")
-    note(
-        "body pairs",
-        "kept" if pairs else "dropped",
-        "dipole-dipole force and torque between free bodies (Eq. 4.2-4.3)"
-        if pairs
-        else "fewer than two dipole bodies",
-    )
-    translating = bool(np.any(bi[:, 0]))
-    gravity = scene.gravity_m_s2 is not None and np.any(scene.gravity_m_s2 != 0) and translating
-    note(
-        "gravity",
-        "kept" if gravity else "dropped",
-        "acts on translating bodies"
-        if gravity
-        else (
-            "absent"
-            if scene.gravity_m_s2 is None or not np.any(scene.gravity_m_s2)
-            else "no translating body"
-        ),
-    )
-    damping = bool(np.any(bf[:, 11] > 0) or np.any((bf[:, 10] > 0) & (bi[:, 0] > 0)))
-    note(
-        "damping",
-        "kept" if damping else "dropped",
-        "exact linear-damping sub-flow (Strang)" if damping else "absent or acts on no integrated DoF",
-    )
-    flags = np.zeros(6, dtype=np.int64)
-    flags[F_FIELD] = int(fvec[0] != 0)
-    flags[F_SOURCES] = int(ns > 0)
-    flags[F_PAIRS] = int(pairs)
-    flags[F_GRAVITY] = int(gravity)
-    flags[F_DAMPING] = int(damping)
-    flags[F_FORCES] = int(forces)
-    g = np.asarray(scene.gravity_m_s2, dtype=float) if gravity else np.zeros(3)
+    return fvec
 
-    # scales and the fastest rate (step rule, tolerances)
+
+def _decide_gravity(scene: Scene, translating: bool, note: Note) -> bool:
+    """Gravity is integrated only when some body translates."""
+    present = scene.gravity_m_s2 is not None and bool(np.any(scene.gravity_m_s2 != 0))
+    gravity = present and translating
+    note("gravity", "kept" if gravity else "dropped",
+         "acts on translating bodies" if gravity else ("no translating body" if present else "absent"))
+    return gravity
+
+
+def _decide_damping(bf: np.ndarray, bi: np.ndarray, note: Note) -> bool:
+    """Damping is integrated when it acts on a rotation or on a translating body."""
+    damping = bool(np.any(bf[:, 11] > 0) or np.any((bf[:, 10] > 0) & (bi[:, 0] > 0)))
+    note("damping", "kept" if damping else "dropped",
+         "exact linear-damping sub-flow (Strang)" if damping else "absent or acts on no integrated DoF")
+    return damping
+
+
+def _length_scale(scene: Scene) -> tuple[float, list[float]]:
+    """The smallest separation of bodies and rotator axes (the error metric's length) and all of them."""
     points = [b.position_m for b in scene.bodies] + [r.axis_point_m for r in scene.rotators]
-    seps = [
-        float(np.linalg.norm(np.asarray(p) - np.asarray(q)))
-        for a, p in enumerate(points)
-        for q in points[a + 1 :]
-    ]
-    length = min(seps) if seps else 1e-3
+    seps = [float(np.linalg.norm(np.asarray(p) - np.asarray(q))) for a, p in enumerate(points)
+            for q in points[a + 1:]]
+    return (min(seps) if seps else 1e-3), seps
+
+
+def _fastest_rate(scene: Scene, bf: np.ndarray, bi: np.ndarray, fvec: np.ndarray, has_dipole: list[bool],
+                  omega: float) -> float:
+    """The fastest rate of the scene (drive, spins, torsional and translational oscillation) for the
+    step rule and the tolerances."""
     rates = [omega]
     for i, b in enumerate(scene.bodies):
-        i_min = float(bf[i, 1:4].min())
-        rates.append(float(np.linalg.norm(b.angular_velocity_rad_s)))
         m = float(np.linalg.norm(b.moment_Am2))
         torque = m * (abs(fvec[1]) + abs(fvec[2]))
         stiff = 0.0
-        for r in scene.rotators:
-            d = max(float(np.linalg.norm(b.position_m - r.axis_point_m)), 1e-12)
-            torque += 2.0 * K_M * abs(r.moment_Am2) * m / d**3
-            stiff += 24.0 * K_M * abs(r.moment_Am2) * m / d**5
-        for k, o in enumerate(scene.bodies):
-            if k != i and has_dipole[k]:
-                d = max(float(np.linalg.norm(b.position_m - o.position_m)), 1e-12)
-                mo = float(np.linalg.norm(o.moment_Am2))
-                torque += 2.0 * K_M * mo * m / d**3
-                stiff += 24.0 * K_M * mo * m / d**5
-        rates.append(math.sqrt(torque / i_min))
+        others = [(r.axis_point_m, abs(r.moment_Am2)) for r in scene.rotators]
+        others += [(o.position_m, float(np.linalg.norm(o.moment_Am2)))
+                   for k, o in enumerate(scene.bodies) if k != i and has_dipole[k]]
+        for position, mo in others:
+            d = max(float(np.linalg.norm(b.position_m - position)), 1e-12)
+            torque += 2.0 * K_M * mo * m / d**3
+            stiff += 24.0 * K_M * mo * m / d**5
+        rates.append(float(np.linalg.norm(b.angular_velocity_rad_s)))
+        rates.append(math.sqrt(torque / float(bf[i, 1:4].min())))
         if bi[i, 0]:
             rates.append(math.sqrt(stiff / b.mass_kg))
-    omega_max = max(rates)
-
-    inv, why, axis = _invariant(scene, fvec, gravity, damping, translating)
-    note("invariant", "monitored" if inv != "none" else "none", why)
-    r_escape = scene.escape_radius_m or (20.0 * max(seps) if seps and translating else 0.0)
-    system = CompiledSystem(
-        scene,
-        "rigid",
-        report,
-        omega,
-        period,
-        omega_max,
-        inv,
-        why,
-        [b.name for b in scene.bodies],
-        bf,
-        bi,
-        src,
-        fvec,
-        flags,
-        g,
-        x0,
-        v0,
-        R0,
-        L0,
-        frames,
-        axis,
-        r_escape,
-        length,
-    )
-    if inv.startswith("jacobi"):
-        system.wz = _drive_rate(fvec, src)
-    return system
+    return max(rates)
 
 
 def _drive_rate(fvec: np.ndarray, src: np.ndarray) -> float:

@@ -19,7 +19,6 @@ import math
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.optimize import brentq
 
 from labkit.sim.rotations import euler_zxz, rot_x
 
@@ -55,6 +54,8 @@ def cone_angle_axisymmetric(
     guess = cone_angle_isotropic(omega, tau_c, tau_s, 0.5 * (i_radial + i_axial), spin_k)
     if i_radial == i_axial:
         return guess
+    from scipy.optimize import brentq  # only anisotropic bodies need a root finder
+
     lo, hi = -math.pi / 2 + 1e-12, math.pi / 2 - 1e-12
     for width in (0.05, 0.2, 0.5, 1.0, math.pi):
         a, b = max(lo, guess - width), min(hi, guess + width)

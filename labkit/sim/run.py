@@ -15,13 +15,15 @@ import numpy as np
 
 from labkit.sim import equilibrium
 from labkit.sim.compile import CompiledSystem, compile_scene
-from labkit.sim.integrators import DEFAULT_INTEGRATOR, RawRun, get_integrator
+from labkit.sim.integrators import DEFAULT_INTEGRATOR, RawRun, SimulationError, get_integrator
 from labkit.sim.integrators.kernels import invariants_over_samples
+from labkit.sim.integrators.status import LABELS, MESSAGES, Status
 from labkit.sim.result import SimResult
 from labkit.sim.rotations import orthonormality_residual, rot_x, rot_z, zenith_angle
 from labkit.sim.scene import Scene, load_scene
 
-RAW_STATUS = {0: "ok", 1: "nan", 2: "blowup", 3: "contact", 4: "escape", 5: "solver_failed"}
+#: kernel status code -> ``SimResult.status`` (kept for callers; :mod:`.integrators.status` names them)
+RAW_STATUS = {int(code): label for code, label in LABELS.items()}
 
 
 def simulate(
@@ -34,11 +36,16 @@ def simulate(
     drift_threshold: float = 1e-6,
     rotation_threshold: float = 1e-6,
     system: CompiledSystem | None = None,
+    decimate: int = 1,
 ) -> SimResult:
     """Simulate ``cycles`` drive periods of ``scene`` (a :class:`Scene`, a TOML path or a bundled name).
 
     ``steps_per_period`` applies to splittings (automatic if None), ``rtol`` to scipy references.
+    ``decimate`` keeps every ``decimate``-th of the ``samples_per_period`` samples (and the last):
+    memory then grows as ``cycles * samples_per_period / decimate`` (long runs, docs/simulator.md).
     """
+    if not (isinstance(decimate, int) and decimate >= 1):
+        raise SimulationError(f"decimate must be a whole number >= 1, got {decimate!r}")
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
     system = system or compile_scene(scene)
@@ -46,7 +53,8 @@ def simulate(
     run = get_integrator(integrator)
     start = time.perf_counter()
     raw = run(
-        system, cycles, steps_per_period=steps_per_period, samples_per_period=samples_per_period, rtol=rtol
+        system, cycles, steps_per_period=steps_per_period, samples_per_period=samples_per_period, rtol=rtol,
+        decimate=decimate,
     )
     wall = time.perf_counter() - start - raw.extra.get("compile_s", 0.0)
     return assemble(scene, system, raw, cycles, wall, drift_threshold, rotation_threshold)
@@ -66,16 +74,10 @@ def assemble(
         parts = _reduced_parts(system, raw)
     else:
         parts = _rigid_parts(system, raw)
-    status = RAW_STATUS[raw.status]
-    detail = {
-        "ok": "",
-        "nan": "non-finite state",
-        "blowup": "state ran away (|omega| > 1e9 rad/s or |v| > 1e6 m/s)",
-        "contact": "bodies touched",
-        "escape": f"a body went beyond {system.r_escape:.4g} m from the others",
-        "solver_failed": f"solver failed: {raw.message}",
-    }[status]
-    if raw.status in (1, 2, 3, 4):
+    code = Status(raw.status)
+    status = code.label
+    detail = MESSAGES[code].format(r_escape=system.r_escape, message=raw.message)
+    if code in (Status.NONFINITE, Status.BLOWUP, Status.CONTACT, Status.ESCAPE):
         detail += f" at t = {raw.event_time:.9g} s (cycle {raw.event_time / system.period:.4g})"
     drift = parts["drift"]
     if status == "ok" and drift is not None and not (drift <= drift_threshold):

@@ -6,6 +6,14 @@ when it moves (rerun-sdk is pinned to 0.41.x in pyproject.toml).
 """
 
 from labkit.stream.core import RerunSpec, add_rerun_argument, open_stream, parse_rerun_spec
-from labkit.stream.run import run_sink
+
+
+def __getattr__(name: str):
+    # run_sink (numpy) is loaded on first use, so a parser that adds --rerun stays light
+    if name == "run_sink":
+        from labkit.stream.run import run_sink
+
+        return run_sink
+    raise AttributeError(f"module 'labkit.stream' has no attribute {name!r}")
 
 __all__ = ["RerunSpec", "add_rerun_argument", "open_stream", "parse_rerun_spec", "run_sink"]

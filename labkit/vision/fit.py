@@ -17,7 +17,6 @@ from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
-from scipy.spatial import cKDTree
 
 from labkit.vision.curves import (
     Pattern,
@@ -104,6 +103,8 @@ def _closest_parameters(z: np.ndarray, rows: _Rows, samples: np.ndarray) -> np.n
     for i in range(len(z)):
         ts = np.linspace(0.0, 2 * math.pi, int(samples[i]), endpoint=False)
         curve = _curve(0j, rows.a[i], rows.b[i], int(rows.k[i]), ts)
+        from scipy.spatial import cKDTree  # loaded after the frames (labkit analyse laser starts sooner)
+
         tree = cKDTree(np.column_stack([curve.real, curve.imag]))
         _, idx = tree.query(np.column_stack([z[i].real, z[i].imag]))
         t[i] = ts[idx]
@@ -455,6 +456,8 @@ def coverage_rms(fit: CurveFit, z: np.ndarray, tau: np.ndarray, samples_per_loop
     curve = fit.c + fit.a * e1 + fit.b * ek
     speed = np.abs(1j * fit.a * e1 + 1j * k * fit.b * ek)
     still = z - fit.drift * tau
+    from scipy.spatial import cKDTree  # loaded after the frames (see _closest_parameters)
+
     distance, _ = cKDTree(np.column_stack([still.real, still.imag])).query(
         np.column_stack([curve.real, curve.imag]))
     return float(np.sqrt(np.sum(speed * distance**2) / np.sum(speed)))

@@ -21,6 +21,10 @@ def test_bench_sim_json_follows_the_issue_schema(tmp_path, capsys):
             "2",
             "--stress",
             "S9",
+            "--peer-scene",
+            "conical_5_1",
+            "--memory-cycles",
+            "200",
             "--json",
             str(out),
             "--plot",
@@ -34,7 +38,19 @@ def test_bench_sim_json_follows_the_issue_schema(tmp_path, capsys):
         "max_invariant_drift_1e4_cycles",
         "one_body_1e4_cycles_s",
         "two_body_1e4_cycles_s",
+        "speedup_vs_compiled_dop853_at_equal_error",
+        "compiled_dop853_drift_at_equal_cost_1e4_cycles",
     }
+    memory = doc["headline_notes"]["memory"]
+    assert memory["exit"] == 0 and memory["peak_rss_mb"] > 10 and "--decimate 1000" in memory["command"]
+    peer = doc["compiled_dop853"]
+    assert [c["scene"] for c in peer] == ["conical_5_1"]
+    rows = peer[0]["by_target"]
+    assert list(rows) == ["0.0001", "1e-05", "1e-06", "1e-07", "1e-08", "1e-09", "1e-10"]
+    ratios = [r["ratio"] for r in rows.values() if r["ratio"] is not None]
+    assert ratios and doc["headline"]["speedup_vs_compiled_dop853_at_equal_error"] == min(ratios)
+    drift = peer[0]["drift_1e4_cycles_at_equal_cost"]
+    assert drift["peer"]["invariant_drift"] > drift["labkit"]["invariant_drift"] > 0
     assert doc["scenes"] and all(
         set(r) == {"id", "integrator", "setting", "error", "invariant_drift", "wall_s", "n_rhs"}
         for r in doc["scenes"]

@@ -3,7 +3,9 @@
 * ``splitting4`` (default, Suzuki 5-stage order 4), ``yoshida4``, ``yoshida6``, ``strang``:
   fixed step ``h = T/N`` kick-rotate-kick splittings with exact free rotation (numba, cached);
 * ``dop853``, ``radau``, ``lsoda``: :func:`scipy.integrate.solve_ivp` references with
-  per-component (scaled) tolerances.
+  per-component (scaled) tolerances;
+* ``cyrk-dop853``: the same DOP853 compiled (CyRK's C++ solver with a numba right-hand side),
+  the fair peer of ``labkit bench sim``.
 
 Every integrator returns a :class:`RawRun`; :func:`labkit.sim.run.simulate` turns it into a
 :class:`labkit.sim.result.SimResult` with invariants, status and quantities of interest.
@@ -13,20 +15,27 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from labkit.errors import LabkitError
+
+if TYPE_CHECKING:  # annotations only: `labkit simulate --help` reads the names below without numpy
+    import numpy as np
 
 SPLITTINGS = {
     "splitting4": "suzuki4",
     "suzuki4": "suzuki4",
     "yoshida4": "yoshida4",
     "yoshida6": "yoshida6",
+    "kahanli6": "kahanli6",
+    "yoshida8": "yoshida8",
+    "kahanli8": "kahanli8",
     "strang": "strang",
 }
 REFERENCES = {"dop853": "DOP853", "radau": "Radau", "lsoda": "LSODA"}
-INTEGRATORS = sorted(set(SPLITTINGS) | set(REFERENCES))
+#: compiled peers (CyRK's C++ solver, numba right-hand side; the optional ``bench`` extra)
+COMPILED = {"cyrk-dop853": "DOP853"}
+INTEGRATORS = sorted(set(SPLITTINGS) | set(REFERENCES) | set(COMPILED))
 DEFAULT_INTEGRATOR = "splitting4"
 MAX_SAMPLE_BYTES = 1 << 30
 
@@ -81,11 +90,14 @@ def check_memory(n_samples: int, nb: int) -> None:
 
 def get_integrator(name: str):
     """Look up an integrator's run function by name."""
-    from labkit.sim.integrators import reference, splitting_run
+    from labkit.sim.integrators import compiled_reference, reference, splitting_run
 
     key = name.lower()
     if key in SPLITTINGS:
         return lambda system, cycles, **kw: splitting_run.run(system, cycles, SPLITTINGS[key], name=key, **kw)
     if key in REFERENCES:
         return lambda system, cycles, **kw: reference.run(system, cycles, REFERENCES[key], name=key, **kw)
+    if key in COMPILED:
+        method = COMPILED[key]
+        return lambda system, cycles, **kw: compiled_reference.run(system, cycles, method, name=key, **kw)
     raise SimulationError(f"unknown integrator {name!r} (choose from {', '.join(INTEGRATORS)})")

@@ -19,7 +19,6 @@ from scipy.integrate import solve_ivp
 
 from labkit.sim.compile import CompiledSystem
 from labkit.sim.integrators import RawRun, check_memory
-from labkit.sim.integrators.kernels import compute_forces, workspace
 from labkit.sim.integrators.splitting import reduced_acceleration
 
 STRIDE = 18
@@ -31,40 +30,49 @@ def _unpack(y: np.ndarray, nb: int):
 
 
 def _rigid_rhs(system: CompiledSystem, counter: list[int]):
-    bf, bi, src, fld, flags, g = system.bf, system.bi, system.src, system.fld, system.flags, system.g
-    nb = bf.shape[0]
-    inv_i = 1.0 / bf[:, 1:4]
-    F = np.zeros((nb, 3))
-    T = np.zeros((nb, 3))
-    trans = bi[:, 0].astype(bool)
-    work = workspace(nb)
-    wz, axis = system.wz, system.axis
+    """``f(t, y)`` for solve_ivp: one call of the compiled right-hand side (the same one CyRK's
+    DOP853 runs, :func:`labkit.sim.integrators.compiled_reference.rigid_derivative`), so a scipy
+    cross-check costs seconds; ``counter[0]`` counts calls."""
+    from labkit.sim.integrators.compiled_reference import pack_args, rigid_derivative
+
+    args = pack_args(system)
+    n = system.bf.shape[0] * (STRIDE + 3) + 1
 
     def rhs(t: float, y: np.ndarray) -> np.ndarray:
         counter[0] += 1
-        x, v, R, L = _unpack(y, nb)
-        R = np.ascontiguousarray(R)
-        compute_forces(t, np.ascontiguousarray(x), R, bf, bi, src, fld, flags, F, T, work)
-        pi = np.einsum("bji,bj->bi", R, L)
-        omega = np.einsum("bij,bj->bi", R, pi * inv_i)
-        dy = np.zeros((nb, STRIDE))
-        acc = F / bf[:, :1] + g - bf[:, 10:11] / bf[:, :1] * v
-        dy[trans, 0:3] = v[trans]
-        dy[trans, 3:6] = acc[trans]
-        wx = np.zeros((nb, 3, 3))
-        wx[:, 0, 1], wx[:, 0, 2], wx[:, 1, 2] = -omega[:, 2], omega[:, 1], -omega[:, 0]
-        wx[:, 1, 0], wx[:, 2, 0], wx[:, 2, 1] = omega[:, 2], -omega[:, 1], omega[:, 0]
-        dy[:, 6:15] = np.einsum("bij,bjk->bik", wx, R).reshape(nb, 9)
-        dy[:, 15:18] = T - bf[:, 11:12] * omega
-        # damping's share of E - wz J_z: power -c v^2 - c_rot |Omega|^2, torque about the axis
-        c_lin = np.where(trans, bf[:, 10], 0.0)
-        rel = x - axis
-        jz_rate = -c_lin * (rel[:, 0] * v[:, 1] - rel[:, 1] * v[:, 0]) - bf[:, 11] * omega[:, 2]
-        power = -c_lin * np.sum(v * v, axis=1) - bf[:, 11] * np.sum(omega * omega, axis=1)
-        budget = np.sum(power) - wz * np.sum(jz_rate)
-        return np.concatenate([dy.ravel(), F.ravel(), [budget]])
+        dy = np.empty(n)
+        rigid_derivative(t, y, dy, args)
+        return dy
 
     return rhs
+
+
+def sample_times(t0: float, t_end: float, n: int, dt: float, decimate: int = 1) -> np.ndarray:
+    """Every ``decimate``-th of the ``n + 1`` sample times ``t0 + k dt``, and the last one (<= t_end)."""
+    k = np.arange(0, n + 1, decimate)
+    if k[-1] != n:
+        k = np.append(k, n)
+    t_eval = t0 + k * dt
+    t_eval[-1] = min(t_eval[-1], t_end)
+    return t_eval
+
+
+def tolerance_scale(system: CompiledSystem) -> np.ndarray:
+    """Scale per state component (length, length * omega, 1, I * omega; inf for the extras, which
+    are outputs, not steered): absolute tolerances are ``rtol`` times this (docs/numerics.md)."""
+    nb = system.bf.shape[0]
+    i_max = system.bf[:, 1:4].max(axis=1, keepdims=True)
+    length = system.length_scale
+    scale = np.concatenate(
+        [
+            np.full((nb, 3), length),
+            np.full((nb, 3), length * system.omega_max),
+            np.ones((nb, 9)),
+            np.repeat(i_max * system.omega_max, 3, axis=1),
+        ],
+        axis=1,
+    ).ravel()
+    return np.concatenate([scale, np.full(3 * nb + 1, np.inf)])
 
 
 def _events(system: CompiledSystem):
@@ -106,13 +114,13 @@ def run(
     rtol: float = 1e-10,
     samples_per_period: int = 8,
     t0: float = 0.0,
+    decimate: int = 1,
     **_: object,
 ) -> RawRun:
     """Integrate with ``solve_ivp(method)``; samples at exact multiples of ``T / samples_per_period``."""
     t_end = t0 + cycles * system.period
     n = int(round(cycles * samples_per_period))
-    t_eval = t0 + np.arange(n + 1) * (system.period / samples_per_period)
-    t_eval[-1] = min(t_eval[-1], t_end)
+    t_eval = sample_times(t0, t_end, n, system.period / samples_per_period, decimate)
     counter = [0]
     setting = {"method": method, "rtol": rtol, "samples_per_period": samples_per_period}
     if system.reduced is not None:
@@ -134,19 +142,7 @@ def run(
     check_memory(n + 2, nb)
     state0 = np.concatenate([system.x0, system.v0, system.R0.reshape(nb, 9), system.L0], axis=1).ravel()
     y0 = np.concatenate([state0, np.zeros(3 * nb + 1)])
-    i_max = system.bf[:, 1:4].max(axis=1, keepdims=True)
-    length = system.length_scale
-    scale = np.concatenate(
-        [
-            np.full((nb, 3), length),
-            np.full((nb, 3), length * system.omega_max),
-            np.ones((nb, 9)),
-            np.repeat(i_max * system.omega_max, 3, axis=1),
-        ],
-        axis=1,
-    ).ravel()
-    # extras: impulse and budget are outputs, not steered: loose absolute tolerances
-    scale = np.concatenate([scale, np.full(3 * nb + 1, np.inf)])
+    scale = tolerance_scale(system)
     events = _events(system) if system.r_escape or np.any(system.bi[:, 0]) else []
     if not system.r_escape and events:
         events = events[:1]

@@ -12,12 +12,14 @@ The base method is a symmetric Strang splitting (Dullweber-Leimkuhler-McLachlan 
   ``pi_i *= exp(-c h / I_i)``).
 
 Symmetric compositions raise the order: Yoshida's triple jump and Suzuki's 5-stage (order 4),
-Yoshida's 7-stage (order 6). With ``h = T/N`` the Jacobi-type invariant of a uniformly driven
+Yoshida's 7-stage and Kahan-Li's 9-stage (order 6), Yoshida's 15-stage and Kahan-Li's 17-stage
+(order 8; Kahan and Li 1997, the coefficients tabulated in Hairer, Lubich and Wanner, Geometric
+Numerical Integration, V.3.2). With ``h = T/N`` the Jacobi-type invariant of a uniformly driven
 scene has no secular drift (NUMERICS.md 2.2). Force evaluations are shared between adjacent
 kicks (first-same-as-last), so a step of an s-stage method costs s force evaluations.
 
-Status codes returned by the kernels: 0 ok, 1 non-finite, 2 blow-up, 3 contact, 4 escape
-(named in :data:`labkit.sim.run.RAW_STATUS`).
+Status codes returned by the kernels: the members of :class:`labkit.sim.integrators.Status`
+(``ST_*`` here, plain ints for numba): ok, non-finite, blow-up, contact, escape.
 """
 
 from __future__ import annotations
@@ -41,6 +43,10 @@ from labkit.sim.integrators.kernels import (
     S_RAD,
     compute_forces,
 )
+from labkit.sim.integrators.status import Status
+
+ST_OK, ST_NONFINITE, ST_BLOWUP = int(Status.OK), int(Status.NONFINITE), int(Status.BLOWUP)
+ST_CONTACT, ST_ESCAPE = int(Status.CONTACT), int(Status.ESCAPE)
 
 
 def _yoshida_triple(order_weights: list[float], order: int) -> list[float]:
@@ -53,12 +59,33 @@ _P = 1.0 / (4.0 - 4.0 ** (1.0 / 3.0))
 _Y6 = [0.784513610477560, 0.235573213359357, -1.17767998417887]  # Yoshida (1990) solution A: w3, w2, w1
 _Y6_0 = 1.0 - 2.0 * sum(_Y6)
 
+#: Yoshida (1990) 8th order, solution D: w7 ... w1 (w0 = 1 - 2 sum)
+_Y8 = [0.914844246229740, 0.253693336566229, -1.44485223686048, -0.158240635368243, 1.93813913762276,
+       -1.96061023297549, 0.102799849391985]
+_Y8_0 = 1.0 - 2.0 * sum(_Y8)
+#: Kahan and Li (1997) s9odr6a: 9 stages, order 6 (gamma_1 ... gamma_5, symmetric)
+_KL6 = [0.39216144400731413928, 0.33259913678935943860, -0.70624617255763935981, 0.08221359629355080023,
+        0.79854399093482996340]
+#: Kahan and Li (1997) s17odr8a: 17 stages, order 8 (gamma_1 ... gamma_9, symmetric)
+_KL8 = [0.13020248308889008088, 0.56116298177510838456, -0.38947496264484728641, 0.15884190655515560090,
+        -0.39590389413323757734, 0.18453964097831570709, 0.25837438768632204729, 0.29501172360931029887,
+        -0.60550853383003451170]
+
+
+def _symmetric(half: list[float]) -> np.ndarray:
+    """Weights g_1 ... g_m, g_{m-1} ... g_1 from their first half (the middle one last)."""
+    return np.array(half + half[-2::-1])
+
+
 #: name -> (stage weights of the symmetric base method, order)
 COMPOSITIONS: dict[str, tuple[np.ndarray, int]] = {
     "strang": (np.array([1.0]), 2),
     "yoshida4": (np.array(_yoshida_triple([1.0], 2)), 4),
     "suzuki4": (np.array([_P, _P, 1.0 - 4.0 * _P, _P, _P]), 4),
     "yoshida6": (np.array([_Y6[0], _Y6[1], _Y6[2], _Y6_0, _Y6[2], _Y6[1], _Y6[0]]), 6),
+    "kahanli6": (_symmetric(_KL6), 6),
+    "yoshida8": (_symmetric(_Y8 + [_Y8_0]), 8),
+    "kahanli8": (_symmetric(_KL8), 8),
 }
 
 
@@ -267,8 +294,9 @@ def _hermite_root(t0, h, g0, d0, g1, d1):
 
 
 @njit(cache=True)
-def _store_sample(n, t, x, v, R, L, budget, out_t, out_x, out_v, out_R, out_L, out_acc):
-    """Copy the state at time ``t`` into sample row ``n``; returns ``n + 1``."""
+def store_sample(n, t, x, v, R, L, budget, out):
+    """Copy the state at time ``t`` into sample row ``n`` of ``out``; returns ``n + 1``."""
+    out_t, out_x, out_v, out_R, out_L, out_acc, _ = out
     out_t[n] = t
     out_x[n] = x
     out_v[n] = v
@@ -278,41 +306,46 @@ def _store_sample(n, t, x, v, R, L, budget, out_t, out_x, out_v, out_R, out_L, o
     return n + 1
 
 
-@njit(cache=True)
-def run_rigid(
-    x,
-    v,
-    R,
-    L,
-    t0,
-    h,
-    n_steps,
-    sample_every,
-    weights,
-    bf,
-    bi,
-    src,
-    fld,
-    flags,
-    g,
-    r_escape,
-    check_events,
-    out_t,
-    out_x,
-    out_v,
-    out_R,
-    out_L,
-    impulse,
-    wz,
-    axis,
-    out_acc,
-):
-    """Integrate ``n_steps`` steps of size ``h`` from ``t0``; state arrays are updated in place.
+@njit(cache=True, _nrt=False)
+def health(x, v, L, bf):
+    """ST_NONFINITE, ST_BLOWUP (|omega| > 1e9 rad/s or |v| > 1e6 m/s) or ST_OK."""
+    big = False
+    for b in range(x.shape[0]):
+        for k in range(3):
+            if not (math.isfinite(x[b, k]) and math.isfinite(v[b, k]) and math.isfinite(L[b, k])):
+                return ST_NONFINITE
+        wmax = math.sqrt(L[b, 0] ** 2 + L[b, 1] ** 2 + L[b, 2] ** 2) / bf[b, B_I]
+        if wmax > 1e9 or abs(v[b, 0]) + abs(v[b, 1]) + abs(v[b, 2]) > 1e6:
+            big = True
+    return ST_BLOWUP if big else ST_OK
 
-    Samples every ``sample_every`` steps (and the first and final states) go to ``out_*``;
-    ``out_acc`` gets the damping's accumulated share of ``E - wz J_z`` (see :func:`damping_flow`).
-    Returns ``(status, steps_done, n_samples, event_time, n_force_evaluations)``.
+
+@njit(cache=True, _nrt=False)
+def step_event(x, v, xp, vp, bf, bi, src, r_escape, t, h):
+    """(status, time) of a contact (Hermite root of the gap over the step) or an escape, else ST_OK."""
+    gmin, ga, gk, go, far = _events(x, v, bf, bi, src)
+    if ga >= 0 and gmin < 0.0:
+        g1, d1, _ = _gap(x, v, bf, src, ga, gk, go)
+        g0, d0, _ = _gap(xp, vp, bf, src, ga, gk, go)
+        return ST_CONTACT, (_hermite_root(t - h, h, g0, d0, g1, d1) if g0 > 0.0 else t - h)
+    if r_escape > 0.0 and far > r_escape:
+        return ST_ESCAPE, t
+    return ST_OK, math.nan
+
+
+@njit(cache=True)
+def run_rigid(state, t0, h, n_steps, sample_every, weights, args, out, check_events):
+    """The general kernel: ``n_steps`` steps of size ``h`` from ``t0`` for any rigid scene.
+
+    ``state = (x, v, R, L)`` is updated in place; ``args`` are the scene's packed kernel arguments
+    (:meth:`labkit.sim.compile.CompiledSystem.kernel_args`); ``out = (t, x, v, R, L, budget,
+    impulse)`` receives a sample every ``sample_every`` steps (and the first and final states),
+    the damping's accumulated share of ``E - wz J_z`` (:func:`damping_flow`) and the magnetic
+    impulse. Returns ``(status, steps_done, n_samples, event_time, n_force_evaluations)``.
     """
+    x, v, R, L = state
+    bf, bi, src, fld, flags, g, axis, r_escape, wz = args
+    impulse = out[6]
     nb = x.shape[0]
     F = np.zeros((nb, 3))
     T = np.zeros((nb, 3))
@@ -320,21 +353,20 @@ def run_rigid(
     xp = np.empty((nb, 3))
     vp = np.empty((nb, 3))
     pi = np.empty(3)
+    acc = np.zeros(1)
     use_damping = flags[F_DAMPING] != 0
     t = t0
-    n_force = 0
     compute_forces(t, x, R, bf, bi, src, fld, flags, F, T, work)
-    n_force += 1
-    acc = np.zeros(1)
-    n_s = _store_sample(0, t, x, v, R, L, 0.0, out_t, out_x, out_v, out_R, out_L, out_acc)
-    status = 0
+    n_force = 1
+    n_s = store_sample(0, t, x, v, R, L, 0.0, out)
+    status = ST_OK
     event_time = math.nan
     steps_done = 0
     for step in range(n_steps):
         if check_events:
             xp[:] = x
             vp[:] = v
-        for w in weights:
+        for w in weights:  # one stage: damping, half kick, drift and free rotation, force, half kick
             hw = w * h
             if use_damping:
                 damping_flow(x, v, R, L, bf, bi, 0.5 * hw, pi, wz, axis, acc)
@@ -352,40 +384,17 @@ def run_rigid(
                 damping_flow(x, v, R, L, bf, bi, 0.5 * hw, pi, wz, axis, acc)
         t = t0 + (step + 1) * h
         steps_done = step + 1
-        # health: non-finite or runaway state
-        bad = False
-        big = False
-        for b in range(nb):
-            for k in range(3):
-                if not (math.isfinite(x[b, k]) and math.isfinite(v[b, k]) and math.isfinite(L[b, k])):
-                    bad = True
-            wmax = math.sqrt(L[b, 0] ** 2 + L[b, 1] ** 2 + L[b, 2] ** 2) / bf[b, B_I]
-            if wmax > 1e9 or abs(v[b, 0]) + abs(v[b, 1]) + abs(v[b, 2]) > 1e6:
-                big = True
-        if bad:
-            status = 1
+        status = health(x, v, L, bf)
+        if status == ST_OK and check_events:
+            status, event_time = step_event(x, v, xp, vp, bf, bi, src, r_escape, t, h)
+        elif status != ST_OK:
             event_time = t
+        if status != ST_OK:
             break
-        if big:
-            status = 2
-            event_time = t
-            break
-        if check_events:
-            gmin, ga, gk, go, far = _events(x, v, bf, bi, src)
-            if ga >= 0 and gmin < 0.0:
-                g1, d1, _ = _gap(x, v, bf, src, ga, gk, go)
-                g0, d0, _ = _gap(xp, vp, bf, src, ga, gk, go)
-                status = 3
-                event_time = _hermite_root(t - h, h, g0, d0, g1, d1) if g0 > 0.0 else t - h
-                break
-            if r_escape > 0.0 and far > r_escape:
-                status = 4
-                event_time = t
-                break
         if (step + 1) % sample_every == 0:
-            n_s = _store_sample(n_s, t, x, v, R, L, acc[0], out_t, out_x, out_v, out_R, out_L, out_acc)
-    if status != 0 or steps_done % sample_every != 0:
-        n_s = _store_sample(n_s, t, x, v, R, L, acc[0], out_t, out_x, out_v, out_R, out_L, out_acc)
+            n_s = store_sample(n_s, t, x, v, R, L, acc[0], out)
+    if status != ST_OK or steps_done % sample_every != 0:
+        n_s = store_sample(n_s, t, x, v, R, L, acc[0], out)
     return status, steps_done, n_s, event_time, n_force
 
 

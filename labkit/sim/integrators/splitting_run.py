@@ -6,6 +6,7 @@ import numpy as np
 
 from labkit.sim.compile import CompiledSystem
 from labkit.sim.integrators import RawRun, SimulationError, auto_steps_per_period, check_memory
+from labkit.sim.integrators.shapes import run_fixed_top, run_free_pair, scene_shape, stage_turns
 from labkit.sim.integrators.splitting import COMPOSITIONS, run_reduced, run_rigid
 
 
@@ -17,6 +18,7 @@ def run(
     steps_per_period: int | None = None,
     samples_per_period: int = 8,
     t0: float = 0.0,
+    decimate: int = 1,
     **_: object,
 ) -> RawRun:
     """Integrate ``cycles`` drive periods with ``h = T / steps_per_period`` (automatic if None)."""
@@ -34,7 +36,7 @@ def run(
         )
     h = system.period / steps_per_period
     n_steps = int(round(cycles * steps_per_period))
-    sample_every = steps_per_period // samples_per_period
+    sample_every = steps_per_period // samples_per_period * decimate
     n_out = n_steps // sample_every + 2
     setting = {
         "steps_per_period": steps_per_period,
@@ -43,6 +45,7 @@ def run(
         "order": order,
         "stages": len(weights),
         "samples_per_period": samples_per_period,
+        "decimate": decimate,
     }
     if system.reduced is not None:
         rf = system.reduced
@@ -75,68 +78,44 @@ def run(
             yd=out_yd[:n_s].copy(),
         )
     check_memory(n_out, system.x0.shape[0])
-    check_events = bool(system.bi[:, 0].any())
-    compile_s = _warm_up(system, weights, check_events)
-    status, event_time, n_force, t, samples = _integrate_rigid(
-        system, weights, check_events, t0, h, n_steps, sample_every, n_out,
-        float(system.r_escape), float(system.wz), system.axis,
-    )
+    shape = scene_shape(system)
+    compile_s = _warm_up(system, weights, shape)
+    status, event_time, n_force, t, samples = _integrate_rigid(system, weights, shape, t0, h, n_steps,
+                                                               sample_every, n_out)
+    setting["kernel"] = shape
     return RawRun(name, setting, status, event_time, n_force, t, **samples, extra={"compile_s": compile_s})
 
 
 def _integrate_rigid(
     system: CompiledSystem,
     weights: np.ndarray,
-    check_events: bool,
+    shape: str,
     t0: float,
     h: float,
     n_steps: int,
     sample_every: int,
     n_out: int,
-    r_escape: float,
-    wz: float,
-    axis: np.ndarray,
 ) -> tuple[int, float, int, np.ndarray, dict[str, np.ndarray]]:
-    """Run :func:`run_rigid` from the system's initial state into ``n_out`` sample rows.
+    """Run the kernel of the scene's ``shape`` from the initial state into ``n_out`` sample rows.
 
     Returns ``(status, event_time, n_force, t, samples)``, ``samples`` holding the sampled
     ``x, v, R, L``, the damping ``budget`` and the magnetic ``impulse``.
     """
     nb = system.x0.shape[0]
-    x, v, R, L = (a.copy() for a in (system.x0, system.v0, system.R0, system.L0))
-    out_t = np.empty(n_out)
-    out_x, out_v, out_L = np.empty((n_out, nb, 3)), np.empty((n_out, nb, 3)), np.empty((n_out, nb, 3))
-    out_R = np.empty((n_out, nb, 3, 3))
-    impulse = np.zeros((nb, 3))
-    out_acc = np.zeros(n_out)
-    status, _, n_s, event_time, n_force = run_rigid(
-        x,
-        v,
-        R,
-        L,
-        t0,
-        h,
-        n_steps,
-        sample_every,
-        weights,
-        system.bf,
-        system.bi,
-        system.src,
-        system.fld,
-        system.flags,
-        system.g,
-        r_escape,
-        check_events,
-        out_t,
-        out_x,
-        out_v,
-        out_R,
-        out_L,
-        impulse,
-        wz,
-        axis,
-        out_acc,
-    )
+    state = tuple(a.copy() for a in (system.x0, system.v0, system.R0, system.L0))
+    out = (np.empty(n_out), np.empty((n_out, nb, 3)), np.empty((n_out, nb, 3)), np.empty((n_out, nb, 3, 3)),
+           np.empty((n_out, nb, 3)), np.zeros(n_out), np.zeros((nb, 3)))
+    args = system.kernel_args()
+    if shape == "fixed_top":
+        turn = stage_turns(weights, h, system.src, system.fld)
+        result = run_fixed_top(state, t0, h, n_steps, sample_every, weights, args, out, turn)
+    elif shape == "free_pair":
+        result = run_free_pair(state, t0, h, n_steps, sample_every, weights, args, out, np.zeros((8, 3)))
+    else:
+        check_events = bool(system.bi[:, 0].any())
+        result = run_rigid(state, t0, h, n_steps, sample_every, weights, args, out, check_events)
+    status, _, n_s, event_time, n_force = result
+    out_t, out_x, out_v, out_R, out_L, out_acc, impulse = out
     samples = {
         "x": out_x[:n_s].copy(),
         "v": out_v[:n_s].copy(),
@@ -148,17 +127,16 @@ def _integrate_rigid(
     return int(status), float(event_time), int(n_force), out_t[:n_s].copy(), samples
 
 
-_WARM: set[int] = set()
+_WARM: set[str] = set()
 
 
-def _warm_up(system: CompiledSystem, weights: np.ndarray, check_events: bool) -> float:
+def _warm_up(system: CompiledSystem, weights: np.ndarray, shape: str) -> float:
     """Load (or compile) the kernel with a zero-step call, so run time excludes it; returns seconds."""
     import time
 
-    key = id(run_rigid)
-    if key in _WARM:
+    if shape in _WARM:
         return 0.0
     start = time.perf_counter()
-    _integrate_rigid(system, weights, check_events, 0.0, 1.0, 0, 1, 2, 0.0, 0.0, np.zeros(3))
-    _WARM.add(key)
+    _integrate_rigid(system, weights, shape, 0.0, 1.0, 0, 1, 2)
+    _WARM.add(shape)
     return time.perf_counter() - start

@@ -1,0 +1,137 @@
+"""Whole-process timings (hyperfine-style interleaved pairs): start-up and ``analyse laser``.
+
+Start-up: ``labkit --help`` and every ``labkit CMD --help`` as fresh processes (issue 15: each under
+0.3 s). Video: ``labkit analyse laser CLIP`` against a process that only decodes the clip (OpenCV
+``VideoCapture.read`` on every frame, as ``labkit bench vision``'s decode-only reference), run in
+alternating pairs so a busy machine slows both alike; the ratio is decode time / analyse time
+(1.0: analysing costs no more than decoding; issue 15 asks >= 0.8 at 720p).
+
+    python analysis/whole_command_bench.py                  # renders a 720p 10 s clip first
+    python analysis/whole_command_bench.py --clip my.mp4 --pairs 7
+    python analysis/whole_command_bench.py --help-only
+
+Prints medians and the range; nothing is asserted (benchmarks print, tests do not time).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+DECODE_ONLY = """
+import sys, cv2
+cap = cv2.VideoCapture(sys.argv[1])
+n = 0
+while True:
+    ok, _ = cap.read()
+    if not ok:
+        break
+    n += 1
+cap.release()
+print(n)
+"""
+
+
+DECODE_FRAMES = """
+import sys
+from labkit.vision.frames import open_frames
+print(open_frames(sys.argv[1]).decode_only())
+"""
+
+
+def cpu_of_child(argv: list[str]) -> tuple[float, float]:
+    """(wall, CPU user + system) of one run of ``argv``; CPU time is what load from other jobs
+    disturbs least."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t = wall(argv)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return t, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+
+
+def wall(argv: list[str]) -> float:
+    t0 = time.perf_counter()
+    proc = subprocess.run(argv, capture_output=True, text=True)
+    dt = time.perf_counter() - t0
+    if proc.returncode not in (0, 1):
+        raise SystemExit(f"{' '.join(argv)} failed ({proc.returncode}): {proc.stderr.strip()[-400:]}")
+    return dt
+
+
+def help_times(repeats: int) -> None:
+    from labkit.cli import COMMANDS
+    from labkit.cli.bench import BENCHES
+
+    argvs = [[]] + [[c] for c in COMMANDS] + [["bench", b] for b in BENCHES]
+    print(f"start-up: `labkit ... --help` as a fresh process, median of {repeats} (load average "
+          f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)")
+    worst = worst_cpu = 0.0
+    for argv in argvs:
+        runs = [cpu_of_child([sys.executable, "-m", "labkit", *argv, "--help"]) for _ in range(repeats)]
+        med = statistics.median(w for w, _ in runs)
+        cpu = statistics.median(c for _, c in runs)
+        worst, worst_cpu = max(worst, med), max(worst_cpu, cpu)
+        print(f"  labkit {' '.join(argv + ['--help']):28s} wall {med:6.3f} s  CPU {cpu:6.3f} s")
+    print(f"  slowest: wall {worst:.3f} s, CPU {worst_cpu:.3f} s (target < 0.3 s)")
+
+
+def clip_for(args: argparse.Namespace, tmp: Path) -> Path:
+    if args.clip:
+        return Path(args.clip)
+    clip = tmp / "clip720.mp4"
+    subprocess.run([sys.executable, "-m", "labkit", "synth", "laser", str(clip), "--size", "1280x720",
+                    "--frames", "300", "--level", "hard", "--pattern", args.pattern], check=True,
+                   capture_output=True)
+    return clip
+
+
+def analyse_pairs(clip: Path, pairs: int) -> None:
+    """Interleaved rounds of the two decode-only processes and ``labkit analyse laser``."""
+    jobs = {
+        "decode-only, labkit.vision.frames (bench vision's reference)":
+            [sys.executable, "-c", DECODE_FRAMES, str(clip)],
+        "decode-only, bare cv2 read loop": [sys.executable, "-c", DECODE_ONLY, str(clip)],
+        "labkit analyse laser": [sys.executable, "-m", "labkit", "analyse", "laser", str(clip)],
+    }
+    for argv in jobs.values():  # warm the page cache and numba/OpenCV caches
+        wall(argv)
+    times: dict[str, list[float]] = {name: [] for name in jobs}
+    order = list(jobs)
+    for i in range(pairs):
+        for name in order if i % 2 == 0 else order[::-1]:
+            times[name].append(wall(jobs[name]))
+    analyse = times["labkit analyse laser"]
+    print(f"analyse laser {clip.name} as a whole process, {pairs} interleaved rounds:")
+    for name, ts in times.items():
+        print(f"  {name:62s} median {statistics.median(ts):.3f} s")
+    for name in order[:2]:
+        ratios = [d / a for d, a in zip(times[name], analyse, strict=True)]
+        print(f"  throughput vs {name}: {statistics.median(ratios):.2f}x "
+              f"(range {min(ratios):.2f}-{max(ratios):.2f}; target >= 0.8)")
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--clip", help="video to analyse (default: render a 1280x720 10 s clip)")
+    ap.add_argument("--pattern", default="ellipse", help="synthetic pattern when rendering (default ellipse)")
+    ap.add_argument("--pairs", type=int, default=5, help="interleaved decode/analyse pairs (default 5)")
+    ap.add_argument("--repeats", type=int, default=3, help="runs per --help timing (default 3)")
+    ap.add_argument("--help-only", action="store_true", help="only the start-up timings")
+    ap.add_argument("--video-only", action="store_true", help="only the analyse laser pairs")
+    args = ap.parse_args()
+    if not args.video_only:
+        help_times(args.repeats)
+    if not args.help_only:
+        with tempfile.TemporaryDirectory() as tmp:
+            analyse_pairs(clip_for(args, Path(tmp)), args.pairs)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""The stress cases, grouped by what they stress; the runner is :mod:`labkit.numerics.stress`."""

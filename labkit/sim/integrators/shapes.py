@@ -1,0 +1,326 @@
+"""Step kernels specialised to a compiled scene's shape (numba, cached).
+
+:func:`labkit.sim.integrators.splitting.run_rigid` integrates any rigid scene: every stage loops
+over bodies, checks the scene's flags and calls the general force routine. A scene whose shape
+is known needs much less. :func:`scene_shape` names the shape; :data:`KERNELS` maps a shape to
+its kernel; the general kernel serves every other scene. Every kernel takes the same packed
+arguments (:class:`labkit.sim.integrators.splitting.KernelArgs`) and returns the same
+``(status, steps_done, n_samples, event_time, n_force)``, with the status codes of
+:class:`labkit.sim.integrators.Status`.
+
+``fixed_top``: one body held in place (no translation), a symmetric top (two equal principal
+moments, or all three), with a dipole, driven by a uniform field and/or rotators, no damping,
+no gravity on a fixed body: the state is R and L, the stage is the same splitting as the general
+kernel (half kick, exact free rotation, force, half kick) with the force and torque of each
+source fused into the stage and no loop over bodies or flags. The same arithmetic in the same
+order, so results agree with the general kernel to round-off.
+
+``free_pair``: two free symmetric tops with dipoles and nothing else (no field, rotator, gravity or
+damping; the bound state of Fig. 6.1): the pair's force and torque fused, no flag checks.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from labkit.sim.integrators.kernels import (
+    B_I,
+    B_M,
+    B_MASS,
+    B_OFF,
+    F_DAMPING,
+    F_FIELD,
+    F_GRAVITY,
+    F_PAIRS,
+    F_SOURCES,
+    I_DIPOLE,
+    I_FREE,
+    I_TRANS,
+    K_M,
+    S_AXIS,
+    S_MOM,
+    S_OMEGA,
+    S_RAMP,
+    S_SHIFT,
+    S_TILT,
+    dipole_force_torque,
+    source_angle,
+)
+from labkit.sim.integrators.splitting import (
+    ST_BLOWUP,
+    ST_NONFINITE,
+    ST_OK,
+    free_rotation,
+    health,
+    rotate_axis_angle,
+    rotate_body_columns,
+    step_event,
+    store_sample,
+)
+
+
+def scene_shape(system) -> str:
+    """The shape of a compiled rigid scene that selects its step kernel ("general" otherwise)."""
+    bf, bi, flags = system.bf, system.bi, system.flags
+    if bf is None:
+        return "general"
+    if bf.shape[0] == 2:
+        free_pair = (all(bi[b, I_TRANS] and bi[b, I_FREE] == 0 and bi[b, I_DIPOLE] for b in range(2))
+                     and flags[F_PAIRS] and not (flags[F_FIELD] or flags[F_SOURCES] or flags[F_GRAVITY]
+                                                 or flags[F_DAMPING]))
+        return "free_pair" if free_pair else "general"
+    if bf.shape[0] != 1:
+        return "general"
+    one_fixed_top = (not bi[0, I_TRANS] and bi[0, I_FREE] == 0 and bi[0, I_DIPOLE]
+                     and not flags[F_DAMPING] and not flags[F_PAIRS])
+    return "fixed_top" if one_fixed_top else "general"
+
+
+@njit(cache=True, _nrt=False)
+def _drive_phases(t, src, fld, ph):
+    """cos and sin of every drive angle at ``t``: row 0 the field's, row 1 + s rotator s's."""
+    th = fld[4] + fld[3] * t
+    ph[0, 0], ph[0, 1] = math.cos(th), math.sin(th)
+    for s in range(src.shape[0]):
+        th = source_angle(src, s, t)
+        ph[1 + s, 0], ph[1 + s, 1] = math.cos(th), math.sin(th)
+
+
+@njit(cache=True, _nrt=False)
+def _advance_phases(base, turn, i, t, src, ph):
+    """Drive phases at stage ``i`` of a step: the step's ``base`` phases turned by the stage's
+    precomputed angle (``turn[d, i]``: cos, sin of rate x stage offset), two products instead
+    of a cos and a sin; a ramped rotator is evaluated directly at ``t``."""
+    for d in range(base.shape[0]):
+        if d > 0 and src[d - 1, S_RAMP] != 0.0:
+            th = source_angle(src, d - 1, t)
+            ph[d, 0], ph[d, 1] = math.cos(th), math.sin(th)
+            continue
+        c0, s0, c1, s1 = base[d, 0], base[d, 1], turn[d, i, 0], turn[d, i, 1]
+        ph[d, 0] = c0 * c1 - s0 * s1
+        ph[d, 1] = s0 * c1 + c0 * s1
+
+
+def stage_turns(weights, h, src, fld) -> np.ndarray:
+    """(drives, stages, 2): cos and sin of each drive's rate times each stage's offset in the step."""
+    offsets = np.cumsum(weights) * h
+    rates = np.concatenate([[fld[3]], src[:, S_OMEGA]])
+    angles = rates[:, None] * offsets[None, :]
+    return np.stack([np.cos(angles), np.sin(angles)], axis=-1)
+
+
+@njit(cache=True, _nrt=False)
+def _top_torque(M, bf, src, fld, flags, x, ft, ph):
+    """Force and torque about the CM on the one body (into ``ft[0:6]``) with the drive phases
+    ``ph`` (:func:`_drive_phases`); fused, no loops over bodies."""
+    mx = M[0, 0] * bf[0, B_M] + M[0, 1] * bf[0, B_M + 1] + M[0, 2] * bf[0, B_M + 2]
+    my = M[1, 0] * bf[0, B_M] + M[1, 1] * bf[0, B_M + 1] + M[1, 2] * bf[0, B_M + 2]
+    mz = M[2, 0] * bf[0, B_M] + M[2, 1] * bf[0, B_M + 1] + M[2, 2] * bf[0, B_M + 2]
+    ox = M[0, 0] * bf[0, B_OFF] + M[0, 1] * bf[0, B_OFF + 1] + M[0, 2] * bf[0, B_OFF + 2]
+    oy = M[1, 0] * bf[0, B_OFF] + M[1, 1] * bf[0, B_OFF + 1] + M[1, 2] * bf[0, B_OFF + 2]
+    oz = M[2, 0] * bf[0, B_OFF] + M[2, 1] * bf[0, B_OFF + 1] + M[2, 2] * bf[0, B_OFF + 2]
+    fx = fy = fz = tx = ty = tz = 0.0
+    if flags[F_FIELD]:  # Eq. 5.21 (rotating or static) or Eq. 5.481 (oscillating), as uniform_field
+        c, sn = ph[0, 0], ph[0, 1]
+        bx, by, bz = (-fld[1] * sn, fld[1] * c, fld[2]) if fld[0] == 1.0 else (0.0, fld[1] * c, fld[2])
+        tx += my * bz - mz * by
+        ty += mz * bx - mx * bz
+        tz += mx * by - my * bx
+    if flags[F_SOURCES]:
+        px, py, pz = x[0, 0] + ox, x[0, 1] + oy, x[0, 2] + oz
+        for s in range(src.shape[0]):
+            c, sn = ph[1 + s, 0], ph[1 + s, 1]  # Eq. 5.25, as source_state
+            mom, tilt = src[s, S_MOM], src[s, S_TILT]
+            m0y, m0z = -mom * math.cos(tilt), mom * math.sin(tilt)
+            sx, sy, sz = src[s, S_SHIFT], src[s, S_SHIFT + 1], src[s, S_SHIFT + 2]
+            spx = src[s, S_AXIS] + c * sx - sn * sy
+            spy = src[s, S_AXIS + 1] + sn * sx + c * sy
+            spz = src[s, S_AXIS + 2] + sz
+            f = dipole_force_torque(-sn * m0y, c * m0y, m0z, mx, my, mz, px - spx, py - spy, pz - spz)
+            fx += f[0]
+            fy += f[1]
+            fz += f[2]
+            tx += f[3] + oy * f[2] - oz * f[1]
+            ty += f[4] + oz * f[0] - ox * f[2]
+            tz += f[5] + ox * f[1] - oy * f[0]
+    ft[0], ft[1], ft[2], ft[3], ft[4], ft[5] = fx, fy, fz, tx, ty, tz
+
+
+@njit(cache=True, _nrt=False)
+def _top_rotation(M, L, i_r, i_a, h):
+    """Exact free rotation of a symmetric top (as :func:`..splitting.free_rotation`, kind 0)."""
+    lx, ly, lz = L[0, 0], L[0, 1], L[0, 2]
+    ln = math.sqrt(lx * lx + ly * ly + lz * lz)
+    l3 = M[0, 2] * lx + M[1, 2] * ly + M[2, 2] * lz
+    c = l3 * (1.0 / i_a - 1.0 / i_r)
+    if c != 0.0:
+        rotate_body_columns(M, 2, h * c)
+    if ln > 0.0:
+        rotate_axis_angle(M, lx / ln, ly / ln, lz / ln, h * ln / i_r)
+
+
+@njit(cache=True)
+def run_fixed_top(state, t0, h, n_steps, sample_every, weights, args, out, turn):
+    """The ``fixed_top`` kernel; ``state = (x, v, R, L)`` updated in place; ``turn`` from
+    :func:`stage_turns` (the drive phases of each stage relative to its step's start)."""
+    x, v, R, L = state
+    bf, bi, src, fld, flags, g, axis, r_escape, wz = args
+    impulse = out[6]
+    M = R[0]
+    i_r, i_a = bf[0, B_I], bf[0, B_I + 2]
+    ft = np.zeros(6)
+    base = np.empty((1 + src.shape[0], 2))
+    ph = np.empty((1 + src.shape[0], 2))
+    t = t0
+    _drive_phases(t, src, fld, ph)
+    _top_torque(M, bf, src, fld, flags, x, ft, ph)
+    n_force = 1
+    n_s = store_sample(0, t, x, v, R, L, 0.0, out)
+    status = ST_OK
+    event_time = math.nan
+    steps_done = 0
+    for step in range(n_steps):
+        _drive_phases(t, src, fld, base)
+        for i in range(weights.shape[0]):
+            hw = weights[i] * h
+            half = 0.5 * hw
+            for k in range(3):
+                L[0, k] += half * ft[3 + k]
+                impulse[0, k] += half * ft[k]
+            _top_rotation(M, L, i_r, i_a, hw)
+            t += hw
+            _advance_phases(base, turn, i, t, src, ph)
+            _top_torque(M, bf, src, fld, flags, x, ft, ph)
+            n_force += 1
+            for k in range(3):
+                L[0, k] += half * ft[3 + k]
+                impulse[0, k] += half * ft[k]
+        t = t0 + (step + 1) * h
+        steps_done = step + 1
+        lx, ly, lz = L[0, 0], L[0, 1], L[0, 2]
+        if not (math.isfinite(lx) and math.isfinite(ly) and math.isfinite(lz)):
+            status, event_time = ST_NONFINITE, t
+            break
+        if math.sqrt(lx * lx + ly * ly + lz * lz) / bf[0, B_I] > 1e9:
+            status, event_time = ST_BLOWUP, t
+            break
+        if (step + 1) % sample_every == 0:
+            n_s = store_sample(n_s, t, x, v, R, L, 0.0, out)
+    if status != ST_OK or steps_done % sample_every != 0:
+        n_s = store_sample(n_s, t, x, v, R, L, 0.0, out)
+    return status, steps_done, n_s, event_time, n_force
+
+
+@njit(cache=True, _nrt=False)
+def _pair_forces(x, R, bf, F, T, mp):
+    """Dipole-dipole force and torque (about each CM) between the two bodies; ``mp`` scratch (4, 3):
+    lab moments and dipole positions. The arithmetic of :func:`..kernels.compute_forces`, fused."""
+    for b in range(2):
+        for i in range(3):
+            acc_m = 0.0
+            acc_p = 0.0
+            for j in range(3):
+                acc_m += R[b, i, j] * bf[b, B_M + j]
+                acc_p += R[b, i, j] * bf[b, B_OFF + j]
+            mp[b, i] = acc_m
+            mp[2 + b, i] = x[b, i] + acc_p
+    rx, ry, rz = mp[3, 0] - mp[2, 0], mp[3, 1] - mp[2, 1], mp[3, 2] - mp[2, 2]
+    fb, fa = _pair_force_torque(mp[0, 0], mp[0, 1], mp[0, 2], mp[1, 0], mp[1, 1], mp[1, 2], rx, ry, rz)
+    _set_force(1, fb, x, mp, F, T)
+    _set_force(0, fa, x, mp, F, T)
+
+
+@njit(cache=True, _nrt=False)
+def _pair_force_torque(ax, ay, az, bx, by, bz, rx, ry, rz):
+    """Eq. 4.2-4.3 for both dipoles of a pair at once (``r`` from a to b): the force on a is minus
+    the force on b; the torques share ``a x b`` and the projections on ``u = r / |r|``. Returns
+    ``(F_b, tau_b), (F_a, tau_a)`` as two 6-tuples (as :func:`..kernels.dipole_force_torque`)."""
+    d2 = rx * rx + ry * ry + rz * rz
+    d = math.sqrt(d2)
+    ux, uy, uz = rx / d, ry / d, rz / d
+    ab = ax * bx + ay * by + az * bz
+    ra = ux * ax + uy * ay + uz * az
+    rb = ux * bx + uy * by + uz * bz
+    cf = 3.0 * K_M / (d2 * d2)
+    fx = cf * (ux * ab + ax * rb + bx * ra - 5.0 * ux * ra * rb)
+    fy = cf * (uy * ab + ay * rb + by * ra - 5.0 * uy * ra * rb)
+    fz = cf * (uz * ab + az * rb + bz * ra - 5.0 * uz * ra * rb)
+    ct = K_M / (d2 * d)
+    cx, cy, cz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx  # a x b
+    tbx = ct * (3.0 * ra * (by * uz - bz * uy) + cx)
+    tby = ct * (3.0 * ra * (bz * ux - bx * uz) + cy)
+    tbz = ct * (3.0 * ra * (bx * uy - by * ux) + cz)
+    tax = ct * (3.0 * rb * (ay * uz - az * uy) - cx)
+    tay = ct * (3.0 * rb * (az * ux - ax * uz) - cy)
+    taz = ct * (3.0 * rb * (ax * uy - ay * ux) - cz)
+    return (fx, fy, fz, tbx, tby, tbz), (-fx, -fy, -fz, tax, tay, taz)
+
+
+@njit(cache=True, _nrt=False)
+def _set_force(b, f, x, mp, F, T):
+    ox, oy, oz = mp[2 + b, 0] - x[b, 0], mp[2 + b, 1] - x[b, 1], mp[2 + b, 2] - x[b, 2]
+    F[b, 0], F[b, 1], F[b, 2] = f[0], f[1], f[2]
+    T[b, 0] = f[3] + oy * f[2] - oz * f[1]
+    T[b, 1] = f[4] + oz * f[0] - ox * f[2]
+    T[b, 2] = f[5] + ox * f[1] - oy * f[0]
+
+
+@njit(cache=True, _nrt=False)
+def _pair_kick(v, L, F, T, inv_m0, inv_m1, h, impulse):
+    for k in range(3):
+        v[0, k] += h * F[0, k] * inv_m0
+        v[1, k] += h * F[1, k] * inv_m1
+        L[0, k] += h * T[0, k]
+        L[1, k] += h * T[1, k]
+        impulse[0, k] += h * F[0, k]
+        impulse[1, k] += h * F[1, k]
+
+
+@njit(cache=True)
+def run_free_pair(state, t0, h, n_steps, sample_every, weights, args, out, scratch):
+    """The ``free_pair`` kernel; ``state = (x, v, R, L)`` in place; ``scratch`` (8, 3): F, T, mp."""
+    x, v, R, L = state
+    bf, bi, src, fld, flags, g, axis, r_escape, wz = args
+    impulse = out[6]
+    F, T, mp = scratch[0:2], scratch[2:4], scratch[4:8]
+    xp, vp = np.empty((2, 3)), np.empty((2, 3))
+    pi = np.empty(3)
+    inv_m0, inv_m1 = 1.0 / bf[0, B_MASS], 1.0 / bf[1, B_MASS]
+    t = t0
+    _pair_forces(x, R, bf, F, T, mp)
+    n_force = 1
+    n_s = store_sample(0, t, x, v, R, L, 0.0, out)
+    status = ST_OK
+    event_time = math.nan
+    steps_done = 0
+    for step in range(n_steps):
+        xp[:] = x
+        vp[:] = v
+        for w in weights:
+            hw = w * h
+            _pair_kick(v, L, F, T, inv_m0, inv_m1, 0.5 * hw, impulse)
+            for b in range(2):
+                for k in range(3):
+                    x[b, k] += hw * v[b, k]
+                free_rotation(R, L, bf, bi, b, hw, pi)
+            t += hw
+            _pair_forces(x, R, bf, F, T, mp)
+            n_force += 1
+            _pair_kick(v, L, F, T, inv_m0, inv_m1, 0.5 * hw, impulse)
+        t = t0 + (step + 1) * h
+        steps_done = step + 1
+        status = health(x, v, L, bf)
+        if status == ST_OK:
+            status, event_time = step_event(x, v, xp, vp, bf, bi, src, r_escape, t, h)
+        else:
+            event_time = t
+        if status != ST_OK:
+            break
+        if (step + 1) % sample_every == 0:
+            n_s = store_sample(n_s, t, x, v, R, L, 0.0, out)
+    if status != ST_OK or steps_done % sample_every != 0:
+        n_s = store_sample(n_s, t, x, v, R, L, 0.0, out)
+    return status, steps_done, n_s, event_time, n_force

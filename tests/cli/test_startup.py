@@ -1,0 +1,67 @@
+"""Start-up: building a parser and printing ``--help`` imports none of the heavy libraries.
+
+Every ``labkit CMD --help`` runs in a fresh interpreter (``python -m labkit``) that reports which
+modules it ended up with; a command that imports scipy, numba, matplotlib, OpenCV or rerun while
+building its parser fails here by name, without timing anything (issue 15: help under 0.3 s).
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from labkit.cli import COMMANDS
+from labkit.cli.bench import BENCHES
+
+HEAVY = ("scipy", "numba", "matplotlib", "cv2", "rerun", "PIL", "numpy")
+
+PROBE = f"""
+import json, sys
+from labkit.cli import main
+try:
+    code = main(sys.argv[1:])
+except SystemExit as exc:
+    code = exc.code
+print("\\n@@MODULES@@" + json.dumps(sorted(m for m in sys.modules if m.split(".")[0] in {set(HEAVY)!r})))
+sys.exit(code or 0)
+"""
+
+ARGVS = [["--help"]] + [[c, "--help"] for c in COMMANDS] + [["bench", b, "--help"] for b in BENCHES] + [
+    ["analyse", "laser", "--help"], ["analyse", "strobe", "--help"],
+    ["synth", "laser", "--help"], ["synth", "strobe", "--help"],
+]
+
+
+def run_help(argv: list[str]) -> tuple[str, list[str]]:
+    proc = subprocess.run([sys.executable, "-c", PROBE, *argv], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    text, _, modules = proc.stdout.rpartition("\n@@MODULES@@")
+    return text, json.loads(modules)
+
+
+@pytest.mark.parametrize("argv", ARGVS, ids=lambda a: " ".join(a))
+def test_help_imports_no_heavy_library(argv):
+    text, modules = run_help(argv)
+    assert "usage: labkit" in text
+    assert modules == [], f"`labkit {' '.join(argv)}` imported {modules} while building its parser"
+
+
+def test_the_probe_sees_a_heavy_import():
+    """The check above can fail: a command that runs (not just --help) loads numba."""
+    proc = subprocess.run([sys.executable, "-c", PROBE, "simulate", "--compile-only", "conical_5_1"],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    modules = json.loads(proc.stdout.rpartition("\n@@MODULES@@")[2])
+    assert "numba" in modules
+
+
+def test_parser_names_match_their_registries():
+    """The names parsers offer without importing their registries (labkit/cli/names.py)."""
+    from labkit.cli import names
+    from labkit.fit.models import MODELS, PAPER_OMEGA_C
+
+    assert names.FIT_MODELS == tuple(MODELS)
+    assert names.PAPER_OMEGA_C == PAPER_OMEGA_C
