@@ -15,8 +15,9 @@ zero           device, value (balance reading at rest before zeroing, in its uni
 point          index, point (one result row, as written to results.json)
 drop           index, trial, rotor_rad_s, spin_rad_s, cause ("balance"|"spin_loss"|"key")
 checkpoint     index
-stop_request   count (1: stop at next checkpoint; 2: safe state now)
-interlock      reason (every motor was commanded to zero)
+stop_request   count (1: stop at next checkpoint; 2: safe state now), signal ("SIGINT", "SIGTERM"...)
+interlock      reason (every motor was commanded to zero), stop_failed (those not delivered)
+stop_failed    devices {role: why}: a STOP could not be delivered (docs/safety.md)
 fault          reason (an exception ended the run; motors zeroed)
 results        results (the results.json object)
 stop           status ("completed"|"interrupted"|"failed"), reason, steps_done
