@@ -67,6 +67,14 @@ class _MotorEmulator(Emulator):
         self.check_events(t)
         self.check_timeout(t)
 
+    def before_bytes(self, t: float) -> None:
+        """What happens up to the arrival of host bytes at ``t``. A pty host that found them
+        waiting after a late wake sets ``arrived_since`` (when it last looked): the command
+        timeout is judged at that earliest arrival, as the real UART would have received them."""
+        since = getattr(self, "arrived_since", None)
+        self.check_events(t)
+        self.check_timeout(t if since is None else min(t, since))
+
     def check_timeout(self, t: float) -> None:
         """Controller-side command timeouts (subclasses)."""
 
@@ -184,7 +192,7 @@ class PololuSmcEmulator(_MotorEmulator):
 
     # ---- bytes --------------------------------------------------------------------------
     def handle(self, data: bytes, t: float) -> None:
-        self.produce(t)
+        self.before_bytes(t)
         for byte in data:
             self._byte(byte, t)
 

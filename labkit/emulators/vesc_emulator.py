@@ -80,7 +80,7 @@ class VescEmulator(_MotorEmulator):
             self.drive(0.0, due)
 
     def handle(self, data: bytes, t: float) -> None:
-        self.produce(t)
+        self.before_bytes(t)
         if t < self.silent_until:
             return
         self.rx += data

@@ -173,20 +173,24 @@ class PtyHost:
                         raise
                     data = b""
                 if data:
-                    self.emulator.receive(garble(data, self._garble_rng) if wrong_baud else data,
-                                          self._arrival_time(now))
+                    # bytes found waiting after a late wake may have come any time since the pump
+                    # last looked: a device's command timeout must not count that wait against
+                    # the host (motor emulators read ``arrived_since``)
+                    self.emulator.arrived_since = self._arrived_since(now)
+                    self.emulator.receive(garble(data, self._garble_rng) if wrong_baud else data, now)
+                    self.emulator.arrived_since = None
             out = self.emulator.emit(now)
             if out:
                 self._write(pty, garble(out, self._garble_rng) if wrong_baud else out)
             self._looked_at = now
 
-    def _arrival_time(self, now: float) -> float:
-        """When bytes found waiting arrived: ``now`` after a prompt wake; after a late one (this
-        process was not scheduled for a while) the earliest they could have, when the pump last
-        looked. A real device reads its UART as bytes come: host commands that were sent on time
-        must not look late to its command timeout because the emulator's thread was starved."""
+    def _arrived_since(self, now: float) -> float | None:
+        """After a late wake (this process was not scheduled for a while) the earliest time
+        bytes found waiting could have arrived: when the pump last looked; None after a prompt
+        wake (they arrived just now). A real device reads its UART as bytes come: commands sent
+        on time must not look late to its command timeout because the emulator was starved."""
         looked = self._looked_at
-        return looked if looked is not None and now - looked > LATE_WAKE_S else now
+        return looked if looked is not None and now - looked > LATE_WAKE_S else None
 
     def wrong_baud(self, pty: _Pty) -> bool:
         """True when the emulated device expects another baud rate than the program set."""

@@ -30,7 +30,7 @@ RIG = ((Path(__file__).resolve().parents[2] / "rigs" / "emulated-fig525.toml").r
        .replace("settle_hold_s = 1.0", "settle_hold_s = 0.2")
        .replace("tach_timeout_s = 0.5", "tach_timeout_s = 5.0")
        .replace("command_timeout_ms=500", "command_timeout_ms=0")
-       .replace("options = { command_timeout_ms = 500 }", "options = { reply_timeout_s = 2.0 }"))
+       .replace("options = { command_timeout_ms = 500 }", "options = { reply_timeout_s = 5.0 }"))
 
 
 class OnSettled(ListSink):
@@ -69,6 +69,8 @@ def run_on_ptys(rig_text, on_settled=None, **overrides):
     finally:
         for host in hosts.values():
             host.close()
+    for role, host in hosts.items():  # an emulator that died would look like a silent device
+        assert host.error is None, (role, host.error)
     return outcome, marks, sink, shared_plant("fig525").motor("rotor"), hosts
 
 
