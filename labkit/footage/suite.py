@@ -90,14 +90,15 @@ def _laser_cases() -> list[CaseSpec]:
 
 def _strobe_cases() -> list[CaseSpec]:
     cases = []
-    bodies = cycle(("cylinder", "cuboid"))
-    rests = cycle((0.0, 90.0, 35.0, -60.0, 90.0, 0.0))
-    flashes = cycle((1.0, 2.0, 3.0, 0.0, 4.0, 6.0, 3.3, 1.0, 5.0))
-    cpfs = cycle((0.08, -0.06, 0.11, -0.13, 0.045, -0.09, 0.17))
-    sizes = cycle(((640, 480), (1280, 720), (320, 240), (1920, 1080)))
+    bodies = ("cylinder", "cuboid")
+    rests = (0.0, 90.0, 35.0, -60.0, 90.0, 0.0)
+    flashes = (1.0, 2.0, 3.0, 0.0, 4.0, 6.0, 3.3, 1.0, 5.0)
+    cpfs = (0.08, -0.06, 0.11, -0.13, 0.045, -0.09, 0.17)
+    sizes = ((640, 480), (1280, 720), (320, 240), (1920, 1080))
     for i in range(72):
-        d = DIFFICULTIES[i % 3]
-        body, rest, fl, cpf, size = next(bodies), next(rests), next(flashes), next(cpfs), next(sizes)
+        d, j = DIFFICULTIES[i % 3], i // 3  # j counts within a difficulty: every level gets every value
+        body, rest, fl = bodies[j % 2], rests[j % len(rests)], flashes[j % len(flashes)]
+        cpf, size = cpfs[i % len(cpfs)], sizes[(j + j // 2) % len(sizes)]
         rolling = i % 4 in (1, 2)
         harmonic = 2 if i % 5 == 4 else 1
         if d == "easy":  # a lamp triggered by the camera: one flash per frame, upright, global shutter

@@ -104,7 +104,7 @@ def build_laser(case: CaseSpec) -> LaserShot:
     radius = float(rng.uniform(0.25, 0.4)) * min(w, h)
     centre = (w / 2 + float(rng.uniform(-0.08, 0.08)) * w, h / 2 + float(rng.uniform(-0.08, 0.08)) * h)
     if case.source == "sim":
-        tilt = 0.0 if case.family == "circle" else float(rng.uniform(8, 25))
+        tilt = 0.0 if case.family == "circle" else float(rng.uniform(12, 25))
         motion = SimulatedCone(cycle_hz=cycle_hz, phase_cycles=float(rng.uniform(0, 1)))
         screen = Screen(60.0, tilt, hole_mm=1.0)
         probe = ScreenView((0.0, 0.0), 1.0, 0.0)
