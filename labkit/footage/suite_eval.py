@@ -54,9 +54,9 @@ def render_case(case: CaseSpec, cache: Path | None = None) -> tuple[Path, dict]:
     truth["case"] = asdict(case)
     tmp = path.with_name("tmp-" + path.name)
     write_footage(tmp, frames, shot.camera.fps, truth, jpeg_quality=shot.camera.jpeg_quality)
-    tmp.rename(path)
     truth_path(tmp).rename(tpath)
-    return path, truth
+    tmp.rename(path)
+    return path, json.loads(tpath.read_text())  # as read back from the cache next time
 
 
 @dataclass
