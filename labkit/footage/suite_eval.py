@@ -24,7 +24,7 @@ from labkit.footage.strobe_scene import render_strobe, strobe_truth
 from labkit.footage.suite import CaseSpec
 from labkit.footage.suite_build import build_shot
 
-RENDER_VERSION = 2  # bump when the renderer's output changes: the cache key includes it
+RENDER_VERSION = 3  # bump when the renderer's output changes: the cache key includes it
 CONICS = ("circle", "ellipse")
 
 
