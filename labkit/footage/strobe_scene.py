@@ -241,6 +241,6 @@ def strobe_truth(shot: StrobeShot) -> dict:
         "flashes_per_exposure": None if shot.lamp.hz is None else cam.exposure_s * shot.lamp.hz,
         "camera_is_strobe": shot.lamp.hz is None, "body": shot.body.shape,
         "rest_deg": shot.rest_deg, "roll_deg": shot.roll_deg, "axis_image_deg": shot.axis_image_deg,
-        "analysis_inputs": {"rotor_hz": sw.rotor_hz, "strobe_hz": f_strobe},
+        "analysis_inputs": {"rotor_hz": sw.rotor_hz, **({"strobe_hz": shot.lamp.hz} if shot.lamp.hz else {})},
         "per_frame": per_frame, "spec": asdict(shot),
     }

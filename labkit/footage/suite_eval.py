@@ -132,6 +132,15 @@ def score_strobe(result: dict, truth: dict) -> tuple[list[str], dict]:
     return fails, err
 
 
+def analysis_inputs(truth: dict) -> dict:
+    """What a user passes to ``analyse_strobe``: the rotor and lamp frequencies; with no lamp (the
+    camera's exposure is the strobe) the rotor frequency alone (the file gives the frame rate)."""
+    inputs = dict(truth["analysis_inputs"])
+    if truth.get("camera_is_strobe"):
+        inputs.pop("strobe_hz", None)
+    return inputs
+
+
 def _call(fn, path: Path, inputs: dict) -> dict:
     """Call an analysis with the inputs a user would give, keeping those it accepts."""
     accepted = inspect.signature(fn).parameters
@@ -148,7 +157,7 @@ def evaluate_case(case: CaseSpec, cache: Path | None = None) -> Outcome:
     strobe = case.family == "strobe"
     try:
         if strobe:
-            result = _call(analyse_strobe, path, truth["analysis_inputs"])
+            result = _call(analyse_strobe, path, analysis_inputs(truth))
         else:
             result = analyse_laser(str(path))
     except LabkitError as exc:
