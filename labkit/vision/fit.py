@@ -62,6 +62,7 @@ class Classification:
     residuals: dict[str, float] = field(default_factory=dict)
     t_ref: float = 0.0  # the time the centres refer to (mean time of the points fitted)
     coverage: dict[str, float] = field(default_factory=dict)  # trochoids' coverage_rms, same keys
+    fits: dict[str, CurveFit] = field(default_factory=dict)  # every trochoid candidate's fit, same keys
 
 
 def _curve(c: complex, a: complex, b: complex, k: int, t: np.ndarray) -> np.ndarray:
@@ -358,6 +359,7 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
     t_ref = _mean_time(full[2])
     residuals = {"ellipse": ellipse.rms_residual}
     coverage: dict[str, float] = {}
+    fits: dict[str, CurveFit] = {}
     if prior is not None:
         residuals.update({f"{k} (first part)": v for k, v in prior.residuals.items()})
         f = prior.best
@@ -368,7 +370,7 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
         zs, _, taus = _prepare(*screen)
         screened = fit_trochoids(screen[0], ks, screen[1], screen[2], iterations=10)
         for f in screened:
-            residuals[_name(f)] = f.rms_residual
+            residuals[_name(f)], fits[_name(f)] = f.rms_residual, f
             coverage[_name(f)] = coverage_rms(f, zs, taus) if math.isfinite(f.rms_residual) else math.inf
         screened.sort(key=lambda f: two_way_rms(f.rms_residual, coverage[_name(f)]))
         shortlist = [f for f in screened[:2] if math.isfinite(f.rms_residual)]
@@ -380,6 +382,7 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
         refined = [_curve_fit(rows, rms, i) for i in range(len(shortlist))]
     for fit in refined:
         residuals[_name(fit)], coverage[_name(fit)] = fit.rms_residual, coverage_rms(fit, z, tau)
+        fits[_name(fit)] = fit
     trochoid = min(refined, key=lambda f: two_way_rms(f.rms_residual, coverage[_name(f)]), default=None)
 
     def trochoid_wins() -> bool:
@@ -398,7 +401,7 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
     if prior is not None and not (
             best.rms_residual <= PRIOR_RMS_FACTOR * prior.best.rms_residual + PRIOR_RMS_SLACK_PX):
         return classify(points, weights, times, max_points, screen_points, trochoid_loops, band)
-    return Classification(best, ellipse, residuals, t_ref, coverage)
+    return Classification(best, ellipse, residuals, t_ref, coverage, fits)
 
 
 def _polished_on_band(ellipse: CurveFit, band: tuple, full: tuple, max_points: int) -> CurveFit:

@@ -30,6 +30,8 @@ from labkit.vision.framepath import (
     measure_frame_path,
 )
 from labkit.vision.frames import FrameSource, open_frames
+from labkit.vision.laser_checks import laser_evidence, laser_verdict, no_pattern_verdict
+from labkit.vision.overlay import accumulated_trace
 from labkit.vision.trace import TracePoints, trace_points
 
 FrameHook = Callable[[int, float, np.ndarray], None]
@@ -239,16 +241,27 @@ def _frame_path(chunks: list[Chunk], probe: FramePathProbe) -> dict:
 
 def _none(reason: str) -> dict:
     return {"type": "none", "reason": reason, "center_px": None, "semi_axes_px": None,
-            "rotation_deg": None, "ellipticity": None, "loops": None, "trochoid": None,
+            "rotation_deg": None, "ellipticity": None, "loops": None, "symmetry": None, "trochoid": None,
             "rms_residual_px": None}
+
+
+def symmetry_of(kind: str, k: int) -> int | None:
+    """n-fold rotational symmetry of a pattern: round(1/|a|) = |k - 1| of Eq. 6.38 (a trochoid
+    with ``loops`` n: n - 1 for an epitrochoid, n for a hypotrochoid), 2 for an ellipse, None for
+    a circle (every rotation maps it onto itself)."""
+    if kind == "circle":
+        return None
+    return round(1.0 / abs(a_for_k(k)))
 
 
 def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | None,
                  band: tuple | None = None, prior: Classification | None = None,
-                 centre_time: float | None = None) -> tuple[dict, dict]:
-    """Classify and fit a trace; returns the JSON ``pattern`` object and fit diagnostics. With
-    ``times``, the fitted centre drifts; it is reported at ``centre_time`` (s, e.g. the middle of
-    the recording), or at the mean time of the points fitted."""
+                 centre_time: float | None = None, line_width_px: float = math.nan,
+                 frame_size: tuple[int, int] | None = None) -> tuple[dict, dict]:
+    """Classify and fit a trace; returns the JSON ``pattern`` object and fit diagnostics, which
+    include the quality verdict (:mod:`labkit.vision.laser_checks`) when ``frame_size`` is given.
+    With ``times``, the fitted centre drifts; it is reported at ``centre_time`` (s, e.g. the
+    middle of the recording), or at the mean time of the points fitted."""
     cls = classify(points, weights, times, band=band, prior=prior)
     best, ell = cls.best, cls.ellipse.pattern
     centre = best.c
@@ -269,11 +282,15 @@ def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | No
         rotation, loops = math.degrees(ell.rotation_rad), 1
     pattern = {"type": kind, "center_px": [float(centre.real), float(centre.imag)], "semi_axes_px": axes,
                "rotation_deg": rotation, "ellipticity": ellipticity,
-               "loops": loops, "trochoid": trochoid, "rms_residual_px": best.rms_residual}
+               "loops": loops, "symmetry": symmetry_of(kind, best.k), "trochoid": trochoid,
+               "rms_residual_px": best.rms_residual}
     residuals = {k: (v if math.isfinite(v) else None) for k, v in cls.residuals.items()}
     coverage = {k: (v if math.isfinite(v) else None) for k, v in cls.coverage.items()}
     diag = {"drift_px_s": [float(best.drift.real), float(best.drift.imag)],
             "candidate_residuals_px": residuals, "candidate_coverage_px": coverage}
+    if frame_size is not None:
+        diag = {**laser_verdict(laser_evidence(cls, points, times, line_width_px, frame_size), frame_size),
+                **diag}
     return pattern, diag
 
 
@@ -311,12 +328,15 @@ def _preliminary(chunks: list[Chunk], futures: list[Future], fps: float) -> Clas
 
 
 def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px: float | None = None,
-                  quality: LaserQuality | None = None, on_frame: FrameHook | None = None) -> dict:
+                  quality: LaserQuality | None = None, on_frame: FrameHook | None = None,
+                  on_trace: Callable[[np.ndarray], None] | None = None) -> dict:
     """Analyse a laser-trace video or long-exposure photo; returns the ``labkit analyse laser`` JSON.
 
     ``on_frame(index, t_s, bgr)`` is called for every analysed frame (live streams hook in here;
-    the frame buffer is reused, copy it to keep it). Raises :class:`VideoError` for unusable input;
-    a usable file without a trace gives ``pattern.type == "none"`` with a reason.
+    the frame buffer is reused, copy it to keep it). ``on_trace(image)`` gets the accumulated
+    trace of the whole clip in a full frame (for :mod:`labkit.vision.overlay`). Raises
+    :class:`VideoError` for unusable input; a usable file without a trace gives
+    ``pattern.type == "none"`` with a reason.
     """
     quality = quality or LaserQuality()
     t_start = time.perf_counter()
@@ -347,6 +367,8 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
         traces = [futures[id(c)].result() for c in chunks]
         preliminary = prior["fit"].result() if "fit" in prior else None
     points, weights, times, band, peak, noise = gather(chunks, traces, fps)
+    if on_trace is not None:
+        on_trace(accumulated_trace(chunks, source.size))
     qual = {"frames_analysed": len(range(0, source.frames_read, quality.stride)),
             "stride": quality.stride, "roi": list(chunks[-1].offset) + list(chunks[-1].image.shape[1::-1]),
             "subpixel": quality.subpixel, "chunks": len(chunks), "trace_points": int(len(points)),
@@ -357,13 +379,16 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
         reason = ("no light above the background noise" if len(points) == 0
                   else f"only {len(points)} trace pixels found")
         pattern, tilt = _none(reason), None
+        qual = {**no_pattern_verdict(reason), **qual}
     else:
         drift = len(chunks) > 1 and fps
         if band is not None and not drift:
             band = (band[0], band[1], None)
         middle = (source.frames_read - 1) / (2 * fps) if fps else None
-        pattern, diag = pattern_dict(points, weights, times if drift else None, band, preliminary, middle)
-        qual.update(diag)
+        widths = [t.line_width_px for t in traces if len(t.points)]
+        pattern, diag = pattern_dict(points, weights, times if drift else None, band, preliminary, middle,
+                                     float(np.median(widths)) if widths else math.nan, tuple(source.size))
+        qual = {**{k: diag[k] for k in ("verdict", "reasons", "checks")}, **qual, **diag}
         tilt = None
         if screen_distance_mm and mm_per_px:
             major, minor = pattern["semi_axes_px"]

@@ -1,0 +1,218 @@
+"""Evidence about a laser-pattern fit, and the quality verdict it supports (docs/vision.md,
+"Quality verdict"). Every measure is one a reviewer would read off an overlay of the fitted
+curve on the trace, expressed in units that do not depend on the footage: the trace's own line
+width, fractions of the curve and of the light, the frame's size.
+
+* residual: rms distance of the trace's centre line from the curve, in line widths. A right
+  curve runs inside the light (well under half a line width); a wrong one leaves it.
+* curve covered: the share of the curve's length that has light within a line width, on it or
+  on one of its symmetric copies (an n-fold pattern seen in one sector is seen). A curve with
+  loops the trace does not have (more loops, a 3x scale) runs through dark screen; a short clip
+  of short arcs leaves part of the pattern unseen, and the fit extrapolates there.
+* light explained: the share of trace points within 1.5 line widths of the curve (a stray
+  reflection or a second pattern is light the curve does not explain; the centre line of a right
+  fit stays within half a width, its spurs where lines cross within about one).
+* size: the curve against the frame (a semi-axis larger than the frame is not a pattern).
+* conditioning: a trochoid's second term (``b`` x scale) against the line width; under one line
+  width the small loops are not formed and ``loops``, ``a`` and ``b`` are not determined.
+* runner-up: how close the best different pattern came, on the score that ranks trochoids
+  (:func:`labkit.vision.fit.two_way_rms`).
+* steadiness: how far each time chunk's trace sits from the fitted curve as a whole (a wandering
+  or shaking centre the linear drift does not follow): the result is then an average.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from labkit.vision.fit import Classification, CurveFit, coverage_rms, two_way_rms
+from labkit.vision.quality import Finding, graded, verdict
+
+MIN_LINE_WIDTH_PX = 2.0  # a trace is never judged against less than this (sub-pixel lines)
+# a different pattern whose score is within this factor of the chosen one's is a real alternative
+RUNNER_UP_FACTOR = 1.25
+MAX_EVIDENCE_POINTS = 4000
+LIGHT_NEAR_WIDTHS = 1.5  # trace points within this many line widths of the curve are explained
+
+
+def _name(fit: CurveFit) -> str:
+    p = fit.pattern
+    return "ellipse" if fit.k == -1 else f"{p.kind}-{p.loops}"
+
+
+def symmetry_order(k: int) -> int:
+    """The curve ``c + A e^{it} + B e^{ikt}`` maps onto itself under ``t -> t + 2 pi / |k - 1|``
+    (a rotation by the same angle about c): |k - 1| copies of one sector make the curve."""
+    return abs(k - 1)
+
+
+def dense_curve(fit: CurveFit, spacing_px: float = 0.3) -> tuple[np.ndarray, np.ndarray]:
+    """Curve points (complex, at the reference time: no drift) about ``spacing_px`` apart along the
+    curve, uniform in the parameter t and a multiple of :func:`symmetry_order` in number, and each
+    sample's share of the curve's length."""
+    k = fit.k
+    t = np.linspace(0.0, 2 * math.pi, 512 * max(2, abs(k)), endpoint=False)
+    speed = np.abs(1j * fit.a * np.exp(1j * t) + 1j * k * fit.b * np.exp(1j * k * t))
+    length = float(np.mean(speed)) * 2 * math.pi
+    m = symmetry_order(k)
+    n = m * math.ceil(min(200000, max(len(t), length / spacing_px)) / m)
+    t = np.linspace(0.0, 2 * math.pi, n, endpoint=False)
+    e1, ek = np.exp(1j * t), np.exp(1j * k * t)
+    speed = np.abs(1j * fit.a * e1 + 1j * k * fit.b * ek)
+    return fit.c + fit.a * e1 + fit.b * ek, speed / np.sum(speed)
+
+
+def _xy(z: np.ndarray) -> np.ndarray:
+    return np.column_stack([z.real, z.imag])
+
+
+def _folded_coverage(lit: np.ndarray, share: np.ndarray, m: int) -> float:
+    """Share of the curve's length that has light on it or on one of its ``m`` symmetric copies
+    (a sector seen once is seen: the other copies are the same curve rotated)."""
+    seen = lit.reshape(m, -1).any(axis=0)
+    sector = share.reshape(m, -1)[0]
+    return float(np.sum(sector[seen]) / np.sum(sector))
+
+
+def chunk_offsets(fit: CurveFit, still: np.ndarray, times: np.ndarray | None) -> np.ndarray:
+    """Per time chunk (points sharing a time stamp), the translation (complex px) that best moves
+    its points onto the curve along the curve's normals; empty for fewer than 3 chunks."""
+    if times is None:
+        return np.zeros(0, complex)
+    labels = np.unique(times)
+    if len(labels) < 3:
+        return np.zeros(0, complex)
+    curve, _ = dense_curve(fit, 0.5)
+    _, idx = cKDTree(_xy(curve)).query(_xy(still))
+    residual = still - curve[idx]
+    normal = residual / np.maximum(np.abs(residual), 1e-9)
+    offsets = []
+    for label in labels:
+        sel = times == label
+        if sel.sum() < 10:
+            continue
+        n, r = normal[sel], residual[sel]
+        m = np.array([[np.sum(n.real * n.real), np.sum(n.real * n.imag)],
+                      [np.sum(n.real * n.imag), np.sum(n.imag * n.imag)]])
+        rhs = np.array([np.sum(n.real * (n.conj() * r).real), np.sum(n.imag * (n.conj() * r).real)])
+        try:
+            d = np.linalg.solve(m + 1e-6 * np.eye(2), rhs)
+        except np.linalg.LinAlgError:
+            continue
+        offsets.append(complex(d[0], d[1]))
+    return np.array(offsets, complex)
+
+
+def laser_evidence(cls: Classification, points: np.ndarray, times: np.ndarray | None,
+                   line_width_px: float, frame_size: tuple[int, int]) -> dict:
+    """The measures of the module docstring for the chosen fit ``cls.best`` (JSON-ready)."""
+    best = cls.best
+    keep = np.random.default_rng(3).permutation(len(points))[:MAX_EVIDENCE_POINTS]
+    pts = np.asarray(points, float)[keep]
+    tms = None if times is None else np.asarray(times, float)[keep]
+    tau = np.zeros(len(pts)) if tms is None else tms - cls.t_ref
+    still = pts[:, 0] + 1j * pts[:, 1] - best.drift * tau
+    width = max(MIN_LINE_WIDTH_PX, float(line_width_px) if math.isfinite(line_width_px) else 0.0)
+    curve, share = dense_curve(best)
+    light_to_curve, _ = cKDTree(_xy(curve)).query(_xy(still))
+    curve_to_light, _ = cKDTree(_xy(still)).query(_xy(curve))
+    radius = np.abs(curve - best.c)
+    w, h = frame_size
+    outside = max(0.0, float(-curve.real.min()), float(curve.real.max() - (w - 1)),
+                  float(-curve.imag.min()), float(curve.imag.max() - (h - 1)))
+    offsets = chunk_offsets(best, still, tms)
+    wander = float(np.sqrt(np.mean(np.abs(offsets - offsets.mean()) ** 2))) if len(offsets) else 0.0
+    runner = _runner_up(cls, width, pts, tau)
+    return {
+        "line_width_px": round(width, 3),
+        "residual_line_widths": round(best.rms_residual / width, 4),
+        "curve_covered": round(_folded_coverage(curve_to_light <= width, share, symmetry_order(best.k)), 4),
+        "light_explained": round(float(np.mean(light_to_curve <= LIGHT_NEAR_WIDTHS * width)), 4),
+        "largest_radius_px": round(float(radius.max()), 2),
+        "curve_outside_frame_px": round(outside, 2),
+        "second_term_line_widths": None if best.k == -1 else round(abs(best.b) / width, 3),
+        "runner_up": runner,
+        "chunk_wander_px": round(wander, 3),
+    }
+
+
+def _runner_up(cls: Classification, width: float, pts: np.ndarray, tau: np.ndarray) -> dict | None:
+    """The best different pattern and its score against the chosen one's (both on the same
+    points). A trochoid whose second term is under a line width is the ellipse in disguise and
+    does not count as different from an ellipse; a 'ratio' under 1 means a different pattern
+    scored better but lost to the rule that prefers the simpler pattern."""
+    best = cls.best
+    z = pts[:, 0] + 1j * pts[:, 1]
+    candidates = [cls.ellipse] + list(cls.fits.values())
+    alternatives = []
+    for f in candidates:
+        if _name(f) == _name(best) or not math.isfinite(f.rms_residual):
+            continue
+        if best.k == -1 and f.k != -1 and abs(f.b) < width:
+            continue
+        alternatives.append(f)
+    if not alternatives:
+        return None
+
+    def score(f: CurveFit) -> float:
+        return two_way_rms(_residual(f, z, tau), coverage_rms(f, z, tau))
+
+    own = score(best)
+    ranked = sorted(alternatives, key=lambda f: two_way_rms(f.rms_residual, cls.coverage.get(_name(f), 0.0)))
+    other = min(ranked[:3], key=score)
+    other_score = score(other)
+    return {"pattern": _name(other), "score_px": round(other_score, 3), "chosen_score_px": round(own, 3),
+            "ratio": round(other_score / max(own, 1e-9), 3)}
+
+
+def _residual(fit: CurveFit, z: np.ndarray, tau: np.ndarray) -> float:
+    curve, _ = dense_curve(fit, 0.5)
+    d, _ = cKDTree(_xy(curve)).query(_xy(z - fit.drift * tau))
+    return float(np.sqrt(np.mean(d * d)))
+
+
+def laser_findings(evidence: dict, frame_size: tuple[int, int]) -> list[Finding]:
+    """The checks of the module docstring as :class:`Finding` objects."""
+    w, h = frame_size
+    width = evidence["line_width_px"]
+    out = [
+        graded("residual", evidence["residual_line_widths"], 0.5, 2.0,
+               "the trace lies {value:.1f} line widths (rms) from the fitted curve"),
+        graded("curve covered", 1.0 - evidence["curve_covered"], 1 / 3, 2 / 3,
+               f"only {100 * evidence['curve_covered']:.0f} % of the fitted curve has light on it"),
+        graded("light explained", 1.0 - evidence["light_explained"], 0.05, 0.5,
+               f"{100 * (1 - evidence['light_explained']):.0f} % of the light lies off the fitted curve "
+               "(a stray reflection, a second pattern, or the wrong pattern)"),
+        graded("size", evidence["largest_radius_px"] / math.hypot(w, h), 0.5, 1.0,
+               f"the fitted curve reaches {evidence['largest_radius_px']:.0f} px from its centre "
+               f"on a {w}x{h} frame"),
+        graded("inside frame", evidence["curve_outside_frame_px"] / min(w, h), 0.02, 0.25,
+               f"the fitted curve runs {evidence['curve_outside_frame_px']:.0f} px outside the frame"),
+        graded("steadiness", evidence["chunk_wander_px"] / width, 0.5, math.inf,
+               f"the trace moves {evidence['chunk_wander_px']:.1f} px (rms) between parts of the clip "
+               "beyond a steady drift (shaking camera or wandering centre): centre and size are averages"),
+    ]
+    if evidence["second_term_line_widths"] is not None:
+        second = evidence["second_term_line_widths"]
+        out.append(graded("conditioning", 1.0 / max(second, 1e-9), 1.0, math.inf,
+                          f"the small loops are barely formed (second term {second:.2f} line widths of "
+                          f"{width:.1f} px): loop count, a and b are poorly determined"))
+    runner = evidence["runner_up"]
+    if runner is not None:
+        out.append(graded("runner-up", 1.0 / max(runner["ratio"], 1e-9), 1.0 / RUNNER_UP_FACTOR, math.inf,
+                          f"{runner['pattern']} explains the trace nearly as well "
+                          f"(score {runner['score_px']:.2f} px against {runner['chosen_score_px']:.2f} px)"))
+    return out
+
+
+def laser_verdict(evidence: dict, frame_size: tuple[int, int]) -> dict:
+    """``{"verdict", "reasons", "checks", ...evidence}`` for a fitted pattern."""
+    return {**verdict(laser_findings(evidence, frame_size)), **evidence}
+
+
+def no_pattern_verdict(reason: str) -> dict:
+    """The verdict of a usable file without a trace."""
+    return verdict([Finding("trace", "failed", reason)])
