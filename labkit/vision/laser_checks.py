@@ -216,3 +216,4 @@ def laser_verdict(evidence: dict, frame_size: tuple[int, int]) -> dict:
 def no_pattern_verdict(reason: str) -> dict:
     """The verdict of a usable file without a trace."""
     return verdict([Finding("trace", "failed", reason)])
+
