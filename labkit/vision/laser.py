@@ -14,7 +14,7 @@ import math
 import time
 from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import cv2
 import numpy as np
@@ -30,13 +30,19 @@ from labkit.vision.framepath import (
     measure_frame_path,
 )
 from labkit.vision.frames import FrameSource, open_frames
-from labkit.vision.laser_checks import laser_evidence, laser_verdict, no_pattern_verdict
+from labkit.vision.laser_checks import MIN_LINE_WIDTH_PX, laser_evidence, laser_verdict, no_pattern_verdict
 from labkit.vision.overlay import accumulated_trace
+from labkit.vision.quality import VERDICTS
 from labkit.vision.trace import TracePoints, trace_points
+from labkit.vision.wander import Wander, follow_wander
 
 FrameHook = Callable[[int, float, np.ndarray], None]
 MAX_POINTS_PER_CHUNK = 4000
 MIN_FRAMES_PER_CHUNK = 4
+# a short clip is cut into at least this many chunks (when each keeps MIN_FRAMES_PER_CHUNK): a
+# centre that wanders on a shaking tripod curves within a second, and 3 chunks of a 1.5 s clip
+# put the middle chunk's mean centre px away from the centre at the middle of the recording
+MIN_CHUNKS = 8
 
 
 @dataclass
@@ -84,10 +90,12 @@ def _clip_roi(roi: tuple[int, int, int, int], size: tuple[int, int]) -> tuple[in
 
 
 def chunk_length(source: FrameSource, quality: LaserQuality) -> int:
-    """Frames per chunk: ``chunk_s`` of video, at least ``MIN_FRAMES_PER_CHUNK`` analysed frames,
-    at most ``max_chunks`` chunks."""
+    """Frames per chunk: ``chunk_s`` of video, shortened so that a short clip still has
+    ``MIN_CHUNKS`` chunks to follow a wandering centre with (:mod:`labkit.vision.wander`); at
+    least ``MIN_FRAMES_PER_CHUNK`` analysed frames, at most ``max_chunks`` chunks."""
     fps = source.fps or 30.0
-    return max(MIN_FRAMES_PER_CHUNK * quality.stride, round(quality.chunk_s * fps),
+    wanted = min(round(quality.chunk_s * fps), math.ceil(source.frame_count / MIN_CHUNKS))
+    return max(MIN_FRAMES_PER_CHUNK * quality.stride, wanted,
                math.ceil(source.frame_count / max(1, quality.max_chunks)))
 
 
@@ -261,12 +269,28 @@ def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | No
     """Classify and fit a trace; returns the JSON ``pattern`` object and fit diagnostics, which
     include the quality verdict (:mod:`labkit.vision.laser_checks`) when ``frame_size`` is given.
     With ``times``, the fitted centre drifts; it is reported at ``centre_time`` (s, e.g. the
-    middle of the recording), or at the mean time of the points fitted."""
+    middle of the recording), or at the mean time of the points fitted.
+
+    A result refined from ``prior`` (the first part's classification) that the checks do not
+    call ``ok`` is done again from scratch, and the fresh result kept unless its verdict is worse:
+    the first part may have shown too little of the pattern."""
+    pattern, diag = _pattern_dict(points, weights, times, band, prior, centre_time, line_width_px, frame_size)
+    if prior is not None and diag.get("verdict", "ok") != "ok":
+        fresh = _pattern_dict(points, weights, times, band, None, centre_time, line_width_px, frame_size)
+        if VERDICTS.index(fresh[1]["verdict"]) <= VERDICTS.index(diag["verdict"]):
+            return fresh
+    return pattern, diag
+
+
+def _pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | None, band: tuple | None,
+                  prior: Classification | None, centre_time: float | None, line_width_px: float,
+                  frame_size: tuple[int, int] | None) -> tuple[dict, dict]:
     cls = classify(points, weights, times, band=band, prior=prior)
+    cls, wander, points = _steadied(cls, points, weights, times, band, line_width_px)
     best, ell = cls.best, cls.ellipse.pattern
     centre = best.c
     if times is not None and centre_time is not None:
-        centre += best.drift * (centre_time - cls.t_ref)
+        centre = wander.centre_at(centre_time) if wander else centre + best.drift * (centre_time - cls.t_ref)
     major, minor = ell.semi_axes
     kind = pattern_kind(cls.best)
     p = best.pattern
@@ -287,11 +311,38 @@ def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | No
     residuals = {k: (v if math.isfinite(v) else None) for k, v in cls.residuals.items()}
     coverage = {k: (v if math.isfinite(v) else None) for k, v in cls.coverage.items()}
     diag = {"drift_px_s": [float(best.drift.real), float(best.drift.imag)],
+            "wander_px": None if wander is None else {"rms": round(wander.rms_px, 3), "chunk_offsets": [
+                [round(float(o.real), 3), round(float(o.imag), 3)] for o in wander.offsets]},
             "candidate_residuals_px": residuals, "candidate_coverage_px": coverage}
     if frame_size is not None:
-        diag = {**laser_verdict(laser_evidence(cls, points, times, line_width_px, frame_size), frame_size),
-                **diag}
+        evidence = laser_evidence(cls, points, times, line_width_px, frame_size, wander)
+        diag = {**laser_verdict(evidence, frame_size), **diag}
     return pattern, diag
+
+
+def _steadied(cls: Classification, points: np.ndarray, weights: np.ndarray, times: np.ndarray | None,
+              band: tuple | None, line_width_px: float) -> tuple[Classification, Wander | None, np.ndarray]:
+    """The classification with the centre's wander followed (:mod:`labkit.vision.wander`), the
+    wander, and the points with it taken out; unchanged (and the wander's offsets zero) when
+    following it does not explain the trace clearly better (:attr:`Wander.needed`). A wander over
+    half a line width (rms) blurs the accumulated trace enough to mislead the classification:
+    the steadied points are then classified again and the wander followed anew."""
+    width = max(MIN_LINE_WIDTH_PX, line_width_px if math.isfinite(line_width_px) else 0.0)
+    wander = follow_wander(cls, points, weights, times, width, band) if times is not None else None
+    if wander is None:
+        return cls, None, points
+    if wander.rms_px > 0.5 * width:
+        again = classify(wander.moved(points, times), weights, times)
+        followed = follow_wander(again, points, weights, times, width, band)
+        if followed is not None and followed.needed:
+            wander, cls = followed, again
+    if not wander.needed:
+        straight = replace(wander, offsets=np.zeros_like(wander.offsets), fit=cls.best, t_ref=cls.t_ref)
+        return cls, straight, points
+    chosen = wander.fit
+    ellipse = chosen if chosen.k == -1 else replace(cls.ellipse, c=cls.ellipse.c + cls.ellipse.drift
+                                                     * (wander.t_ref - cls.t_ref))
+    return replace(cls, best=chosen, ellipse=ellipse, t_ref=wander.t_ref), wander, wander.moved(points, times)
 
 
 def gather(chunks: list[Chunk], traces: list[TracePoints], fps: float):

@@ -18,7 +18,10 @@ width, fractions of the curve and of the light, the frame's size.
 * runner-up: how close the best different pattern came, on the score that ranks trochoids
   (:func:`labkit.vision.fit.two_way_rms`).
 * steadiness: how far each time chunk's trace sits from the fitted curve as a whole (a wandering
-  or shaking centre the linear drift does not follow): the result is then an average.
+  or shaking centre the centre model does not follow): the result is then an average.
+* straight drift: a pattern that moved more than a line width over the clip, in a clip where too
+  few time chunks show enough of the pattern to follow the centre chunk by chunk
+  (:mod:`labkit.vision.wander`): its centre and size rest on the assumption of a straight drift.
 """
 
 from __future__ import annotations
@@ -30,6 +33,8 @@ from scipy.spatial import cKDTree
 
 from labkit.vision.fit import Classification, CurveFit, coverage_rms, two_way_rms
 from labkit.vision.quality import Finding, graded, verdict
+from labkit.vision.wander import Wander, chunk_offsets, dense_curve, folded_coverage
+from labkit.vision.wander import xy as _xy
 
 MIN_LINE_WIDTH_PX = 2.0  # a trace is never judged against less than this (sub-pixel lines)
 # a different pattern whose score is within this factor of the chosen one's is a real alternative
@@ -43,72 +48,25 @@ def _name(fit: CurveFit) -> str:
     return "ellipse" if fit.k == -1 else f"{p.kind}-{p.loops}"
 
 
-def symmetry_order(k: int) -> int:
-    """The curve ``c + A e^{it} + B e^{ikt}`` maps onto itself under ``t -> t + 2 pi / |k - 1|``
-    (a rotation by the same angle about c): |k - 1| copies of one sector make the curve."""
-    return abs(k - 1)
-
-
-def dense_curve(fit: CurveFit, spacing_px: float = 0.3) -> tuple[np.ndarray, np.ndarray]:
-    """Curve points (complex, at the reference time: no drift) about ``spacing_px`` apart along the
-    curve, uniform in the parameter t and a multiple of :func:`symmetry_order` in number, and each
-    sample's share of the curve's length."""
-    k = fit.k
-    t = np.linspace(0.0, 2 * math.pi, 512 * max(2, abs(k)), endpoint=False)
-    speed = np.abs(1j * fit.a * np.exp(1j * t) + 1j * k * fit.b * np.exp(1j * k * t))
-    length = float(np.mean(speed)) * 2 * math.pi
-    m = symmetry_order(k)
-    n = m * math.ceil(min(200000, max(len(t), length / spacing_px)) / m)
-    t = np.linspace(0.0, 2 * math.pi, n, endpoint=False)
-    e1, ek = np.exp(1j * t), np.exp(1j * k * t)
-    speed = np.abs(1j * fit.a * e1 + 1j * k * fit.b * ek)
-    return fit.c + fit.a * e1 + fit.b * ek, speed / np.sum(speed)
-
-
-def _xy(z: np.ndarray) -> np.ndarray:
-    return np.column_stack([z.real, z.imag])
-
-
-def _folded_coverage(lit: np.ndarray, share: np.ndarray, m: int) -> float:
-    """Share of the curve's length that has light on it or on one of its ``m`` symmetric copies
-    (a sector seen once is seen: the other copies are the same curve rotated)."""
-    seen = lit.reshape(m, -1).any(axis=0)
-    sector = share.reshape(m, -1)[0]
-    return float(np.sum(sector[seen]) / np.sum(sector))
-
-
-def chunk_offsets(fit: CurveFit, still: np.ndarray, times: np.ndarray | None) -> np.ndarray:
-    """Per time chunk (points sharing a time stamp), the translation (complex px) that best moves
-    its points onto the curve along the curve's normals; empty for fewer than 3 chunks."""
+def _steadiness_px(fit: CurveFit, still: np.ndarray, times: np.ndarray | None, width: float) -> float:
+    """Rms of the chunks' offsets from the fitted curve (see :mod:`labkit.vision.wander`) that the
+    fit's centre model left: 0 for a photo or fewer than 3 chunks."""
     if times is None:
-        return np.zeros(0, complex)
-    labels = np.unique(times)
-    if len(labels) < 3:
-        return np.zeros(0, complex)
-    curve, _ = dense_curve(fit, 0.5)
-    _, idx = cKDTree(_xy(curve)).query(_xy(still))
-    residual = still - curve[idx]
-    normal = residual / np.maximum(np.abs(residual), 1e-9)
-    offsets = []
-    for label in labels:
-        sel = times == label
-        if sel.sum() < 10:
-            continue
-        n, r = normal[sel], residual[sel]
-        m = np.array([[np.sum(n.real * n.real), np.sum(n.real * n.imag)],
-                      [np.sum(n.real * n.imag), np.sum(n.imag * n.imag)]])
-        rhs = np.array([np.sum(n.real * (n.conj() * r).real), np.sum(n.imag * (n.conj() * r).real)])
-        try:
-            d = np.linalg.solve(m + 1e-6 * np.eye(2), rhs)
-        except np.linalg.LinAlgError:
-            continue
-        offsets.append(complex(d[0], d[1]))
-    return np.array(offsets, complex)
+        return 0.0
+    mid_times, chunk = np.unique(times, return_inverse=True)
+    if len(mid_times) < 3:
+        return 0.0
+    offsets = chunk_offsets(fit, still, chunk, len(mid_times), width)
+    offsets = offsets[np.isfinite(offsets)]
+    if len(offsets) < 3:
+        return 0.0
+    return float(np.sqrt(np.mean(np.abs(offsets - offsets.mean()) ** 2)))
 
 
 def laser_evidence(cls: Classification, points: np.ndarray, times: np.ndarray | None,
-                   line_width_px: float, frame_size: tuple[int, int]) -> dict:
-    """The measures of the module docstring for the chosen fit ``cls.best`` (JSON-ready)."""
+                   line_width_px: float, frame_size: tuple[int, int], wander: Wander | None = None) -> dict:
+    """The measures of the module docstring for the chosen fit ``cls.best`` (JSON-ready);
+    ``wander``: the centre's wander as followed (:func:`labkit.vision.wander.follow_wander`)."""
     best = cls.best
     keep = np.random.default_rng(3).permutation(len(points))[:MAX_EVIDENCE_POINTS]
     pts = np.asarray(points, float)[keep]
@@ -123,36 +81,47 @@ def laser_evidence(cls: Classification, points: np.ndarray, times: np.ndarray | 
     w, h = frame_size
     outside = max(0.0, float(-curve.real.min()), float(curve.real.max() - (w - 1)),
                   float(-curve.imag.min()), float(curve.imag.max() - (h - 1)))
-    offsets = chunk_offsets(best, still, tms)
-    wander = float(np.sqrt(np.mean(np.abs(offsets - offsets.mean()) ** 2))) if len(offsets) else 0.0
+    steadiness = _steadiness_px(best, still, tms, width)
     runner = _runner_up(cls, width, pts, tau)
     return {
         "line_width_px": round(width, 3),
         "residual_line_widths": round(best.rms_residual / width, 4),
-        "curve_covered": round(_folded_coverage(curve_to_light <= width, share, symmetry_order(best.k)), 4),
+        "curve_covered": round(folded_coverage(curve_to_light <= width, share, best.k), 4),
         "light_explained": round(float(np.mean(light_to_curve <= LIGHT_NEAR_WIDTHS * width)), 4),
         "largest_radius_px": round(float(radius.max()), 2),
         "curve_outside_frame_px": round(outside, 2),
         "second_term_line_widths": None if best.k == -1 else round(abs(best.b) / width, 3),
         "runner_up": runner,
-        "chunk_wander_px": round(wander, 3),
+        "chunk_wander_px": round(steadiness, 3),
+        "centre_travel_px": round(_travel_px(best, times), 3),
+        "chunks_checked": None if wander is None else wander.chunks_checked,
     }
+
+
+def _travel_px(fit: CurveFit, times: np.ndarray | None) -> float:
+    """How far the fitted drift moves the centre over the clip (first to last chunk)."""
+    if times is None or not len(times):
+        return 0.0
+    return float(abs(fit.drift) * (np.max(times) - np.min(times)))
 
 
 def _runner_up(cls: Classification, width: float, pts: np.ndarray, tau: np.ndarray) -> dict | None:
     """The best different pattern and its score against the chosen one's (both on the same
-    points). A trochoid whose second term is under a line width is the ellipse in disguise and
-    does not count as different from an ellipse; a 'ratio' under 1 means a different pattern
-    scored better but lost to the rule that prefers the simpler pattern."""
+    points). A candidate whose curve stays within a line width of the chosen one (a trochoid
+    with loops too small to see, against an ellipse) is the same answer and does not count; a
+    'ratio' under 1 means a different pattern scored better but lost to the rule that prefers
+    the simpler pattern."""
     best = cls.best
     z = pts[:, 0] + 1j * pts[:, 1]
     candidates = [cls.ellipse] + list(cls.fits.values())
+    own_curve, _ = dense_curve(best, 1.0)
+    own_tree = cKDTree(_xy(own_curve))
     alternatives = []
     for f in candidates:
         if _name(f) == _name(best) or not math.isfinite(f.rms_residual):
             continue
-        if best.k == -1 and f.k != -1 and abs(f.b) < width:
-            continue
+        if _departure(f, own_curve, own_tree) <= width:
+            continue  # the same curve within a line width (a trochoid with invisible loops)
         alternatives.append(f)
     if not alternatives:
         return None
@@ -166,6 +135,15 @@ def _runner_up(cls: Classification, width: float, pts: np.ndarray, tau: np.ndarr
     other_score = score(other)
     return {"pattern": _name(other), "score_px": round(other_score, 3), "chosen_score_px": round(own, 3),
             "ratio": round(other_score / max(own, 1e-9), 3)}
+
+
+def _departure(fit: CurveFit, other: np.ndarray, other_tree: cKDTree) -> float:
+    """How far two curves visibly differ: the larger of the 90th percentiles of the distances
+    from each to the other (px)."""
+    mine, _ = dense_curve(fit, 1.0)
+    there, _ = other_tree.query(_xy(mine))
+    back, _ = cKDTree(_xy(mine)).query(_xy(other))
+    return float(max(np.percentile(there, 90), np.percentile(back, 90)))
 
 
 def _residual(fit: CurveFit, z: np.ndarray, tau: np.ndarray) -> float:
@@ -195,6 +173,11 @@ def laser_findings(evidence: dict, frame_size: tuple[int, int]) -> list[Finding]
                f"the trace moves {evidence['chunk_wander_px']:.1f} px (rms) between parts of the clip "
                "beyond a steady drift (shaking camera or wandering centre): centre and size are averages"),
     ]
+    if evidence["chunks_checked"] is not None and evidence["chunks_checked"] < 3:
+        out.append(graded("straight drift", evidence["centre_travel_px"] / width, 1.0, math.inf,
+                          f"the pattern moved {evidence['centre_travel_px']:.0f} px over the clip, and too "
+                          "few parts of the clip show enough of the pattern to check that it moved in a "
+                          "straight line (short arcs per frame): centre and size assume it did"))
     if evidence["second_term_line_widths"] is not None:
         second = evidence["second_term_line_widths"]
         out.append(graded("conditioning", 1.0 / max(second, 1e-9), 1.0, math.inf,
