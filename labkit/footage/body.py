@@ -17,6 +17,7 @@ import cv2
 import numpy as np
 
 SUPERSAMPLE = 4
+EDGE_INSET = 0.45  # fine pixels (see coverage)
 
 
 @dataclass(frozen=True)
@@ -52,11 +53,21 @@ def outline(centre: tuple[float, float], axis_deg: float, length: float, width: 
 
 
 def coverage(corners: np.ndarray, roi: tuple[int, int, int, int]) -> np.ndarray:
-    """Fraction of each pixel of ``roi`` (x0, y0, w, h) covered by the polygon (float32)."""
+    """Fraction of each pixel of ``roi`` (x0, y0, w, h) covered by the rectangle with ``corners``
+    as :func:`outline` gives them (float32). OpenCV's fill includes the pixels its edges touch,
+    which on the finer grid grows the area by about half a fine pixel all round; the edges are
+    moved in by that much first (measured: area within 0.5 %). Edges snap to the finer grid, so
+    the centroid is within ``0.5 / SUPERSAMPLE`` px."""
     x0, y0, w, h = roi
     s = SUPERSAMPLE
+    along, across = corners[0] - corners[3], corners[0] - corners[1]
+    inset = EDGE_INSET / s
+    along = along / max(np.linalg.norm(along), 1e-12) * inset
+    across = across / max(np.linalg.norm(across), 1e-12) * inset
+    signs = np.array([[1, 1], [1, -1], [-1, -1], [-1, 1]], float)
+    inner = corners - signs[:, :1] * along - signs[:, 1:] * across
     big = np.zeros((h * s, w * s), np.uint8)
     # pixel centres at integer coordinates, here and in OpenCV's fill on the finer grid
-    pts = np.round((((corners - [x0, y0]) + 0.5) * s - 0.5) * 16).astype(np.int32)
+    pts = np.round((((inner - [x0, y0]) + 0.5) * s - 0.5) * 16).astype(np.int32)
     cv2.fillPoly(big, [pts], 255, cv2.LINE_8, 4)
     return cv2.resize(big.astype(np.float32) / 255.0, (w, h), interpolation=cv2.INTER_AREA)

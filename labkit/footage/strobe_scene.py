@@ -174,6 +174,8 @@ def render_strobe(shot: StrobeShot) -> Iterator[np.ndarray]:
             if not seen.any():
                 continue
             flash += seen
+            if not seen[y0:y0 + rh].any():
+                continue
             mask = _silhouette(shot, float(tj), roi)
             lit_bg = 1.0 - mask
             if shot.lamp.shadow_depth > 0:
@@ -181,6 +183,9 @@ def render_strobe(shot: StrobeShot) -> Iterator[np.ndarray]:
                 lit_bg *= 1.0 - shot.lamp.shadow_depth * shadow
             part = bg_level * lit_bg + body_level * mask
             body_energy += seen[y0:y0 + rh, None] * (part - bg_level)
+        if shot.lamp.hz is None:  # room light: each row's mean over its own window, whatever the sampling
+            body_energy /= np.maximum(flash[y0:y0 + rh, None], 1e-9)
+            flash[:] = 1.0
         image = np.repeat(bg_level * flash[:, None], w, axis=1)
         image[y0:y0 + rh, x0:x0 + rw] += body_energy
         if shot.ambient > 0:
