@@ -18,8 +18,10 @@ from dataclasses import asdict, dataclass, replace
 
 import cv2
 import numpy as np
+from scipy.spatial import cKDTree
 
 from labkit.errors import VideoError
+from labkit.vision.clusters import LINK_WIDTHS, separate_pattern
 from labkit.vision.curves import a_for_k
 from labkit.vision.fit import MIN_POINTS, Classification, classify, pattern_kind
 from labkit.vision.framepath import (
@@ -265,7 +267,7 @@ def symmetry_of(kind: str, k: int) -> int | None:
 def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | None,
                  band: tuple | None = None, prior: Classification | None = None,
                  centre_time: float | None = None, line_width_px: float = math.nan,
-                 frame_size: tuple[int, int] | None = None) -> tuple[dict, dict]:
+                 frame_size: tuple[int, int] | None = None, left_out: float = 0.0) -> tuple[dict, dict]:
     """Classify and fit a trace; returns the JSON ``pattern`` object and fit diagnostics, which
     include the quality verdict (:mod:`labkit.vision.laser_checks`) when ``frame_size`` is given.
     With ``times``, the fitted centre drifts; it is reported at ``centre_time`` (s, e.g. the
@@ -274,9 +276,10 @@ def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | No
     A result refined from ``prior`` (the first part's classification) that the checks do not
     call ``ok`` is done again from scratch, and the fresh result kept unless its verdict is worse:
     the first part may have shown too little of the pattern."""
-    pattern, diag = _pattern_dict(points, weights, times, band, prior, centre_time, line_width_px, frame_size)
+    args = (centre_time, line_width_px, frame_size, left_out)
+    pattern, diag = _pattern_dict(points, weights, times, band, prior, *args)
     if prior is not None and diag.get("verdict", "ok") != "ok":
-        fresh = _pattern_dict(points, weights, times, band, None, centre_time, line_width_px, frame_size)
+        fresh = _pattern_dict(points, weights, times, band, None, *args)
         if VERDICTS.index(fresh[1]["verdict"]) <= VERDICTS.index(diag["verdict"]):
             return fresh
     return pattern, diag
@@ -284,7 +287,7 @@ def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | No
 
 def _pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | None, band: tuple | None,
                   prior: Classification | None, centre_time: float | None, line_width_px: float,
-                  frame_size: tuple[int, int] | None) -> tuple[dict, dict]:
+                  frame_size: tuple[int, int] | None, left_out: float) -> tuple[dict, dict]:
     cls = classify(points, weights, times, band=band, prior=prior)
     cls, wander, points = _steadied(cls, points, weights, times, band, line_width_px)
     best, ell = cls.best, cls.ellipse.pattern
@@ -315,7 +318,8 @@ def _pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | N
                 [round(float(o.real), 3), round(float(o.imag), 3)] for o in wander.offsets]},
             "candidate_residuals_px": residuals, "candidate_coverage_px": coverage}
     if frame_size is not None:
-        evidence = laser_evidence(cls, points, times, line_width_px, frame_size, wander)
+        evidence = {**laser_evidence(cls, points, times, line_width_px, frame_size, wander),
+                    "light_left_out": round(left_out, 4)}
         diag = {**laser_verdict(evidence, frame_size), **diag}
     return pattern, diag
 
@@ -368,6 +372,30 @@ def gather(chunks: list[Chunk], traces: list[TracePoints], fps: float):
     points = np.concatenate(pts) if pts else np.zeros((0, 2))
     band = tuple(np.concatenate(parts) for parts in zip(*bands, strict=True)) if bands else None
     return points, np.concatenate(wts), np.concatenate(tms), band, peak, noise
+
+
+def line_width(traces: list[TracePoints]) -> float:
+    """Median line width of the chunks' traces (NaN without any)."""
+    widths = [t.line_width_px for t in traces if len(t.points)]
+    return float(np.median(widths)) if widths else math.nan
+
+
+def without_stray_light(points: np.ndarray, weights: np.ndarray, times: np.ndarray, band: tuple | None,
+                        width: float) -> tuple:
+    """The trace without light away from the pattern (:mod:`labkit.vision.clusters`): points,
+    weights, times, band (its pixels near a kept point), and the share of points left out. The
+    analysis tries this only when the whole trace gives no ``ok`` result, and keeps it only if its
+    verdict is better: arcs of one pattern with wide gaps between them can look like separate
+    light, and the fit of everything is then the right one."""
+    sep = separate_pattern(points, width)
+    if sep.groups == 0:
+        return points, weights, times, band, 0.0
+    kept = points[sep.keep]
+    if band is not None:
+        near, _ = cKDTree(kept).query(band[0], distance_upper_bound=LINK_WIDTHS * max(width, 2.0))
+        inside = np.isfinite(near)
+        band = tuple(None if part is None else np.asarray(part)[inside] for part in band)
+    return kept, weights[sep.keep], times[sep.keep], band, sep.left_out_share
 
 
 def _preliminary(chunks: list[Chunk], futures: list[Future], fps: float) -> Classification | None:
@@ -436,9 +464,17 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
         if band is not None and not drift:
             band = (band[0], band[1], None)
         middle = (source.frames_read - 1) / (2 * fps) if fps else None
-        widths = [t.line_width_px for t in traces if len(t.points)]
+        width = line_width(traces)
         pattern, diag = pattern_dict(points, weights, times if drift else None, band, preliminary, middle,
-                                     float(np.median(widths)) if widths else math.nan, tuple(source.size))
+                                     width, tuple(source.size))
+        if diag["verdict"] != "ok":  # is it light away from the pattern that misleads the fit?
+            *parts, left_out = without_stray_light(points, weights, times, band, width)
+            if left_out > 0:
+                p2, w2, t2, b2 = parts
+                second = pattern_dict(p2, w2, t2 if drift else None, b2, None, middle, width,
+                                      tuple(source.size), left_out)
+                if VERDICTS.index(second[1]["verdict"]) < VERDICTS.index(diag["verdict"]):
+                    pattern, diag = second
         qual = {**{k: diag[k] for k in ("verdict", "reasons", "checks")}, **qual, **diag}
         tilt = None
         if screen_distance_mm and mm_per_px:

@@ -5,16 +5,20 @@ width, fractions of the curve and of the light, the frame's size.
 
 * residual: rms distance of the trace's centre line from the curve, in line widths. A right
   curve runs inside the light (well under half a line width); a wrong one leaves it.
-* curve covered: the share of the curve's length that has light within a line width, on it or
-  on one of its symmetric copies (an n-fold pattern seen in one sector is seen). A curve with
-  loops the trace does not have (more loops, a 3x scale) runs through dark screen; a short clip
-  of short arcs leaves part of the pattern unseen, and the fit extrapolates there.
+* curve covered: the share of the curve's length that has light within a line width. A curve
+  with loops the trace does not have (more loops, a 3x scale) runs through dark screen; a short
+  clip of short arcs leaves part of the pattern unseen, and the fit extrapolates there (a
+  symmetric copy of the unseen part does not stand in for it: an arc and its copy on the other
+  side are what pin down the centre and the size).
 * light explained: the share of trace points within 1.5 line widths of the curve (a stray
   reflection or a second pattern is light the curve does not explain; the centre line of a right
   fit stays within half a width, its spurs where lines cross within about one).
 * size: the curve against the frame (a semi-axis larger than the frame is not a pattern).
 * conditioning: a trochoid's second term (``b`` x scale) against the line width; under one line
   width the small loops are not formed and ``loops``, ``a`` and ``b`` are not determined.
+* light left out: the share of the trace set apart as lying away from the pattern
+  (:mod:`labkit.vision.clusters`: a burnt-in timestamp, a stray reflection); when it is a large
+  part of the light, which part is the pattern is itself a guess.
 * runner-up: how close the best different pattern came, on the score that ranks trochoids
   (:func:`labkit.vision.fit.two_way_rms`).
 * steadiness: how far each time chunk's trace sits from the fitted curve as a whole (a wandering
@@ -33,7 +37,7 @@ from scipy.spatial import cKDTree
 
 from labkit.vision.fit import Classification, CurveFit, coverage_rms, two_way_rms
 from labkit.vision.quality import Finding, graded, verdict
-from labkit.vision.wander import Wander, chunk_offsets, dense_curve, folded_coverage
+from labkit.vision.wander import Wander, chunk_offsets, dense_curve
 from labkit.vision.wander import xy as _xy
 
 MIN_LINE_WIDTH_PX = 2.0  # a trace is never judged against less than this (sub-pixel lines)
@@ -86,7 +90,7 @@ def laser_evidence(cls: Classification, points: np.ndarray, times: np.ndarray | 
     return {
         "line_width_px": round(width, 3),
         "residual_line_widths": round(best.rms_residual / width, 4),
-        "curve_covered": round(folded_coverage(curve_to_light <= width, share, best.k), 4),
+        "curve_covered": round(float(np.sum(share[curve_to_light <= width])), 4),
         "light_explained": round(float(np.mean(light_to_curve <= LIGHT_NEAR_WIDTHS * width)), 4),
         "largest_radius_px": round(float(radius.max()), 2),
         "curve_outside_frame_px": round(outside, 2),
@@ -126,15 +130,17 @@ def _runner_up(cls: Classification, width: float, pts: np.ndarray, tau: np.ndarr
     if not alternatives:
         return None
 
-    def score(f: CurveFit) -> float:
-        return two_way_rms(_residual(f, z, tau), coverage_rms(f, z, tau))
+    def scores(f: CurveFit) -> tuple[float, float]:
+        residual = _residual(f, z, tau)
+        return two_way_rms(residual, coverage_rms(f, z, tau)), residual
 
-    own = score(best)
+    own, own_residual = scores(best)
     ranked = sorted(alternatives, key=lambda f: two_way_rms(f.rms_residual, cls.coverage.get(_name(f), 0.0)))
-    other = min(ranked[:3], key=score)
-    other_score = score(other)
+    scored = [(scores(f), f) for f in ranked[:3]]
+    (other_score, other_residual), other = min(scored, key=lambda item: item[0][0])
     return {"pattern": _name(other), "score_px": round(other_score, 3), "chosen_score_px": round(own, 3),
-            "ratio": round(other_score / max(own, 1e-9), 3)}
+            "ratio": round(other_score / max(own, 1e-9), 3), "residual_px": round(other_residual, 3),
+            "chosen_residual_px": round(own_residual, 3)}
 
 
 def _departure(fit: CurveFit, other: np.ndarray, other_tree: cKDTree) -> float:
@@ -160,7 +166,8 @@ def laser_findings(evidence: dict, frame_size: tuple[int, int]) -> list[Finding]
         graded("residual", evidence["residual_line_widths"], 0.5, 2.0,
                "the trace lies {value:.1f} line widths (rms) from the fitted curve"),
         graded("curve covered", 1.0 - evidence["curve_covered"], 1 / 3, 2 / 3,
-               f"only {100 * evidence['curve_covered']:.0f} % of the fitted curve has light on it"),
+               f"only {100 * evidence['curve_covered']:.0f} % of the fitted curve has light on it "
+               "(the rest is extrapolated)"),
         graded("light explained", 1.0 - evidence["light_explained"], 0.05, 0.5,
                f"{100 * (1 - evidence['light_explained']):.0f} % of the light lies off the fitted curve "
                "(a stray reflection, a second pattern, or the wrong pattern)"),
@@ -173,6 +180,10 @@ def laser_findings(evidence: dict, frame_size: tuple[int, int]) -> list[Finding]
                f"the trace moves {evidence['chunk_wander_px']:.1f} px (rms) between parts of the clip "
                "beyond a steady drift (shaking camera or wandering centre): centre and size are averages"),
     ]
+    left_out = evidence.get("light_left_out", 0.0)
+    out.append(graded("light left out", left_out, 1 / 3, math.inf,
+                      f"{100 * left_out:.0f} % of the light lies away from the pattern and was left out "
+                      "(burnt-in text, reflections, a second pattern)"))
     if evidence["chunks_checked"] is not None and evidence["chunks_checked"] < 3:
         out.append(graded("straight drift", evidence["centre_travel_px"] / width, 1.0, math.inf,
                           f"the pattern moved {evidence['centre_travel_px']:.0f} px over the clip, and too "
@@ -184,11 +195,22 @@ def laser_findings(evidence: dict, frame_size: tuple[int, int]) -> list[Finding]
                           f"the small loops are barely formed (second term {second:.2f} line widths of "
                           f"{width:.1f} px): loop count, a and b are poorly determined"))
     runner = evidence["runner_up"]
-    if runner is not None:
-        out.append(graded("runner-up", 1.0 / max(runner["ratio"], 1e-9), 1.0 / RUNNER_UP_FACTOR, math.inf,
-                          f"{runner['pattern']} explains the trace nearly as well "
-                          f"(score {runner['score_px']:.2f} px against {runner['chosen_score_px']:.2f} px)"))
+    if runner is not None and runner_up_is_close(runner, width):
+        out.append(Finding("runner-up", "doubtful",
+                           f"{runner['pattern']} explains the trace nearly as well "
+                           f"(score {runner['score_px']:.2f} px against {runner['chosen_score_px']:.2f} px)"))
     return out
+
+
+def runner_up_is_close(runner: dict, width: float) -> bool:
+    """Whether the trace fails to tell the runner-up from the chosen pattern: its two-way score is
+    within ``RUNNER_UP_FACTOR`` of the chosen one's, and its residual is not clearly larger (at
+    most twice the chosen one's, or a quarter line width more). Scores share the part of a curve
+    that no light covers; residuals do not, and on a clean trace they separate patterns whose
+    scores an unseen stretch of the curve makes look alike."""
+    own = runner["chosen_residual_px"]
+    near = runner["residual_px"] <= max(2 * own, own + 0.25 * width)
+    return bool(runner["ratio"] < RUNNER_UP_FACTOR and near)
 
 
 def laser_verdict(evidence: dict, frame_size: tuple[int, int]) -> dict:

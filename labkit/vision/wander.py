@@ -53,16 +53,6 @@ def xy(z: np.ndarray) -> np.ndarray:
     return np.column_stack([z.real, z.imag])
 
 
-def folded_coverage(lit: np.ndarray, share: np.ndarray, k: int) -> float:
-    """Share of the curve's length (samples of :func:`dense_curve`: ``lit`` which have light,
-    ``share`` their length) that has light on it or on one of its ``|k - 1|`` symmetric copies
-    (a sector seen once is seen: the other copies are the same curve rotated)."""
-    m = abs(k - 1)
-    seen = lit.reshape(m, -1).any(axis=0)
-    sector = share.reshape(m, -1)[0]
-    return float(np.sum(sector[seen]) / np.sum(sector))
-
-
 MIN_CHUNK_COVERAGE = 0.5  # a chunk that shows less of the pattern cannot tell a shift from a shape
 
 
