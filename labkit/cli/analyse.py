@@ -221,6 +221,13 @@ def _laser_overlay(trace, result: dict, out: str | None, stream) -> None:
                                   "(use a .png or .jpg name in a writable folder)")
 
 
+def _loops_in_words(p: dict) -> str:
+    """What ``loops`` counts (Sec. 6.5): an epitrochoid's main loop and its small loops, a
+    hypotrochoid's arms."""
+    n = p["loops"]
+    return f"main loop + {n - 1} small" if p["type"] == "epitrochoid" else f"{n} arms"
+
+
 def _print_laser(r: dict) -> None:
     from labkit.vision.quality import in_words
 
@@ -245,7 +252,7 @@ def _print_laser(r: dict) -> None:
     if p["trochoid"]:
         t = p["trochoid"]
         print(
-            f"trochoid (Eq. 6.38): loops {p['loops']} (main loop + {p['loops'] - 1} small), "
+            f"trochoid (Eq. 6.38): loops {p['loops']} ({_loops_in_words(p)}), "
             f"{p['symmetry']}-fold symmetry  a {t['a']:.4f}  b {t['b']:.3f}  "
             f"scale {t['scale_px']:.2f} px  rotation {t['rotation_deg']:.2f} deg"
         )

@@ -469,7 +469,7 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
                                      width, tuple(source.size))
         if diag["verdict"] != "ok":  # is it light away from the pattern that misleads the fit?
             *parts, left_out = without_stray_light(points, weights, times, band, width)
-            if left_out > 0:
+            if 0 < left_out < 0.5:  # the pattern is most of the light, or this is a fragment of it
                 p2, w2, t2, b2 = parts
                 second = pattern_dict(p2, w2, t2 if drift else None, b2, None, middle, width,
                                       tuple(source.size), left_out)
