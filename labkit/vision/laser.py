@@ -18,10 +18,8 @@ from dataclasses import asdict, dataclass, replace
 
 import cv2
 import numpy as np
-from scipy.spatial import cKDTree
 
 from labkit.errors import VideoError
-from labkit.vision.clusters import LINK_WIDTHS, separate_pattern
 from labkit.vision.curves import a_for_k
 from labkit.vision.fit import MIN_POINTS, Classification, classify, pattern_kind
 from labkit.vision.framepath import (
@@ -35,6 +33,7 @@ from labkit.vision.frames import FrameSource, open_frames
 from labkit.vision.laser_checks import MIN_LINE_WIDTH_PX, laser_evidence, laser_verdict, no_pattern_verdict
 from labkit.vision.overlay import accumulated_trace
 from labkit.vision.quality import VERDICTS
+from labkit.vision.rescue import one_chunk_start, without_stray_light
 from labkit.vision.trace import TracePoints, trace_points
 from labkit.vision.wander import Wander, follow_wander
 
@@ -267,7 +266,8 @@ def symmetry_of(kind: str, k: int) -> int | None:
 def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | None,
                  band: tuple | None = None, prior: Classification | None = None,
                  centre_time: float | None = None, line_width_px: float = math.nan,
-                 frame_size: tuple[int, int] | None = None, left_out: float = 0.0) -> tuple[dict, dict]:
+                 frame_size: tuple[int, int] | None = None, left_out: float = 0.0,
+                 start: Classification | None = None) -> tuple[dict, dict]:
     """Classify and fit a trace; returns the JSON ``pattern`` object and fit diagnostics, which
     include the quality verdict (:mod:`labkit.vision.laser_checks`) when ``frame_size`` is given.
     With ``times``, the fitted centre drifts; it is reported at ``centre_time`` (s, e.g. the
@@ -277,9 +277,9 @@ def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | No
     call ``ok`` is done again from scratch, and the fresh result kept unless its verdict is worse:
     the first part may have shown too little of the pattern."""
     args = (centre_time, line_width_px, frame_size, left_out)
-    pattern, diag = _pattern_dict(points, weights, times, band, prior, *args)
+    pattern, diag = _pattern_dict(points, weights, times, band, prior, *args, start)
     if prior is not None and diag.get("verdict", "ok") != "ok":
-        fresh = _pattern_dict(points, weights, times, band, None, *args)
+        fresh = _pattern_dict(points, weights, times, band, None, *args, None)
         if VERDICTS.index(fresh[1]["verdict"]) <= VERDICTS.index(diag["verdict"]):
             return fresh
     return pattern, diag
@@ -287,8 +287,9 @@ def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | No
 
 def _pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | None, band: tuple | None,
                   prior: Classification | None, centre_time: float | None, line_width_px: float,
-                  frame_size: tuple[int, int] | None, left_out: float) -> tuple[dict, dict]:
-    cls = classify(points, weights, times, band=band, prior=prior)
+                  frame_size: tuple[int, int] | None, left_out: float,
+                  start: Classification | None) -> tuple[dict, dict]:
+    cls = start if start is not None else classify(points, weights, times, band=band, prior=prior)
     cls, wander, points = _steadied(cls, points, weights, times, band, line_width_px)
     best, ell = cls.best, cls.ellipse.pattern
     centre = best.c
@@ -380,22 +381,29 @@ def line_width(traces: list[TracePoints]) -> float:
     return float(np.median(widths)) if widths else math.nan
 
 
-def without_stray_light(points: np.ndarray, weights: np.ndarray, times: np.ndarray, band: tuple | None,
-                        width: float) -> tuple:
-    """The trace without light away from the pattern (:mod:`labkit.vision.clusters`): points,
-    weights, times, band (its pixels near a kept point), and the share of points left out. The
-    analysis tries this only when the whole trace gives no ``ok`` result, and keeps it only if its
-    verdict is better: arcs of one pattern with wide gaps between them can look like separate
-    light, and the fit of everything is then the right one."""
-    sep = separate_pattern(points, width)
-    if sep.groups == 0:
-        return points, weights, times, band, 0.0
-    kept = points[sep.keep]
-    if band is not None:
-        near, _ = cKDTree(kept).query(band[0], distance_upper_bound=LINK_WIDTHS * max(width, 2.0))
-        inside = np.isfinite(near)
-        band = tuple(None if part is None else np.asarray(part)[inside] for part in band)
-    return kept, weights[sep.keep], times[sep.keep], band, sep.left_out_share
+def _second_readings(pattern: dict, diag: dict, points: np.ndarray, weights: np.ndarray, times: np.ndarray,
+                     drift: bool, band: tuple | None, middle: float | None, width: float,
+                     size: tuple[int, int]) -> tuple[dict, dict]:
+    """The first fit is not ok: try the readings of :mod:`labkit.vision.rescue` in turn and keep
+    whichever gives the best verdict (the first fit on a tie)."""
+    def better(candidate: tuple[dict, dict]) -> bool:
+        return VERDICTS.index(candidate[1]["verdict"]) < VERDICTS.index(diag["verdict"])
+
+    *parts, left_out = without_stray_light(points, weights, times, band, width)
+    if 0 < left_out < 0.5:  # the pattern is most of the light, or this is a fragment of it
+        points, weights, times, band = parts
+        second = pattern_dict(points, weights, times if drift else None, band, None, middle, width, size,
+                              left_out)
+        if better(second):
+            pattern, diag = second
+    else:
+        left_out = 0.0
+    start = one_chunk_start(points, weights, times) if drift and diag["verdict"] != "ok" else None
+    if start is not None:
+        third = pattern_dict(points, weights, times, band, None, middle, width, size, left_out, start=start)
+        if better(third):
+            pattern, diag = third
+    return pattern, diag
 
 
 def _preliminary(chunks: list[Chunk], futures: list[Future], fps: float) -> Classification | None:
@@ -467,14 +475,9 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
         width = line_width(traces)
         pattern, diag = pattern_dict(points, weights, times if drift else None, band, preliminary, middle,
                                      width, tuple(source.size))
-        if diag["verdict"] != "ok":  # is it light away from the pattern that misleads the fit?
-            *parts, left_out = without_stray_light(points, weights, times, band, width)
-            if 0 < left_out < 0.5:  # the pattern is most of the light, or this is a fragment of it
-                p2, w2, t2, b2 = parts
-                second = pattern_dict(p2, w2, t2 if drift else None, b2, None, middle, width,
-                                      tuple(source.size), left_out)
-                if VERDICTS.index(second[1]["verdict"]) < VERDICTS.index(diag["verdict"]):
-                    pattern, diag = second
+        if diag["verdict"] != "ok":
+            pattern, diag = _second_readings(pattern, diag, points, weights, times, bool(drift), band,
+                                             middle, width, tuple(source.size))
         qual = {**{k: diag[k] for k in ("verdict", "reasons", "checks")}, **qual, **diag}
         tilt = None
         if screen_distance_mm and mm_per_px:
