@@ -42,7 +42,7 @@ MAX_POINTS_PER_CHUNK = 4000
 MIN_FRAMES_PER_CHUNK = 4
 # a short clip is cut into at least this many chunks (when each keeps MIN_FRAMES_PER_CHUNK): a
 # centre that wanders on a shaking tripod curves within a second, and 3 chunks of a 1.5 s clip
-# put the middle chunk's mean centre px away from the centre at the middle of the recording
+# put the middle chunk's mean centre 4 px from the centre at the middle of the recording (suite)
 MIN_CHUNKS = 8
 
 
