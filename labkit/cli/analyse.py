@@ -82,6 +82,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     _add_speed_arguments(laser)
     laser.add_argument("--json", metavar="OUT", help="write the result as JSON ('-' for stdout)")
     laser.add_argument("--rerun", metavar="SPEC", help="stream frames and overlays to rerun")
+    laser.add_argument("--overlay", metavar="OUT.png",
+                       help="draw the fitted curve and the verdict over the accumulated trace "
+                            "into this image")
     laser.set_defaults(func=run_laser)
 
     strobe = kinds.add_parser("strobe", help="tilt, lateral amplitude and RC offset from strobe video")
@@ -167,6 +170,7 @@ def run_laser(args: argparse.Namespace) -> int:
         max_chunks=args.max_chunks, luma=False if args.colour_frames else (True if args.luma else None),
     )
     stream = open_stream(args.rerun, "laser")
+    traces: list = []
     try:
         try:
             result = analyse_laser(
@@ -175,22 +179,58 @@ def run_laser(args: argparse.Namespace) -> int:
                 args.mm_per_px,
                 quality,
                 on_frame=stream.frame if stream else None,
+                on_trace=traces.append if (stream or args.overlay) else None,
             )
         except ValueError as exc:
             raise VideoError(args.path, str(exc)) from None
         record_speeds(result, args.speed_rpm, args.spin_rad_s)
         if stream:
             stream.result(result)
+        if traces:
+            _laser_overlay(traces[0], result, args.overlay, stream)
     finally:
         if stream:
             stream.close()
     _write_json(result, args.json)
     if args.json != "-":
         _print_laser(result)
-    return 1 if result["pattern"]["type"] == "none" else 0
+    if result["quality"]["verdict"] == "failed":
+        reasons = result["quality"]["reasons"]
+        print(f"labkit analyse laser: {args.path}: result failed: {reasons[0] if reasons else 'no pattern'}",
+              file=sys.stderr)
+        return 1
+    return 0
+
+
+def _laser_overlay(trace, result: dict, out: str | None, stream) -> None:
+    """Draw the overlay; write it to ``out`` (if given) and log it to ``stream`` (if any)."""
+    import cv2
+
+    from labkit.vision.overlay import draw_overlay
+
+    image = draw_overlay(trace, result)
+    if stream is not None and hasattr(stream, "overlay"):
+        stream.overlay(image)
+    if out:
+        try:
+            written = cv2.imwrite(out, image)
+        except cv2.error:
+            written = False
+        if not written:
+            raise VideoError(out, "cannot write the overlay image "
+                                  "(use a .png or .jpg name in a writable folder)")
+
+
+def _loops_in_words(p: dict) -> str:
+    """What ``loops`` counts (Sec. 6.5): an epitrochoid's main loop and its small loops, a
+    hypotrochoid's arms."""
+    n = p["loops"]
+    return f"main loop + {n - 1} small" if p["type"] == "epitrochoid" else f"{n} arms"
 
 
 def _print_laser(r: dict) -> None:
+    from labkit.vision.quality import in_words
+
     p = r["pattern"]
     rate = f"{r['fps']:.3g} fps" if r["fps"] else "photo"
     print(f"{r['source']}: {r['frames']} frames, {r['size'][0]}x{r['size'][1]}, {rate}")
@@ -200,6 +240,7 @@ def _print_laser(r: dict) -> None:
               f"{q['cnr_colour']:.1f} in colour on the first frames: too little kept in luma)")
     if p["type"] == "none":
         print(f"pattern: none ({p['reason']})")
+        print(f"quality: {in_words(q)}")
         return
     cx, cy = p["center_px"]
     major, minor = p["semi_axes_px"]
@@ -211,7 +252,8 @@ def _print_laser(r: dict) -> None:
     if p["trochoid"]:
         t = p["trochoid"]
         print(
-            f"trochoid (Eq. 6.38): loops {p['loops']}  a {t['a']:.4f}  b {t['b']:.3f}  "
+            f"trochoid (Eq. 6.38): loops {p['loops']} ({_loops_in_words(p)}), "
+            f"{p['symmetry']}-fold symmetry  a {t['a']:.4f}  b {t['b']:.3f}  "
             f"scale {t['scale_px']:.2f} px  rotation {t['rotation_deg']:.2f} deg"
         )
     if r["tilt_rad"]:
@@ -224,6 +266,7 @@ def _print_laser(r: dict) -> None:
         print(f"warning: {r['quality']['truncated']}")
     if _speed_line(r):
         print(_speed_line(r))
+    print(f"quality: {in_words(q)}")
 
 
 def _strobe_speed_rpm(speed_rpm: float | None, rotor_hz: float | None) -> float | None:

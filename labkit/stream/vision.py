@@ -8,7 +8,9 @@ entity                     content
 ``/video/frame``           the analysed frames, JPEG-encoded (raw images bloat .rrd files ~30x)
 ``/video/frame/fit``       the fitted circle/ellipse/trochoid, drawn over every frame (static)
 ``/video/frame/center``    the pattern centre
-``/video/pattern``         text: classification and its numbers, once the analysis ends
+``/video/pattern``         text: classification, its numbers and the quality verdict, once the analysis ends
+``/video/overlay``         laser: the fitted curve over the accumulated trace, with the verdict
+                           (the image ``labkit analyse laser --overlay OUT.png`` writes; static)
 ========================  =========================================================================
 
 OpenCV puts pixel centres at integers, rerun at +0.5 (RERUN-OPENCV.md section 3), so every
@@ -17,7 +19,6 @@ pixel coordinate is shifted by +0.5 when logged.
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
@@ -32,7 +33,10 @@ def vision_blueprint() -> Any:
 
     return rrb.Blueprint(
         rrb.Vertical(
-            rrb.Spatial2DView(origin="/video/frame", name="frames and fit"),
+            rrb.Horizontal(
+                rrb.Spatial2DView(origin="/video/frame", name="frames and fit"),
+                rrb.Spatial2DView(origin="/video/overlay", name="fit over the accumulated trace"),
+            ),
             rrb.TextLogView(origin="/video/pattern", name="pattern"),
             row_shares=[5, 1],
         ),
@@ -42,20 +46,9 @@ def vision_blueprint() -> Any:
 
 def pattern_curve(pattern: dict[str, Any], samples: int = 720) -> np.ndarray | None:
     """Points (N, 2) of the fitted pattern of a ``labkit analyse`` JSON, in OpenCV pixels."""
-    from labkit.vision.curves import Pattern
+    from labkit.vision.overlay import pattern_curve as curve
 
-    kind = pattern.get("type")
-    if kind in (None, "none") or pattern.get("center_px") is None:
-        return None
-    center = tuple(pattern["center_px"])
-    if kind in ("circle", "ellipse"):
-        shape = Pattern(kind, center, math.radians(pattern.get("rotation_deg") or 0.0),
-                        tuple(pattern["semi_axes_px"]))
-    else:
-        troch = pattern.get("trochoid") or {}
-        shape = Pattern(kind, center, math.radians(troch.get("rotation_deg") or 0.0),
-                        scale=float(troch["scale_px"]), b=float(troch["b"]), loops=int(pattern["loops"]))
-    return shape.points(np.linspace(0.0, 2.0 * math.pi, samples))
+    return curve(pattern, samples)
 
 
 class VisionStream:
@@ -94,6 +87,15 @@ class VisionStream:
                          static=True)
         self.rec.log("/video/pattern", self.rr.TextLog(describe(result), level="INFO"), static=True)
 
+    def overlay(self, bgr: np.ndarray) -> None:
+        """Log the overlay image (:func:`labkit.vision.overlay.draw_overlay`) as a static PNG."""
+        import cv2
+
+        ok, encoded = cv2.imencode(".png", bgr)
+        if ok:
+            image = self.rr.EncodedImage(contents=encoded.tobytes(), media_type="image/png")
+            self.rec.log("/video/overlay", image, static=True)
+
     def close(self) -> None:
         try:
             self.rec.flush()
@@ -114,6 +116,11 @@ def describe(result: dict[str, Any]) -> str:
         parts.append(f"{pattern['loops']} loops")
     if result.get("tilt_amplitude_rad") is not None:
         parts.append(f"tilt amplitude {result['tilt_amplitude_rad']:.4f} rad")
+    quality = result.get("quality") or {}
+    if quality.get("verdict"):
+        from labkit.vision.quality import in_words
+
+        parts.append(in_words(quality))
     return ", ".join(parts)
 
 

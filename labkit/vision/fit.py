@@ -11,7 +11,6 @@ point). Pure functions: no I/O.
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass, field, replace
 
@@ -25,6 +24,7 @@ from labkit.vision.curves import (
     k_for,
     trochoid_from_coefficients,
 )
+from labkit.vision.starts import b_starts_for, trochoid_starts
 
 CIRCLE_MAX_ELLIPTICITY = 0.02  # below this an ellipse is reported as a circle
 SIMPLER_TOLERANCE = 1.12  # a simpler pattern wins unless a trochoid's residual is this much lower
@@ -61,6 +61,7 @@ class Classification:
     residuals: dict[str, float] = field(default_factory=dict)
     t_ref: float = 0.0  # the time the centres refer to (mean time of the points fitted)
     coverage: dict[str, float] = field(default_factory=dict)  # trochoids' coverage_rms, same keys
+    fits: dict[str, CurveFit] = field(default_factory=dict)  # every trochoid candidate's fit, same keys
 
 
 def _curve(c: complex, a: complex, b: complex, k: int, t: np.ndarray) -> np.ndarray:
@@ -226,46 +227,6 @@ def _ellipse_start(z: np.ndarray) -> tuple[complex, complex, complex]:
     return complex(cx, cy), e * (major + minor) / 2, e * (major - minor) / 2
 
 
-@functools.lru_cache(maxsize=256)
-def _canonical_moments(b: float, k: int, n: int = 4096) -> tuple[complex, float, complex]:
-    """Centroid, rms radius and m-fold angular moment (see :func:`_trochoid_starts`) of the
-    canonical trochoid ``e^{it} + b e^{ikt}`` sampled uniformly in arc length; they depend only
-    on ``b`` and ``k``, so every trace reuses them."""
-    t = np.linspace(0, 2 * math.pi, n, endpoint=False)
-    zc = _curve(0j, 1.0, b, k, t)
-    speed = np.abs(1j * np.exp(1j * t) + 1j * k * b * np.exp(1j * k * t))
-    m = abs(k - 1)
-    cen_c = complex(np.sum(speed * zc) / np.sum(speed))
-    dc = zc - cen_c
-    rms_c = math.sqrt(float(np.sum(speed * np.abs(dc) ** 2) / np.sum(speed)))
-    mom_c = complex(np.sum(speed * np.abs(dc) ** _moment_power(m) * np.exp(-1j * m * np.angle(dc))))
-    return cen_c, rms_c, mom_c
-
-
-def _moment_power(m: int) -> int:
-    return 2 if m == 1 else 1  # with r^1 the m = 1 moment vanishes at the centroid
-
-
-def _trochoid_starts(z: np.ndarray, w: np.ndarray, k: int, bs: tuple[float, ...]):
-    """Starting coefficients for a trochoid: match the point cloud's centroid, rms radius and the
-    phase of its m-fold angular moment (m = |k - 1|, the curve's rotational symmetry) to those of
-    the canonical curve sampled uniformly in arc length."""
-    cen = complex(np.sum(w * z) / np.sum(w))
-    d = z - cen
-    rms = math.sqrt(float(np.sum(w * np.abs(d) ** 2) / np.sum(w)))
-    m = abs(k - 1)
-    mom = np.sum(w * np.abs(d) ** _moment_power(m) * np.exp(-1j * m * np.angle(d)))
-    for b in bs:
-        cen_c, rms_c, mom_c = _canonical_moments(float(b), int(k))
-        s = rms / rms_c
-        rho = (np.angle(mom_c) - np.angle(mom)) / m if abs(mom) > 0 else 0.0
-        # a limacon (m = 1) has no symmetry to lock on to: try four quadrants; otherwise the
-        # moment's phase and half a symmetry step from it (noise can flip the moment's sign)
-        for extra in ((0.0, 0.5 * math.pi, math.pi, 1.5 * math.pi) if m == 1 else (0.0, math.pi / m)):
-            e = complex(math.cos(rho + extra), math.sin(rho + extra))
-            yield cen - s * e * cen_c, s * e, s * b * e
-
-
 def fit_ellipse(points: np.ndarray, weights: np.ndarray | None = None, times: np.ndarray | None = None,
                 iterations: int = 18) -> CurveFit:
     """Geometric ellipse fit (major first; rotation of the major axis) with optional linear drift."""
@@ -276,29 +237,34 @@ def fit_ellipse(points: np.ndarray, weights: np.ndarray | None = None, times: np
 
 def fit_trochoid(points: np.ndarray, kind: str, loops: int, weights: np.ndarray | None = None,
                  times: np.ndarray | None = None, iterations: int = 30,
-                 b_starts: tuple[float, ...] = (0.15, 0.45, 0.9)) -> CurveFit:
+                 b_starts: tuple[float, ...] | None = None) -> CurveFit:
     """Fit an epitrochoid or hypotrochoid (Eq. 6.38) with ``loops`` loops: a few steps from each
-    start (:func:`_trochoid_starts`), then the best one to ``iterations`` steps."""
+    start (:func:`labkit.vision.starts.trochoid_starts`), then the best one to ``iterations`` steps."""
     return fit_trochoids(points, [k_for(kind, loops)], weights, times, iterations, b_starts)[0]
 
 
 def fit_trochoids(points: np.ndarray, ks: list[int], weights: np.ndarray | None = None,
                   times: np.ndarray | None = None, iterations: int = 30,
-                  b_starts: tuple[float, ...] = (0.15, 0.45, 0.9)) -> list[CurveFit]:
+                  b_starts: tuple[float, ...] | None = None) -> list[CurveFit]:
     """:func:`fit_trochoid` for several frequency ratios ``ks`` (:func:`labkit.vision.curves.k_for`)
     at once, one fit per k: every start of every k is probed for ``PROBE_ITERATIONS`` steps in one
     batch, then each k's best start is carried on to ``iterations`` steps in a second batch."""
     z, w, tau = _prepare(points, weights, times)
     drift = times is not None
-    starts = [(k, c, a, b) for k in ks for c, a, b in _trochoid_starts(z, w, k, b_starts)]
+    starts = [(k, c, a, b) for k in ks
+              for c, a, b in trochoid_starts(z, w, k, b_starts or b_starts_for(k))]
     k_col, c, a, b = (np.array(col) for col in zip(*starts, strict=True))
     probes = _Rows(k_col, c, a, b, np.zeros(len(starts), complex))
     probes, rms = _icp_rows(z, w, tau, probes, PROBE_ITERATIONS, drift, 200 * np.abs(k_col))
     chosen = []
     for k in ks:
         mine = np.flatnonzero(k_col == k)
-        if np.isfinite(rms[mine]).any():
-            chosen.append(mine[np.argmin(rms[mine])])
+        finite = mine[np.isfinite(rms[mine])]
+        if len(finite):
+            # ranked as candidates are (two_way_rms): a start that grew loops larger than the
+            # trace's passes close to every point and would win on the residual alone
+            scores = [two_way_rms(rms[i], coverage_rms(_curve_fit(probes, rms, i), z, tau)) for i in finite]
+            chosen.append(finite[int(np.argmin(scores))])
         else:  # every start degenerated; keep the least bad
             chosen.append(mine[np.argmin(np.abs(probes.b[mine]) / np.maximum(np.abs(probes.a[mine]), 1e-12))])
     best = probes.take(chosen)
@@ -359,6 +325,7 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
     t_ref = _mean_time(full[2])
     residuals = {"ellipse": ellipse.rms_residual}
     coverage: dict[str, float] = {}
+    fits: dict[str, CurveFit] = {}
     if prior is not None:
         residuals.update({f"{k} (first part)": v for k, v in prior.residuals.items()})
         f = prior.best
@@ -369,7 +336,7 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
         zs, _, taus = _prepare(*screen)
         screened = fit_trochoids(screen[0], ks, screen[1], screen[2], iterations=10)
         for f in screened:
-            residuals[_name(f)] = f.rms_residual
+            residuals[_name(f)], fits[_name(f)] = f.rms_residual, f
             coverage[_name(f)] = coverage_rms(f, zs, taus) if math.isfinite(f.rms_residual) else math.inf
         screened.sort(key=lambda f: two_way_rms(f.rms_residual, coverage[_name(f)]))
         shortlist = [f for f in screened[:2] if math.isfinite(f.rms_residual)]
@@ -381,6 +348,7 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
         refined = [_curve_fit(rows, rms, i) for i in range(len(shortlist))]
     for fit in refined:
         residuals[_name(fit)], coverage[_name(fit)] = fit.rms_residual, coverage_rms(fit, z, tau)
+        fits[_name(fit)] = fit
     trochoid = min(refined, key=lambda f: two_way_rms(f.rms_residual, coverage[_name(f)]), default=None)
 
     def trochoid_wins() -> bool:
@@ -399,7 +367,7 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
     if prior is not None and not (
             best.rms_residual <= PRIOR_RMS_FACTOR * prior.best.rms_residual + PRIOR_RMS_SLACK_PX):
         return classify(points, weights, times, max_points, screen_points, trochoid_loops, band)
-    return Classification(best, ellipse, residuals, t_ref, coverage)
+    return Classification(best, ellipse, residuals, t_ref, coverage, fits)
 
 
 def _polished_on_band(ellipse: CurveFit, band: tuple, full: tuple, max_points: int) -> CurveFit:

@@ -14,7 +14,7 @@ import math
 import time
 from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import cv2
 import numpy as np
@@ -30,11 +30,20 @@ from labkit.vision.framepath import (
     measure_frame_path,
 )
 from labkit.vision.frames import FrameSource, open_frames
+from labkit.vision.laser_checks import MIN_LINE_WIDTH_PX, laser_evidence, laser_verdict, no_pattern_verdict
+from labkit.vision.overlay import accumulated_trace
+from labkit.vision.quality import VERDICTS
+from labkit.vision.rescue import one_chunk_start, without_stray_light
 from labkit.vision.trace import TracePoints, trace_points
+from labkit.vision.wander import Wander, follow_wander
 
 FrameHook = Callable[[int, float, np.ndarray], None]
 MAX_POINTS_PER_CHUNK = 4000
 MIN_FRAMES_PER_CHUNK = 4
+# a short clip is cut into at least this many chunks (when each keeps MIN_FRAMES_PER_CHUNK): a
+# centre that wanders on a shaking tripod curves within a second, and 3 chunks of a 1.5 s clip
+# put the middle chunk's mean centre 4 px from the centre at the middle of the recording (suite)
+MIN_CHUNKS = 8
 
 
 @dataclass
@@ -82,10 +91,12 @@ def _clip_roi(roi: tuple[int, int, int, int], size: tuple[int, int]) -> tuple[in
 
 
 def chunk_length(source: FrameSource, quality: LaserQuality) -> int:
-    """Frames per chunk: ``chunk_s`` of video, at least ``MIN_FRAMES_PER_CHUNK`` analysed frames,
-    at most ``max_chunks`` chunks."""
+    """Frames per chunk: ``chunk_s`` of video, shortened so that a short clip still has
+    ``MIN_CHUNKS`` chunks to follow a wandering centre with (:mod:`labkit.vision.wander`); at
+    least ``MIN_FRAMES_PER_CHUNK`` analysed frames, at most ``max_chunks`` chunks."""
     fps = source.fps or 30.0
-    return max(MIN_FRAMES_PER_CHUNK * quality.stride, round(quality.chunk_s * fps),
+    wanted = min(round(quality.chunk_s * fps), math.ceil(source.frame_count / MIN_CHUNKS))
+    return max(MIN_FRAMES_PER_CHUNK * quality.stride, wanted,
                math.ceil(source.frame_count / max(1, quality.max_chunks)))
 
 
@@ -239,21 +250,51 @@ def _frame_path(chunks: list[Chunk], probe: FramePathProbe) -> dict:
 
 def _none(reason: str) -> dict:
     return {"type": "none", "reason": reason, "center_px": None, "semi_axes_px": None,
-            "rotation_deg": None, "ellipticity": None, "loops": None, "trochoid": None,
+            "rotation_deg": None, "ellipticity": None, "loops": None, "symmetry": None, "trochoid": None,
             "rms_residual_px": None}
+
+
+def symmetry_of(kind: str, k: int) -> int | None:
+    """n-fold rotational symmetry of a pattern: round(1/|a|) = |k - 1| of Eq. 6.38 (a trochoid
+    with ``loops`` n: n - 1 for an epitrochoid, n for a hypotrochoid), 2 for an ellipse, None for
+    a circle (every rotation maps it onto itself)."""
+    if kind == "circle":
+        return None
+    return round(1.0 / abs(a_for_k(k)))
 
 
 def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | None,
                  band: tuple | None = None, prior: Classification | None = None,
-                 centre_time: float | None = None) -> tuple[dict, dict]:
-    """Classify and fit a trace; returns the JSON ``pattern`` object and fit diagnostics. With
-    ``times``, the fitted centre drifts; it is reported at ``centre_time`` (s, e.g. the middle of
-    the recording), or at the mean time of the points fitted."""
-    cls = classify(points, weights, times, band=band, prior=prior)
+                 centre_time: float | None = None, line_width_px: float = math.nan,
+                 frame_size: tuple[int, int] | None = None, left_out: float = 0.0,
+                 start: Classification | None = None) -> tuple[dict, dict]:
+    """Classify and fit a trace; returns the JSON ``pattern`` object and fit diagnostics, which
+    include the quality verdict (:mod:`labkit.vision.laser_checks`) when ``frame_size`` is given.
+    With ``times``, the fitted centre drifts; it is reported at ``centre_time`` (s, e.g. the
+    middle of the recording), or at the mean time of the points fitted.
+
+    A result refined from ``prior`` (the first part's classification) that the checks do not
+    call ``ok`` is done again from scratch, and the fresh result kept unless its verdict is worse:
+    the first part may have shown too little of the pattern."""
+    args = (centre_time, line_width_px, frame_size, left_out)
+    pattern, diag = _pattern_dict(points, weights, times, band, prior, *args, start)
+    if prior is not None and diag.get("verdict", "ok") != "ok":
+        fresh = _pattern_dict(points, weights, times, band, None, *args, None)
+        if VERDICTS.index(fresh[1]["verdict"]) <= VERDICTS.index(diag["verdict"]):
+            return fresh
+    return pattern, diag
+
+
+def _pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | None, band: tuple | None,
+                  prior: Classification | None, centre_time: float | None, line_width_px: float,
+                  frame_size: tuple[int, int] | None, left_out: float,
+                  start: Classification | None) -> tuple[dict, dict]:
+    cls = start if start is not None else classify(points, weights, times, band=band, prior=prior)
+    cls, wander, points = _steadied(cls, points, weights, times, band, line_width_px)
     best, ell = cls.best, cls.ellipse.pattern
     centre = best.c
     if times is not None and centre_time is not None:
-        centre += best.drift * (centre_time - cls.t_ref)
+        centre = wander.centre_at(centre_time) if wander else centre + best.drift * (centre_time - cls.t_ref)
     major, minor = ell.semi_axes
     kind = pattern_kind(cls.best)
     p = best.pattern
@@ -269,12 +310,44 @@ def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | No
         rotation, loops = math.degrees(ell.rotation_rad), 1
     pattern = {"type": kind, "center_px": [float(centre.real), float(centre.imag)], "semi_axes_px": axes,
                "rotation_deg": rotation, "ellipticity": ellipticity,
-               "loops": loops, "trochoid": trochoid, "rms_residual_px": best.rms_residual}
+               "loops": loops, "symmetry": symmetry_of(kind, best.k), "trochoid": trochoid,
+               "rms_residual_px": best.rms_residual}
     residuals = {k: (v if math.isfinite(v) else None) for k, v in cls.residuals.items()}
     coverage = {k: (v if math.isfinite(v) else None) for k, v in cls.coverage.items()}
     diag = {"drift_px_s": [float(best.drift.real), float(best.drift.imag)],
+            "wander_px": None if wander is None else {"rms": round(wander.rms_px, 3), "chunk_offsets": [
+                [round(float(o.real), 3), round(float(o.imag), 3)] for o in wander.offsets]},
             "candidate_residuals_px": residuals, "candidate_coverage_px": coverage}
+    if frame_size is not None:
+        evidence = {**laser_evidence(cls, points, times, line_width_px, frame_size, wander),
+                    "light_left_out": round(left_out, 4)}
+        diag = {**laser_verdict(evidence, frame_size), **diag}
     return pattern, diag
+
+
+def _steadied(cls: Classification, points: np.ndarray, weights: np.ndarray, times: np.ndarray | None,
+              band: tuple | None, line_width_px: float) -> tuple[Classification, Wander | None, np.ndarray]:
+    """The classification with the centre's wander followed (:mod:`labkit.vision.wander`), the
+    wander, and the points with it taken out; unchanged (and the wander's offsets zero) when
+    following it does not explain the trace clearly better (:attr:`Wander.needed`). A wander over
+    half a line width (rms) blurs the accumulated trace enough to mislead the classification:
+    the steadied points are then classified again and the wander followed anew."""
+    width = max(MIN_LINE_WIDTH_PX, line_width_px if math.isfinite(line_width_px) else 0.0)
+    wander = follow_wander(cls, points, weights, times, width, band) if times is not None else None
+    if wander is None:
+        return cls, None, points
+    if wander.rms_px > 0.5 * width:
+        again = classify(wander.moved(points, times), weights, times)
+        followed = follow_wander(again, points, weights, times, width, band)
+        if followed is not None and followed.needed:
+            wander, cls = followed, again
+    if not wander.needed:
+        straight = replace(wander, offsets=np.zeros_like(wander.offsets), fit=cls.best, t_ref=cls.t_ref)
+        return cls, straight, points
+    chosen = wander.fit
+    ellipse = chosen if chosen.k == -1 else replace(cls.ellipse, c=cls.ellipse.c + cls.ellipse.drift
+                                                     * (wander.t_ref - cls.t_ref))
+    return replace(cls, best=chosen, ellipse=ellipse, t_ref=wander.t_ref), wander, wander.moved(points, times)
 
 
 def gather(chunks: list[Chunk], traces: list[TracePoints], fps: float):
@@ -302,6 +375,37 @@ def gather(chunks: list[Chunk], traces: list[TracePoints], fps: float):
     return points, np.concatenate(wts), np.concatenate(tms), band, peak, noise
 
 
+def line_width(traces: list[TracePoints]) -> float:
+    """Median line width of the chunks' traces (NaN without any)."""
+    widths = [t.line_width_px for t in traces if len(t.points)]
+    return float(np.median(widths)) if widths else math.nan
+
+
+def _second_readings(pattern: dict, diag: dict, points: np.ndarray, weights: np.ndarray, times: np.ndarray,
+                     drift: bool, band: tuple | None, middle: float | None, width: float,
+                     size: tuple[int, int]) -> tuple[dict, dict]:
+    """The first fit is not ok: try the readings of :mod:`labkit.vision.rescue` in turn and keep
+    whichever gives the best verdict (the first fit on a tie)."""
+    def better(candidate: tuple[dict, dict]) -> bool:
+        return VERDICTS.index(candidate[1]["verdict"]) < VERDICTS.index(diag["verdict"])
+
+    *parts, left_out = without_stray_light(points, weights, times, band, width)
+    if 0 < left_out < 0.5:  # the pattern is most of the light, or this is a fragment of it
+        points, weights, times, band = parts
+        second = pattern_dict(points, weights, times if drift else None, band, None, middle, width, size,
+                              left_out)
+        if better(second):
+            pattern, diag = second
+    else:
+        left_out = 0.0
+    start = one_chunk_start(points, weights, times) if drift and diag["verdict"] != "ok" else None
+    if start is not None:
+        third = pattern_dict(points, weights, times, band, None, middle, width, size, left_out, start=start)
+        if better(third):
+            pattern, diag = third
+    return pattern, diag
+
+
 def _preliminary(chunks: list[Chunk], futures: list[Future], fps: float) -> Classification | None:
     """Classification of the first chunks (runs in the worker while later frames decode)."""
     points, weights, times, _, _, _ = gather(chunks, [f.result() for f in futures], fps)
@@ -311,12 +415,15 @@ def _preliminary(chunks: list[Chunk], futures: list[Future], fps: float) -> Clas
 
 
 def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px: float | None = None,
-                  quality: LaserQuality | None = None, on_frame: FrameHook | None = None) -> dict:
+                  quality: LaserQuality | None = None, on_frame: FrameHook | None = None,
+                  on_trace: Callable[[np.ndarray], None] | None = None) -> dict:
     """Analyse a laser-trace video or long-exposure photo; returns the ``labkit analyse laser`` JSON.
 
     ``on_frame(index, t_s, bgr)`` is called for every analysed frame (live streams hook in here;
-    the frame buffer is reused, copy it to keep it). Raises :class:`VideoError` for unusable input;
-    a usable file without a trace gives ``pattern.type == "none"`` with a reason.
+    the frame buffer is reused, copy it to keep it). ``on_trace(image)`` gets the accumulated
+    trace of the whole clip in a full frame (for :mod:`labkit.vision.overlay`). Raises
+    :class:`VideoError` for unusable input; a usable file without a trace gives
+    ``pattern.type == "none"`` with a reason.
     """
     quality = quality or LaserQuality()
     t_start = time.perf_counter()
@@ -347,6 +454,8 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
         traces = [futures[id(c)].result() for c in chunks]
         preliminary = prior["fit"].result() if "fit" in prior else None
     points, weights, times, band, peak, noise = gather(chunks, traces, fps)
+    if on_trace is not None:
+        on_trace(accumulated_trace(chunks, source.size))
     qual = {"frames_analysed": len(range(0, source.frames_read, quality.stride)),
             "stride": quality.stride, "roi": list(chunks[-1].offset) + list(chunks[-1].image.shape[1::-1]),
             "subpixel": quality.subpixel, "chunks": len(chunks), "trace_points": int(len(points)),
@@ -357,13 +466,19 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
         reason = ("no light above the background noise" if len(points) == 0
                   else f"only {len(points)} trace pixels found")
         pattern, tilt = _none(reason), None
+        qual = {**no_pattern_verdict(reason), **qual}
     else:
         drift = len(chunks) > 1 and fps
         if band is not None and not drift:
             band = (band[0], band[1], None)
         middle = (source.frames_read - 1) / (2 * fps) if fps else None
-        pattern, diag = pattern_dict(points, weights, times if drift else None, band, preliminary, middle)
-        qual.update(diag)
+        width = line_width(traces)
+        pattern, diag = pattern_dict(points, weights, times if drift else None, band, preliminary, middle,
+                                     width, tuple(source.size))
+        if diag["verdict"] != "ok":
+            pattern, diag = _second_readings(pattern, diag, points, weights, times, bool(drift), band,
+                                             middle, width, tuple(source.size))
+        qual = {**{k: diag[k] for k in ("verdict", "reasons", "checks")}, **qual, **diag}
         tilt = None
         if screen_distance_mm and mm_per_px:
             major, minor = pattern["semi_axes_px"]

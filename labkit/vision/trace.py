@@ -26,6 +26,7 @@ class TracePoints:
     noise: float  # robust noise of the residual (grey levels)
     band: np.ndarray | None = None  # every trace pixel (M, 2), not thinned
     band_weights: np.ndarray | None = None
+    line_width_px: float = float("nan")  # full width of the band: twice its median half-width
 
 
 def brightness(image: np.ndarray) -> np.ndarray:
@@ -127,15 +128,16 @@ def _centreline(mask: np.ndarray, res: np.ndarray, offset: tuple[int, int], subp
         return TracePoints(np.zeros((0, 2)), np.zeros(0), peak, noise)
     x, y = xs.astype(float), ys.astype(float)
     weights = np.ones(len(xs))
+    half_width = float(np.median(dist[ys, xs]))
     if subpixel:
-        half = int(np.clip(np.median(dist[ys, xs]), 1, 12))
+        half = int(np.clip(half_width, 1, 12))
         x, y = _window_centroids(np.where(mask, res, 0).astype(np.float32), xs, ys, half)
         weights = np.clip(res[ys, xs], 1e-3, None).astype(float)
     pts = np.column_stack([x + offset[0], y + offset[1]])
     bys, bxs = _nonzero(mask)
     band = np.column_stack([bxs + offset[0], bys + offset[1]]).astype(float)
     band_w = np.clip(res[bys, bxs], 1e-3, None).astype(float) if subpixel else np.ones(len(bxs))
-    return TracePoints(pts, weights, peak, noise, band, band_w)
+    return TracePoints(pts, weights, peak, noise, band, band_w, 2.0 * half_width)
 
 
 def _nonzero(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -12,8 +12,8 @@ from labkit.cli import main
 VIDEOS = Path(__file__).resolve().parents[2] / "recordings" / "videos"
 LASER_KEYS = {"source", "frames", "fps", "size", "pattern", "tilt_rad", "quality",
               "rotor_speed_rpm", "spin_rad_s"}  # the last two from the CLI (--speed-rpm, --spin-rad-s)
-PATTERN_KEYS = {"type", "center_px", "semi_axes_px", "rotation_deg", "ellipticity", "loops", "trochoid",
-                "rms_residual_px"}
+PATTERN_KEYS = {"type", "center_px", "semi_axes_px", "rotation_deg", "ellipticity", "loops", "symmetry",
+                "trochoid", "rms_residual_px"}
 STROBE_KEYS = {"source", "frames", "apparent_hz", "tilt_amplitude_rad", "lateral_amplitude_px",
                "rc_offset_px", "phase_per_frame", "point_pattern"}
 
@@ -39,8 +39,11 @@ def test_laser_examples(capsys, tmp_path, name):
     p = r["pattern"]
     assert p["type"] == truth["type"] and p["loops"] == truth["loops"]
     assert math.dist(p["center_px"], truth["center_px"]) < 1.0
+    assert r["quality"]["verdict"] == "ok" and r["quality"]["reasons"] == []
+    assert "quality: result ok" in out
     if truth["trochoid"]:
         assert set(p["trochoid"]) == {"a", "b", "scale_px", "rotation_deg"}
+        assert p["symmetry"] == round(1 / abs(truth["trochoid"]["a"]))
         assert abs(p["trochoid"]["b"] - truth["trochoid"]["b"]) < 0.05
         assert p["ellipticity"] is None
     else:

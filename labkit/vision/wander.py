@@ -1,0 +1,197 @@
+"""A pattern centre that wanders: a camera on a tripod on a bench that shakes, or a rig whose
+mean tilt breathes, moves the whole trace by tens of pixels over a clip, not along a straight
+line. The fit's linear drift (:mod:`labkit.vision.fit`) cannot follow that; this module adds one
+translation per time chunk on top of it.
+
+Each chunk's trace is moved onto the fitted curve by the translation that best cancels its
+residuals along the curve's normals (a linearised registration against the known shape); the
+curve is then refitted on the moved points, and the two steps alternate. The translations'
+weighted mean and linear trend are handed back to the centre and the drift (they are the same
+thing), so the chunk offsets are what a straight drift does not explain. The centre at any time
+is the fitted centre, plus the drift, plus the offsets interpolated linearly between the chunks'
+mid times. Pure functions, no I/O.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from labkit.vision.fit import (
+    SIMPLER_TOLERANCE,
+    Classification,
+    CurveFit,
+    _polished_on_band,
+    polish,
+    without_outliers,
+)
+
+MIN_CHUNKS = 3
+MIN_CHUNK_POINTS = 10
+
+
+def dense_curve(fit: CurveFit, spacing_px: float = 0.3) -> tuple[np.ndarray, np.ndarray]:
+    """Curve points (complex, at the fit's reference time: no drift) about ``spacing_px`` apart
+    along the curve, uniform in the parameter t and a multiple of the curve's symmetry
+    ``|k - 1|`` in number, and each sample's share of the curve's length."""
+    k = fit.k
+    t = np.linspace(0.0, 2 * math.pi, 512 * max(2, abs(k)), endpoint=False)
+    speed = np.abs(1j * fit.a * np.exp(1j * t) + 1j * k * fit.b * np.exp(1j * k * t))
+    length = float(np.mean(speed)) * 2 * math.pi
+    m = abs(k - 1)
+    n = m * math.ceil(min(200000, max(len(t), length / spacing_px)) / m)
+    t = np.linspace(0.0, 2 * math.pi, n, endpoint=False)
+    e1, ek = np.exp(1j * t), np.exp(1j * k * t)
+    speed = np.abs(1j * fit.a * e1 + 1j * k * fit.b * ek)
+    return fit.c + fit.a * e1 + fit.b * ek, speed / np.sum(speed)
+
+
+def xy(z: np.ndarray) -> np.ndarray:
+    return np.column_stack([z.real, z.imag])
+
+
+MIN_CHUNK_COVERAGE = 0.5  # a chunk that shows less of the pattern cannot tell a shift from a shape
+
+
+def chunk_offsets(fit: CurveFit, still: np.ndarray, chunk: np.ndarray, chunks: int,
+                  width: float) -> np.ndarray:
+    """Per chunk (``chunk``: each point's chunk index), the translation (complex px) that best
+    moves its points ``still`` (drift already taken out) onto the curve along the curve's
+    normals. A chunk whose light covers less than ``MIN_CHUNK_COVERAGE`` of the curve's length
+    (within ``width`` px) gets NaN: on a part of the pattern a shift and a change of shape look
+    alike (symmetric copies do not help here: a shift moves opposite sides the same way, a change
+    of size opposite ways, and only seeing both tells them apart)."""
+    curve, share = dense_curve(fit, 0.5)
+    tree = cKDTree(xy(curve))
+    _, idx = tree.query(xy(still))
+    residual = still - curve[idx]
+    normal = residual / np.maximum(np.abs(residual), 1e-9)
+    along = (np.conj(normal) * residual).real
+    offsets = np.full(chunks, np.nan + 0j)
+    for j in range(chunks):
+        sel = chunk == j
+        if sel.sum() < MIN_CHUNK_POINTS:
+            continue
+        lit = np.zeros(len(curve), bool)
+        for near in tree.query_ball_point(xy(still[sel]), width):
+            lit[near] = True
+        if float(np.sum(share[lit])) < MIN_CHUNK_COVERAGE:
+            continue
+        nx, ny, d = normal[sel].real, normal[sel].imag, along[sel]
+        m = np.array([[nx @ nx, nx @ ny], [nx @ ny, ny @ ny]])
+        if np.linalg.cond(m) > 1e6:
+            continue
+        sx, sy = np.linalg.solve(m, np.array([nx @ d, ny @ d]))
+        offsets[j] = complex(sx, sy)
+    return offsets
+
+
+def filled(offsets: np.ndarray, mid_times: np.ndarray) -> np.ndarray:
+    """NaN offsets interpolated linearly in time from the chunks that have one (0 if none has)."""
+    ok = np.isfinite(offsets)
+    if not ok.any():
+        return np.zeros(len(offsets), complex)
+    return (np.interp(mid_times, mid_times[ok], offsets[ok].real)
+            + 1j * np.interp(mid_times, mid_times[ok], offsets[ok].imag))
+
+
+def robust_rms(fit: CurveFit, still: np.ndarray) -> float:
+    """Rms distance of points ``still`` (drift taken out) from the curve, leaving out points
+    farther than 3 x the median distance (spurs of the centre line, specks)."""
+    curve, _ = dense_curve(fit, 0.5)
+    d, _ = cKDTree(xy(curve)).query(xy(still))
+    d = d[d <= 3 * max(float(np.median(d)), 1 / 3)]
+    return float(np.sqrt(np.mean(d * d))) if len(d) else math.nan
+
+
+def _detrended(offsets: np.ndarray, mid_times: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """Offsets without their count-weighted mean and linear trend in time (the centre's and the
+    drift's share)."""
+    w = counts.astype(float)
+    if w.sum() <= 0:
+        return offsets
+    design = np.column_stack([np.ones(len(mid_times)), mid_times - np.average(mid_times, weights=w)])
+    sw = np.sqrt(w)[:, None]
+    coef = np.linalg.lstsq(design * sw, offsets * sw[:, 0], rcond=None)[0]
+    return offsets - design @ coef
+
+
+@dataclass
+class Wander:
+    """The fit with the wander taken out, the time its centre refers to, and the chunks' mid
+    times with their offsets (complex px)."""
+
+    fit: CurveFit
+    t_ref: float
+    mid_times: np.ndarray
+    offsets: np.ndarray
+    chunks_checked: int = 0  # chunks that showed enough of the pattern to measure their offset
+    rms_straight_px: float = math.nan  # residual of the straight-drift fit on the same points
+    rms_followed_px: float = math.nan  # residual with the chunk offsets followed
+
+    @property
+    def needed(self) -> bool:
+        """Whether following the wander explains the trace clearly better than a straight drift
+        (by the factor a trochoid must beat an ellipse by, ``SIMPLER_TOLERANCE``): otherwise the
+        chunk offsets fit small shape errors of partial chunks, and the simpler model stays."""
+        return bool(self.rms_straight_px > SIMPLER_TOLERANCE * self.rms_followed_px)
+
+    def centre_at(self, t: float) -> complex:
+        """The pattern centre at time ``t`` (s)."""
+        extra = complex(np.interp(t, self.mid_times, self.offsets.real),
+                        np.interp(t, self.mid_times, self.offsets.imag))
+        return self.fit.c + self.fit.drift * (t - self.t_ref) + extra
+
+    def moved(self, points: np.ndarray, times: np.ndarray) -> np.ndarray:
+        """``points`` (N, 2) with their chunk's offset taken out (``times``: the chunks' mid times)."""
+        chunk = np.clip(np.searchsorted(self.mid_times, times), 0, len(self.offsets) - 1)
+        off = self.offsets[chunk]
+        return points - np.column_stack([off.real, off.imag])
+
+    @property
+    def rms_px(self) -> float:
+        return float(np.sqrt(np.mean(np.abs(self.offsets) ** 2))) if len(self.offsets) else 0.0
+
+
+def follow_wander(cls: Classification, points: np.ndarray, weights: np.ndarray | None, times: np.ndarray,
+                  width: float, band: tuple | None = None, rounds: int = 3,
+                  max_points: int = 3000) -> Wander | None:
+    """Alternate chunk offsets and a refit of ``cls.best`` (see the module docstring); None for
+    fewer than ``MIN_CHUNKS`` chunks. An ellipse is polished at the end on every trace pixel
+    ``band`` (points, weights, times), moved by the offsets, as :func:`labkit.vision.fit.classify`
+    does (a thinned centre line ends short of a flat ellipse's tips)."""
+    mid_times, chunk = np.unique(np.asarray(times, float), return_inverse=True)
+    if len(mid_times) < MIN_CHUNKS:
+        return None
+    keep = np.random.default_rng(4).permutation(len(points))[:max_points]
+    z = points[keep, 0] + 1j * points[keep, 1]
+    w = None if weights is None else np.asarray(weights, float)[keep]
+    t, ch = np.asarray(times, float)[keep], chunk[keep]
+    counts = np.bincount(ch, minlength=len(mid_times))
+    t_ref = float(np.mean(t))
+    fit = replace(cls.best, c=cls.best.c + cls.best.drift * (t_ref - cls.t_ref))
+    rms_straight = robust_rms(fit, z - fit.drift * (t - t_ref))
+    total = np.zeros(len(mid_times), complex)
+    checked = 0
+    for _ in range(rounds):
+        still = z - total[ch] - fit.drift * (t - t_ref)
+        raw = chunk_offsets(fit, still, ch, len(mid_times), width)
+        checked = int(np.isfinite(raw).sum())
+        if checked == 0:  # no chunk can be registered: keep the straight drift
+            zeros = np.zeros(len(mid_times), complex)
+            return Wander(fit, t_ref, mid_times, zeros, 0, rms_straight, rms_straight)
+        step = filled(raw, mid_times)
+        total = _detrended(total + step, mid_times, counts)
+        moved = z - total[ch]
+        fit = polish(fit, xy(moved), w, t, iterations=8)
+    if fit.k != -1:
+        fit = without_outliers(fit, xy(moved), w, t)
+    result = Wander(fit, t_ref, mid_times, total, checked, rms_straight,
+                    robust_rms(fit, z - total[ch] - fit.drift * (t - t_ref)))
+    if fit.k == -1 and band is not None and band[2] is not None and len(band[0]) >= MIN_CHUNK_POINTS:
+        moved_band = (result.moved(np.asarray(band[0], float), np.asarray(band[2], float)), band[1], band[2])
+        result.fit = _polished_on_band(fit, moved_band, (xy(moved), w, t), 2 * max_points)
+    return result
