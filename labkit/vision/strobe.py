@@ -14,13 +14,23 @@ from __future__ import annotations
 
 import math
 
+import cv2
 import numpy as np
 
 from labkit.errors import VideoError
 from labkit.vision.curves import a_for_k, ellipse_from_coefficients, trochoid_from_coefficients
 from labkit.vision.fit import CIRCLE_MAX_ELLIPTICITY, MAX_TROCHOID_B, trochoid_beats
 from labkit.vision.frames import open_frames
-from labkit.vision.strobe_body import BodyPose, ClipOrientation, measure_body, orient_clip
+from labkit.vision.strobe_body import (
+    BodyPose,
+    ClipOrientation,
+    flatten_illumination,
+    measure_body,
+    measure_flat,
+    orient_clip,
+    refine_with_static_light,
+    static_light,
+)
 from labkit.vision.strobe_fit import MotionFit, fit_motion
 from labkit.vision.strobe_phase import (
     PhaseModel,
@@ -35,24 +45,73 @@ from labkit.vision.strobe_quality import strobe_quality
 __all__ = ["analyse_strobe", "apparent_cycles_per_frame", "measure_body", "phase_pattern"]
 
 MIN_FRAMES = 6
+GHOST_CORRECT = 0.05  # ghost fraction above which bodies are re-measured against the static light
+
+
+def ghost_fraction(found: list[BodyPose], static: np.ndarray, dark: bool) -> float:
+    """How much light stays where the body sweeps, as a fraction of the body's contrast: the static
+    light (brightest of all frames for a dark body) on the swept pixels (inside some frame's blob,
+    not inside all) against the same static light 8-15 px beyond every blob. 0 without a ghost
+    (the noise bias of the max cancels between the two), ~ G h for an ambient fraction G of the
+    exposure and a pixel covered a fraction h of the revolution."""
+    h, w = static.shape
+    union = np.zeros((h, w), np.uint8)
+    for p in found:
+        c = p.crop
+        rh, rw = c.region.shape
+        union[c.y0:c.y0 + rh, c.x0:c.x0 + rw] |= c.region
+    body = float(np.median([p.crop.body_level for p in found]))
+    bg = float(np.median([p.crop.bg_level for p in found]))
+    full = abs(bg - body)
+    core = np.abs(static - body) < 0.5 * full
+    swept = (union > 0) & ~core
+    far = (cv2.dilate(union, np.ones((31, 31), np.uint8))
+           - cv2.dilate(union, np.ones((17, 17), np.uint8))) > 0
+    if swept.sum() < 10 or far.sum() < 10 or full <= 0:
+        return 0.0
+    sign = 1.0 if dark else -1.0
+    return float(sign * (np.median(static[far]) - np.median(static[swept])) / full)
 
 
 def _read_poses(path: str, on_frame, keep_frame: int | None = None):
+    """Measure the body in every frame; where an ambient ghost shows (:func:`ghost_fraction` above
+    ``GHOST_CORRECT``), measure again against the clip's static light (see
+    :func:`labkit.vision.strobe_body.refine_with_static_light`). Returns the source, the poses,
+    the kept frame and the ghost fraction."""
     source = open_frames(path)
     poses: list[BodyPose | None] = []
     lo, hi, kept = 255, 0, None
+    brightest = darkest = None
     for index, frame in source.frames():
         if on_frame is not None:
             on_frame(index, index / source.fps if source.fps else 0.0, frame)
         lo, hi = min(lo, int(frame.min())), max(hi, int(frame.max()))
-        poses.append(measure_body(frame))
-        if keep_frame is None or (poses[-1] is not None and (kept is None or index <= keep_frame)):
+        gray = frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+        flat = flatten_illumination(gray)
+        pose = measure_flat(flat)
+        poses.append(pose)
+        if pose is not None:
+            light = static_light(flat)
+            brightest = light if brightest is None else np.maximum(brightest, light)
+            darkest = light if darkest is None else np.minimum(darkest, light)
+        if keep_frame is not None and pose is not None and kept is None:
             kept = (index, frame)
     if hi < 16:
         raise VideoError(source.path, f"all frames are black (brightest grey level {hi})")
     if lo > 245:
         raise VideoError(source.path, "all frames are white (saturated); reduce exposure or gain")
-    return source, poses, kept
+    found = [p for p in poses if p is not None]
+    ghost = 0.0
+    if found:
+        dark = sum(p.crop.dark for p in found) * 2 >= len(found)
+        static = brightest if dark else darkest
+        ghost = ghost_fraction(found, static, dark)
+        if ghost > GHOST_CORRECT:
+            poses = [None if p is None else refine_with_static_light(p, static) for p in poses]
+        for p in poses:
+            if p is not None:
+                p.crop = None
+    return source, poses, kept, ghost
 
 
 def _phase_spread(psi: np.ndarray) -> float:
@@ -123,7 +182,7 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
     ``keep_frame``: return the first frame with a body as ``result["_frame"]`` (index, BGR) for
     an overlay; the caller removes it before writing JSON.
     """
-    source, poses, kept = _read_poses(path, on_frame, 0 if keep_frame else None)
+    source, poses, kept, ghost = _read_poses(path, on_frame, 0 if keep_frame else None)
     fps = camera_fps or source.fps or (strobe_hz or 0.0)
     try:
         model = choose_phase_model(rotor_hz, strobe_hz, apparent_hz, camera_fps, exposure_s, source.fps)
@@ -163,7 +222,8 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
            "body": {"rest_axis_deg": orient.rest_axis_deg, "symmetry": orient.symmetry,
                     "half_length_px": half},
            "quality": strobe_quality(_evidence(source, poses, found, orient, model, motion, phase_ev, psi,
-                                               half, point, _flash_spread(model, rotor_hz, strobe_hz)))}
+                                               half, point, _flash_spread(model, rotor_hz, strobe_hz),
+                                               ghost))}
     if mm_per_px:
         out["lateral_amplitude_mm"] = motion.beta * mm_per_px
         out["rc_offset_mm"] = None if motion.delta is None else motion.delta * mm_per_px
@@ -187,11 +247,11 @@ def _axis_at(orient: ClipOrientation, tilt: np.ndarray) -> np.ndarray:
 
 
 def _evidence(source, poses, found, orient: ClipOrientation, model: PhaseModel, motion: MotionFit,
-              phase_ev: dict, psi: np.ndarray, half: float, point: str, flash_spread) -> dict:
+              phase_ev: dict, psi: np.ndarray, half: float, point: str, flash_spread, ghost: float) -> dict:
     areas = np.array([p.area_px for p in found])
     noise = _neighbour_noise(psi, orient.tilt_rad)
     w, h = source.size
-    return {"frames": len(poses), "frames_with_body": len(found),
+    return {"frames": len(poses), "frames_with_body": len(found), "ghost_fraction": ghost,
             "body_half_length_px": half, "body_size_fraction": half / min(w, h),
             "body_area_spread": float(np.std(areas) / np.mean(areas)),
             "body_anisotropy": orient.anisotropy, "body_symmetry": orient.symmetry,

@@ -2,13 +2,14 @@
 *Stroboscope*).
 
 Per frame (:func:`measure_body`): the lamp's banding and gradients are evened out by row and
-column medians; the body is the largest blob of Otsu's dark or bright class that does not
-touch the border; it is measured by moments of a soft mask whose ramp runs from 30 % to 70 % of the
+column medians; the body is the largest blob of Otsu's dark or bright class that does not touch
+the border; it is measured by moments of a soft mask whose ramp runs from 40 % to 60 % of the
 body's contrast against a ring around it. That ramp keeps edges unbiased (a symmetric edge profile
-keeps its centre) while a faint ambient ghost of the whole revolution or a flash shadow, both well
-under 30 % of the contrast, do not pull the moments. The axis angle comes two ways: from the second
-moments (2-fold, for elongated bodies) and four-fold (the
-sides of a cube's square silhouette: the fourth-order complex moment ``sum w (z - z_c)^4``, which is
+keeps its centre) while a faint ambient ghost of the whole revolution or a flash shadow, both
+under 40 % of the contrast, do not pull the moments (a strong ghost is measured against the
+clip's static light instead, see :func:`refine_with_static_light`). The axis angle comes two
+ways: from the second moments (2-fold, for elongated bodies) and four-fold (the sides of a cube's
+square silhouette: the fourth-order complex moment ``sum w (z - z_c)^4``, which is
 ``-|c| e^{4 i alpha}`` for a square at angle alpha), so a square body has an orientation too.
 
 Over the clip (:func:`orient_clip`): the rest axis is the body's own mean orientation (circular
@@ -20,14 +21,16 @@ rotor axis is vertical, horizontal (Fig. 5.19) or rolled in the image.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
 
 MIN_BODY_AREA_PX = 30
 MIN_CONTRAST = 25.0
-RAMP = (0.3, 0.7)  # soft-mask ramp, fraction of the body's contrast
+RAMP = (0.4, 0.6)  # soft-mask ramp, fraction of the body's contrast
+FLAT_LEVEL = 200.0  # background of a dark-body frame after flattening
+DARK_FLAT_LEVEL = 20.0  # background of a bright-body frame after flattening
 SQUARE_ANISOTROPY = 0.25  # below it the silhouette is too square for a 2-fold moment axis
 
 
@@ -49,6 +52,7 @@ class BodyPose:
     mu11: float
     area_px: float
     contrast: float
+    crop: BodyCrop | None = field(default=None, repr=False, compare=False)
 
     def half_length_along(self, angle_rad: float) -> float:
         """Half length of the body along direction ``angle_rad`` (uniform bar: L^2/12 second moment)."""
@@ -60,17 +64,18 @@ def flatten_illumination(gray: np.ndarray) -> np.ndarray:
     """Even out row and column brightness (rolling-shutter flash bands, lamp gradients): each row,
     then each column, brought to the frame's median. The body covers a minority of each row and
     column, so the medians are background. On a bright background (a dark body) the light is a
-    gain and is divided out; on a dark background (a lit body) the medians are too near zero to
-    divide by and are subtracted."""
+    gain and is divided out, the background brought to ``FLAT_LEVEL`` in every frame (flicker and
+    the number of flashes per exposure drop out); on a dark background (a lit body) the medians
+    are too near zero to divide by and are subtracted (background at ``DARK_FLAT_LEVEL``)."""
     g = gray.astype(np.float32)
     level = float(np.median(g))
     if level > 0.5 * (float(g.min()) + float(g.max())):
         g = g + 1.0
-        g *= (level + 1.0) / np.maximum(np.median(g, axis=1, keepdims=True), 1.0)
-        g *= (level + 1.0) / np.maximum(np.median(g, axis=0, keepdims=True), 1.0)
+        g *= FLAT_LEVEL / np.maximum(np.median(g, axis=1, keepdims=True), 1.0)
+        g *= FLAT_LEVEL / np.maximum(np.median(g, axis=0, keepdims=True), 1.0)
         return g
-    g -= np.median(g, axis=1, keepdims=True) - level
-    g -= np.median(g, axis=0, keepdims=True) - level
+    g -= np.median(g, axis=1, keepdims=True)
+    g -= np.median(g, axis=0, keepdims=True) - DARK_FLAT_LEVEL
     return g
 
 
@@ -90,22 +95,56 @@ def _largest_blob(blur: np.ndarray, t: float):
     return best
 
 
+@dataclass
+class BodyCrop:
+    """What :func:`refine_with_static_light` needs of a frame: the flattened pixels around the body."""
+
+    x0: int
+    y0: int
+    values: np.ndarray
+    region: np.ndarray  # uint8 blob mask
+    dark: bool
+    body_level: float
+    bg_level: float
+
+
+def _pose_from_cover(cover: np.ndarray, near: np.ndarray, x0: int, y0: int, contrast: float,
+                     crop: BodyCrop) -> BodyPose | None:
+    soft = np.clip((cover - RAMP[0]) / (RAMP[1] - RAMP[0]), 0, 1).astype(np.float32) * near
+    m = cv2.moments(soft)
+    if m["m00"] <= 0:
+        return None
+    mu20, mu02, mu11 = m["mu20"] / m["m00"], m["mu02"] / m["m00"], m["mu11"] / m["m00"]
+    spread = math.hypot(0.5 * (mu20 - mu02), mu11)
+    anisotropy = 2 * spread / (mu20 + mu02) if mu20 + mu02 > 0 else 0.0
+    cx, cy = m["m10"] / m["m00"], m["m01"] / m["m00"]
+    yy, xx = np.mgrid[0:soft.shape[0], 0:soft.shape[1]]
+    z4 = np.sum(soft * ((xx - cx) + 1j * (yy - cy)) ** 4)  # a square's is -|c| e^{4i alpha}
+    pose = BodyPose(x0 + cx, y0 + cy, 0.5 * math.atan2(2 * mu11, mu20 - mu02), 0.25 * float(np.angle(-z4)),
+                    anisotropy, mu20, mu02, mu11, float(m["m00"]), contrast)
+    pose.crop = crop
+    return pose
+
+
 def measure_body(frame: np.ndarray) -> BodyPose | None:
     """Measure the body in one frame (BGR or grey); None when no contrasting body is visible."""
     gray = frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
-    flat = flatten_illumination(gray)
+    return measure_flat(flatten_illumination(gray))
+
+
+def measure_flat(flat: np.ndarray) -> BodyPose | None:
+    """:func:`measure_body` on a frame already through :func:`flatten_illumination`."""
     blur = cv2.GaussianBlur(flat, (5, 5), 0)
     scaled = cv2.normalize(blur, None, 0, 255, cv2.NORM_MINMAX).astype(np.uint8)
     t8, _ = cv2.threshold(scaled, 0, 255, cv2.THRESH_BINARY | cv2.THRESH_OTSU)
     lo_v, hi_v = float(blur.min()), float(blur.max())
-    t = lo_v + (hi_v - lo_v) * t8 / 255.0
-    best = _largest_blob(blur, t)
+    best = _largest_blob(blur, lo_v + (hi_v - lo_v) * t8 / 255.0)
     if best is None:
         return None
     _, dark, region, (x, y, bw, bh) = best
     pad = 6
     x0, y0 = max(0, x - pad), max(0, y - pad)
-    x1, y1 = min(gray.shape[1], x + bw + pad), min(gray.shape[0], y + bh + pad)
+    x1, y1 = min(flat.shape[1], x + bw + pad), min(flat.shape[0], y + bh + pad)
     g = flat[y0:y1, x0:x1]
     reg = region[y0:y1, x0:x1].astype(np.uint8)
     inner = cv2.erode(reg, np.ones((3, 3), np.uint8))
@@ -118,21 +157,42 @@ def measure_body(frame: np.ndarray) -> BodyPose | None:
     contrast = abs(body_level - bg_level)
     if contrast < MIN_CONTRAST or (body_level < bg_level) != dark:  # flat is in grey levels
         return None
+    crop = BodyCrop(x0, y0, g.copy(), reg, dark, body_level, bg_level)
     cover = (g - bg_level) / (body_level - bg_level)
-    near = cv2.dilate(reg, np.ones((5, 5), np.uint8))
-    soft = np.clip((cover - RAMP[0]) / (RAMP[1] - RAMP[0]), 0, 1).astype(np.float32) * near
-    m = cv2.moments(soft)
-    if m["m00"] <= 0:
-        return None
-    mu20, mu02, mu11 = m["mu20"] / m["m00"], m["mu02"] / m["m00"], m["mu11"] / m["m00"]
-    spread = math.hypot(0.5 * (mu20 - mu02), mu11)
-    anisotropy = 2 * spread / (mu20 + mu02) if mu20 + mu02 > 0 else 0.0
-    cx, cy = m["m10"] / m["m00"], m["m01"] / m["m00"]
-    yy, xx = np.mgrid[0:soft.shape[0], 0:soft.shape[1]]
-    z4 = np.sum(soft * ((xx - cx) + 1j * (yy - cy)) ** 4)  # a square's is -|c| e^{4i alpha}
-    return BodyPose(x0 + cx, y0 + cy, 0.5 * math.atan2(2 * mu11, mu20 - mu02), 0.25 * float(np.angle(-z4)),
-                    anisotropy,
-                    mu20, mu02, mu11, float(m["m00"]), contrast)
+    return _pose_from_cover(cover, cv2.dilate(reg, np.ones((5, 5), np.uint8)), x0, y0, contrast, crop)
+
+
+def static_light(flat: np.ndarray) -> np.ndarray:
+    """The frame as :func:`refine_with_static_light` accumulates it (3x3 mean: less noise in the max)."""
+    return cv2.blur(flat, (3, 3))
+
+
+def refine_with_static_light(pose: BodyPose, static: np.ndarray) -> BodyPose:
+    """Re-measure a body against the clip's static light ``static`` (per pixel, the brightest of
+    all frames for a dark body, the darkest for a bright one): the background plus whatever does
+    not change from frame to frame, such as the ambient-light ghost of the whole revolution. The
+    body's coverage is then ``(S - g) / F`` with F the flash contrast, measured on pixels the body
+    covers now but not in every frame; pixels covered in every frame count as covered. Without
+    such pixels (a body that does not move) the pose is returned unchanged."""
+    crop = pose.crop
+    if crop is None:
+        return pose
+    h, w = crop.values.shape
+    s = static[crop.y0:crop.y0 + h, crop.x0:crop.x0 + w]
+    sign = 1.0 if crop.dark else -1.0
+    d = sign * (s - crop.values)
+    full = abs(crop.bg_level - crop.body_level)
+    core = np.abs(s - crop.body_level) < 0.5 * full
+    inner = cv2.erode(crop.region, np.ones((3, 3), np.uint8)) > 0
+    swept = inner & ~core
+    if swept.sum() < 5:
+        return pose
+    flash = float(np.median(d[swept]))
+    if flash < 0.3 * full:
+        return pose
+    cover = np.where(core, 1.0, d / flash)
+    near = cv2.dilate(crop.region, np.ones((5, 5), np.uint8))
+    return _pose_from_cover(cover, near, crop.x0, crop.y0, pose.contrast, crop) or pose
 
 
 def _wrap(a: np.ndarray, period: float) -> np.ndarray:

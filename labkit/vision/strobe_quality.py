@@ -23,6 +23,7 @@ MIN_PHASE_SPREAD, FAILED_PHASE_SPREAD = 0.3, 0.08
 MAX_RESIDUAL_RATIO = 2.5  # sinusoid residual against the phase-neighbour noise
 RUNNER_UP_CLOSE = 0.9  # runner-up frequency explains this much of what the best does
 MAX_FLASH_SPREAD_CYCLES = 0.1
+GHOST_DOUBT = 0.08  # ghost fraction (strobe.ghost_fraction)
 
 
 @dataclass
@@ -97,6 +98,10 @@ def _body_checks(v: Verdict, e: dict) -> None:
     if lo < e["body_anisotropy"] < hi:
         v.doubt(f"silhouette neither square nor elongated (anisotropy {e['body_anisotropy']:.2f}): its axis "
                 f"was taken {e['body_symmetry']}-fold")
+    if e["ghost_fraction"] > GHOST_DOUBT:
+        v.doubt(f"ambient-light ghost where the body sweeps ({e['ghost_fraction']:.0%} of its contrast): "
+                "measured against the clip's static light, but a flash shadow or other light moving with "
+                "the body would bias that; film with less ambient light")
     if e.get("truncated"):
         v.doubt(str(e["truncated"]))
 
