@@ -40,12 +40,14 @@ from labkit.vision.strobe_phase import (
     explained_fraction,
     fold,
 )
-from labkit.vision.strobe_quality import strobe_quality
+from labkit.vision.strobe_quality import GHOST_DOUBT, strobe_quality
 
 __all__ = ["analyse_strobe", "apparent_cycles_per_frame", "measure_body", "phase_pattern"]
 
 MIN_FRAMES = 6
-GHOST_CORRECT = 0.05  # ghost fraction above which bodies are re-measured against the static light
+# ghost fraction above which bodies are re-measured against the static light; the verdict then
+# says doubtful too, because a flash shadow moving with the body also looks like a ghost
+GHOST_CORRECT = GHOST_DOUBT
 
 
 def ghost_fraction(found: list[BodyPose], static: np.ndarray, dark: bool) -> float:
@@ -69,8 +71,10 @@ def ghost_fraction(found: list[BodyPose], static: np.ndarray, dark: bool) -> flo
            - cv2.dilate(union, np.ones((17, 17), np.uint8))) > 0
     if swept.sum() < 10 or far.sum() < 10 or full <= 0:
         return 0.0
+    # the far ring's background side: a flash shadow darkens one side of it only
+    far_level = np.percentile(static[far], 75 if dark else 25)
     sign = 1.0 if dark else -1.0
-    return float(sign * (np.median(static[far]) - np.median(static[swept])) / full)
+    return float(sign * (far_level - np.median(static[swept])) / full)
 
 
 def _read_poses(path: str, on_frame, keep_frame: int | None = None):

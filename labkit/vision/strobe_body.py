@@ -157,9 +157,16 @@ def measure_flat(flat: np.ndarray) -> BodyPose | None:
     contrast = abs(body_level - bg_level)
     if contrast < MIN_CONTRAST or (body_level < bg_level) != dark:  # flat is in grey levels
         return None
-    crop = BodyCrop(x0, y0, g.copy(), reg, dark, body_level, bg_level)
     cover = (g - bg_level) / (body_level - bg_level)
-    return _pose_from_cover(cover, cv2.dilate(reg, np.ones((5, 5), np.uint8)), x0, y0, contrast, crop)
+    near = cv2.dilate(reg, np.ones((5, 5), np.uint8))
+    # the body is where coverage passes one half: Otsu's class may take in part of a flash shadow
+    # and the soft mask is read only within a pixel of that half-coverage region, so a shadow or
+    # ghost a little below the ramp's lower end adds nothing through noise
+    half = ((cover > 0.5) & (near > 0)).astype(np.uint8)
+    if half.sum() >= MIN_BODY_AREA_PX:
+        reg, near = half, cv2.dilate(half, np.ones((3, 3), np.uint8))
+    crop = BodyCrop(x0, y0, g.copy(), reg, dark, body_level, bg_level)
+    return _pose_from_cover(cover, near, x0, y0, contrast, crop)
 
 
 def static_light(flat: np.ndarray) -> np.ndarray:
@@ -191,7 +198,7 @@ def refine_with_static_light(pose: BodyPose, static: np.ndarray) -> BodyPose:
     if flash < 0.3 * full:
         return pose
     cover = np.where(core, 1.0, d / flash)
-    near = cv2.dilate(crop.region, np.ones((5, 5), np.uint8))
+    near = cv2.dilate(((cover > 0.5) | (crop.region > 0)).astype(np.uint8), np.ones((3, 3), np.uint8))
     return _pose_from_cover(cover, near, crop.x0, crop.y0, pose.contrast, crop) or pose
 
 
