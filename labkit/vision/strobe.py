@@ -99,7 +99,7 @@ def _read_poses(path: str, on_frame, keep_frame: int | None = None):
             brightest = light if brightest is None else np.maximum(brightest, light)
             darkest = light if darkest is None else np.minimum(darkest, light)
         if keep_frame is not None and pose is not None and kept is None:
-            kept = (index, frame)
+            kept = (index, frame.copy())  # the reader may reuse its buffer
     if hi < 16:
         raise VideoError(source.path, f"all frames are black (brightest grey level {hi})")
     if lo > 245:
@@ -237,8 +237,9 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
         k = kept[0]
         j = int(np.searchsorted(idx, k))
         out["_frame"] = {"index": k, "bgr": kept[1], "centre": [found[j].x, found[j].y],
-                         "axis": _axis_at(orient, tilt)[j].tolist(), "half_length_px": half,
-                         "point": points[j].tolist(), "track": points.tolist()}
+                         "axis": _axis_at(orient, tilt)[j].tolist(), "rest_axis": orient.axis.tolist(),
+                         "half_length_px": half, "point": points[j].tolist(), "track": points.tolist(),
+                         "radius_px": math.sqrt(3 * (found[j].mu20 + found[j].mu02))}
     return out
 
 

@@ -226,7 +226,7 @@ class ClipOrientation:
     @property
     def rest_axis_deg(self) -> float:
         """Rest axis direction on screen, counter-clockwise from image +x, in [0, 180)."""
-        return math.degrees(math.atan2(-self.axis[1], self.axis[0])) % 180.0
+        return round(math.degrees(math.atan2(-self.axis[1], self.axis[0])), 9) % 180.0
 
 
 def orient_clip(poses: list[BodyPose]) -> ClipOrientation:
@@ -238,14 +238,15 @@ def orient_clip(poses: list[BodyPose]) -> ClipOrientation:
     tilt = _wrap(angles - rest, 2 * math.pi / symmetry)
     centres = np.array([[p.x, p.y] for p in poses])
     offsets = centres - centres.mean(axis=0)
-    candidates = [rest] if symmetry == 2 else [rest, rest + math.pi / 2]
-    if symmetry == 4 and len(poses) >= 3:
-        # the centre of mass moves across the magnet axis (Eq. 5.97): take the side whose normal
-        # carries more of the centroid's motion
-        def across(a: float) -> float:
-            return float(np.sum((offsets @ np.array([-math.sin(a), math.cos(a)])) ** 2))
-        candidates.sort(key=across, reverse=True)
-    a = candidates[0]
+
+    def across(a: float) -> float:
+        return float(np.sum((offsets @ np.array([-math.sin(a), math.cos(a)])) ** 2))
+
+    # The centre of mass moves across the magnet axis (Eq. 5.97). The magnet axis of a flat body
+    # (a plate seen edge-on) is its short side, so the side whose normal carries clearly more of
+    # the centroid's motion is taken as the axis; a square's sides are equal candidates anyway.
+    margin = 1.0 if symmetry == 4 else 2.0
+    a = rest + math.pi / 2 if len(poses) >= 3 and across(rest + math.pi / 2) > margin * across(rest) else rest
     axis = np.array([math.cos(a), math.sin(a)])
     if axis[1] > 1e-9 or (abs(axis[1]) <= 1e-9 and axis[0] < 0):
         axis = -axis
