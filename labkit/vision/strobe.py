@@ -150,9 +150,10 @@ def _pick_phase(model: PhaseModel | None, idx: np.ndarray, series: list[np.ndarr
     given = explained_fraction(idx, model.cycles_per_frame, series)
     ev["model_explained"] = given
     ev["model_apparent_hz"] = abs(model.apparent_hz or 0.0)
-    resolution = 1.0 / max(8.0, float(idx.max() - idx.min() + 1))
-    if abs(fold(model.cycles_per_frame) - signal.cycles_per_frame) > resolution and \
-            signal.explained > 0.5 and given < signal.explained - 0.2:
+    # the given model disagrees when the footage's own frequency leaves clearly less unexplained:
+    # under half of the given model's residual variance (and a clear signal to begin with)
+    if signal.explained > 0.5 and (1 - given) > 2 * (1 - signal.explained) + 0.02 and \
+            abs(fold(model.cycles_per_frame) - signal.cycles_per_frame) > 1e-6:
         sign = -1.0 if (model.cycles_per_frame % 1.0) > 0.5 else 1.0
         model.cycles_per_frame = sign * signal.cycles_per_frame
         model.apparent_hz = model.cycles_per_frame * (model.camera_fps or fps)
@@ -223,7 +224,8 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
                            "method": "1-sigma from the least-squares residuals (scatter only, see docs)"},
            "phase_per_frame": phases, "point_pattern": point_pattern,
            "rc_offset_direction": direction, "phase_source": model.source, "phase_model": model.to_dict(),
-           "body": {"rest_axis_deg": orient.rest_axis_deg, "symmetry": orient.symmetry,
+           "body": {"rest_axis_deg": (orient.rest_axis_deg - math.degrees(motion.tilt.coef[0])) % 180.0,
+                    "symmetry": orient.symmetry,
                     "half_length_px": half},
            "quality": strobe_quality(_evidence(source, poses, found, orient, model, motion, phase_ev, psi,
                                                half, point, _flash_spread(model, rotor_hz, strobe_hz),
