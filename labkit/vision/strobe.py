@@ -31,7 +31,7 @@ from labkit.vision.strobe_body import (
     refine_with_static_light,
     static_light,
 )
-from labkit.vision.strobe_fit import MotionFit, fit_motion
+from labkit.vision.strobe_fit import MotionFit, fit_motion, sine_fit
 from labkit.vision.strobe_phase import (
     PhaseModel,
     apparent_cycles_per_frame,
@@ -200,8 +200,10 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
     found = [p for p in poses if p is not None]
     orient = orient_clip(found)
     tilt, lateral = orient.tilt_rad, orient.lateral_px
-    model, phase_ev = _pick_phase(model, idx, [lateral, tilt], fps, source.path)
+    model, phase_ev = _pick_phase(model, idx, [lateral, orient.lateral_other_px, tilt], fps, source.path)
     psi = model.phases(idx)
+    orient = _magnet_axis(orient, psi)
+    tilt, lateral = orient.tilt_rad, orient.lateral_px
     motion = fit_motion(psi, tilt, lateral, model.blur_factor)
     phases = [float((2 * math.pi * model.cycles_per_frame * k + motion.phase_offset) % (2 * math.pi))
               for k in range(len(poses))]
@@ -245,6 +247,18 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
     return out
 
 
+def _magnet_axis(orient: ClipOrientation, psi: np.ndarray) -> ClipOrientation:
+    """The side of the silhouette across which the centroid swings at the apparent frequency
+    (Eq. 5.97: the centre of mass moves across the magnet axis). A square's sides are equal
+    candidates; an elongated body keeps its long axis unless the swing across the short one is
+    more than twice as large and clearly above the noise (a plate seen edge-on)."""
+    here, other = sine_fit(psi, orient.lateral_px), sine_fit(psi, orient.lateral_other_px)
+    margin = 1.0 if orient.symmetry == 4 else 2.0
+    if other.amplitude > margin * here.amplitude and other.amplitude > 3 * other.amplitude_se():
+        return orient.swapped()
+    return orient
+
+
 def _axis_at(orient: ClipOrientation, tilt: np.ndarray) -> np.ndarray:
     """Unit vectors (N, 2) of the body axis ("top" end) in each frame: the rest axis turned by the
     tilt, clockwise on screen (image y points down)."""
@@ -262,6 +276,7 @@ def _evidence(source, poses, found, orient: ClipOrientation, model: PhaseModel, 
             "body_half_length_px": half, "body_size_fraction": half / min(w, h),
             "body_area_spread": float(np.std(areas) / np.mean(areas)),
             "body_anisotropy": orient.anisotropy, "body_symmetry": orient.symmetry,
+            "body_bend_px": float(np.median([p.bend_px for p in found])),
             "phase_source": model.kind, "phase_spread": _phase_spread(psi),
             "tilt_amplitude_rad": motion.phi, "tilt_amplitude_se_rad": motion.phi_se,
             "lateral_amplitude_px": motion.beta, "lateral_amplitude_se_px": motion.beta_se,

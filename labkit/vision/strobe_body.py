@@ -52,6 +52,7 @@ class BodyPose:
     mu11: float
     area_px: float
     contrast: float
+    bend_px: float = 0.0
     crop: BodyCrop | None = field(default=None, repr=False, compare=False)
 
     def half_length_along(self, angle_rad: float) -> float:
@@ -120,10 +121,37 @@ def _pose_from_cover(cover: np.ndarray, near: np.ndarray, x0: int, y0: int, cont
     cx, cy = m["m10"] / m["m00"], m["m01"] / m["m00"]
     yy, xx = np.mgrid[0:soft.shape[0], 0:soft.shape[1]]
     z4 = np.sum(soft * ((xx - cx) + 1j * (yy - cy)) ** 4)  # a square's is -|c| e^{4i alpha}
-    pose = BodyPose(x0 + cx, y0 + cy, 0.5 * math.atan2(2 * mu11, mu20 - mu02), 0.25 * float(np.angle(-z4)),
-                    anisotropy, mu20, mu02, mu11, float(m["m00"]), contrast)
+    angle2, angle4 = 0.5 * math.atan2(2 * mu11, mu20 - mu02), 0.25 * float(np.angle(-z4))
+    side = angle2 if anisotropy >= SQUARE_ANISOTROPY else angle4  # a square has no major axis
+    pose = BodyPose(x0 + cx, y0 + cy, angle2, angle4, anisotropy, mu20, mu02, mu11, float(m["m00"]), contrast,
+                    bend_px=_bend(soft, xx - cx, yy - cy, side))
     pose.crop = crop
     return pose
+
+
+def _bend(soft: np.ndarray, dx: np.ndarray, dy: np.ndarray, angle: float) -> float:
+    """How far the body's midline strays from a straight line (px, mass-weighted rms over 2 px
+    slices along ``angle``, the middle 80 %): ~0 for a straight body; large when a rolling
+    shutter shows different rows at different rotor phases and bends the silhouette."""
+    c, s = math.cos(angle), math.sin(angle)
+    along, across = dx * c + dy * s, -dx * s + dy * c
+    w = soft.ravel()
+    keep = w > 0
+    a, x, w = along.ravel()[keep], across.ravel()[keep], w[keep]
+    if a.size < 10:
+        return 0.0
+    lo, hi = np.percentile(a, [10, 90])
+    bins = np.arange(lo, hi + 2.0, 2.0)
+    k = np.digitize(a, bins)
+    mass = np.bincount(k, w, minlength=len(bins) + 1)
+    mean = np.bincount(k, w * x, minlength=len(bins) + 1) / np.maximum(mass, 1e-9)
+    inside = (mass > 0) & (np.arange(len(mass)) > 0) & (np.arange(len(mass)) < len(bins))
+    if inside.sum() < 3:
+        return 0.0
+    centres = (bins[np.arange(len(mass))[inside] - 1] + 1.0)
+    coef = np.polyfit(centres, mean[inside], 1, w=np.sqrt(mass[inside]))
+    resid = mean[inside] - np.polyval(coef, centres)
+    return float(np.sqrt(np.average(resid ** 2, weights=mass[inside])))
 
 
 def measure_body(frame: np.ndarray) -> BodyPose | None:
@@ -213,7 +241,9 @@ class ClipOrientation:
     ``axis``: unit vector of the rest axis in image coordinates, pointing at the body's "top" end
     (the end nearer image-up; +x if the axis is horizontal). ``normal``: the axis turned a quarter
     turn clockwise on screen (image-up axis -> normal +x); positive tilt turns the top towards
-    ``normal``. ``symmetry``: 2 (elongated) or 4 (square silhouette: tilt is mod pi/2)."""
+    ``normal``. ``symmetry``: 2 (elongated) or 4 (square silhouette: tilt is mod pi/2).
+    ``lateral_other_px``: the centroid along ``axis`` (what would be lateral if the magnet axis
+    were the other side of the silhouette, see :meth:`swapped`)."""
 
     rest_angle_rad: float
     axis: np.ndarray
@@ -221,34 +251,41 @@ class ClipOrientation:
     symmetry: int
     tilt_rad: np.ndarray
     lateral_px: np.ndarray
+    lateral_other_px: np.ndarray
     anisotropy: float
+    offsets: np.ndarray  # centroids (N, 2) less their mean
 
     @property
     def rest_axis_deg(self) -> float:
         """Rest axis direction on screen, counter-clockwise from image +x, in [0, 180)."""
         return round(math.degrees(math.atan2(-self.axis[1], self.axis[0])), 9) % 180.0
 
+    def swapped(self) -> ClipOrientation:
+        """The same clip with the other side of the silhouette as the magnet axis: the centre of
+        mass moves across the magnet axis (Eq. 5.97), and for a plate seen edge-on that is its
+        short side. Tilt is unchanged (both sides turn together)."""
+        return _oriented(self.rest_angle_rad + math.pi / 2, self.symmetry, self.tilt_rad,
+                         self.offsets, self.anisotropy)
+
+
+def _oriented(angle: float, symmetry: int, tilt: np.ndarray, offsets: np.ndarray,
+              anisotropy: float) -> ClipOrientation:
+    axis = np.array([math.cos(angle), math.sin(angle)])
+    if axis[1] > 1e-9 or (abs(axis[1]) <= 1e-9 and axis[0] < 0):
+        axis = -axis
+    normal = np.array([-axis[1], axis[0]])
+    return ClipOrientation(angle, axis, normal, symmetry, tilt, offsets @ normal, offsets @ axis, anisotropy,
+                           offsets)
+
 
 def orient_clip(poses: list[BodyPose]) -> ClipOrientation:
-    """Rest axis as the circular mean of the per-frame n-fold angles; tilt and lateral about it."""
+    """Rest axis as the circular mean of the per-frame n-fold angles (the major axis for an
+    elongated body); tilt and lateral about it. Which side is the magnet axis is decided later,
+    from the motion at the apparent frequency (:meth:`ClipOrientation.swapped`)."""
     anisotropy = float(np.median([p.anisotropy for p in poses]))
     symmetry = 4 if anisotropy < SQUARE_ANISOTROPY else 2
     angles = np.array([p.angle4_rad if symmetry == 4 else p.angle2_rad for p in poses])
     rest = float(np.angle(np.mean(np.exp(1j * symmetry * angles)))) / symmetry
     tilt = _wrap(angles - rest, 2 * math.pi / symmetry)
     centres = np.array([[p.x, p.y] for p in poses])
-    offsets = centres - centres.mean(axis=0)
-
-    def across(a: float) -> float:
-        return float(np.sum((offsets @ np.array([-math.sin(a), math.cos(a)])) ** 2))
-
-    # The centre of mass moves across the magnet axis (Eq. 5.97). The magnet axis of a flat body
-    # (a plate seen edge-on) is its short side, so the side whose normal carries clearly more of
-    # the centroid's motion is taken as the axis; a square's sides are equal candidates anyway.
-    margin = 1.0 if symmetry == 4 else 2.0
-    a = rest + math.pi / 2 if len(poses) >= 3 and across(rest + math.pi / 2) > margin * across(rest) else rest
-    axis = np.array([math.cos(a), math.sin(a)])
-    if axis[1] > 1e-9 or (abs(axis[1]) <= 1e-9 and axis[0] < 0):
-        axis = -axis
-    normal = np.array([-axis[1], axis[0]])
-    return ClipOrientation(a, axis, normal, symmetry, tilt, offsets @ normal, anisotropy)
+    return _oriented(rest, symmetry, tilt, centres - centres.mean(axis=0), anisotropy)

@@ -23,7 +23,9 @@ MIN_PHASE_SPREAD, FAILED_PHASE_SPREAD = 0.3, 0.08
 MAX_RESIDUAL_RATIO = 2.5  # sinusoid residual against the phase-neighbour noise
 RUNNER_UP_CLOSE = 0.9  # runner-up frequency explains this much of what the best does
 MAX_FLASH_SPREAD_CYCLES = 0.1
+LOCKED_WEAK, LOCKED_STRONG = 0.5, 0.8  # explained variance of tilt vs lateral (they move together)
 GHOST_DOUBT = 0.08  # ghost fraction (strobe.ghost_fraction)
+MAX_BEND_PX = 0.4  # midline of a straight body: measured <= 0.27 px with noise, blur and compression
 
 
 @dataclass
@@ -76,6 +78,12 @@ def _phase_checks(v: Verdict, e: dict) -> None:
     if ratio > MAX_RESIDUAL_RATIO and e["tilt_explained"] < 0.9:
         v.doubt(f"the Eq. 5.97 sinusoid leaves {e['rms_residual_tilt_rad']:.4f} rad rms, {ratio:.1f}x the "
                 "tilt's frame-to-frame noise at neighbouring phases: the phase model or the waveform is off")
+    tilt_fit, lateral_fit = e["tilt_explained"], e["lateral_explained"]
+    for name, weak, strong in (("tilt", tilt_fit, lateral_fit), ("lateral motion", lateral_fit, tilt_fit)):
+        if weak < LOCKED_WEAK and strong > LOCKED_STRONG:
+            v.doubt(f"the {name} follows the apparent frequency poorly (the sinusoid explains {weak:.0%} "
+                    f"of its variance, against {strong:.0%} for the other): Eq. 5.97 locks tilt and lateral "
+                    "motion; a rolling shutter with the camera as strobe, or a wrong body axis, does this")
     spread_cycles = e.get("flash_spread_cycles")
     if spread_cycles is not None and spread_cycles > MAX_FLASH_SPREAD_CYCLES:
         v.doubt(f"each frame superimposes flashes {spread_cycles:.2f} cycles apart: the body is seen at "
@@ -94,6 +102,10 @@ def _body_checks(v: Verdict, e: dict) -> None:
     if e["body_area_spread"] > MAX_AREA_SPREAD:
         v.doubt(f"body area varies by {e['body_area_spread']:.0%} between frames: segmentation unstable "
                 "(shadow, ghost, or several images per frame)")
+    if e["body_bend_px"] > MAX_BEND_PX:
+        v.doubt(f"the body's silhouette is bent (its midline strays {e['body_bend_px']:.2f} px rms from a "
+                "straight line): a rolling shutter shows different rows at different rotor phases, which "
+                "with the camera as the strobe distorts tilt and lateral motion")
     lo, hi = AMBIGUOUS_ANISOTROPY
     if lo < e["body_anisotropy"] < hi:
         v.doubt(f"silhouette neither square nor elongated (anisotropy {e['body_anisotropy']:.2f}): its axis "

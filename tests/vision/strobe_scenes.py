@@ -37,7 +37,7 @@ class Scene:
     rotor_hz: float = 200.0
     strobe_hz: float | None = 199.5  # None: continuous light, the short exposure is the strobe
     phi_rad: float = 0.12
-    delta_px: float = 40.0  # rotation centre from the centre of mass, along the rest axis (+ = "up" end)
+    delta_px: float = 40.0  # Eq. 5.97; the rotation centre lies on the axis towards the end opposite rest_deg
     rest_deg: float = 90.0  # rest axis direction from image +x, counter-clockwise as seen on screen
     length_px: float = 60.0
     width_px: float = 20.0  # equal to length for a cube
