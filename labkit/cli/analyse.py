@@ -300,7 +300,8 @@ def _print_strobe(r: dict) -> None:
           f"phase from {r['phase_source']}")
     extra = ""
     if pm.get("flashes_per_frame") is not None and pm["kind"] == "lamp":
-        extra = f"  {pm['flashes_per_frame']:.3g} flashes per frame, harmonic m = {pm['harmonic_m']}"
+        up_to = "up to " if pm["cycles_per_exposure"] is None else ""  # exposure not given
+        extra = f"  {up_to}{pm['flashes_per_frame']:.3g} flashes per frame, harmonic m = {pm['harmonic_m']}"
     print(f"apparent frequency {r['apparent_hz']:.4f} Hz ({pm['cycles_per_frame']:+.4f} cycles per frame at "
           f"{r['fps']:.4g} fps){extra}")
     body = r["body"]
