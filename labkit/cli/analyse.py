@@ -264,19 +264,17 @@ def run_strobe(args: argparse.Namespace) -> int:
         result = analyse_strobe(
             args.path, args.rotor_hz, args.strobe_hz, args.apparent_hz, args.mm_per_px, args.point,
             on_frame=stream.frame if stream else None, camera_fps=args.camera_fps,
-            exposure_s=args.exposure_s, keep_frame=bool(args.overlay),
+            exposure_s=args.exposure_s, keep_frame=bool(args.overlay or stream),
         )
         drawing = result.pop("_frame", None)
         record_speeds(result, speed_rpm, args.spin_rad_s)
         if stream:
             stream.result(result)
+        if drawing is not None:
+            _strobe_overlay(drawing, result, args.overlay, stream)
     finally:
         if stream:
             stream.close()
-    if args.overlay and drawing is not None:
-        from labkit.vision.strobe_overlay import write_strobe_overlay
-
-        write_strobe_overlay(args.overlay, drawing.pop("bgr"), result, drawing)
     _write_json(result, args.json)
     if args.json != "-":
         _print_strobe(result)
@@ -286,6 +284,18 @@ def run_strobe(args: argparse.Namespace) -> int:
               file=sys.stderr)
         return 1
     return 0
+
+
+def _strobe_overlay(drawing: dict, result: dict, out: str | None, stream) -> None:
+    """Draw the strobe overlay; write it to ``out`` (if given) and hand it to the rerun stream
+    (``stream.overlay(bgr)``, when the stream offers it)."""
+    from labkit.vision.strobe_overlay import draw_strobe_overlay, write_strobe_overlay
+
+    frame = drawing.pop("bgr")
+    if out:
+        write_strobe_overlay(out, frame, result, drawing)
+    if stream is not None and hasattr(stream, "overlay"):
+        stream.overlay(draw_strobe_overlay(frame, result, drawing))
 
 
 def _pm(value, se, digits: int) -> str:
