@@ -87,11 +87,24 @@ def register(sub: argparse._SubParsersAction) -> None:
                             "into this image")
     laser.set_defaults(func=run_laser)
 
-    strobe = kinds.add_parser("strobe", help="tilt, lateral amplitude and RC offset from strobe video")
+    strobe = kinds.add_parser(
+        "strobe", help="tilt, lateral amplitude and RC offset from strobe video",
+        description="Phase model (docs/vision.md): --rotor-hz with --strobe-hz is a lamp flashing at "
+                    "its own rate, any number of flashes per exposure, filmed at the file's frame rate "
+                    "(or --camera-fps); --rotor-hz alone means no lamp, the camera's short exposure is "
+                    "the strobe; --apparent-hz gives the apparent frequency; nothing: from the footage.")
     strobe.add_argument("path", help="stroboscope video")
-    strobe.add_argument("--rotor-hz", type=_positive, help="rotor frequency (with --strobe-hz)")
-    strobe.add_argument("--strobe-hz", type=_positive, help="flash rate, one flash per frame")
-    strobe.add_argument("--apparent-hz", type=_positive, help="apparent frequency at the file's frame rate")
+    strobe.add_argument("--rotor-hz", type=_positive,
+                        help="rotor frequency; alone: the camera's exposure is the strobe (Fig. 6.20)")
+    strobe.add_argument("--strobe-hz", type=_positive,
+                        help="lamp flash rate (with --rotor-hz); independent of the camera's frame rate")
+    strobe.add_argument("--apparent-hz", type=_positive, help="apparent frequency at the camera's frame rate")
+    strobe.add_argument("--camera-fps", type=_positive,
+                        help="the camera's real frame rate, when the file's header says otherwise "
+                             "(slow-motion or re-encoded files)")
+    strobe.add_argument("--exposure-s", type=_positive,
+                        help="exposure time per frame: counts flashes per frame and corrects the "
+                             "amplitudes for the motion within one exposure")
     strobe.add_argument("--mm-per-px", type=_positive, help="scale for mm outputs")
     strobe.add_argument(
         "--point",
@@ -99,6 +112,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         default="tip",
         help="body point whose trajectory is classified (default tip)",
     )
+    strobe.add_argument("--overlay", metavar="OUT.png",
+                        help="draw the body axis, the rest axis and the tracked point over a frame")
     _add_speed_arguments(strobe, " (default: 60 x --rotor-hz)")
     strobe.add_argument("--json", metavar="OUT", help="write the result as JSON ('-' for stdout)")
     strobe.add_argument("--rerun", metavar="SPEC", help="stream frames and overlays to rerun")
@@ -284,41 +299,73 @@ def _strobe_speed_rpm(speed_rpm: float | None, rotor_hz: float | None) -> float 
 def run_strobe(args: argparse.Namespace) -> int:
     from labkit.vision.strobe import analyse_strobe
 
-    if (args.rotor_hz is None) != (args.strobe_hz is None):
-        raise LabkitError("labkit analyse strobe: give --rotor-hz and --strobe-hz together")
+    if args.strobe_hz is not None and args.rotor_hz is None:
+        raise LabkitError("labkit analyse strobe: --strobe-hz needs --rotor-hz (or give --apparent-hz)")
     speed_rpm = _strobe_speed_rpm(args.speed_rpm, args.rotor_hz)
     stream = open_stream(args.rerun, "strobe")
     try:
         result = analyse_strobe(
-            args.path,
-            args.rotor_hz,
-            args.strobe_hz,
-            args.apparent_hz,
-            args.mm_per_px,
-            args.point,
-            on_frame=stream.frame if stream else None,
+            args.path, args.rotor_hz, args.strobe_hz, args.apparent_hz, args.mm_per_px, args.point,
+            on_frame=stream.frame if stream else None, camera_fps=args.camera_fps,
+            exposure_s=args.exposure_s, keep_frame=bool(args.overlay or stream),
         )
+        drawing = result.pop("_frame", None)
         record_speeds(result, speed_rpm, args.spin_rad_s)
         if stream:
             stream.result(result)
+        if drawing is not None:
+            _strobe_overlay(drawing, result, args.overlay, stream)
     finally:
         if stream:
             stream.close()
     _write_json(result, args.json)
     if args.json != "-":
-        r = result
-        print(
-            f"{r['source']}: {r['frames']} frames ({r['quality']['frames_with_body']} with a body), "
-            f"phase from {r['phase_source']}"
-        )
-        print(
-            f"apparent frequency {r['apparent_hz']:.4f} Hz  "
-            f"tilt amplitude {r['tilt_amplitude_rad']:.4f} rad "
-            f"({math.degrees(r['tilt_amplitude_rad']):.2f} deg)  lateral amplitude "
-            f"{r['lateral_amplitude_px']:.2f} px  RC offset (Eq. 5.97) {_fmt(r['rc_offset_px'])} px "
-            f"{r['rc_offset_direction'] or ''}"
-        )
-        print(f"{r['quality']['point']} trajectory: {r['point_pattern']['type']}")
-        if _speed_line(r):
-            print(_speed_line(r))
+        _print_strobe(result)
+    if result["quality"]["verdict"] == "failed":
+        reasons = result["quality"]["reasons"]
+        print(f"labkit analyse strobe: {args.path}: result failed: {reasons[0] if reasons else 'no reason'}",
+              file=sys.stderr)
+        return 1
     return 0
+
+
+def _strobe_overlay(drawing: dict, result: dict, out: str | None, stream) -> None:
+    """Draw the strobe overlay; write it to ``out`` (if given) and hand it to the rerun stream
+    (``stream.overlay(bgr)``, when the stream offers it)."""
+    from labkit.vision.strobe_overlay import draw_strobe_overlay, write_strobe_overlay
+
+    frame = drawing.pop("bgr")
+    if out:
+        write_strobe_overlay(out, frame, result, drawing)
+    if stream is not None and hasattr(stream, "overlay"):
+        stream.overlay(draw_strobe_overlay(frame, result, drawing))
+
+
+def _pm(value, se, digits: int) -> str:
+    return "-" if value is None else f"{value:.{digits}f}" + ("" if se is None else f" +- {se:.{digits}f}")
+
+
+def _print_strobe(r: dict) -> None:
+    from labkit.vision.strobe_quality import describe
+
+    q, u, pm = r["quality"], r["uncertainty"], r["phase_model"]
+    print(f"{r['source']}: {r['frames']} frames ({q['frames_with_body']} with a body), "
+          f"phase from {r['phase_source']}")
+    extra = ""
+    if pm.get("flashes_per_frame") is not None and pm["kind"] == "lamp":
+        up_to = "up to " if pm["cycles_per_exposure"] is None else ""  # exposure not given
+        extra = f"  {up_to}{pm['flashes_per_frame']:.3g} flashes per frame, harmonic m = {pm['harmonic_m']}"
+    print(f"apparent frequency {r['apparent_hz']:.4f} Hz ({pm['cycles_per_frame']:+.4f} cycles per frame at "
+          f"{r['fps']:.4g} fps){extra}")
+    body = r["body"]
+    print(f"body: rest axis {body['rest_axis_deg']:.1f} deg from image +x, "
+          f"{'square (tilt mod 90 deg)' if body['symmetry'] == 4 else 'elongated (tilt mod 180 deg)'}, "
+          f"half length {body['half_length_px']:.1f} px")
+    print(f"tilt amplitude {_pm(r['tilt_amplitude_rad'], u['tilt_amplitude_rad'], 4)} rad "
+          f"({math.degrees(r['tilt_amplitude_rad']):.2f} deg)  lateral amplitude "
+          f"{_pm(r['lateral_amplitude_px'], u['lateral_amplitude_px'], 2)} px  RC offset (Eq. 5.97) "
+          f"{_pm(r['rc_offset_px'], u['rc_offset_px'], 2)} px {r['rc_offset_direction'] or ''}".rstrip())
+    print(f"{q['point']} trajectory: {r['point_pattern']['type']}")
+    if _speed_line(r):
+        print(_speed_line(r))
+    print(describe(q))

@@ -1,19 +1,18 @@
-"""Stroboscope analysis (Sec. 5.4.3, Fig. 6.14, 6.20): segment the floating magnet in every frame,
-measure its orientation and centroid, recover the apparent phase, and fit the tilt amplitude phi,
-the lateral amplitude beta and the offset of the rotation centre from the centre of mass
-``delta = beta / tan(phi)`` (Eq. 5.97).
+"""Stroboscope analysis (Sec. 5.4.3, Fig. 5.19, 6.14, 6.20; docs/vision.md, *Stroboscope*):
+measure the floating body in every frame (:mod:`labkit.vision.strobe_body`), map frames to rotor
+phase (:mod:`labkit.vision.strobe_phase`), fit the tilt amplitude phi, the lateral amplitude beta
+and the offset of the rotation centre from the centre of mass ``delta = beta / tan(phi)`` (Eq.
+5.97) with standard errors (:mod:`labkit.vision.strobe_fit`), and judge the result
+(:mod:`labkit.vision.strobe_quality`).
 
-Model per frame k with apparent phase ``psi_k``: tilt ``theta_k = phi sin(psi_k)`` (from the
-vertical, top of the body towards +x) and centroid ``x_k = x_0 - delta tan(theta_k)``. A rolling
-shutter shears the body in proportion to its lateral velocity, which adds a tilt in quadrature
-with the lateral motion; taking only the tilt component in phase with ``x_k`` removes it. Motion
-blur averages shapes; the soft (grey-level) mask keeps the moments unbiased.
+Tilt is measured about the body's own mean orientation (mod pi, or mod pi/2 for a square
+silhouette), so a rotor axis horizontal in the image or a rolled camera changes nothing; the
+lateral position is taken across that rest axis.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import cv2
 import numpy as np
@@ -22,188 +21,271 @@ from labkit.errors import VideoError
 from labkit.vision.curves import a_for_k, ellipse_from_coefficients, trochoid_from_coefficients
 from labkit.vision.fit import CIRCLE_MAX_ELLIPTICITY, MAX_TROCHOID_B, trochoid_beats
 from labkit.vision.frames import open_frames
+from labkit.vision.strobe_body import (
+    BodyPose,
+    ClipOrientation,
+    flatten_illumination,
+    measure_body,
+    measure_flat,
+    orient_clip,
+    refine_with_static_light,
+    static_light,
+)
+from labkit.vision.strobe_fit import MotionFit, fit_motion, sine_fit
+from labkit.vision.strobe_phase import (
+    PhaseModel,
+    apparent_cycles_per_frame,
+    choose_phase_model,
+    estimate_cycles_per_frame,
+    explained_fraction,
+    fold,
+)
+from labkit.vision.strobe_quality import GHOST_DOUBT, strobe_quality
 
-MIN_BODY_AREA_PX = 30
-MIN_CONTRAST = 25.0
+__all__ = ["analyse_strobe", "apparent_cycles_per_frame", "measure_body", "phase_pattern"]
 
-
-@dataclass
-class BodyPose:
-    """One frame's body: centroid (px), tilt from the vertical (rad), half length (px)."""
-
-    x: float
-    y: float
-    tilt_rad: float
-    half_length_px: float
-    area_px: float
-
-
-def segment_body(frame: np.ndarray) -> BodyPose | None:
-    """Find the body (dark or bright on a contrasting background) and measure it by grey-level
-    moments of a soft mask. Returns None when no body is visible."""
-    gray = frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
-    blur = cv2.GaussianBlur(gray, (5, 5), 0)
-    t, _ = cv2.threshold(blur, 0, 255, cv2.THRESH_BINARY | cv2.THRESH_OTSU)
-    lo, hi = blur[blur <= t], blur[blur > t]
-    if lo.size == 0 or hi.size == 0 or float(hi.mean()) - float(lo.mean()) < MIN_CONTRAST:
-        return None
-    lo_level, hi_level = float(np.median(lo)), float(np.median(hi))
-    best = None
-    for dark in (True, False):
-        mask = ((blur <= t) if dark else (blur > t)).astype(np.uint8)
-        n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
-        h, w = mask.shape
-        for i in range(1, n):
-            x, y, bw, bh, area = stats[i]
-            touches = x == 0 or y == 0 or x + bw == w or y + bh == h
-            if area < MIN_BODY_AREA_PX or touches or area > 0.5 * h * w:
-                continue
-            if best is None or area > best[0]:
-                best = (area, dark, labels == i, (x, y, bw, bh))
-    if best is None:
-        return None
-    _, dark, region, (x, y, bw, bh) = best
-    pad = 4
-    x0, y0 = max(0, x - pad), max(0, y - pad)
-    x1, y1 = min(gray.shape[1], x + bw + pad), min(gray.shape[0], y + bh + pad)
-    g = gray[y0:y1, x0:x1].astype(np.float32)
-    near = cv2.dilate(region[y0:y1, x0:x1].astype(np.uint8), np.ones((2 * pad + 1, 2 * pad + 1), np.uint8))
-    body_level, bg_level = (lo_level, hi_level) if dark else (hi_level, lo_level)
-    soft = np.clip((g - bg_level) / (body_level - bg_level), 0, 1) * near
-    m = cv2.moments(soft)
-    if m["m00"] <= 0:
-        return None
-    cx, cy = m["m10"] / m["m00"], m["m01"] / m["m00"]
-    mu20, mu02, mu11 = m["mu20"] / m["m00"], m["mu02"] / m["m00"], m["mu11"] / m["m00"]
-    alpha = 0.5 * math.atan2(2 * mu11, mu20 - mu02)  # major axis from +x towards +y (down)
-    tilt = math.atan2(math.cos(alpha), -math.sin(alpha))  # from image-up, towards +x
-    if tilt > math.pi / 2:
-        tilt -= math.pi
-    elif tilt <= -math.pi / 2:
-        tilt += math.pi
-    lam1 = 0.5 * (mu20 + mu02) + math.sqrt(0.25 * (mu20 - mu02) ** 2 + mu11 ** 2)
-    return BodyPose(x0 + cx, y0 + cy, tilt, math.sqrt(3 * lam1), float(m["m00"]))
+MIN_FRAMES = 6
+# ghost fraction above which bodies are re-measured against the static light; the verdict then
+# says doubtful too, because a flash shadow moving with the body also looks like a ghost
+GHOST_CORRECT = GHOST_DOUBT
 
 
-def apparent_cycles_per_frame(rotor_hz: float, strobe_hz: float) -> float:
-    """Alias of the rotor frequency sampled by the strobe, in cycles per flash, in [-0.5, 0.5)."""
-    r = rotor_hz / strobe_hz
-    return r - math.floor(r + 0.5)
+def ghost_fraction(found: list[BodyPose], static: np.ndarray, dark: bool) -> float:
+    """How much light stays where the body sweeps, as a fraction of the body's contrast: the static
+    light (brightest of all frames for a dark body) on the swept pixels (inside some frame's blob,
+    not inside all) against the same static light 8-15 px beyond every blob. 0 without a ghost
+    (the noise bias of the max cancels between the two), ~ G h for an ambient fraction G of the
+    exposure and a pixel covered a fraction h of the revolution."""
+    h, w = static.shape
+    union = np.zeros((h, w), np.uint8)
+    for p in found:
+        c = p.crop
+        rh, rw = c.region.shape
+        union[c.y0:c.y0 + rh, c.x0:c.x0 + rw] |= c.region
+    body = float(np.median([p.crop.body_level for p in found]))
+    bg = float(np.median([p.crop.bg_level for p in found]))
+    full = abs(bg - body)
+    core = np.abs(static - body) < 0.5 * full
+    swept = (union > 0) & ~core
+    far = (cv2.dilate(union, np.ones((31, 31), np.uint8))
+           - cv2.dilate(union, np.ones((17, 17), np.uint8))) > 0
+    if swept.sum() < 10 or far.sum() < 10 or full <= 0:
+        return 0.0
+    # the far ring's background side: a flash shadow darkens one side of it only
+    far_level = np.percentile(static[far], 75 if dark else 25)
+    sign = 1.0 if dark else -1.0
+    return float(sign * (far_level - np.median(static[swept])) / full)
 
 
-def _sin_fit(psi: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float]:
-    m = np.column_stack([np.ones_like(psi), np.sin(psi), np.cos(psi)])
-    coef, *_ = np.linalg.lstsq(m, y, rcond=None)
-    resid = y - m @ coef
-    return coef, float(np.sqrt(np.mean(resid ** 2)))
-
-
-def estimate_cycles_per_frame(k: np.ndarray, series: list[np.ndarray]) -> float:
-    """Apparent frequency (cycles per frame, in (0, 0.5]) that best explains the series as
-    sinusoids: the maximum of the summed normalised least-squares periodogram, refined locally."""
-    def power(f: float) -> float:
-        total = 0.0
-        for y in series:
-            var = float(np.var(y))
-            if var <= 0:
-                continue
-            _, rms = _sin_fit(2 * math.pi * f * k, y)
-            total += 1 - rms ** 2 / var
-        return total
-
-    n = max(8, int(k.max() - k.min() + 1))
-    grid = np.linspace(0.5 / n, 0.5, 8 * n)
-    best = float(grid[int(np.argmax([power(f) for f in grid]))])
-    step = grid[1] - grid[0]
-    a, b = max(1e-6, best - step), min(0.5, best + step)
-    for _ in range(40):  # golden-section refinement around the grid maximum
-        c1, c2 = b - 0.618 * (b - a), a + 0.618 * (b - a)
-        if power(c1) > power(c2):
-            b = c2
-        else:
-            a = c1
-    return 0.5 * (a + b)
-
-
-def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | None = None,
-                   apparent_hz: float | None = None, mm_per_px: float | None = None,
-                   point: str = "tip", on_frame=None) -> dict:
-    """Analyse a stroboscope video; returns the ``labkit analyse strobe`` JSON.
-
-    Phase comes from ``rotor_hz`` and ``strobe_hz`` (one flash per frame), from ``apparent_hz``
-    (at the file's frame rate), or from the signal itself. ``point``: the body point whose
-    trajectory is classified, ``tip`` (top end of the body axis), ``bottom`` or ``centroid``.
-    ``on_frame(index, t_s, bgr)`` is called for every frame (live streams hook in here).
-    """
+def _read_poses(path: str, on_frame, keep_frame: int | None = None):
+    """Measure the body in every frame; where an ambient ghost shows (:func:`ghost_fraction` above
+    ``GHOST_CORRECT``), measure again against the clip's static light (see
+    :func:`labkit.vision.strobe_body.refine_with_static_light`). Returns the source, the poses,
+    the kept frame and the ghost fraction."""
     source = open_frames(path)
-    fps = source.fps or (strobe_hz or 0.0)
     poses: list[BodyPose | None] = []
-    levels = []
+    lo, hi, kept = 255, 0, None
+    brightest = darkest = None
     for index, frame in source.frames():
         if on_frame is not None:
-            on_frame(index, index / fps if fps else 0.0, frame)
-        levels.append((int(frame.min()), int(frame.max())))
-        poses.append(segment_body(frame))
-    lo, hi = min(v[0] for v in levels), max(v[1] for v in levels)
+            on_frame(index, index / source.fps if source.fps else 0.0, frame)
+        lo, hi = min(lo, int(frame.min())), max(hi, int(frame.max()))
+        gray = frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+        flat = flatten_illumination(gray)
+        pose = measure_flat(flat)
+        poses.append(pose)
+        if pose is not None:
+            light = static_light(flat)
+            brightest = light if brightest is None else np.maximum(brightest, light)
+            darkest = light if darkest is None else np.minimum(darkest, light)
+        if keep_frame is not None and pose is not None and kept is None:
+            kept = (index, frame.copy())  # the reader may reuse its buffer
     if hi < 16:
         raise VideoError(source.path, f"all frames are black (brightest grey level {hi})")
     if lo > 245:
         raise VideoError(source.path, "all frames are white (saturated); reduce exposure or gain")
-    idx = np.array([i for i, p in enumerate(poses) if p is not None])
-    if len(idx) < 6:
-        raise VideoError(source.path, f"no body found: a contrasting body was segmented in {len(idx)} of "
-                                      f"{len(poses)} frames (need 6); check lighting and framing")
-    x = np.array([poses[i].x for i in idx])
-    y = np.array([poses[i].y for i in idx])
-    tilt = np.array([poses[i].tilt_rad for i in idx])
-    half = float(np.median([poses[i].half_length_px for i in idx]))
-    if rotor_hz and strobe_hz:
-        cpf, phase_source = apparent_cycles_per_frame(rotor_hz, strobe_hz), "rotor and strobe frequencies"
-        fps = strobe_hz
-    elif apparent_hz:
+    found = [p for p in poses if p is not None]
+    ghost = 0.0
+    if found:
+        dark = sum(p.crop.dark for p in found) * 2 >= len(found)
+        static = brightest if dark else darkest
+        ghost = ghost_fraction(found, static, dark)
+        if ghost > GHOST_CORRECT:
+            poses = [None if p is None else refine_with_static_light(p, static) for p in poses]
+        for p in poses:
+            if p is not None:
+                p.crop = None
+    return source, poses, kept, ghost
+
+
+def _phase_spread(psi: np.ndarray) -> float:
+    """How evenly the phases cover the cycle: twice the smaller eigenvalue of the covariance of
+    (sin psi, cos psi); 1 for uniform phases, 0 when they sit at one or two opposite points."""
+    s, c = np.sin(psi), np.cos(psi)
+    cov = np.cov(np.vstack([s, c]))
+    return float(2 * max(0.0, np.linalg.eigvalsh(cov)[0]))
+
+
+def _neighbour_noise(psi: np.ndarray, y: np.ndarray) -> float:
+    """Noise of y from differences between frames at neighbouring phases (no waveform assumed)."""
+    order = np.argsort(np.mod(psi, 2 * math.pi))
+    d = np.diff(y[order])
+    return float(np.sqrt(np.mean(d ** 2) / 2)) if d.size else 0.0
+
+
+def _pick_phase(model: PhaseModel | None, idx: np.ndarray, series: list[np.ndarray], fps: float,
+                path: str) -> tuple[PhaseModel, dict]:
+    """The phase model used and the evidence of how well it explains the footage."""
+    signal = estimate_cycles_per_frame(idx.astype(float), series)
+    ev = {"signal_cycles_per_frame": signal.cycles_per_frame, "signal_explained": signal.explained,
+          "signal_apparent_hz": signal.cycles_per_frame * fps if fps else None,
+          "runner_up_explained": signal.runner_up_explained,
+          "runner_up_apparent_hz": (signal.runner_up_cycles_per_frame or 0.0) * fps if fps else None,
+          "model_disagrees": False}
+    if model is None:
         if not fps:
-            raise VideoError(source.path, "the file has no frame rate; give --rotor-hz and --strobe-hz")
-        cpf, phase_source = apparent_hz / fps, "apparent frequency"
-    else:
-        cpf = estimate_cycles_per_frame(idx.astype(float), [x - x.mean(), tilt - tilt.mean()])
-        phase_source = "signal"
-    k_all = np.arange(len(poses), dtype=float)
-    psi = 2 * math.pi * cpf * idx
-    cx, rms_x = _sin_fit(psi, x)
-    ct, rms_t = _sin_fit(psi, tilt)
-    beta = float(math.hypot(cx[1], cx[2]))
-    if beta > 3 * rms_x / math.sqrt(len(idx)) + 1e-9:
-        e = np.array([cx[1], cx[2]]) / beta
-        in_phase = float(ct[1:] @ e)
-        quad = float(ct[1] * -e[1] + ct[2] * e[0])
-        phi = abs(in_phase)
-        offset = math.atan2(cx[2], cx[1]) + (math.pi if in_phase < 0 else 0.0)
-        # x = x0 - delta tan(theta): x in antiphase with the tilt means the centre is towards the top
-        direction = "towards body top" if in_phase < 0 else "towards body bottom"
-    else:
-        phi, quad = float(math.hypot(ct[1], ct[2])), 0.0
-        offset, direction = math.atan2(ct[2], ct[1]), None
-    delta = beta / math.tan(phi) if phi > 0 else None
-    phases = [float((2 * math.pi * cpf * k + offset) % (2 * math.pi)) for k in k_all]
+            fps = 1.0
+        return PhaseModel("signal", signal.cycles_per_frame, fps or None, signal.cycles_per_frame * fps,
+                          equation="psi_k = 2 pi c k, c from the footage", source="signal"), ev
+    given = explained_fraction(idx, model.cycles_per_frame, series)
+    ev["model_explained"] = given
+    ev["model_apparent_hz"] = abs(model.apparent_hz or 0.0)
+    # the given model disagrees when the footage's own frequency leaves clearly less unexplained:
+    # under half of the given model's residual variance (and a clear signal to begin with)
+    if signal.explained > 0.5 and (1 - given) > 2 * (1 - signal.explained) + 0.02 and \
+            abs(fold(model.cycles_per_frame) - signal.cycles_per_frame) > 1e-6:
+        sign = -1.0 if (model.cycles_per_frame % 1.0) > 0.5 else 1.0
+        model.cycles_per_frame = sign * signal.cycles_per_frame
+        model.apparent_hz = model.cycles_per_frame * (model.camera_fps or fps)
+        model.source += "; frequency from the footage (the given one disagrees)"
+        ev["model_disagrees"] = True
+    return model, ev
+
+
+def _flash_spread(model: PhaseModel, rotor_hz: float | None, strobe_hz: float | None) -> float | None:
+    """Cycles of rotor phase between the first and last flash of one exposure (lamp model)."""
+    if model.kind != "lamp" or not (rotor_hz and strobe_hz) or model.flashes_per_frame is None:
+        return None
+    if model.camera_fps and abs(model.camera_fps / strobe_hz - 1) < 1e-3:
+        return 0.0  # one flash per frame, locked to the camera
+    flashes = max(1.0, math.ceil(model.flashes_per_frame - 1e-9))
+    return (flashes - 1) * abs(apparent_cycles_per_frame(rotor_hz, strobe_hz))
+
+
+def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | None = None,
+                   apparent_hz: float | None = None, mm_per_px: float | None = None,
+                   point: str = "tip", on_frame=None, camera_fps: float | None = None,
+                   exposure_s: float | None = None, keep_frame: bool = False) -> dict:
+    """Analyse a stroboscope video; returns the ``labkit analyse strobe`` JSON.
+
+    Phase (see :mod:`labkit.vision.strobe_phase`): ``rotor_hz`` with ``strobe_hz`` (a lamp,
+    any number of flashes per frame), ``rotor_hz`` alone (the camera's exposure is the strobe),
+    ``apparent_hz``, or the signal. ``camera_fps`` overrides the file's frame rate,
+    ``exposure_s`` (when known) gives the blur correction. ``point``: the body point whose
+    trajectory is classified, ``tip`` (top end of the body axis), ``bottom`` or ``centroid``.
+    ``on_frame(index, t_s, bgr)`` is called for every frame (live streams hook in here).
+    ``keep_frame``: return the first frame with a body as ``result["_frame"]`` (index, BGR) for
+    an overlay; the caller removes it before writing JSON.
+    """
+    source, poses, kept, ghost = _read_poses(path, on_frame, 0 if keep_frame else None)
+    fps = camera_fps or source.fps or (strobe_hz or 0.0)
+    try:
+        model = choose_phase_model(rotor_hz, strobe_hz, apparent_hz, camera_fps, exposure_s, source.fps)
+    except ValueError as exc:
+        raise VideoError(source.path, str(exc)) from None
+    idx = np.array([i for i, p in enumerate(poses) if p is not None])
+    if len(idx) < MIN_FRAMES:
+        raise VideoError(source.path, f"no body found: a contrasting body was segmented in {len(idx)} of "
+                                      f"{len(poses)} frames (need {MIN_FRAMES}); check lighting and framing")
+    found = [p for p in poses if p is not None]
+    orient = orient_clip(found)
+    tilt, lateral = orient.tilt_rad, orient.lateral_px
+    model, phase_ev = _pick_phase(model, idx, [lateral, orient.lateral_other_px, tilt], fps, source.path)
+    psi = model.phases(idx)
+    orient = _magnet_axis(orient, psi)
+    tilt, lateral = orient.tilt_rad, orient.lateral_px
+    motion = fit_motion(psi, tilt, lateral, model.blur_factor)
+    phases = [float((2 * math.pi * model.cycles_per_frame * k + motion.phase_offset) % (2 * math.pi))
+              for k in range(len(poses))]
+    half = float(np.median([p.half_length_along(orient.rest_angle_rad + t)
+                            for p, t in zip(found, tilt, strict=True)]))
     sign = {"tip": 1.0, "bottom": -1.0, "centroid": 0.0}[point]
-    px = x + sign * half * np.sin(tilt)
-    py = y - sign * half * np.cos(tilt)
+    points = np.array([[p.x, p.y] for p in found]) + sign * half * _axis_at(orient, tilt)
     if len(idx) >= 8:
-        point_pattern = phase_pattern(np.column_stack([px, py]), np.array(phases)[idx])
+        point_pattern = phase_pattern(points, np.array(phases)[idx])
     else:
         point_pattern = {"type": "none", "reason": f"only {len(idx)} frames with a body"}
-    out = {"source": source.path, "frames": len(poses), "fps": fps, "apparent_hz": abs(cpf) * fps,
-           "tilt_amplitude_rad": phi, "lateral_amplitude_px": beta, "rc_offset_px": delta,
+    direction = None if motion.towards_top is None else (
+        "towards body top" if motion.towards_top else "towards body bottom")
+    apparent = model.apparent_hz if model.apparent_hz is not None else model.cycles_per_frame * fps
+    out = {"source": source.path, "frames": len(poses), "fps": fps, "apparent_hz": abs(apparent),
+           "tilt_amplitude_rad": motion.phi, "lateral_amplitude_px": motion.beta,
+           "rc_offset_px": motion.delta,
+           "uncertainty": {"tilt_amplitude_rad": motion.phi_se, "lateral_amplitude_px": motion.beta_se,
+                           "rc_offset_px": motion.delta_se,
+                           "method": "1-sigma from the least-squares residuals (scatter only, see docs)"},
            "phase_per_frame": phases, "point_pattern": point_pattern,
-           "rc_offset_direction": direction, "phase_source": phase_source,
-           "quality": {"frames_with_body": len(idx), "body_half_length_px": half,
-                       "tilt_quadrature_rad": quad, "rms_residual_x_px": rms_x,
-                       "rms_residual_tilt_rad": rms_t,
-                       "point": point, "truncated": source.truncated}}
+           "rc_offset_direction": direction, "phase_source": model.source, "phase_model": model.to_dict(),
+           "body": {"rest_axis_deg": (orient.rest_axis_deg - math.degrees(motion.tilt.coef[0])) % 180.0,
+                    "symmetry": orient.symmetry,
+                    "half_length_px": half},
+           "quality": strobe_quality(_evidence(source, poses, found, orient, model, motion, phase_ev, psi,
+                                               half, point, _flash_spread(model, rotor_hz, strobe_hz),
+                                               ghost))}
     if mm_per_px:
-        out["lateral_amplitude_mm"] = beta * mm_per_px
-        out["rc_offset_mm"] = None if delta is None else delta * mm_per_px
+        out["lateral_amplitude_mm"] = motion.beta * mm_per_px
+        out["rc_offset_mm"] = None if motion.delta is None else motion.delta * mm_per_px
+        out["uncertainty"]["lateral_amplitude_mm"] = motion.beta_se * mm_per_px
+        out["uncertainty"]["rc_offset_mm"] = None if motion.delta_se is None else motion.delta_se * mm_per_px
+    if keep_frame and kept is not None:
+        k = kept[0]
+        j = int(np.searchsorted(idx, k))
+        out["_frame"] = {"index": k, "bgr": kept[1], "centre": [found[j].x, found[j].y],
+                         "axis": _axis_at(orient, tilt)[j].tolist(), "rest_axis": orient.axis.tolist(),
+                         "half_length_px": half, "point": points[j].tolist(), "track": points.tolist(),
+                         "radius_px": math.sqrt(3 * (found[j].mu20 + found[j].mu02))}
     return out
+
+
+def _magnet_axis(orient: ClipOrientation, psi: np.ndarray) -> ClipOrientation:
+    """The side of the silhouette across which the centroid swings at the apparent frequency
+    (Eq. 5.97: the centre of mass moves across the magnet axis). A square's sides are equal
+    candidates; an elongated body keeps its long axis unless the swing across the short one is
+    more than twice as large and clearly above the noise (a plate seen edge-on)."""
+    here, other = sine_fit(psi, orient.lateral_px), sine_fit(psi, orient.lateral_other_px)
+    margin = 1.0 if orient.symmetry == 4 else 2.0
+    if other.amplitude > margin * here.amplitude and other.amplitude > 3 * other.amplitude_se():
+        return orient.swapped()
+    return orient
+
+
+def _axis_at(orient: ClipOrientation, tilt: np.ndarray) -> np.ndarray:
+    """Unit vectors (N, 2) of the body axis ("top" end) in each frame: the rest axis turned by the
+    tilt, clockwise on screen (image y points down)."""
+    u = orient.axis
+    c, s = np.cos(tilt), np.sin(tilt)
+    return np.column_stack([u[0] * c - u[1] * s, u[0] * s + u[1] * c])
+
+
+def _evidence(source, poses, found, orient: ClipOrientation, model: PhaseModel, motion: MotionFit,
+              phase_ev: dict, psi: np.ndarray, half: float, point: str, flash_spread, ghost: float) -> dict:
+    areas = np.array([p.area_px for p in found])
+    noise = _neighbour_noise(psi, orient.tilt_rad)
+    w, h = source.size
+    return {"frames": len(poses), "frames_with_body": len(found), "ghost_fraction": ghost,
+            "body_half_length_px": half, "body_size_fraction": half / min(w, h),
+            "body_area_spread": float(np.std(areas) / np.mean(areas)),
+            "body_anisotropy": orient.anisotropy, "body_symmetry": orient.symmetry,
+            "body_bend_px": float(np.median([p.bend_px for p in found])),
+            "phase_source": model.kind, "phase_spread": _phase_spread(psi),
+            "tilt_amplitude_rad": motion.phi, "tilt_amplitude_se_rad": motion.phi_se,
+            "lateral_amplitude_px": motion.beta, "lateral_amplitude_se_px": motion.beta_se,
+            "tilt_quadrature_rad": motion.quadrature, "tilt_explained": motion.tilt.explained,
+            "lateral_explained": motion.lateral.explained,
+            "rms_residual_x_px": motion.lateral.rms, "rms_residual_tilt_rad": motion.tilt.rms,
+            "tilt_noise_rad": noise, "tilt_residual_ratio": motion.tilt.rms / noise if noise > 0 else 1.0,
+            "flash_spread_cycles": flash_spread, **phase_ev,
+            "point": point, "truncated": source.truncated}
 
 
 def phase_pattern(points: np.ndarray, phases: np.ndarray) -> dict:

@@ -1,0 +1,135 @@
+"""The quality verdict of a stroboscope analysis (docs/vision.md, *Strobe quality verdict*).
+
+``strobe_quality(evidence)`` returns the ``"quality"`` object of ``labkit analyse strobe``:
+``{"verdict": "ok" | "doubtful" | "failed", "reasons": [...], **evidence}``. Each rule names the
+evidence it reads; the tolerances are those of the acceptance (tilt within 5 % or 0.005 rad,
+lateral amplitude within 5 % or 0.5 px), so "ok" means: by the fit's own scatter and by every
+check below, the numbers are within them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+OK, DOUBTFUL, FAILED = "ok", "doubtful", "failed"
+TILT_TOL_REL, TILT_TOL_ABS = 0.05, 0.005
+LATERAL_TOL_REL, LATERAL_TOL_PX = 0.05, 0.5
+MIN_DETECTED = 0.9  # of the frames
+MIN_BODY_HALF_LENGTH_PX = 6.0
+MAX_BODY_FRACTION = 0.45  # half length against the frame's shorter side
+MAX_AREA_SPREAD = 0.2  # relative standard deviation of the body's area
+AMBIGUOUS_ANISOTROPY = (0.12, 0.35)  # between square (4-fold) and elongated (2-fold)
+MIN_PHASE_SPREAD, FAILED_PHASE_SPREAD = 0.3, 0.08
+MAX_RESIDUAL_RATIO = 2.5  # sinusoid residual against the phase-neighbour noise
+RUNNER_UP_CLOSE = 0.9  # runner-up frequency explains this much of what the best does
+MAX_FLASH_SPREAD_CYCLES = 0.1
+LOCKED_WEAK, LOCKED_STRONG = 0.5, 0.8  # explained variance of tilt vs lateral (they move together)
+GHOST_DOUBT = 0.08  # ghost fraction (strobe.ghost_fraction)
+MAX_BEND_PX = 0.4  # midline of a straight body: measured <= 0.27 px with noise, blur and compression
+
+
+@dataclass
+class Verdict:
+    verdict: str = OK
+    reasons: list[str] = field(default_factory=list)
+
+    def doubt(self, reason: str) -> None:
+        self.reasons.append(reason)
+        if self.verdict == OK:
+            self.verdict = DOUBTFUL
+
+    def fail(self, reason: str) -> None:
+        self.reasons.insert(0, reason)
+        self.verdict = FAILED
+
+
+def _amplitude_checks(v: Verdict, e: dict) -> None:
+    phi, phi_se = e["tilt_amplitude_rad"], e["tilt_amplitude_se_rad"]
+    tol = max(TILT_TOL_REL * phi, TILT_TOL_ABS)
+    if phi_se > 10 * tol:
+        v.fail(f"no tilt above the noise: {phi:.4f} +- {phi_se:.4f} rad")
+    elif 3 * phi_se > tol:
+        v.doubt(f"tilt amplitude uncertain: {phi:.4f} +- {phi_se:.4f} rad (1 sigma) against a tolerance "
+                f"of {tol:.4f} rad")
+    beta, beta_se = e["lateral_amplitude_px"], e["lateral_amplitude_se_px"]
+    tol = max(LATERAL_TOL_REL * beta, LATERAL_TOL_PX)
+    if 3 * beta_se > tol:
+        v.doubt(f"lateral amplitude uncertain: {beta:.2f} +- {beta_se:.2f} px (1 sigma)")
+
+
+def _phase_checks(v: Verdict, e: dict) -> None:
+    spread = e["phase_spread"]
+    if spread < FAILED_PHASE_SPREAD:
+        v.fail(f"the frames sample too little of the cycle (phase spread {spread:.2f} of 1): the "
+               "clip is shorter than an apparent cycle or the apparent frequency is near 0 or half "
+               "the frame rate")
+    elif spread < MIN_PHASE_SPREAD:
+        v.doubt(f"the frames sample the cycle unevenly (phase spread {spread:.2f} of 1)")
+    if e.get("model_disagrees"):
+        v.doubt(f"the given frequencies predict {e['model_apparent_hz']:.4g} Hz apparent but the body moves "
+                f"at {e['signal_apparent_hz']:.4g} Hz in the footage; the footage's frequency was used "
+                "(check --rotor-hz/--strobe-hz, and --camera-fps if the file's frame rate is not the "
+                "camera's)")
+    if e["phase_source"] == "signal" and e.get("runner_up_explained") is not None:
+        if e["runner_up_explained"] >= RUNNER_UP_CLOSE * e["signal_explained"]:
+            v.doubt(f"apparent frequency ambiguous: {e['runner_up_apparent_hz']:.4g} Hz explains the motion "
+                    f"nearly as well as {e['signal_apparent_hz']:.4g} Hz; give --rotor-hz/--strobe-hz")
+    ratio = e["tilt_residual_ratio"]
+    if ratio > MAX_RESIDUAL_RATIO and e["tilt_explained"] < 0.9:
+        v.doubt(f"the Eq. 5.97 sinusoid leaves {e['rms_residual_tilt_rad']:.4f} rad rms, {ratio:.1f}x the "
+                "tilt's frame-to-frame noise at neighbouring phases: the phase model or the waveform is off")
+    tilt_fit, lateral_fit = e["tilt_explained"], e["lateral_explained"]
+    for name, weak, strong in (("tilt", tilt_fit, lateral_fit), ("lateral motion", lateral_fit, tilt_fit)):
+        if weak < LOCKED_WEAK and strong > LOCKED_STRONG:
+            v.doubt(f"the {name} follows the apparent frequency poorly (the sinusoid explains {weak:.0%} "
+                    f"of its variance, against {strong:.0%} for the other): Eq. 5.97 locks tilt and lateral "
+                    "motion; a rolling shutter with the camera as strobe, or a wrong body axis, does this")
+    spread_cycles = e.get("flash_spread_cycles")
+    if spread_cycles is not None and spread_cycles > MAX_FLASH_SPREAD_CYCLES:
+        v.doubt(f"each frame superimposes flashes {spread_cycles:.2f} cycles apart: the body is seen at "
+                "several phases at once")
+
+
+def _body_checks(v: Verdict, e: dict) -> None:
+    seen, frames = e["frames_with_body"], e["frames"]
+    if seen < MIN_DETECTED * frames:
+        v.doubt(f"body found in only {seen} of {frames} frames")
+    half = e["body_half_length_px"]
+    if half < MIN_BODY_HALF_LENGTH_PX:
+        v.doubt(f"body small: half length {half:.1f} px; tilt is poorly resolved")
+    if e["body_size_fraction"] > MAX_BODY_FRACTION:
+        v.doubt(f"body large against the frame ({e['body_size_fraction']:.0%} of its shorter side)")
+    if e["body_area_spread"] > MAX_AREA_SPREAD:
+        v.doubt(f"body area varies by {e['body_area_spread']:.0%} between frames: segmentation unstable "
+                "(shadow, ghost, or several images per frame)")
+    if e["body_bend_px"] > MAX_BEND_PX:
+        v.doubt(f"the body's silhouette is bent (its midline strays {e['body_bend_px']:.2f} px rms from a "
+                "straight line): a rolling shutter shows different rows at different rotor phases, which "
+                "with the camera as the strobe distorts tilt and lateral motion")
+    lo, hi = AMBIGUOUS_ANISOTROPY
+    if lo < e["body_anisotropy"] < hi:
+        v.doubt(f"silhouette neither square nor elongated (anisotropy {e['body_anisotropy']:.2f}): its axis "
+                f"was taken {e['body_symmetry']}-fold")
+    if e["ghost_fraction"] > GHOST_DOUBT:
+        v.doubt(f"ambient-light ghost where the body sweeps ({e['ghost_fraction']:.0%} of its contrast): "
+                "measured against the clip's static light, but a flash shadow or other light moving with "
+                "the body would bias that; film with less ambient light")
+    if e.get("truncated"):
+        v.doubt(str(e["truncated"]))
+
+
+def strobe_quality(evidence: dict) -> dict:
+    """The ``quality`` object: verdict, reasons, then the evidence as given."""
+    v = Verdict()
+    _body_checks(v, evidence)
+    _phase_checks(v, evidence)
+    _amplitude_checks(v, evidence)
+    return {"verdict": v.verdict, "reasons": v.reasons, **evidence}
+
+
+def describe(quality: dict) -> str:
+    """The verdict in words for the terminal."""
+    if quality["verdict"] == OK:
+        return "quality: ok (every check passed; numbers within the stated tolerances by their own scatter)"
+    head = "quality: DOUBTFUL, check before use" if quality["verdict"] == DOUBTFUL else "quality: FAILED"
+    return "\n".join([head, *(f"  - {r}" for r in quality["reasons"])])
