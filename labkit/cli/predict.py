@@ -17,11 +17,10 @@ Magnets come from a rig file's [bodies.rotator] / [bodies.floator] or from optio
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
-from pathlib import Path
 
+from labkit.cli.output import add_json_argument, write_json
 from labkit.predict.estimate import Estimate
 from labkit.predict.inputs import (
     PredictInputError,
@@ -57,7 +56,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="skip the speed limits and the Eq. 6.18 scaling (the slowest part, a few s)")
     p.add_argument("--verify-cycles", type=int, default=2000,
                    help="drive periods of the check (default 2000)")
-    p.add_argument("--json", metavar="OUT", help="write the prediction (or the map) as JSON")
+    add_json_argument(p, "the prediction (or the map)")
     p.add_argument("--map", nargs="+", metavar="AXIS=START:STOP:COUNT",
                    help="stability map over tilt_deg and/or speed_rpm")
     p.add_argument("--out", metavar="STORE", help="map: JSON-lines store, resumed when it exists")
@@ -114,10 +113,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _write_json(path: str, data) -> None:
-    try:
-        Path(path).write_text(json.dumps(data, indent=2, default=_jsonable) + "\n")
-    except OSError as exc:
-        raise PredictInputError(f"--json: cannot write {path} ({exc.strerror})") from None
+    write_json(data, path, "predict")  # labkit.cli.output: '-' is stdout, alone
 
 
 def _jsonable(x):

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 
+from labkit.cli.output import add_json_argument, write_json
 from labkit.fit.models import MODELS
 from labkit.fit.overlay import overlays_from_csv
 from labkit.report.build import build_report
@@ -28,6 +29,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--overlay", action="append", default=[], metavar="CSV",
                    help="draw curves from a CSV on the fit figures (first column x, others y, matched "
                    "by column name); repeatable")
+    add_json_argument(p, "where the report and its files are")
     p.set_defaults(func=run)
 
 
@@ -37,4 +39,6 @@ def run(args: argparse.Namespace) -> int:
                         inertia=args.inertia, overlays=overlays)
     print(f"report written: {path}")
     print(f"figures and data next to it in {path.parent}")
+    files = sorted(str(f) for f in path.parent.iterdir() if f.is_file())
+    write_json({"report": str(path), "folder": str(path.parent), "files": files}, args.json, "report")
     return 0

@@ -12,6 +12,7 @@ import argparse
 import sys
 from typing import Any
 
+from labkit.cli.output import add_json_argument, write_json
 from labkit.errors import LabkitError
 from labkit.protocols import PROTOCOLS, ProgressSink
 from labkit.protocols.events import FlagTally
@@ -34,6 +35,7 @@ def add_common(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--notes", default="", help="operator notes stored in run.json")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_json_argument(p, "the outcome (status, session, points and fit)")
     add_rerun_argument(p)
 
 
@@ -129,6 +131,13 @@ def close_sinks(sinks: list[Any], command: str) -> None:
                   file=sys.stderr)
 
 
+def outcome_json(outcome: Any) -> dict[str, Any]:
+    """The ``--json`` document of a run: ``{"status", "reason", "session", "results"}``."""
+    return {"status": outcome.status, "reason": outcome.reason,
+            "session": str(outcome.session) if outcome.session else None,
+            "results": outcome.results}
+
+
 def report(outcome: Any) -> int:
     where = f" (session {outcome.session})" if outcome.session else ""
     fit = (outcome.results or {}).get("fit") or {}
@@ -177,4 +186,5 @@ def main(args: argparse.Namespace) -> int:
     finally:
         close_sinks(sinks, "run")
     warn_flags(prep.runner.bus.sinks)
+    write_json(outcome_json(outcome), getattr(args, "json", None), "run")
     return report(outcome)

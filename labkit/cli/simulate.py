@@ -14,6 +14,7 @@ import json
 import math
 import sys
 
+from labkit.cli.output import add_json_argument, write_json
 from labkit.sim import DEFAULT_INTEGRATOR, INTEGRATORS, bundled_scenes, compile_scene, load_scene
 from labkit.sim.run import simulate
 
@@ -51,7 +52,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         default=1e-6,
         help="relative invariant drift that marks the run as failed (default 1e-6)",
     )
-    p.add_argument("--json", metavar="OUT", help="write the result summary as JSON")
+    add_json_argument(p, "the result summary")
     p.add_argument("--series", action="store_true", help="include the sampled series in --json")
     p.add_argument(
         "--rerun", metavar="SPEC", help="stream poses to rerun: spawn, connect[:ADDR] or save:FILE"
@@ -89,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
         _stream(result, args.rerun)
     print(format_summary(result))
     if args.json:
-        result.write_json(args.json, series=args.series)
+        write_json(result.to_json(args.series), args.json, "simulate")
     return 0 if result.ok else 1
 
 
