@@ -78,7 +78,8 @@ def test_the_check_catches_an_undeclared_import(tmp_path: Path) -> None:
 
 
 def test_test_tools_have_compatible_ranges() -> None:
-    test_extra = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]["optional-dependencies"]["test"]
+    project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
+    test_extra = project["optional-dependencies"]["test"]
     for tool in ("pytest", "hypothesis", "pytest-timeout", "ruff"):
         (spec,) = [r for r in test_extra if canonical(re.split(r"[<>=]", r, maxsplit=1)[0]) == tool]
         assert ">=" in spec and "<" in spec.replace("<=", ""), f"{spec}: needs a lower and an upper bound"
