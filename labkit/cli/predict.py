@@ -11,7 +11,7 @@ Magnets come from a rig file's [bodies.rotator] / [bodies.floator] or from optio
   labkit predict --rotator cylinder:6x3mm --floator sphere:10mm --speed-rpm 25000 --tilt-deg 5
   labkit predict my-rig.toml --speed-rpm 12000
   labkit predict --rotator cylinder:6x3mm --floator sphere:10mm --tilt-deg 5 \\
-      --map tilt_deg=2:8:7 speed_rpm=10000:40000:7 --out map.jsonl [--scheduler tcp://host:8786]
+      --map tilt_deg=2:8:n=7 speed_rpm=10000:40000:n=7 --out map.jsonl [--scheduler tcp://host:8786]
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ import argparse
 import math
 import sys
 
+from labkit.cli.confirm import CONFIRM_POINTS, add_yes_argument, confirm_size
 from labkit.cli.output import add_json_argument, write_json
 from labkit.predict.estimate import Estimate
 from labkit.predict.inputs import (
@@ -57,7 +58,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--verify-cycles", type=int, default=2000,
                    help="drive periods of the check (default 2000)")
     add_json_argument(p, "the prediction (or the map)")
-    p.add_argument("--map", nargs="+", metavar="AXIS=START:STOP:COUNT",
+    p.add_argument("--map", nargs="+", metavar="AXIS=START:STOP:n=COUNT",
                    help="stability map over tilt_deg and/or speed_rpm")
     p.add_argument("--out", metavar="STORE", help="map: JSON-lines store, resumed when it exists")
     p.add_argument("--workers", type=int, default=1, help="map: local worker processes (default 1)")
@@ -65,6 +66,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--chunk", type=int, default=4, help="map: points per task (default 4)")
     p.add_argument("--map-verify", type=int, default=0, metavar="CYCLES",
                    help="map: also run the time-domain check (CYCLES drive periods) at every bound point")
+    add_yes_argument(p, f"the map has more than {CONFIRM_POINTS} points")
     p.set_defaults(func=run)
 
 
@@ -189,6 +191,7 @@ def _run_map(args: argparse.Namespace, pair: Pair) -> int:
         points = grid_points(axes, pair, args.speed_rpm, args.map_verify)
     except MapSpecError as exc:
         raise PredictInputError(f"--map: {exc}") from None
+    confirm_size(len(points), CONFIRM_POINTS, "map points", yes=args.yes, command="predict")
     result = run_sweep(points, evaluate_points, store=args.out, chunk=args.chunk, workers=args.workers,
                        scheduler=args.scheduler, progress=sys.stderr.isatty(), description="predict map")
     rows = [{k: v for k, v in r.items() if k not in ("rotator", "floator")} for r in result.results]

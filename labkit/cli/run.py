@@ -12,6 +12,7 @@ import argparse
 import sys
 from typing import Any
 
+from labkit.cli.confirm import CONFIRM_STEPS, add_yes_argument, confirm_size
 from labkit.cli.output import add_json_argument, write_json
 from labkit.errors import LabkitError
 from labkit.protocols import PROTOCOLS, ProgressSink
@@ -36,6 +37,7 @@ def add_common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--notes", default="", help="operator notes stored in run.json")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_json_argument(p, "the outcome (status, session, points and fit)")
+    add_yes_argument(p, f"the plan has more than {CONFIRM_STEPS} steps")
     add_rerun_argument(p)
 
 
@@ -176,6 +178,8 @@ def main(args: argparse.Namespace) -> int:
     if args.dry_run:
         print(prep.runner.dry_run())
         return 0
+    confirm_size(len(prep.runner.steps) - len(prep.runner.done_steps), CONFIRM_STEPS, "measurement steps",
+                 yes=getattr(args, "yes", False), command="run")
     sinks: list[Any] = []
 
     def on_session(runner: Any, session: Any) -> None:
