@@ -76,8 +76,10 @@ def _run(argv, capsys):
     (["--tilt-deg", "95"], "labkit predict: --tilt-deg: must be below 90 degrees"),
     (["--speed-rpm", "-5"], "labkit predict: --speed-rpm: must be positive"),
     (["--map", "tilt=1:2:3"], "labkit predict: --map: 'tilt=1:2:3': expected AXIS=START:STOP:n=COUNT"),
-    (["--map", "speed_rpm=1:2:x"], "labkit predict: --map: 'speed_rpm=1:2:x': third part 'x' is not a number"),
-    (["--map", "tilt_deg=2:8:7"], "labkit predict: --map: 'tilt_deg=2:8:7': '2:8:7' is ambiguous: write 2:8:n=7"),
+    (["--map", "speed_rpm=1:2:x"],
+     "labkit predict: --map: 'speed_rpm=1:2:x': third part 'x' is not a number"),
+    (["--map", "tilt_deg=2:8:7"],
+     "labkit predict: --map: 'tilt_deg=2:8:7': '2:8:7' is ambiguous: write 2:8:n=7"),
 ])
 def test_bad_options_are_one_line(extra, message, capsys):
     rc, out, err = _run(STORY + extra + ["--no-verify"], capsys)
