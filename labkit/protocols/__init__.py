@@ -12,11 +12,16 @@ PROTOCOLS: dict[str, type[ProtocolDef]] = {p.name: p for p in (SpeedSweep, SpinC
 
 
 def get_protocol(name: str) -> ProtocolDef:
-    """A fresh protocol object by name; LabkitError listing the known ones otherwise."""
-    try:
-        return PROTOCOLS[name]()
-    except KeyError:
-        raise LabkitError(f"unknown protocol {name!r}; known: {', '.join(sorted(PROTOCOLS))}") from None
+    """A fresh protocol object by name (built in, or a ``labkit.protocols`` entry point:
+    :mod:`labkit.plugins`); LabkitError listing the known ones otherwise."""
+    if name not in PROTOCOLS:
+        from labkit.plugins import load_protocol_plugins, problems_note
+
+        load_protocol_plugins(PROTOCOLS)
+        if name not in PROTOCOLS:
+            raise LabkitError(f"unknown protocol {name!r}; known: {', '.join(sorted(PROTOCOLS))}"
+                              + problems_note())
+    return PROTOCOLS[name]()
 
 
 #: :mod:`labkit.protocols.launch` (which imports this package) is reached through the package
