@@ -91,3 +91,28 @@ def announce_written(path: str | Path, command: str, what: str = "") -> None:
     """One ``labkit CMD: wrote PATH`` line on stderr for every file a command writes."""
     kind = f" ({what})" if what else ""
     print(f"labkit {command}: wrote {path}{kind}", file=sys.stderr)
+
+
+def kernel_cache_present() -> bool:
+    """Whether numba's on-disk cache holds the simulator kernels (``labkit.sim.integrators``):
+    in ``NUMBA_CACHE_DIR`` when that is set, else in the package's ``__pycache__``."""
+    import importlib.util
+    import os
+
+    custom = os.environ.get("NUMBA_CACHE_DIR")
+    if custom:
+        folders = [Path(custom)]
+    else:
+        spec = importlib.util.find_spec("labkit.sim.integrators.splitting")
+        if spec is None or spec.origin is None:
+            return False
+        folders = [Path(spec.origin).parent / "__pycache__"]
+    return any(folder.is_dir() and any(folder.rglob("splitting.*.nbi")) for folder in folders)
+
+
+def note_first_compile(command: str) -> None:
+    """One line on stderr before the simulator kernels are compiled for the first time (tens
+    of seconds once; numba caches them on disk, docs/simulator.md)."""
+    if not kernel_cache_present():
+        print(f"labkit {command}: compiling simulator kernels once; cached afterwards "
+              "(20-40 s on a 2-core machine)", file=sys.stderr, flush=True)

@@ -21,7 +21,7 @@ import math
 import sys
 
 from labkit.cli.confirm import CONFIRM_POINTS, add_yes_argument, confirm_size
-from labkit.cli.output import add_json_argument, write_json
+from labkit.cli.output import add_json_argument, note_first_compile, write_json
 from labkit.predict.estimate import Estimate
 from labkit.predict.inputs import (
     PredictInputError,
@@ -105,6 +105,8 @@ def run(args: argparse.Namespace) -> int:
         return _run_map(args, pair)
     if args.speed_rpm is None:
         raise PredictInputError("--speed-rpm missing (the rotator speed to predict at)")
+    if not args.no_verify:
+        note_first_compile("predict")
     pred = predict(pair, args.speed_rpm / RPM, run_verify=not args.no_verify,
                    verify_cycles=args.verify_cycles, speed_limits=not args.no_limits,
                    scaling=not args.no_limits)

@@ -25,6 +25,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         help="only rows whose id starts with PREFIX (repeatable), e.g. table5.7")
     parser.add_argument("--quick", action="store_true", help="a fast subset (seconds), as used by the tests")
     add_json_argument(parser, "the rows")
+    parser.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
     parser.set_defaults(func=main)
 
 
@@ -47,6 +48,14 @@ def format_rows(rows: list[Row]) -> str:
     return "\n".join(lines)
 
 
+def _progress(start: float):
+    """``labkit reproduce: [k/n] PREFIX (elapsed)`` on stderr before each suite."""
+    def show(k: int, n: int, prefix: str) -> None:
+        print(f"labkit reproduce: [{k}/{n}] {prefix} ({time.perf_counter() - start:.0f} s so far)",
+              file=sys.stderr, flush=True)
+    return show
+
+
 def main(args: argparse.Namespace) -> int:
     only = args.only or []
     known = [prefix for prefix, _ in SUITES]
@@ -54,7 +63,7 @@ def main(args: argparse.Namespace) -> int:
         if not any(p.startswith(o) or o.startswith(p) for p in known):
             raise LabkitError(f"--only {o!r}: no such row prefix (known: {', '.join(known)})")
     start = time.perf_counter()
-    rows = run(only, quick=args.quick)
+    rows = run(only, quick=args.quick, progress=None if args.no_progress else _progress(start))
     elapsed = time.perf_counter() - start
     write_json([r.as_dict() for r in rows], args.json, "reproduce")
     agree = sum(r.ok for r in rows)

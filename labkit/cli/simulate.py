@@ -14,7 +14,7 @@ import json
 import math
 import sys
 
-from labkit.cli.output import add_json_argument, write_json
+from labkit.cli.output import add_json_argument, note_first_compile, write_json
 from labkit.sim import DEFAULT_INTEGRATOR, INTEGRATORS, bundled_scenes, compile_scene, load_scene
 from labkit.sim.run import simulate
 
@@ -75,6 +75,8 @@ def run(args: argparse.Namespace) -> int:
     if args.compile_only:
         print(json.dumps(system.summary(), indent=2))
         return 0
+    if args.integrator not in ("dop853", "lsoda", "radau"):  # the splittings run numba kernels
+        note_first_compile("simulate")
     result = simulate(
         scene,
         cycles=args.cycles,

@@ -66,6 +66,7 @@ def test_json_dash_is_one_document_on_stdout(name: str, made: Path, tmp_path: Pa
     key = EXPECTED_KEY[name]
     if name == "reproduce --quick":
         assert isinstance(doc, list) and {"id", "paper", "labkit"} <= set(doc[0])
+        assert "labkit reproduce: [1/" in done.stderr  # progress, on stderr
     elif key is not None:
         assert key in doc, f"{name}: {sorted(doc)}"
     assert not (tmp_path / "-").exists()
