@@ -17,7 +17,7 @@ import math
 import sys
 from pathlib import Path
 
-from labkit.cli.output import add_json_argument, announce_written, write_json
+from labkit.cli.output import add_json_argument, announce_rerun_file, announce_written, write_json
 from labkit.errors import FitError
 from labkit.fit.data import load_tables, write_table
 from labkit.fit.models import MODELS, PAPER_OMEGA_C
@@ -113,6 +113,7 @@ def run(args: argparse.Namespace) -> int:
         from labkit.stream.fit import stream_fit_report
 
         stream_fit_report(args.rerun, report)
+        announce_rerun_file(args.rerun, "fit")
     if args.strict and any(r.warnings for r in report.series.values()):
         print("labkit fit: warnings present (--strict)", file=sys.stderr)
         return 3

@@ -115,4 +115,10 @@ def note_first_compile(command: str) -> None:
     of seconds once; numba caches them on disk, docs/simulator.md)."""
     if not kernel_cache_present():
         print(f"labkit {command}: compiling simulator kernels once; cached afterwards "
-              "(20-40 s on a 2-core machine)", file=sys.stderr, flush=True)
+              "(up to a minute or two; later runs start at once)", file=sys.stderr, flush=True)
+
+
+def announce_rerun_file(spec: Any, command: str) -> None:
+    """Name the recording that ``--rerun save:FILE`` wrote (nothing for spawn/connect)."""
+    if getattr(spec, "mode", None) == "save" and Path(spec.target).exists():
+        announce_written(spec.target, command, f"rerun recording; open with: rerun {spec.target}")

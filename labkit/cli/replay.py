@@ -12,7 +12,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from labkit.cli.output import add_json_argument, write_json
+from labkit.cli.output import add_json_argument, announce_rerun_file, write_json
 from labkit.cli.run import close_sinks
 from labkit.protocols.events import FlagTally
 from labkit.protocols.launch import replay_session
@@ -50,6 +50,7 @@ def main(args: argparse.Namespace) -> int:
         result = replay_session(Path(args.session), sinks=sinks)
     finally:
         close_sinks(sinks, "replay")
+    announce_rerun_file(args.rerun, "replay")
     for warning in result.warnings:
         print(f"labkit replay: warning: {warning}", file=sys.stderr)
     out = result.outcome

@@ -13,7 +13,7 @@ import sys
 from typing import Any
 
 from labkit.cli.confirm import CONFIRM_STEPS, add_yes_argument, confirm_size
-from labkit.cli.output import add_json_argument, write_json
+from labkit.cli.output import add_json_argument, announce_rerun_file, write_json
 from labkit.errors import LabkitError
 from labkit.protocols import PROTOCOLS, ProgressSink
 from labkit.protocols.events import FlagTally
@@ -189,6 +189,7 @@ def main(args: argparse.Namespace) -> int:
         outcome = execute(prep, args.sessions, notes=args.notes, on_session=on_session)
     finally:
         close_sinks(sinks, "run")
+    announce_rerun_file(args.rerun, "run")
     warn_flags(prep.runner.bus.sinks)
     write_json(outcome_json(outcome), getattr(args, "json", None), "run")
     return report(outcome)
