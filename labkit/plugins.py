@@ -47,12 +47,11 @@ def _load_group(group: str) -> list[tuple[Any, Any]]:
     return out
 
 
-def load_protocol_plugins(registry: dict[str, Any]) -> None:
-    """Add the ``labkit.protocols`` entry points to ``registry`` (name -> ProtocolDef class)."""
-    from labkit.protocols.runner import ProtocolDef
-
+def load_protocol_plugins(registry: dict[str, Any], base: type) -> None:
+    """Add the ``labkit.protocols`` entry points to ``registry`` (name -> subclass of ``base``,
+    labkit.protocols.ProtocolDef: passed in, so this module imports no other part of labkit)."""
     for ep, obj in _load_group(PROTOCOL_GROUP):
-        if not (isinstance(obj, type) and issubclass(obj, ProtocolDef) and obj.name):
+        if not (isinstance(obj, type) and issubclass(obj, base) and getattr(obj, "name", "")):
             PROBLEMS.append(f"{_where(ep)}: {ep.value} is not a ProtocolDef subclass with a name")
             continue
         if obj.name in registry and registry[obj.name] is not obj:
@@ -61,20 +60,19 @@ def load_protocol_plugins(registry: dict[str, Any]) -> None:
         registry[obj.name] = obj
 
 
-def load_driver_plugins() -> None:
-    """Register the ``labkit.drivers`` entry points (Device subclasses with kind and protocol)."""
-    from labkit.devices.base import _DRIVERS, Device, register_driver
-
+def load_driver_plugins(registry: dict[tuple[str, str], Any], base: type) -> None:
+    """Add the ``labkit.drivers`` entry points to ``registry`` ((kind, protocol) -> subclass of
+    ``base``, labkit.devices.base.Device, with kind and protocol set)."""
     for ep, obj in _load_group(DRIVER_GROUP):
-        if not (isinstance(obj, type) and issubclass(obj, Device) and getattr(obj, "protocol", "")
+        if not (isinstance(obj, type) and issubclass(obj, base) and getattr(obj, "protocol", "")
                 and getattr(obj, "kind", "")):
             PROBLEMS.append(f"{_where(ep)}: {ep.value} is not a Device subclass with kind and protocol")
             continue
-        existing = _DRIVERS.get((obj.kind, obj.protocol))
+        existing = registry.get((obj.kind, obj.protocol))
         if existing is not None and existing is not obj:
             PROBLEMS.append(f"{_where(ep)}: {obj.kind} driver {obj.protocol!r} already exists; not replaced")
             continue
-        register_driver(obj)
+        registry[(obj.kind, obj.protocol)] = obj
 
 
 def problems_note() -> str:

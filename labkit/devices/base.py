@@ -281,7 +281,7 @@ def driver_class(kind: str, protocol: str) -> DriverClass:
     if (kind, protocol) not in _DRIVERS:  # a user's driver (labkit.drivers entry point)?
         from labkit.plugins import load_driver_plugins, problems_note
 
-        load_driver_plugins()
+        load_driver_plugins(_DRIVERS, Device)
         if (kind, protocol) not in _DRIVERS:
             known = sorted(p for k, p in _DRIVERS if k == kind)
             raise KeyError(f"no {kind} driver {protocol!r}; known: {', '.join(known)}{problems_note()}")

@@ -17,7 +17,7 @@ def get_protocol(name: str) -> ProtocolDef:
     if name not in PROTOCOLS:
         from labkit.plugins import load_protocol_plugins, problems_note
 
-        load_protocol_plugins(PROTOCOLS)
+        load_protocol_plugins(PROTOCOLS, ProtocolDef)
         if name not in PROTOCOLS:
             raise LabkitError(f"unknown protocol {name!r}; known: {', '.join(sorted(PROTOCOLS))}"
                               + problems_note())
