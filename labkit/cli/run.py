@@ -177,6 +177,9 @@ def main(args: argparse.Namespace) -> int:
         print(f"labkit run: warning: {warning}", file=sys.stderr)
     if args.dry_run:
         print(prep.runner.dry_run())
+        write_json({"status": "dry-run", "protocol": prep.protocol.name, "params": prep.params,
+                    "n_steps": len(prep.runner.steps), "plan": prep.runner.dry_run()},
+                   getattr(args, "json", None), "run")
         return 0
     confirm_size(len(prep.runner.steps) - len(prep.runner.done_steps), CONFIRM_STEPS, "measurement steps",
                  yes=getattr(args, "yes", False), command="run")

@@ -73,6 +73,16 @@ def test_json_dash_is_one_document_on_stdout(name: str, made: Path, tmp_path: Pa
     assert not (made / "-").exists()
 
 
+def test_a_dry_run_gives_its_plan_as_json(tmp_path: Path) -> None:
+    done = labkit(["run", "emulated-fig525", "speed-sweep", "--set", "speeds_rpm=6000:8000:n=3", "--dry-run",
+                   "--json", "-"], tmp_path)
+    assert done.returncode == 0, done.stderr
+    doc = json.loads(done.stdout)
+    assert doc["status"] == "dry-run" and doc["n_steps"] == 3
+    assert doc["params"]["speeds_rpm"] == [6000.0, 7000.0, 8000.0]
+    assert "3 steps" in done.stderr  # the human plan, moved to stderr
+
+
 def test_json_path_is_named_on_stderr(made: Path, tmp_path: Path) -> None:
     out = tmp_path / "fit.json"
     done = labkit(["fit", session_of(made), "--model", "power-law", "--json", str(out)], tmp_path)
