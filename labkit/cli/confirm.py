@@ -1,5 +1,6 @@
 """A confirmation above a documented size (docs/ranges.md): a plan of more than
-:data:`CONFIRM_STEPS` run steps or a map/sweep of more than :data:`CONFIRM_POINTS` points asks
+:data:`CONFIRM_STEPS` run steps, a ``predict --map`` of more than :data:`CONFIRM_POINTS` points
+(about 1 s each) or a ``sweep`` of more than :data:`CONFIRM_SWEEP_POINTS` (about 10 ms each) asks
 first, so a range typed with the wrong meaning (a step for a count) is seen before it runs.
 ``--yes`` skips the question; without a terminal to ask on, the command refuses in one line.
 """
@@ -12,7 +13,8 @@ import sys
 from labkit.errors import LabkitError
 
 CONFIRM_STEPS = 200      # labkit run: measurement steps in the plan
-CONFIRM_POINTS = 500     # labkit predict --map, labkit sweep: points to compute
+CONFIRM_POINTS = 500     # labkit predict --map: points to compute (~1 s each: 8 minutes)
+CONFIRM_SWEEP_POINTS = 5000  # labkit sweep: points to compute (~10 ms each: about a minute)
 
 
 def add_yes_argument(p: argparse.ArgumentParser, what: str) -> None:

@@ -17,7 +17,7 @@ import argparse
 import math
 import sys
 
-from labkit.cli.confirm import CONFIRM_POINTS, add_yes_argument, confirm_size
+from labkit.cli.confirm import CONFIRM_SWEEP_POINTS, add_yes_argument, confirm_size
 from labkit.numerics.checks import NumericsError
 
 DEFAULT_RATIOS = "0:0.6:n=13"
@@ -55,7 +55,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--timeout", type=float, default=10.0, help="seconds to wait for the scheduler")
     p.add_argument("--json", metavar="PATH|-", help="write all results as JSON ('-': alone on stdout)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    add_yes_argument(p, f"the sweep has more than {CONFIRM_POINTS} points")
+    add_yes_argument(p, f"the sweep has more than {CONFIRM_SWEEP_POINTS} points")
     p.set_defaults(func=run)
 
 
@@ -88,7 +88,7 @@ def run(args: argparse.Namespace) -> int:
         points = stability_map.table5_3_rows()
     else:
         points = stability_map.map_points(parse_ratios(args.ratios or DEFAULT_RATIOS), bias_y=args.bias)
-    confirm_size(len(points), CONFIRM_POINTS, "sweep points", yes=args.yes, command="sweep")
+    confirm_size(len(points), CONFIRM_SWEEP_POINTS, "sweep points", yes=args.yes, command="sweep")
     for p in points:  # the horizon is part of a point's identity in the store
         p["cycles"], p["steps_per_period"] = args.cycles, args.steps
     try:

@@ -81,3 +81,40 @@ def test_the_old_map_spelling_names_the_new_one(capsys) -> None:
                  "--map", "speed_rpm=10000:40000:15000"])
     assert code == 2
     assert "write 10000:40000:n=15000 for 15000 values or 10000:40000:step=15000" in capsys.readouterr().err
+
+
+def test_a_big_sweep_is_refused_without_a_terminal(capsys) -> None:
+    assert main(["sweep", "table5.3", "--ratios", "0:0.6:n=1000", "--no-progress"]) == 2
+    assert "11000 sweep points is more than 5000" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("answer", "goes_ahead"), [(b"y\n", True), (b"yes\n", True), (b"\n", False),
+                                                    (b"n\n", False)])
+def test_on_a_terminal_the_question_is_asked(answer: bytes, goes_ahead: bool, monkeypatch, capsys) -> None:
+    """A real pseudo-terminal as stdin: the answer typed decides."""
+    import os
+    import pty
+
+    from labkit.cli.confirm import confirm_size
+    from labkit.errors import LabkitError
+
+    master, slave = pty.openpty()
+    with os.fdopen(slave, "r", encoding="utf-8") as terminal:
+        try:
+            monkeypatch.setattr("sys.stdin", terminal)
+            os.write(master, answer)
+            if goes_ahead:
+                confirm_size(900, 500, "map points", yes=False, command="predict")
+            else:
+                with pytest.raises(LabkitError, match="not confirmed: 900 map points; nothing was started"):
+                    confirm_size(900, 500, "map points", yes=False, command="predict")
+        finally:
+            os.close(master)
+    assert "900 map points (more than 500). Go ahead? [y/N]" in capsys.readouterr().err
+
+
+def test_yes_skips_the_question_and_small_plans_are_not_asked() -> None:
+    from labkit.cli.confirm import confirm_size
+
+    confirm_size(10_000, 500, "map points", yes=True, command="predict")  # no terminal needed
+    confirm_size(500, 500, "map points", yes=False, command="predict")
