@@ -19,7 +19,11 @@ def get_protocol(name: str) -> ProtocolDef:
 
         load_protocol_plugins(PROTOCOLS, ProtocolDef)
         if name not in PROTOCOLS:
-            raise LabkitError(f"unknown protocol {name!r}; known: {', '.join(sorted(PROTOCOLS))}"
+            import difflib
+
+            close = difflib.get_close_matches(name, sorted(PROTOCOLS), n=1, cutoff=0.6)
+            guess = f" (did you mean {close[0]!r}?)" if close else ""
+            raise LabkitError(f"unknown protocol {name!r}{guess}; known: {', '.join(sorted(PROTOCOLS))}"
                               + problems_note())
     return PROTOCOLS[name]()
 

@@ -12,6 +12,7 @@ built). Limits are documented in docs/protocols.md.
 
 from __future__ import annotations
 
+import difflib
 import math
 from typing import Any
 
@@ -121,7 +122,9 @@ def resolve_params(defaults: dict[str, Any], overrides: dict[str, Any] | list[st
         if key not in defaults:
             known = ", ".join(sorted(defaults))
             name = protocol or "this protocol"
-            raise ParamError(f"--set {key}: unknown parameter of {name} (known: {known})")
+            close = difflib.get_close_matches(key, sorted(defaults), n=1, cutoff=0.6)
+            guess = f"; did you mean {close[0]!r}?" if close else ""
+            raise ParamError(f"--set {key}: unknown parameter of {name}{guess} (known: {known})")
         default = defaults[key]
         typed = isinstance(value, str)
         params[key] = coerce(key, value, default) if typed else check_typed(key, value, default)
