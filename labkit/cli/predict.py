@@ -105,6 +105,9 @@ def run(args: argparse.Namespace) -> int:
         return _run_map(args, pair)
     if args.speed_rpm is None:
         raise PredictInputError("--speed-rpm missing (the rotator speed to predict at)")
+    steps = ["bound state, stiffness and stability"] + ([] if args.no_limits else ["speed limits"]) + (
+        [] if args.no_verify else [f"a {args.verify_cycles}-cycle simulation check"])
+    print(f"labkit predict: computing {', '.join(steps)}...", file=sys.stderr, flush=True)
     if not args.no_verify:
         note_first_compile("predict")
     pred = predict(pair, args.speed_rpm / RPM, run_verify=not args.no_verify,

@@ -8,6 +8,8 @@ sheet of frames with the fitted pattern.
 from __future__ import annotations
 
 import argparse
+import sys
+from pathlib import Path
 
 from labkit.cli.output import add_json_argument, write_json
 from labkit.fit.models import MODELS
@@ -35,6 +37,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     overlays = tuple(ov for csv in args.overlay for ov in overlays_from_csv(csv))
+    if Path(args.source).exists():  # a missing source stays a one-line error
+        print(f"labkit report: fitting and drawing {args.source} (a few seconds)...", file=sys.stderr,
+              flush=True)
     path = build_report(args.source, args.out, model=args.model, x=args.x, y=args.y,
                         inertia=args.inertia, overlays=overlays)
     print(f"report written: {path}")
