@@ -59,3 +59,19 @@ def test_fit_data_gives_the_fit_of_labkit_fit(sweep: Path) -> None:
     report = labkit.fit_data(sweep, "power-law")
     b = report.to_json()["series"]["all"]["params"]["b"]["value"]
     assert b == pytest.approx(-1.9, abs=0.05)  # the emulated rig's force law, y ~ rpm^-1.9
+
+
+def test_a_session_cut_short_gives_the_points_it_measured(sweep: Path, tmp_path: Path) -> None:
+    """No results.json (a crash before the end): the points come from the point events."""
+    import shutil
+
+    cut = tmp_path / "cut"
+    shutil.copytree(sweep, cut)
+    (cut / "results.json").unlink()
+    events = (cut / "events.jsonl").read_text().splitlines(keepends=True)
+    third_point = [i for i, line in enumerate(events) if '"type":"point"' in line.replace(" ", "")][2]
+    (cut / "events.jsonl").write_text("".join(events[: third_point + 1]) + '{"type": "poi')  # torn line
+    session = labkit.load_session(cut)
+    assert len(session.points) == 3
+    assert session.fit is None
+    assert session.problems == []  # a torn last line is a crash, not damage
