@@ -1,6 +1,97 @@
 """labkit: measure, replay and model polarity-free magnetic repulsion (PFR) rigs.
 
-See README.md for the two commands that set up and run it, and ARCHITECTURE in docs/.
+The flat public face for scripts and notebooks (docs/scripting.md, docs/notebook.md)::
+
+    import labkit
+    rig = labkit.load_rig("rigs/emulated-fig525.toml")
+    session = labkit.load_session("sessions/20260101-120000-speed-sweep")
+    session.points            # pandas DataFrame, units in the column names
+    report = labkit.fit_data([session.path], "power-law")
+
+Every name is imported on first use (PEP 562 ``__getattr__``), so ``import labkit`` and
+``labkit --help`` stay fast. The fit function is ``fit_data``, not ``fit``: ``labkit.fit`` is the
+subpackage of fit models. The package is typed (``py.typed``).
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
 __version__ = "0.1.0"
+
+#: public name -> (module, attribute), imported on first access
+_FACE: dict[str, tuple[str, str]] = {
+    # rigs and devices
+    "load_rig": ("labkit.rig", "load_rig"),
+    "open_rig": ("labkit.rig", "open_rig"),
+    # runs and sessions
+    "prepare_run": ("labkit.protocols.launch", "prepare_run"),
+    "execute": ("labkit.protocols.launch", "execute"),
+    "replay_session": ("labkit.protocols.launch", "replay_session"),
+    "load_session": ("labkit.session.frames", "load_session"),
+    "SessionFrames": ("labkit.session.frames", "SessionFrames"),
+    # video analysis
+    "analyse_laser": ("labkit.vision.laser", "analyse_laser"),
+    "analyse_strobe": ("labkit.vision.strobe", "analyse_strobe"),
+    # fits, reports, simulation
+    "load_tables": ("labkit.fit.data", "load_tables"),
+    "fit_table": ("labkit.fit.table_fit", "fit_table"),
+    "FitOptions": ("labkit.fit.table_fit", "FitOptions"),
+    "build_report": ("labkit.report.build", "build_report"),
+    "load_scene": ("labkit.sim.scene", "load_scene"),
+    "simulate": ("labkit.sim.run", "simulate"),
+    # errors
+    "LabkitError": ("labkit.errors", "LabkitError"),
+    "SessionError": ("labkit.session.writer", "SessionError"),
+}
+
+__all__ = [  # tests/packaging/test_public_face.py checks this equals the names above
+    "FitOptions", "LabkitError", "SessionError", "SessionFrames", "__version__", "analyse_laser",
+    "analyse_strobe", "build_report", "execute", "fit_data", "fit_table", "load_rig", "load_scene",
+    "load_session", "load_tables", "open_rig", "prepare_run", "replay_session", "simulate",
+]
+
+if TYPE_CHECKING:  # for type checkers and IDEs; at run time the names come from __getattr__
+    from collections.abc import Sequence
+    from pathlib import Path
+
+    from labkit.errors import LabkitError
+    from labkit.fit.data import load_tables
+    from labkit.fit.table_fit import FitOptions, FitReport, fit_table
+    from labkit.protocols.launch import execute, prepare_run, replay_session
+    from labkit.report.build import build_report
+    from labkit.rig import load_rig, open_rig
+    from labkit.session.frames import SessionFrames, load_session
+    from labkit.session.writer import SessionError
+    from labkit.sim.run import simulate
+    from labkit.sim.scene import load_scene
+    from labkit.vision.laser import analyse_laser
+    from labkit.vision.strobe import analyse_strobe
+
+
+def fit_data(inputs: str | Path | Sequence[str | Path], model: str, **options: Any) -> FitReport:
+    """Fit sessions, results JSON, CSVs or ``labkit analyse --json`` files against ``model``,
+    as ``labkit fit INPUT... --model MODEL`` does; ``options`` are :class:`FitOptions` fields
+    (``x``, ``y``, ``sigma``, ``inertia``, ``omega_c``, ``fixed``, ``bootstrap``, ...)."""
+    from pathlib import Path
+
+    from labkit.fit.data import load_tables
+    from labkit.fit.table_fit import FitOptions, fit_table
+
+    paths = [inputs] if isinstance(inputs, str | Path) else list(inputs)
+    return fit_table(load_tables([str(p) for p in paths]), model, FitOptions(**options))
+
+
+def __getattr__(name: str) -> Any:
+    if name in _FACE:
+        import importlib
+
+        module, attribute = _FACE[name]
+        value = getattr(importlib.import_module(module), attribute)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'labkit' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_FACE))

@@ -7,6 +7,7 @@ documented in docs/rig-files.md ("Finite values and caps", ``[devices.ROLE]``).
 
 from __future__ import annotations
 
+import difflib
 import math
 import re
 from pathlib import Path
@@ -72,6 +73,9 @@ class _Section:
             raise RigFileError(file, prefix, f"must be a table, got {type(table).__name__}")
         self.table = dict(table)
         self.used: set[str] = set()
+        #: every key this section was asked for (raw names; quantities as base_suffix), for "did you mean"
+        self.asked: set[str] = set()
+        self.asked_bases: set[str] = set()
 
     def key(self, name: str) -> str:
         return f"{self.prefix}.{name}" if self.prefix else name
@@ -81,9 +85,10 @@ class _Section:
 
     def raw(self, name: str, typ: type | tuple[type, ...], required: bool = False,
             default: Any = None) -> Any:
+        self.asked.add(name)
         if name not in self.table:
             if required:
-                raise self.error(name, "missing (required)")
+                raise self.error(name, "missing (required)" + self._given_instead(name))
             return default
         self.used.add(name)
         value = self.table[name]
@@ -102,6 +107,8 @@ class _Section:
 
         The value must be finite and at most ``cap`` (SI value, text), by default the
         absolute cap of its unit (:data:`MAX_SPEED_RPM`, :data:`MAX_DURATION_S`, ...)."""
+        self.asked.add(f"{base}_{_example_suffix(si_unit)}")
+        self.asked_bases.add(base)
         found = [k for k in self.table if (s := split_unit(k)) and s[0] == base]
         if len(found) > 1:
             raise self.error(found[1], f"given twice (also as {found[0]})")
@@ -109,7 +116,8 @@ class _Section:
             if base in self.table:
                 raise self.error(base, f"needs a unit suffix, e.g. {base}_{_example_suffix(si_unit)}")
             if required:
-                raise self.error(f"{base}_{_example_suffix(si_unit)}", "missing (required)")
+                example = f"{base}_{_example_suffix(si_unit)}"
+                raise self.error(example, "missing (required)" + self._given_instead(example, base))
             return default
         key = found[0]
         _, unit, factor = split_unit(key)  # type: ignore[misc]
@@ -129,10 +137,27 @@ class _Section:
             raise self.error(key, f"{value!r} is beyond the sanity cap of {limit[1]}")
         return si
 
+    def _given_instead(self, name: str, base: str | None = None) -> str:
+        """``; did you mean ...`` when the table holds an unread key close to ``name``."""
+        unread = [k for k in self.table if k not in self.used]
+        close = difflib.get_close_matches(name, unread, n=1, cutoff=0.6)
+        if not close and base is not None:  # a quantity: compare without the unit suffix
+            stems = {(s[0] if (s := split_unit(k)) else k): k for k in unread}
+            close = [stems[m] for m in difflib.get_close_matches(base, list(stems), n=1, cutoff=0.6)]
+        return f"; the file has {close[0]!r}: did you mean {name!r}?" if close else ""
+
+    def _suggestion(self, key: str) -> str:
+        """``; did you mean 'KEY'?`` for an unknown key close to one this section reads."""
+        close = difflib.get_close_matches(key, sorted(self.asked - self.used), n=1, cutoff=0.6)
+        if not close and (split := split_unit(key)):  # max_sped_rpm -> max_speed_rpm
+            bases = difflib.get_close_matches(split[0], sorted(self.asked_bases), n=1, cutoff=0.6)
+            close = [key.replace(split[0], bases[0], 1)] if bases else []
+        return f"; did you mean {close[0]!r}?" if close else ""
+
     def finish(self) -> None:
         for k in self.table:
             if k not in self.used:
-                raise self.error(k, "unknown key")
+                raise self.error(k, "unknown key" + self._suggestion(k))
 
 
 def _example_suffix(si_unit: str) -> str:

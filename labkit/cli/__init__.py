@@ -2,6 +2,7 @@
 exposing ``register(subparsers)``, which adds its parser and sets ``func(args) -> int``.
 
 Expected faults (:class:`labkit.errors.LabkitError`) end as one line on stderr and exit 2.
+``--json -`` (labkit.cli.output) keeps stdout for the JSON document alone.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from labkit.errors import LabkitError
 
 COMMANDS = [
     "demo", "ports", "probe", "emulate", "run", "replay", "analyse", "synth",
-    "fit", "simulate", "bench", "reproduce", "report", "sweep", "predict",
+    "fit", "simulate", "bench", "reproduce", "report", "sweep", "predict", "rig",
 ]
 
 
@@ -47,8 +48,11 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 1
+    from labkit.cli.output import stdout_reserved_for_json, wants_json_stdout
+
     try:
-        return int(args.func(args) or 0)
+        with stdout_reserved_for_json(wants_json_stdout(args)):
+            return int(args.func(args) or 0)
     except LabkitError as exc:
         print(f"labkit {args.command}: {exc}", file=sys.stderr)
         return 2

@@ -12,11 +12,10 @@ top-level ``rotor_speed_rpm`` and ``spin_rad_s`` (null when not given), so that 
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
-from pathlib import Path
 
+from labkit.cli.output import add_json_argument, write_json
 from labkit.errors import LabkitError, VideoError
 
 
@@ -80,7 +79,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     path.add_argument("--luma", action="store_true",
                       help="force the codec's luma plane (fastest; for benchmarks)")
     _add_speed_arguments(laser)
-    laser.add_argument("--json", metavar="OUT", help="write the result as JSON ('-' for stdout)")
+    add_json_argument(laser, "the result")
     laser.add_argument("--rerun", metavar="SPEC", help="stream frames and overlays to rerun")
     laser.add_argument("--overlay", metavar="OUT.png",
                        help="draw the fitted curve and the verdict over the accumulated trace "
@@ -115,7 +114,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     strobe.add_argument("--overlay", metavar="OUT.png",
                         help="draw the body axis, the rest axis and the tracked point over a frame")
     _add_speed_arguments(strobe, " (default: 60 x --rotor-hz)")
-    strobe.add_argument("--json", metavar="OUT", help="write the result as JSON ('-' for stdout)")
+    add_json_argument(strobe, "the result")
     strobe.add_argument("--rerun", metavar="SPEC", help="stream frames and overlays to rerun")
     strobe.set_defaults(func=run_strobe)
     parser.set_defaults(func=lambda args: parser.print_help() or 1)
@@ -157,16 +156,7 @@ def _speed_line(r: dict) -> str | None:
 
 
 def _write_json(result: dict, out: str | None) -> None:
-    if not out:
-        return
-    text = json.dumps(result, indent=1, default=float) + "\n"
-    if out == "-":
-        sys.stdout.write(text)
-        return
-    try:
-        Path(out).write_text(text)
-    except OSError as exc:
-        raise VideoError(out, f"cannot write JSON: {exc.strerror}") from None
+    write_json(result, out, "analyse")  # labkit.cli.output: '-' is stdout, alone
 
 
 def _fmt(v, digits: int = 2) -> str:

@@ -13,12 +13,12 @@ writes ``{"model", "series": {NAME: {"params": {P: {"value", "stderr", "ci95"}},
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 from pathlib import Path
 
 from labkit.cli.names import FIT_MODELS, PAPER_OMEGA_C
+from labkit.cli.output import add_json_argument, announce_rerun_file, announce_written, write_json
 from labkit.errors import FitError
 from labkit.stream.core import add_rerun_argument
 
@@ -46,7 +46,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=0, help="bootstrap seed")
     p.add_argument("--strict", action="store_true",
                    help="exit with status 3 when any fit has a warning (for scripts and CI)")
-    p.add_argument("--json", metavar="OUT", help="write the fit as JSON ('-' for stdout)")
+    add_json_argument(p, "the fit")
     p.add_argument("--plot", metavar="OUT.png", help="write data, fit and residuals as a PNG")
     p.add_argument("--table", metavar="OUT.csv",
                    help="also write the collected input rows as a CSV (e.g. speed and cone angle per clip)")
@@ -102,24 +102,19 @@ def run(args: argparse.Namespace) -> int:
     if args.table:
         write_table(table, args.table)
     report = fit_table(table, args.model, options)
-    to_stdout = args.json == "-"
-    print(format_report(report), file=sys.stderr if to_stdout else sys.stdout)
-    if args.json:
-        text = json.dumps(report.to_json(), indent=2)
-        if to_stdout:
-            print(text)
-        else:
-            Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-            Path(args.json).write_text(text + "\n")
+    print(format_report(report))
+    write_json(report.to_json(), args.json, "fit")
     if args.plot:
         from labkit.fit.overlay import overlays_from_csv
         from labkit.report.figures import fit_figure
         overlays = [ov for path in args.overlay for ov in overlays_from_csv(path)]
         fit_figure(report, args.plot, overlays=overlays)
+        announce_written(args.plot, "fit", "figure")
     if args.rerun is not None:
         from labkit.stream.fit import stream_fit_report
 
         stream_fit_report(args.rerun, report)
+        announce_rerun_file(args.rerun, "fit")
     if args.strict and any(r.warnings for r in report.series.values()):
         print("labkit fit: warnings present (--strict)", file=sys.stderr)
         return 3

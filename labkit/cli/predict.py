@@ -11,18 +11,18 @@ Magnets come from a rig file's [bodies.rotator] / [bodies.floator] or from optio
   labkit predict --rotator cylinder:6x3mm --floator sphere:10mm --speed-rpm 25000 --tilt-deg 5
   labkit predict my-rig.toml --speed-rpm 12000
   labkit predict --rotator cylinder:6x3mm --floator sphere:10mm --tilt-deg 5 \\
-      --map tilt_deg=2:8:7 speed_rpm=10000:40000:7 --out map.jsonl [--scheduler tcp://host:8786]
+      --map tilt_deg=2:8:n=7 speed_rpm=10000:40000:n=7 --out map.jsonl [--scheduler tcp://host:8786]
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
-from pathlib import Path
 from typing import TYPE_CHECKING
 
+from labkit.cli.confirm import CONFIRM_POINTS, add_yes_argument, confirm_size
+from labkit.cli.output import add_json_argument, note_first_compile, write_json
 from labkit.predict.inputs import (
     PredictInputError,
     check_remanence,
@@ -59,8 +59,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="skip the speed limits and the Eq. 6.18 scaling (the slowest part, a few s)")
     p.add_argument("--verify-cycles", type=int, default=2000,
                    help="drive periods of the check (default 2000)")
-    p.add_argument("--json", metavar="OUT", help="write the prediction (or the map) as JSON")
-    p.add_argument("--map", nargs="+", metavar="AXIS=START:STOP:COUNT",
+    add_json_argument(p, "the prediction (or the map)")
+    p.add_argument("--map", nargs="+", metavar="AXIS=START:STOP:n=COUNT",
                    help="stability map over tilt_deg and/or speed_rpm")
     p.add_argument("--out", metavar="STORE", help="map: JSON-lines store, resumed when it exists")
     p.add_argument("--workers", type=int, default=1, help="map: local worker processes (default 1)")
@@ -68,6 +68,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--chunk", type=int, default=4, help="map: points per task (default 4)")
     p.add_argument("--map-verify", type=int, default=0, metavar="CYCLES",
                    help="map: also run the time-domain check (CYCLES drive periods) at every bound point")
+    add_yes_argument(p, f"the map has more than {CONFIRM_POINTS} points")
     p.set_defaults(func=run)
 
 
@@ -110,6 +111,11 @@ def run(args: argparse.Namespace) -> int:
         return _run_map(args, pair)
     if args.speed_rpm is None:
         raise PredictInputError("--speed-rpm missing (the rotator speed to predict at)")
+    steps = ["bound state, stiffness and stability"] + ([] if args.no_limits else ["speed limits"]) + (
+        [] if args.no_verify else [f"a {args.verify_cycles}-cycle simulation check"])
+    print(f"labkit predict: computing {', '.join(steps)}...", file=sys.stderr, flush=True)
+    if not args.no_verify:
+        note_first_compile("predict")
     pred = predict(pair, args.speed_rpm / RPM, run_verify=not args.no_verify,
                    verify_cycles=args.verify_cycles, speed_limits=not args.no_limits,
                    scaling=not args.no_limits)
@@ -120,10 +126,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _write_json(path: str, data) -> None:
-    try:
-        Path(path).write_text(json.dumps(data, indent=2, default=_jsonable) + "\n")
-    except OSError as exc:
-        raise PredictInputError(f"--json: cannot write {path} ({exc.strerror})") from None
+    write_json(data, path, "predict")  # labkit.cli.output: '-' is stdout, alone
 
 
 def _jsonable(x):
@@ -206,6 +209,7 @@ def _run_map(args: argparse.Namespace, pair: Pair) -> int:
         points = grid_points(axes, pair, args.speed_rpm, args.map_verify)
     except MapSpecError as exc:
         raise PredictInputError(f"--map: {exc}") from None
+    confirm_size(len(points), CONFIRM_POINTS, "map points", yes=args.yes, command="predict")
     result = run_sweep(points, evaluate_points, store=args.out, chunk=args.chunk, workers=args.workers,
                        scheduler=args.scheduler, progress=sys.stderr.isatty(), description="predict map")
     rows = [{k: v for k, v in r.items() if k not in ("rotator", "floator")} for r in result.results]

@@ -12,6 +12,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from labkit.cli.output import add_json_argument, announce_rerun_file, write_json
 from labkit.cli.run import close_sinks
 from labkit.protocols.events import FlagTally
 from labkit.protocols.launch import replay_session
@@ -27,6 +28,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("session", help="session directory")
     p.add_argument("--export-csv", action="store_true", help="only export readings/*.jsonl to CSV")
+    add_json_argument(p, "the comparison (identical, differences, status, results)")
     add_rerun_argument(p)
     p.set_defaults(func=main)
 
@@ -50,9 +52,13 @@ def main(args: argparse.Namespace) -> int:
         result = replay_session(Path(args.session), sinks=sinks)
     finally:
         close_sinks(sinks, "replay")
+    announce_rerun_file(args.rerun, "replay")
     for warning in result.warnings:
         print(f"labkit replay: warning: {warning}", file=sys.stderr)
     out = result.outcome
+    write_json({"session": str(args.session), "identical": result.identical,
+                "differences": result.differences, "status": out.status, "reason": out.reason,
+                "warnings": result.warnings, "results": out.results}, args.json, "replay")
     if flags.counts:
         print(f"device flags: {flags.summary()}")
     if out.status != "completed" and out.error is not None and result.recorded is None:

@@ -8,8 +8,11 @@ sheet of frames with the fitted pattern.
 from __future__ import annotations
 
 import argparse
+import sys
+from pathlib import Path
 
 from labkit.cli.names import FIT_MODELS
+from labkit.cli.output import add_json_argument, write_json
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -26,6 +29,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--overlay", action="append", default=[], metavar="CSV",
                    help="draw curves from a CSV on the fit figures (first column x, others y, matched "
                    "by column name); repeatable")
+    add_json_argument(p, "where the report and its files are")
     p.set_defaults(func=run)
 
 
@@ -34,8 +38,13 @@ def run(args: argparse.Namespace) -> int:
     from labkit.report.build import build_report
 
     overlays = tuple(ov for csv in args.overlay for ov in overlays_from_csv(csv))
+    if Path(args.source).exists():  # a missing source stays a one-line error
+        print(f"labkit report: fitting and drawing {args.source} (a few seconds)...", file=sys.stderr,
+              flush=True)
     path = build_report(args.source, args.out, model=args.model, x=args.x, y=args.y,
                         inertia=args.inertia, overlays=overlays)
     print(f"report written: {path}")
     print(f"figures and data next to it in {path.parent}")
+    files = sorted(str(f) for f in path.parent.iterdir() if f.is_file())
+    write_json({"report": str(path), "folder": str(path.parent), "files": files}, args.json, "report")
     return 0

@@ -8,12 +8,11 @@ of ``{"id", "quantity", "paper", "labkit", "rel_diff", "ok", "note"}``.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 import time
-from pathlib import Path
 
+from labkit.cli.output import add_json_argument, write_json
 from labkit.errors import LabkitError
 from labkit.reproduce import SUITES, Row, run
 from labkit.reproduce.paper_data import MISPRINTS
@@ -25,7 +24,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     parser.add_argument("--only", action="append", metavar="PREFIX",
                         help="only rows whose id starts with PREFIX (repeatable), e.g. table5.7")
     parser.add_argument("--quick", action="store_true", help="a fast subset (seconds), as used by the tests")
-    parser.add_argument("--json", metavar="OUT", type=Path, help="write the rows as JSON to OUT")
+    add_json_argument(parser, "the rows")
+    parser.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
     parser.set_defaults(func=main)
 
 
@@ -48,6 +48,14 @@ def format_rows(rows: list[Row]) -> str:
     return "\n".join(lines)
 
 
+def _progress(start: float):
+    """``labkit reproduce: [k/n] PREFIX (elapsed)`` on stderr before each suite."""
+    def show(k: int, n: int, prefix: str) -> None:
+        print(f"labkit reproduce: [{k}/{n}] {prefix} ({time.perf_counter() - start:.0f} s so far)",
+              file=sys.stderr, flush=True)
+    return show
+
+
 def main(args: argparse.Namespace) -> int:
     only = args.only or []
     known = [prefix for prefix, _ in SUITES]
@@ -55,14 +63,9 @@ def main(args: argparse.Namespace) -> int:
         if not any(p.startswith(o) or o.startswith(p) for p in known):
             raise LabkitError(f"--only {o!r}: no such row prefix (known: {', '.join(known)})")
     start = time.perf_counter()
-    rows = run(only, quick=args.quick)
+    rows = run(only, quick=args.quick, progress=None if args.no_progress else _progress(start))
     elapsed = time.perf_counter() - start
-    if args.json:
-        try:
-            args.json.write_text(json.dumps([r.as_dict() for r in rows], indent=1) + "\n")
-        except OSError as exc:
-            raise LabkitError(f"{args.json}: cannot write ({exc.strerror})") from exc
-        print(f"wrote {args.json}", file=sys.stderr)
+    write_json([r.as_dict() for r in rows], args.json, "reproduce")
     agree = sum(r.ok for r in rows)
     summary = f"{len(rows)} rows, {agree} agree, {len(rows) - agree} differ (see notes); {elapsed:.1f} s"
     text = "\n".join([format_rows(rows), "", summary,

@@ -12,6 +12,8 @@ import argparse
 import sys
 from typing import Any
 
+from labkit.cli.confirm import CONFIRM_STEPS, add_yes_argument, confirm_size
+from labkit.cli.output import add_json_argument, announce_rerun_file, write_json
 from labkit.errors import LabkitError
 from labkit.protocols import PROTOCOLS, ProgressSink
 from labkit.protocols.events import FlagTally
@@ -37,6 +39,8 @@ def add_common(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--notes", default="", help="operator notes stored in run.json")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_json_argument(p, "the outcome (status, session, points and fit)")
+    add_yes_argument(p, f"the plan has more than {CONFIRM_STEPS} steps")
     add_rerun_argument(p)
 
 
@@ -132,6 +136,13 @@ def close_sinks(sinks: list[Any], command: str) -> None:
                   file=sys.stderr)
 
 
+def outcome_json(outcome: Any) -> dict[str, Any]:
+    """The ``--json`` document of a run: ``{"status", "reason", "session", "results"}``."""
+    return {"status": outcome.status, "reason": outcome.reason,
+            "session": str(outcome.session) if outcome.session else None,
+            "results": outcome.results}
+
+
 def report(outcome: Any) -> int:
     where = f" (session {outcome.session})" if outcome.session else ""
     fit = (outcome.results or {}).get("fit") or {}
@@ -180,7 +191,12 @@ def main(args: argparse.Namespace) -> int:
         print(f"labkit run: warning: {warning}", file=sys.stderr)
     if args.dry_run:
         print(prep.runner.dry_run())
+        write_json({"status": "dry-run", "protocol": prep.protocol.name, "params": prep.params,
+                    "n_steps": len(prep.runner.steps), "plan": prep.runner.dry_run()},
+                   getattr(args, "json", None), "run")
         return 0
+    confirm_size(len(prep.runner.steps) - len(prep.runner.done_steps), CONFIRM_STEPS, "measurement steps",
+                 yes=getattr(args, "yes", False), command="run")
     check_ports_free(prep.rig)
     from labkit.control.supervisor import needs_supervisor, supervised
 
@@ -200,5 +216,7 @@ def run_prepared(args: argparse.Namespace, prep: Any) -> int:
         outcome = execute(prep, args.sessions, notes=args.notes, on_session=on_session)
     finally:
         close_sinks(sinks, "run")
+    announce_rerun_file(args.rerun, "run")
     warn_flags(prep.runner.bus.sinks)
+    write_json(outcome_json(outcome), getattr(args, "json", None), "run")
     return report(outcome)

@@ -14,6 +14,7 @@ import json
 import math
 import sys
 
+from labkit.cli.output import add_json_argument, note_first_compile, write_json
 from labkit.sim.integrators import DEFAULT_INTEGRATOR, INTEGRATORS
 
 SINK_MODULE = "labkit.stream.sim_sink"
@@ -65,7 +66,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         default=1e-6,
         help="relative invariant drift that marks the run as failed (default 1e-6)",
     )
-    p.add_argument("--json", metavar="OUT", help="write the result summary as JSON")
+    add_json_argument(p, "the result summary")
     p.add_argument("--series", action="store_true", help="include the sampled series in --json")
     p.add_argument(
         "--rerun", metavar="SPEC", help="stream poses to rerun: spawn, connect[:ADDR] or save:FILE"
@@ -90,6 +91,8 @@ def run(args: argparse.Namespace) -> int:
     if args.compile_only:
         print(json.dumps(system.summary(), indent=2))
         return 0
+    if args.integrator not in ("dop853", "lsoda", "radau"):  # the splittings run numba kernels
+        note_first_compile("simulate")
     if args.target_error is not None:
         _choose(args, scene, system)
     result = simulate(
@@ -108,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
         _stream(result, args.rerun)
     print(format_summary(result))
     if args.json:
-        result.write_json(args.json, series=args.series)
+        write_json(result.to_json(args.series), args.json, "simulate")
     return 0 if result.ok else 1
 
 

@@ -1,7 +1,7 @@
 """``labkit sweep table5.3 | fig5.12``: stability maps of the conical motion (paper Sec. 5.1.3, 5.1.6).
 
 ``--rows`` runs the 36 rows of Table 5.3 and compares each verdict with the paper's; otherwise
-every body/drive configuration of Table 5.3 is run over ``--ratios START:STOP:COUNT`` of
+every body/drive configuration of Table 5.3 is run over ``--ratios START:STOP:n=COUNT`` of
 ``tau_S / tau_C`` and printed as a map (``S`` stable, ``u`` unstable) next to Eq. 5.46's
 minimum ratio. Points run in chunks with the batch kernel, in this process (default), a local
 process pool (``--workers``) or on a Dask cluster (``--scheduler tcp://host:8786``); with
@@ -14,15 +14,15 @@ Grids that start with a minus sign are given with ``=``: ``--k=-1.5:0.25:15``.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 
+from labkit.cli.confirm import CONFIRM_SWEEP_POINTS, add_yes_argument, confirm_size
 from labkit.numerics.checks import NumericsError
 
-DEFAULT_RATIOS = "0:0.6:13"
-FIG_5_12_RATIOS = "-4:5:19"
-FIG_5_12_KS = "-1.5:0.25:15"
+DEFAULT_RATIOS = "0:0.6:n=13"
+FIG_5_12_RATIOS = "-4:5:n=19"
+FIG_5_12_KS = "-1.5:0.25:n=15"
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -36,12 +36,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rows", action="store_true", help="the 36 rows of Table 5.3 instead of a map")
     p.add_argument(
         "--ratios",
-        help=f"tau_S/tau_C grid START:STOP:COUNT (table5.3: {DEFAULT_RATIOS}; fig5.12: {FIG_5_12_RATIOS})",
+        help=f"tau_S/tau_C grid START:STOP:n=COUNT (table5.3: {DEFAULT_RATIOS}; fig5.12: {FIG_5_12_RATIOS})",
     )
     p.add_argument(
         "--k",
         default=FIG_5_12_KS,
-        help=f"fig5.12: spin parameter grid START:STOP:COUNT, written --k={FIG_5_12_KS} (the default)",
+        help=f"fig5.12: spin parameter grid START:STOP:n=COUNT, written --k={FIG_5_12_KS} (the default)",
     )
     p.add_argument(
         "--bias", type=float, default=0.5, help="initial kick on the y angular velocity, rad/s (map)"
@@ -53,26 +53,21 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--workers", type=int, default=1, help="local worker processes (default 1: in process)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler, e.g. tcp://10.0.0.5:8786")
     p.add_argument("--timeout", type=float, default=10.0, help="seconds to wait for the scheduler")
-    p.add_argument("--json", metavar="OUT", help="write all results as JSON")
+    p.add_argument("--json", metavar="PATH|-", help="write all results as JSON ('-': alone on stdout)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_yes_argument(p, f"the sweep has more than {CONFIRM_SWEEP_POINTS} points")
     p.set_defaults(func=run)
 
 
-def parse_ratios(text: str) -> list[float]:
-    """``START:STOP:COUNT`` (inclusive, evenly spaced) or a comma list of ratios."""
+def parse_ratios(text: str, option: str = "--ratios") -> list[float]:
+    """``START:STOP:n=COUNT`` (inclusive, evenly spaced), ``START:STOP:step=S`` or a comma list
+    (:mod:`labkit.ranges`; the old ``START:STOP:COUNT`` is refused with the new spelling)."""
+    from labkit.ranges import RangeError, parse_range
+
     try:
-        if ":" in text:
-            start, stop, count = text.split(":")
-            n = int(count)
-            if n < 1:
-                raise ValueError
-            a, b = float(start), float(stop)
-            return [a + (b - a) * k / max(n - 1, 1) for k in range(n)]
-        return [float(x) for x in text.split(",")]
-    except ValueError:
-        raise NumericsError(
-            f"--ratios {text!r}: expected START:STOP:COUNT (e.g. 0:0.6:13) or a comma list"
-        ) from None
+        return parse_range(text, bare="error", limit=100_000)
+    except RangeError as exc:
+        raise NumericsError(f"{option} {exc} (e.g. 0:0.6:n=13 or a comma list)") from None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -87,12 +82,13 @@ def run(args: argparse.Namespace) -> int:
     stability_map.check_chunk(max(1, args.chunk), args.cycles)
     if args.problem == "fig5.12":
         points = stability_map.fig5_12_points(
-            parse_ratios(args.k), parse_ratios(args.ratios or FIG_5_12_RATIOS), bias_y=args.bias
+            parse_ratios(args.k, "--k"), parse_ratios(args.ratios or FIG_5_12_RATIOS), bias_y=args.bias
         )
     elif args.rows:
         points = stability_map.table5_3_rows()
     else:
         points = stability_map.map_points(parse_ratios(args.ratios or DEFAULT_RATIOS), bias_y=args.bias)
+    confirm_size(len(points), CONFIRM_SWEEP_POINTS, "sweep points", yes=args.yes, command="sweep")
     for p in points:  # the horizon is part of a point's identity in the store
         p["cycles"], p["steps_per_period"] = args.cycles, args.steps
     try:
@@ -169,7 +165,6 @@ def print_fig5_12(results: list[dict]) -> None:
 
 
 def _write_json(path: str | None, res) -> None:
-    if path:
-        with open(path, "w") as fh:
-            json.dump({"points": res.results, "computed": res.computed, "reused": res.reused}, fh, indent=2)
-            fh.write("\n")
+    from labkit.cli.output import write_json
+
+    write_json({"points": res.results, "computed": res.computed, "reused": res.reused}, path, "sweep")

@@ -14,10 +14,18 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from labkit.cli.output import add_json_argument, write_json
 from labkit.errors import VideoError
 
 if TYPE_CHECKING:  # numpy loads when a clip is written, not for --help
     import numpy as np
+
+
+def _written(path: Path, truth: dict | None) -> dict:
+    """``{"video", "truth", "ground_truth"}`` of one written clip (the ``--json`` document)."""
+    from labkit.synth.writer import truth_path
+
+    return {"video": str(path), "truth": str(truth_path(path)), "ground_truth": truth}
 
 
 def _size(text: str) -> tuple[int, int]:
@@ -83,6 +91,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     laser.add_argument("--angles", metavar="RUN", help="simulator run: t_s, tilt_x_rad, tilt_y_rad")
     laser.add_argument("--screen-distance-mm", type=float, default=500.0, help="with --angles")
     laser.add_argument("--mm-per-px", type=float, default=0.5, help="with --angles")
+    add_json_argument(laser, "the files written and the ground truth")
     laser.set_defaults(func=run_laser)
 
     strobe = kinds.add_parser("strobe", help="stroboscopic side view of the floating magnet")
@@ -95,10 +104,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     strobe.add_argument("--rc-offset-px", type=float, default=60.0, help="delta of Eq. 5.97")
     strobe.add_argument("--codec", default="mp4v")
     strobe.add_argument("--seed", type=int, default=0)
+    add_json_argument(strobe, "the files written and the ground truth")
     strobe.set_defaults(func=run_strobe)
 
     testset = kinds.add_parser("testset", help="the seeded acceptance set (laser clips) into a folder")
     testset.add_argument("folder")
+    add_json_argument(testset, "the files written")
     testset.set_defaults(func=run_testset)
     parser.set_defaults(func=lambda args: parser.print_help() or 1)
 
@@ -174,7 +185,8 @@ def run_laser(args: argparse.Namespace) -> int:
     truth = truth or laser_truth(spec)
     path = write_clip(args.out, render_laser(spec, position), spec.fps, spec.codec, truth)
     w, h = spec.size
-    print(f"wrote {path} ({spec.frames} frames {w}x{h}, {args.level}) and its truth JSON")
+    print(f"wrote {path} ({spec.frames} frames {w}x{h}, {args.level}) and {_written(path, None)['truth']}")
+    write_json(_written(path, truth), args.json, "synth")
     return 0
 
 
@@ -193,8 +205,11 @@ def run_strobe(args: argparse.Namespace) -> int:
     )
     if not 0 < spec.tilt_amplitude_rad < math.pi / 2:
         raise VideoError(args.out, "--tilt-rad must lie in (0, pi/2)")
-    path = write_clip(args.out, render_strobe(spec), spec.strobe_hz, spec.codec, strobe_truth(spec))
-    print(f"wrote {path} ({spec.frames} frames, apparent {abs(spec.apparent_hz):.3f} Hz) and its truth JSON")
+    truth = strobe_truth(spec)
+    path = write_clip(args.out, render_strobe(spec), spec.strobe_hz, spec.codec, truth)
+    print(f"wrote {path} ({spec.frames} frames, apparent {abs(spec.apparent_hz):.3f} Hz) and "
+          f"{_written(path, None)['truth']}")
+    write_json(_written(path, truth), args.json, "synth")
     return 0
 
 
@@ -202,9 +217,12 @@ def run_testset(args: argparse.Namespace) -> int:
     from labkit.synth import laser_truth, render_laser, write_clip
     from labkit.synth.presets import laser_test_set
 
+    written = []
     for name, spec in laser_test_set():
         path = write_clip(
             Path(args.folder) / f"{name}.mp4", render_laser(spec), spec.fps, spec.codec, laser_truth(spec)
         )
-        print(path)
+        written.append(_written(path, None))
+        print(f"wrote {path} and {written[-1]['truth']}")
+    write_json({"clips": written}, args.json, "synth")
     return 0

@@ -278,11 +278,14 @@ def _load_driver_modules() -> None:
 def driver_class(kind: str, protocol: str) -> DriverClass:
     """Look up a driver; raises KeyError with the known names."""
     _load_driver_modules()
-    try:
-        return _DRIVERS[(kind, protocol)]
-    except KeyError:
-        known = sorted(p for k, p in _DRIVERS if k == kind)
-        raise KeyError(f"no {kind} driver {protocol!r}; known: {', '.join(known)}") from None
+    if (kind, protocol) not in _DRIVERS:  # a user's driver (labkit.drivers entry point)?
+        from labkit.plugins import load_driver_plugins, problems_note
+
+        load_driver_plugins(_DRIVERS, Device)
+        if (kind, protocol) not in _DRIVERS:
+            known = sorted(p for k, p in _DRIVERS if k == kind)
+            raise KeyError(f"no {kind} driver {protocol!r}; known: {', '.join(known)}{problems_note()}")
+    return _DRIVERS[(kind, protocol)]
 
 
 def known_drivers() -> dict[str, list[str]]:

@@ -16,6 +16,7 @@ import numpy as np
 
 from labkit.predict.magnets import Magnet
 from labkit.predict.pair import Pair
+from labkit.ranges import RangeError, parse_range
 
 AXES = ("tilt_deg", "speed_rpm")
 
@@ -24,24 +25,22 @@ class MapSpecError(ValueError):
     """A ``--map`` axis that cannot be read."""
 
 
+#: values per --map axis (the product of the axes is confirmed above CONFIRM_POINTS, docs/ranges.md)
+MAX_AXIS_VALUES = 10_000
+
+
 def parse_axis(text: str) -> tuple[str, np.ndarray]:
-    """``tilt_deg=2:8:7`` -> ("tilt_deg", 7 values from 2 to 8 inclusive); ``speed_rpm=20000``
-    is a single value."""
+    """``tilt_deg=2:8:n=7`` -> ("tilt_deg", 7 values from 2 to 8 inclusive); ``2:8:step=1``,
+    ``2,4,8`` and ``speed_rpm=20000`` as in :mod:`labkit.ranges` (the old ``2:8:7`` is refused
+    with the new spelling: it meant a count here and a step in ``--set``)."""
     name, sep, spec = text.partition("=")
     name = name.strip()
     if not sep or name not in AXES:
-        raise MapSpecError(f"{text!r}: expected AXIS=START:STOP:COUNT with AXIS one of {', '.join(AXES)}")
-    parts = spec.split(":")
+        raise MapSpecError(f"{text!r}: expected AXIS=START:STOP:n=COUNT with AXIS one of {', '.join(AXES)}")
     try:
-        nums = [float(p) for p in parts]
-    except ValueError:
-        raise MapSpecError(f"{text!r}: START, STOP and COUNT must be numbers") from None
-    if len(nums) == 1:
-        values = np.array(nums)
-    elif len(nums) == 3 and nums[2] >= 1 and nums[2] == int(nums[2]):
-        values = np.linspace(nums[0], nums[1], int(nums[2]))
-    else:
-        raise MapSpecError(f"{text!r}: expected START:STOP:COUNT (COUNT a whole number >= 1) or one value")
+        values = np.array(parse_range(spec, bare="error", limit=MAX_AXIS_VALUES))
+    except RangeError as exc:
+        raise MapSpecError(f"{text!r}: {exc}") from None
     if name == "speed_rpm" and np.any(values <= 0):
         raise MapSpecError(f"{text!r}: speeds must be positive")
     if name == "tilt_deg" and np.any(np.abs(values) >= 90):

@@ -12,11 +12,20 @@ PROTOCOLS: dict[str, type[ProtocolDef]] = {p.name: p for p in (SpeedSweep, SpinC
 
 
 def get_protocol(name: str) -> ProtocolDef:
-    """A fresh protocol object by name; LabkitError listing the known ones otherwise."""
-    try:
-        return PROTOCOLS[name]()
-    except KeyError:
-        raise LabkitError(f"unknown protocol {name!r}; known: {', '.join(sorted(PROTOCOLS))}") from None
+    """A fresh protocol object by name (built in, or a ``labkit.protocols`` entry point:
+    :mod:`labkit.plugins`); LabkitError listing the known ones otherwise."""
+    if name not in PROTOCOLS:
+        from labkit.plugins import load_protocol_plugins, problems_note
+
+        load_protocol_plugins(PROTOCOLS, ProtocolDef)
+        if name not in PROTOCOLS:
+            import difflib
+
+            close = difflib.get_close_matches(name, sorted(PROTOCOLS), n=1, cutoff=0.6)
+            guess = f" (did you mean {close[0]!r}?)" if close else ""
+            raise LabkitError(f"unknown protocol {name!r}{guess}; known: {', '.join(sorted(PROTOCOLS))}"
+                              + problems_note())
+    return PROTOCOLS[name]()
 
 
 #: :mod:`labkit.protocols.launch` (which imports this package) is reached through the package

@@ -12,10 +12,12 @@ built). Limits are documented in docs/protocols.md.
 
 from __future__ import annotations
 
+import difflib
 import math
 from typing import Any
 
 from labkit.errors import LabkitError
+from labkit.ranges import RangeError, parse_range
 from labkit.rig import MAX_DURATION_S, MAX_SPEED_RPM
 from labkit.units import RAD_S_PER_RPM
 
@@ -60,26 +62,16 @@ def check_count(key: str, n: float, what: str = "values", limit: int = MAX_LIST_
 
 
 def parse_number_list(key: str, text: str) -> list[float]:
+    """One list, range or number in the grammar of :mod:`labkit.ranges` (``a:b:step=S``,
+    ``a:b:n=N``, ``a,b,c``; the old ``a:b:S`` is the step), every value checked."""
     text = text.strip()
     check_length(key, text)
     try:
-        if ":" in text:
-            parts = [check_value(key, float(p)) for p in text.split(":")]
-            if len(parts) != 3:
-                raise ParamError(f"--set {key}: a range is start:stop:step, got {_short(text)}")
-            start, stop, step = parts
-            if step == 0 or (stop - start) / step < 0:
-                raise ParamError(f"--set {key}: step {step:g} does not go from {start:g} to {stop:g}")
-            count = (stop - start) / step + 1
-            check_count(key, count)
-            n = int(round((stop - start) / step, 9)) + 1
-            return [start + i * step for i in range(n)]
-        items = [p for p in text.replace(";", ",").split(",") if p.strip()]
-        check_count(key, len(items))
-        return [check_value(key, float(p)) for p in items]
-    except ValueError:
-        raise ParamError(f"--set {key}: {_short(text)} is not a number, list (a,b,c) or range (a:b:step)") \
-            from None
+        values = parse_range(text, bare="step", limit=MAX_LIST_VALUES)
+    except RangeError as exc:
+        raise ParamError(f"--set {key}: {exc} (a number, list a,b,c or range "
+                         "a:b:step=S / a:b:n=N)") from None
+    return [check_value(key, v) for v in values]
 
 
 def coerce(key: str, text: str, default: Any) -> Any:
@@ -130,7 +122,9 @@ def resolve_params(defaults: dict[str, Any], overrides: dict[str, Any] | list[st
         if key not in defaults:
             known = ", ".join(sorted(defaults))
             name = protocol or "this protocol"
-            raise ParamError(f"--set {key}: unknown parameter of {name} (known: {known})")
+            close = difflib.get_close_matches(key, sorted(defaults), n=1, cutoff=0.6)
+            guess = f"; did you mean {close[0]!r}?" if close else ""
+            raise ParamError(f"--set {key}: unknown parameter of {name}{guess} (known: {known})")
         default = defaults[key]
         typed = isinstance(value, str)
         params[key] = coerce(key, value, default) if typed else check_typed(key, value, default)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import importlib
 import math
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass
 
 SUITES = [
@@ -74,14 +74,19 @@ def _wanted(prefix: str, only: Iterable[str] | None) -> bool:
     return any(prefix.startswith(o) or o.startswith(prefix) for o in only)
 
 
-def run(only: Iterable[str] | None = None, quick: bool = False) -> list[Row]:
-    """Run the suites whose prefix matches ``only`` (any of the id prefixes; all if empty)."""
+def run(only: Iterable[str] | None = None, quick: bool = False,
+        progress: Callable[[int, int, str], None] | None = None) -> list[Row]:
+    """Run the suites whose prefix matches ``only`` (any of the id prefixes; all if empty);
+    ``progress(k, n, prefix)`` is called before suite k of n starts."""
     only = list(only or [])
     done: set[str] = set()
     rows: list[Row] = []
-    for prefix, module_name in SUITES:
-        if not _wanted(prefix, only) or (prefix, module_name) in done:
+    wanted = [(p, m) for p, m in dict.fromkeys(SUITES) if _wanted(p, only)]
+    for k, (prefix, module_name) in enumerate(wanted, 1):
+        if (prefix, module_name) in done:
             continue
+        if progress is not None:
+            progress(k, len(wanted), prefix)
         module = importlib.import_module(module_name)
         for row in module.rows(quick=quick, prefix=prefix):
             if not only or any(row.id.startswith(o) for o in only):

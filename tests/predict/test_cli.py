@@ -75,8 +75,11 @@ def _run(argv, capsys):
     (["--grade", "N42", "--remanence-t", "1.3"], "labkit predict: give --grade or --remanence-t, not both"),
     (["--tilt-deg", "95"], "labkit predict: --tilt-deg: must be below 90 degrees"),
     (["--speed-rpm", "-5"], "labkit predict: --speed-rpm: must be positive"),
-    (["--map", "tilt=1:2:3"], "labkit predict: --map: 'tilt=1:2:3': expected AXIS=START:STOP:COUNT"),
-    (["--map", "speed_rpm=1:2:x"], "labkit predict: --map: 'speed_rpm=1:2:x': START, STOP and COUNT must"),
+    (["--map", "tilt=1:2:3"], "labkit predict: --map: 'tilt=1:2:3': expected AXIS=START:STOP:n=COUNT"),
+    (["--map", "speed_rpm=1:2:x"],
+     "labkit predict: --map: 'speed_rpm=1:2:x': third part 'x' is not a number"),
+    (["--map", "tilt_deg=2:8:7"],
+     "labkit predict: --map: 'tilt_deg=2:8:7': '2:8:7' is ambiguous: write 2:8:n=7"),
 ])
 def test_bad_options_are_one_line(extra, message, capsys):
     rc, out, err = _run(STORY + extra + ["--no-verify"], capsys)
@@ -146,7 +149,7 @@ def test_rig_file_gives_the_same_answer_as_options(tmp_path, monkeypatch, capsys
 def test_map_on_a_tiny_grid_resumes(tmp_path, capsys):
     store = tmp_path / "map.jsonl"
     argv = ["predict", "--rotator", "cylinder:6x3mm", "--floator", "sphere:10mm", "--tilt-deg", "5",
-            "--map", "speed_rpm=3000:40000:3", "--map-verify", "200", "--out", str(store),
+            "--map", "speed_rpm=3000:40000:n=3", "--map-verify", "200", "--out", str(store),
             "--json", str(tmp_path / "map.json")]
     rc, out, _ = _run(argv, capsys)
     assert rc == 0 and "3 computed, 0 reused" in out

@@ -1,0 +1,59 @@
+"""docs/notebook.md runs: every ```python cell, in order, in one namespace, from a folder
+holding the repository's rigs/, and what each prints matches the ```text block after it
+(words exactly, numbers to a relative 1e-2); the figure it writes is a PNG."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import math
+import os
+import re
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+PAGE = REPO / "docs" / "notebook.md"
+BLOCK = re.compile(r"```(python|text)\n(.*?)```", re.S)
+NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?")
+
+
+def cells() -> list[tuple[str, str | None]]:
+    out: list[tuple[str, str | None]] = []
+    for kind, body in BLOCK.findall(PAGE.read_text()):
+        if kind == "python":
+            out.append((body, None))
+        elif out and out[-1][1] is None:
+            out[-1] = (out[-1][0], body)
+    return out
+
+
+def same_output(got: str, expected: str) -> bool:
+    if NUMBER.sub("#", got).split() != NUMBER.sub("#", expected).split():
+        return False
+    pairs = zip(NUMBER.findall(got), NUMBER.findall(expected), strict=True)
+    return all(math.isclose(float(a), float(b), rel_tol=1e-2, abs_tol=1e-3) for a, b in pairs)
+
+
+def test_the_page_walks_run_load_fit_figure() -> None:
+    text = PAGE.read_text()
+    for call in ("labkit.execute", "labkit.load_session", ".readings[", ".events", ".meta",
+                 "labkit.fit_data", "savefig"):
+        assert call in text, call
+    assert len(cells()) >= 6 and all(expected is not None for _, expected in cells())
+    assert not same_output("b = -1.7", "b = -1.898")
+
+
+@pytest.mark.timeout(300)
+def test_every_cell_runs_and_prints_what_the_page_shows(tmp_path, monkeypatch) -> None:
+    os.symlink(REPO / "rigs", tmp_path / "rigs")
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {"__name__": "notebook_doc"}
+    for number, (code, expected) in enumerate(cells(), 1):
+        buffer = io.StringIO()
+        with contextlib.redirect_stdout(buffer):
+            exec(compile(code, f"docs/notebook.md cell {number}", "exec"), namespace)  # noqa: S102
+        assert same_output(buffer.getvalue(), expected or ""), (
+            f"cell {number} printed:\n{buffer.getvalue()}\nthe page shows:\n{expected}")
+    assert (tmp_path / "force-vs-speed.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
