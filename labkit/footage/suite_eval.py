@@ -75,8 +75,19 @@ class Outcome:
 
     def to_dict(self) -> dict:
         return {"case": asdict(self.case), "passed": self.passed, "reported": self.reported,
-                "verdict": self.verdict, "failures": self.failures, "errors": self.errors,
+                "verdict": self.verdict, "failures": self.failures, "errors": _finite(self.errors),
                 "message": self.message}
+
+
+def _finite(value):
+    """JSON-safe: infinities and NaN (a quantity the analysis did not give) become None."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_finite(v) for v in value]
+    return value
 
 
 def _rel(got: float | None, want: float) -> float:

@@ -20,7 +20,8 @@ from labkit.footage.suite_eval import evaluate_case, render_case, score_laser, s
 
 PLATE_WRAP = ("tilt is measured from the image vertical: a plate magnet's long side lies across its "
               "dipole axis, so the angle wraps near +-pi/2 (issue 11, item 3: the strobe analysis "
-              "work, wt/vision-strobe)")
+              "work, wt/vision-strobe; with its commit 922de65 the case is within tolerance but "
+              "labelled doubtful)")
 
 SUBSET = {
     "circle-00-easy": None,
