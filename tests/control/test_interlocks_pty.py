@@ -42,7 +42,7 @@ def run_on_ptys(rig_text, **overrides):
     finally:
         for host in hosts.values():
             host.close()
-    return outcome, proto.marks, sink, shared_plant("fig525").motor("rotor"), hosts
+    return outcome, proto.marks, sink, shared_plant("model-fig525").motor("rotor"), hosts
 
 
 @pytest.mark.timeout(60)
