@@ -15,7 +15,7 @@ from labkit.errors import LabkitError
 
 COMMANDS = [
     "demo", "ports", "probe", "emulate", "run", "replay", "analyse", "synth",
-    "fit", "simulate", "bench", "reproduce", "report", "sweep", "predict",
+    "fit", "simulate", "bench", "reproduce", "report", "sweep", "predict", "twin",
 ]
 
 
