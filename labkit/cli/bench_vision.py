@@ -8,6 +8,12 @@ decode-only, then analysed per setting. Printed per setting: wall time, frames p
 ratio to decode-only, and the errors of centre, semi-axes, rotation (and loops/b for trochoids).
 Fixed costs (trace extraction and the pattern fit, independent of the clip length) are printed
 apart, so the ratio for longer clips can be read off.
+
+``--suite`` runs the robustness suite instead: >= 200 seeded cases drawn by the independent
+renderer :mod:`labkit.footage` (never labkit.synth), rendered on demand into a cache folder,
+analysed by ``labkit.vision`` and scored against their truth; it prints the pass rate per family
+and difficulty, a confusion table of pattern kinds and the cases outside tolerance with verdict
+ok (docs/vision.md, *Independent footage and the robustness suite*).
 """
 
 from __future__ import annotations
@@ -69,6 +75,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     parser.add_argument("--repeats", type=int, default=3,
                         help="interleaved rounds of every timing (default 3; the machine may be shared)")
     parser.add_argument("--keep", metavar="DIR", help="keep the rendered clip in DIR")
+    suite = parser.add_argument_group("robustness suite (independent footage)")
+    suite.add_argument("--suite", action="store_true",
+                       help="run the robustness suite instead of the timing bench")
+    suite.add_argument("--only", metavar="FAMILY",
+                       help="one family: circle, ellipse, epitrochoid, hypotrochoid or strobe")
+    suite.add_argument("--difficulty", choices=["easy", "medium", "hard"], help="one difficulty")
+    suite.add_argument("--limit", type=int, metavar="N",
+                       help="the first N cases (interleaved across families)")
+    suite.add_argument("--json", metavar="OUT", help="write every case's outcome and the summary as JSON")
+    suite.add_argument("--cache", metavar="DIR",
+                       help="render cache (default $LABKIT_FOOTAGE_CACHE or ~/.cache/labkit/footage-suite)")
     parser.set_defaults(func=run)
 
 
@@ -101,7 +118,42 @@ def _errors(result: dict, truth: dict) -> str:
     return text
 
 
+def run_suite(args: argparse.Namespace) -> int:
+    """Render, analyse and score the suite's cases; print the summary."""
+    import json
+
+    from labkit.footage.suite import suite_cases
+    from labkit.footage.suite_eval import default_cache, evaluate_case
+    from labkit.footage.suite_report import format_summary, summarise
+
+    try:
+        cases = suite_cases(args.only, args.difficulty, args.limit)
+    except ValueError as exc:
+        print(f"labkit bench vision: {exc}")
+        return 2
+    cache = Path(args.cache) if args.cache else default_cache()
+    print(f"robustness suite: {len(cases)} cases, footage cached in {cache}")
+    outcomes = []
+    t0 = time.perf_counter()
+    for i, case in enumerate(cases, 1):
+        outcome = evaluate_case(case, cache)
+        outcomes.append(outcome)
+        mark = "pass" if outcome.passed else "FAIL " + ",".join(outcome.failures)
+        print(f"[{i:3d}/{len(cases)}] {case.name:32s} {case.kind:5s} {case.size[0]}x{case.size[1]:<5d} "
+              f"-> {outcome.reported:16s} verdict {outcome.verdict or '-':9s} {mark}", flush=True)
+    summary = summarise(outcomes)
+    print()
+    print(format_summary(summary))
+    print(f"\n{len(cases)} cases in {time.perf_counter() - t0:.0f} s")
+    if args.json:
+        Path(args.json).write_text(json.dumps({"summary": summary, "cases": [o.to_dict() for o in outcomes]},
+                                              indent=1, default=str))
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
+    if args.suite:
+        return run_suite(args)
     w, h = args.size
     kw = {"ellipticity": 0.3, "rotation_deg": 35} if args.pattern == "ellipse" else {"loops": 4, "b": 0.3}
     spec = replace(
