@@ -1,10 +1,11 @@
 """``labkit twin RIG``: the virtual twin of a rig file, measured with labkit's own instruments.
 
-Builds the model plant from RIG's magnets and geometry (docs/twin.md), runs the Fig. 5.25
-speed sweep and the Fig. 6.18 spin-critical protocol on it through the emulated devices,
-fits, and writes OUT/twin-report.md and OUT/twin-report.json: every recovered parameter
-beside the value that went in, its 95 % interval and the residual. Exit status 1 when a
-put-in value lies outside its interval (the rig file and the model disagree).
+Builds the model plant from RIG's magnets and geometry (docs/twin.md), runs the Fig. 5.25 speed
+sweep and the Fig. 6.18 spin-critical protocol on it through the emulated devices, renders
+laser-trace and stroboscope clips of the model's floator motion (labkit.footage) and analyses
+them (labkit.vision), fits, and writes OUT/twin-report.md and OUT/twin-report.json: every
+recovered parameter beside the value that went in, its 95 % interval and the residual. Exit
+status 1 when a put-in value lies outside its interval (the rig file and the model disagree).
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ def main(args: argparse.Namespace) -> int:
     from labkit.twin.report import markdown, write_report
     from labkit.twin.run import run_twin
     parts = tuple(args.only or ("balance", "spin", "footage"))
-    result = run_twin(args.rig, args.out, seed=args.seed, parts=parts, vision="footage" in parts)
+    result = run_twin(args.rig, args.out, seed=args.seed, parts=parts)
     md, js = write_report(result, args.out)
     print(markdown(result), end="")
     print(f"report: {md}\n        {js}")

@@ -73,8 +73,8 @@ def spin_rows(user_rig: Path, params: TwinParams, work: Path, seed: int) -> tupl
     return rows, {"session": str(outcome.session), "points": outcome.results["points"]}
 
 
-def run_twin(rig_path: str | Path, work: Path, seed: int = 0, parts: tuple[str, ...] = ("balance", "spin"),
-             vision: bool = True) -> dict:
+def run_twin(rig_path: str | Path, work: Path, seed: int = 0,
+             parts: tuple[str, ...] = ("balance", "spin", "footage")) -> dict:
     """Every twin row for the rig file ``rig_path``; sessions and rigs go under ``work``."""
     from labkit.rig import load_rig
     rig = load_rig(rig_path)
@@ -88,7 +88,7 @@ def run_twin(rig_path: str | Path, work: Path, seed: int = 0, parts: tuple[str, 
     if "spin" in parts:
         r, runs["fig6.18"] = spin_rows(user_rig, params, work, seed)
         rows += r
-    if vision and "footage" in parts:
+    if "footage" in parts:
         from labkit.twin.footage import footage_rows
         r, runs["footage"] = footage_rows(params, work, seed)
         rows += r
