@@ -7,6 +7,7 @@ loop come from the bundled ``emulated-fig525`` / ``emulated-fig618`` rigs; ``[bo
 
 from __future__ import annotations
 
+import json
 import tomllib
 from pathlib import Path
 from typing import Any
@@ -18,8 +19,10 @@ from labkit.rig_checks import read_rig_text
 def _value(v: Any) -> str:
     if isinstance(v, bool):
         return "true" if v else "false"
-    if isinstance(v, str):
-        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, (str, list)):
+        # a JSON string or list is a TOML value once non-BMP characters stay raw (JSON would write
+        # surrogate pairs) and DEL is escaped (TOML allows no raw control characters)
+        return json.dumps(v, ensure_ascii=False).replace("\x7f", "\\u007f")
     return repr(v)
 
 
