@@ -23,11 +23,11 @@ from labkit.io.ports import open_port
 
 #: name -> (driver protocol, emulator URL, serial settings, driver options)
 SESSIONS: dict[str, tuple[str, str, dict[str, Any], dict[str, Any]]] = {
-    "mtsics": ("mtsics", "sim://mtsics?seed=3&plant=rec-mtsics",
+    "mtsics": ("mtsics", "sim://mtsics?seed=3&plant=model-fig525.rec-mtsics",
                {"baudrate": 9600, "bytesize": 8, "parity": "N", "stopbits": 1}, {}),
-    "and_std": ("and_std", "sim://and_std?seed=3&plant=rec-and&unit=N",
+    "and_std": ("and_std", "sim://and_std?seed=3&plant=model-fig525.rec-and&unit=N",
                 {"baudrate": 2400, "bytesize": 7, "parity": "E", "stopbits": 1}, {}),
-    "hx711_adc": ("line_regex", "sim://hx711?seed=3&plant=rec-hx711&preset=hx711_adc&startup_s=0.3",
+    "hx711_adc": ("line_regex", "sim://hx711?seed=3&plant=model-fig525.rec-hx711&preset=hx711_adc&startup_s=0.3",
                   {"baudrate": 57600, "bytesize": 8, "parity": "N", "stopbits": 1},
                   {"preset": "hx711_adc", "stable_std": 0.02}),
 }

@@ -1,8 +1,10 @@
 """``labkit demo``: the Fig. 5.25 speed sweep on the emulated rig, on a virtual clock.
 
 Runs the bundled ``emulated-fig525`` rig (motor, tachometer and balance emulated on one
-plant whose balance force follows the paper's y = 224e6 x^-1.9) through ``speed-sweep``,
-saves the session and prints where it is, the fitted exponent and how to look at it.
+model plant: the balance force is the PFR the model derives from the rig's magnets and
+geometry, with seeded imperfections; docs/twin.md) through ``speed-sweep``, saves the session
+and prints which plant ran, the measured force against the model's, the fitted exponent and
+how to look at it.
 """
 
 from __future__ import annotations
@@ -68,10 +70,11 @@ def main(args: argparse.Namespace) -> int:
     print(f"session: {outcome.session}")
     for name in ("results.json", "events.jsonl", "readings", "cassettes"):
         print(f"  {outcome.session / name}")
+    model_b = print_measured_vs_model(prep.rig, outcome.results.get("points") or [])
     if b:
         print(
             f"fitted power law y = a x^b: b = {b['value']:.3f} +/- {b['stderr']:.3f} "
-            "(emulator: -1.9; paper Fig. 5.25: -1.9)"
+            f"({model_b}; paper Fig. 5.25: -1.9)"
         )
     rrd = outcome.session / "run.rrd"
     if rrd.exists():
@@ -80,3 +83,35 @@ def main(args: argparse.Namespace) -> int:
         print(f"viewer: the run was streamed to --rerun {rerun_text(args.rerun)} (no run.rrd)")
     print(f"replay offline: labkit replay {outcome.session}")
     return 0
+
+
+def plant_of(rig: Any) -> str:
+    """The plant preset the rig's emulated devices share (``plant=`` of their sim:// URLs)."""
+    from labkit.emulators.urls import parse_sim_url
+    names = {parse_sim_url(d.port).plant for d in rig.devices.values() if d.port.startswith("sim://")}
+    return ", ".join(sorted(names)) or "none"
+
+
+def print_measured_vs_model(rig: Any, points: list[dict]) -> str:
+    """Print which plant ran and, for a model plant, measured force against the model's;
+    returns the model's (or the fitted law's) exponent as text for the fit line."""
+    plant = plant_of(rig)
+    if not plant.startswith("model-"):
+        print(f"plant: {plant} (the paper's fitted law y = 224e6 x^-1.9 typed in)")
+        return "emulator: -1.9"
+    from labkit.emulators.twin_model import force_g, params_from_rig
+    from labkit.protocols.quickfit import quick_fit_power_law
+    params = params_from_rig(rig)
+    print(f"plant: {plant} (model of the rig's magnets: m_R m_F = {params.moment_product:.3g} A^2 m^4, "
+          f"gap {params.gap_m * 1e3:g} mm; docs/twin.md)")
+    rows = [(p["speed_rpm"], p["speed_rad_s"], p["force_g"]) for p in points if p.get("force_g")]
+    print("  speed_rpm  measured_g   model_g   diff")
+    model = []
+    for rpm, w, meas in rows:
+        m = force_g(params, w)
+        model.append(m)
+        print(f"  {rpm:9.0f}  {meas:10.4f}  {m:8.4f}  {(meas / m - 1) * 100:+5.2f} %")
+    if len(rows) < 3:
+        return "model: n/a"
+    fit = quick_fit_power_law([r[0] for r in rows], model)
+    return f"model at these speeds: {fit['params']['b']['value']:.3f}"

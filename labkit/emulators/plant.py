@@ -5,8 +5,11 @@ PFR force of the speed the motor emulator has reached, and the spin tachometer s
 floator spin. State is advanced lazily and analytically to the time asked for, so the
 plant is exact on any clock and costs nothing between reads.
 
-Defaults follow the paper: the balance force is the fitted law of Fig. 5.25,
-``grams = 224e6 * rpm**-1.9`` (a PFR force falling roughly as omega^-2, Eq. 5.81).
+Plain plants (presets ``fig525``, ``fig618`` and any other name) type in the paper's fitted
+laws: the balance force of Fig. 5.25, ``grams = 224e6 * rpm**-1.9`` (a PFR force falling
+roughly as omega^-2, Eq. 5.81). The shipped emulated rigs use the model plant instead
+(presets ``model-fig525``, ``model-fig618``; :mod:`labkit.emulators.model_plant`,
+docs/twin.md), which derives both from the rig file's magnets.
 
 The spin-critical plant of Fig. 6.18 (:class:`FloatorPlant`, preset ``fig618``): a floator
 held in the bound state spins up about its dipole axis and drops when its spin reaches the
@@ -21,6 +24,7 @@ import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from typing import Any
 
 from labkit.units import G0, RAD_S_PER_RPM
 
@@ -213,6 +217,14 @@ class RigPlant:
             self._advance_floator(t)
             return self.floator_spin_rad_s if self.floator_present else 0.0
 
+    def tach_reading(self, t: float, source: str = "rotor") -> float:
+        """What a tachometer aimed at ``source`` reads (rad/s): the floator's spin for
+        ``"floator"``, else the named motor's speed (exact here; the model plant adds jitter
+        and dropped pulses)."""
+        if source == "floator":
+            return self.floator_spin(t)
+        return self.speed(t, source)
+
     def _advance_floator(self, t: float) -> None:
         if self.floator is None:
             return
@@ -244,9 +256,19 @@ PLANT_PRESETS: dict[str, Callable[[int], RigPlant]] = {
 }
 
 
-def make_plant(name: str, seed: int = 0) -> RigPlant:
-    """A fresh plant for ``name``: the preset named by the part before the first dot, else default."""
-    preset = PLANT_PRESETS.get(name.split(".", 1)[0])
+def make_plant(name: str, seed: int = 0, rig: Any = None) -> RigPlant:
+    """A fresh plant for ``name``: the preset named by the part before the first dot, else the
+    fitted law of Fig. 5.25. ``model-fig525`` / ``model-fig618`` build the model plant of
+    :mod:`labkit.emulators.model_plant` from ``rig`` (a loaded rig file; None: the magnets of
+    the shipped emulated rig)."""
+    head = name.split(".", 1)[0]
+    if head.startswith("model-"):
+        from labkit.emulators.model_plant import MODEL_PRESETS, model_plant
+        from labkit.emulators.twin_model import TwinParams, params_from_rig
+        if head not in MODEL_PRESETS:
+            raise ValueError(f"plant={name}: unknown model preset {head!r} (use {', '.join(MODEL_PRESETS)})")
+        return model_plant(head, seed, params_from_rig(rig) if rig is not None else TwinParams())
+    preset = PLANT_PRESETS.get(head)
     return preset(seed) if preset else RigPlant(seed=seed)
 
 
@@ -257,8 +279,11 @@ class Emulation:
     of labkit's suite gets its own (tests/conftest.py). Decision record:
     docs/decisions/0006-scoped-emulations.md."""
 
-    def __init__(self, name: str = "") -> None:
+    def __init__(self, name: str = "", rig: Any = None, seed: int = 0) -> None:
         self.name = name
+        #: the rig file whose magnets and geometry model plants are built from (None: defaults)
+        self.rig = rig
+        self.seed = seed
         self._plants: dict[str, RigPlant] = {}
         self._lock = threading.Lock()
 
@@ -267,7 +292,7 @@ class Emulation:
         as ``fig525``, ``fig618``, ``fig618.test3`` get that preset)."""
         with self._lock:
             if name not in self._plants:
-                self._plants[name] = make_plant(name, seed)
+                self._plants[name] = make_plant(name, seed or self.seed, self.rig)
             return self._plants[name]
 
     def plants(self) -> dict[str, RigPlant]:
@@ -277,6 +302,12 @@ class Emulation:
     def clear(self) -> None:
         """Forget every plant (the next run starts from rest)."""
         with self._lock:
+            self._plants.clear()
+
+    def bind_rig(self, rig: Any) -> None:
+        """Build model plants from ``rig`` from now on (forgets the plants built so far)."""
+        with self._lock:
+            self.rig = rig
             self._plants.clear()
 
     def __repr__(self) -> str:

@@ -43,9 +43,7 @@ class _StreamingTachEmulator(Emulator):
 
     def source_speed(self, t: float) -> float:
         """rad/s seen by the sensor: the named motor's speed, or the floator's spin."""
-        if self.source == "floator":
-            return self.plant.floator_spin(t)
-        return self.plant.speed(t, self.source)
+        return self.plant.tach_reading(t, self.source)
 
     def stream_start(self, t: float) -> float:
         return t

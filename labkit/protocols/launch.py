@@ -62,7 +62,7 @@ def fresh_emulators(rig: Rig) -> None:
     if any(d.port.startswith("sim://") for d in rig.devices.values()):
         from labkit.emulators import current_emulation
 
-        current_emulation().clear()
+        current_emulation().bind_rig(rig)  # model plants (plant=model-*) read its magnets
 
 
 def carried_points(record: SessionRecord) -> list[dict[str, Any]]:

@@ -28,6 +28,7 @@ SUITES = [
     ("fig6.18", "labkit.reproduce.measured_rows"),
     ("fig5.25", "labkit.reproduce.measured_rows"),
     ("fig5.26", "labkit.reproduce.measured_rows"),
+    ("twin", "labkit.reproduce.twin_rows"),
 ]
 
 

@@ -32,7 +32,7 @@ def start(rig_text, target_rpm, seconds=30.0):
         control.set_targets({"rotor": rpm_to_rad_s(target_rpm)})
         while control.tripped is None and clock.now() < seconds:
             clock.sleep(0.01)
-    return control, opened, events, shared_plant("fig525"), clock
+    return control, opened, events, shared_plant("model-fig525"), clock
 
 
 def test_speed_loop_reaches_and_holds_the_target():
@@ -97,8 +97,8 @@ def test_tachometer_silent_too_long():
 def test_implausible_tachometer_reading():
     # a Lutron display showing over-range ("OL") instead of a number
     text = RIG.replace('protocol = "labkit_tach"', 'protocol = "lutron16"').replace(
-        "sim://labkit_tach?seed=2&plant=fig525&role=rotor_tach&rate_hz=20",
-        "sim://lutron16?seed=2&plant=fig525&role=rotor_tach&rate_hz=20&faults=overload:1").replace(
+        "sim://labkit_tach?seed=2&plant=model-fig525&role=rotor_tach&rate_hz=20",
+        "sim://lutron16?seed=2&plant=model-fig525&role=rotor_tach&rate_hz=20&faults=overload:1").replace(
         "baudrate = 115200", "baudrate = 9600")
     control, opened, events, plant, clock = start(text, 10000)
     assert "implausible reading nan" in control.tripped and "OL" in control.tripped
@@ -148,4 +148,4 @@ def test_target_above_the_rig_limit_is_refused_before_anything_moves():
         opened.close()
     from labkit.emulators.plant import shared_plant
 
-    assert shared_plant("fig525").motor("rotor").duty_changes == []
+    assert shared_plant("model-fig525").motor("rotor").duty_changes == []

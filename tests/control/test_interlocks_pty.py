@@ -61,7 +61,7 @@ def run_on_ptys(rig_text, on_settled=None, **overrides):
             outcome = runner.run()
             marks = {**proto.marks, "returned": clock.now()}
             # the STOP left before run() returned; wait (event-driven) for the controller to read it
-            motor = shared_plant("fig525").motor("rotor")
+            motor = shared_plant("model-fig525").motor("rotor")
             deadline = clock.now() + 10.0
             while motor.duty != 0.0 and clock.now() < deadline:
                 clock.sleep(0.01)
@@ -71,7 +71,7 @@ def run_on_ptys(rig_text, on_settled=None, **overrides):
             host.close()
     for role, host in hosts.items():  # an emulator that died would look like a silent device
         assert host.error is None, (role, host.error)
-    return outcome, marks, sink, shared_plant("fig525").motor("rotor"), hosts
+    return outcome, marks, sink, shared_plant("model-fig525").motor("rotor"), hosts
 
 
 def assert_stopped_between(motor, after: float, before: float) -> None:

@@ -15,13 +15,13 @@ SECOND = """
 [devices.rotor2_motor]
 kind = "motor"
 protocol = "pololu_smc"
-port = "sim://pololu_smc?seed=5&plant=fig525&role=rotor2_motor&motor=rotor2"
+port = "sim://pololu_smc?seed=5&plant=model-fig525&role=rotor2_motor&motor=rotor2"
 serial = { baudrate = 9600, timeout = 0.2 }
 
 [devices.rotor2_tach]
 kind = "tach"
 protocol = "labkit_tach"
-port = "sim://labkit_tach?seed=6&plant=fig525&role=rotor2_tach&rate_hz=20&source=rotor2{fault}"
+port = "sim://labkit_tach?seed=6&plant=model-fig525&role=rotor2_tach&rate_hz=20&source=rotor2{fault}"
 serial = {{ baudrate = 115200, timeout = 0.2 }}
 """
 
@@ -50,7 +50,7 @@ def test_both_loops_are_paired_by_role_and_reach_their_own_targets():
         opened.close()
     assert snaps["rotor"].measured_rad_s == pytest.approx(rpm_to_rad_s(8000), rel=0.01)
     assert snaps["rotor2"].measured_rad_s == pytest.approx(rpm_to_rad_s(12000), rel=0.01)
-    plant = shared_plant("fig525")
+    plant = shared_plant("model-fig525")
     assert plant.motor("rotor").duty == 0.0 and plant.motor("rotor2").duty == 0.0
 
 
@@ -66,7 +66,7 @@ def test_losing_one_tachometer_stops_both_motors_in_the_same_period():
             assert clock.now() < 30
         opened.close()
     assert "rotor2_tach" in control.tripped
-    plant = shared_plant("fig525")
+    plant = shared_plant("model-fig525")
     t1 = plant.motor("rotor").zeroed_since(4.0)
     t2 = plant.motor("rotor2").zeroed_since(4.0)
     assert t1 is not None and t2 is not None

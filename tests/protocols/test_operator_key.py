@@ -32,7 +32,7 @@ class Operator:
     def run(self) -> None:
         self.settled.wait(timeout=60)
         while not self.stop.wait(0.5):
-            self.spins_at_press.append(shared_plant("fig618").floator.spin_rad_s)
+            self.spins_at_press.append(shared_plant("model-fig618").floator.spin_rad_s)
             os.write(self.master, b"\n")
 
 
@@ -83,7 +83,7 @@ def test_enter_on_the_terminal_registers_the_drop(tmp_path, monkeypatch):
     [point] = outcome.results["points"]
     [trial] = point["trials"]
     assert trial["cause"] == "key"
-    assert shared_plant("fig618").floator.drops == 0        # the plant itself never dropped it
+    assert shared_plant("model-fig618").floator.drops == 0        # the plant itself never dropped it
     # the pair is the spin when Enter was pressed (the floator spins up ~100 rad/s per s):
     # the first press after the trial began, not one typed while the rotor settled
     assert any(abs(trial["spin_rad_s"] - spin) < 30.0 for spin in operator.spins_at_press)
@@ -104,7 +104,7 @@ class ScriptedHand:
             self.settled = True
         elif event.type == "reading" and self.settled and event.t - self.last >= 0.5:
             self.last = event.t
-            self.spins_at_signal.append(shared_plant("fig618").floator.spin_rad_s)
+            self.spins_at_signal.append(shared_plant("model-fig618").floator.spin_rad_s)
             self.operator.signal()
 
 
@@ -122,5 +122,5 @@ def test_operator_signal_is_a_runner_verb_any_input_can_drive(tmp_path):
     [point] = outcome.results["points"]
     [trial] = point["trials"]
     assert trial["cause"] == "key"
-    assert shared_plant("fig618").floator.drops == 0
+    assert shared_plant("model-fig618").floator.drops == 0
     assert any(abs(trial["spin_rad_s"] - spin) < 30.0 for spin in hand.spins_at_signal)

@@ -5,9 +5,13 @@ from pathlib import Path
 
 import pytest
 
+from labkit.emulators.model_plant import DEFAULT_BREAK_PHI
 from labkit.emulators.plant import SpinCriticalLaw
+from labkit.emulators.twin_model import force_g, params_from_rig, spin_critical_c
 from labkit.errors import LabkitError, RigFileError, SafetyError
 from labkit.protocols.launch import execute, prepare_run
+from labkit.protocols.quickfit import quick_fit_power_law
+from labkit.rig import load_rig
 
 RIGS = Path(__file__).resolve().parents[2] / "rigs"
 
@@ -21,11 +25,15 @@ def test_speed_sweep_recovers_the_emulated_exponent(tmp_path):
     assert results["protocol"] == "speed-sweep"
     assert len(results["points"]) == 8
     b = results["fit"]["params"]["b"]
-    assert b["value"] == pytest.approx(-1.9, abs=0.05)   # the emulator's law: 224e6 * rpm^-1.9
-    assert b["stderr"] > 0
-    for point in results["points"]:
+    # the model plant (plant=model-fig525): the PFR of the rig's magnets (about w^-2)
+    params = params_from_rig(load_rig(RIGS / "emulated-fig525.toml"))
+    model = [force_g(params, p["speed_rad_s"]) for p in results["points"]]
+    model_b = quick_fit_power_law([p["speed_rpm"] for p in results["points"]], model)["params"]["b"]["value"]
+    assert b["value"] == pytest.approx(model_b, abs=0.01)
+    assert -2.1 <= b["value"] <= -1.7 and b["stderr"] > 0
+    for point, expected_g in zip(results["points"], model, strict=True):
         assert point["speed_rpm"] == pytest.approx(point["target_rpm"], rel=0.01)
-        assert point["force_g"] == pytest.approx(224e6 * point["speed_rpm"] ** -1.9, rel=0.03)
+        assert point["force_g"] == pytest.approx(expected_g, rel=0.01)
         assert point["n"] >= 5
 
 
@@ -35,7 +43,9 @@ def test_spin_critical_pairs_follow_the_plant_law(tmp_path):
                        session_root=tmp_path)
     outcome = execute(prep, tmp_path)
     assert outcome.status == "completed", outcome.reason
-    law = SpinCriticalLaw()  # the fig618 plant: C = 4.7e5, w_ref = 3000 rad/s, 1 % threshold noise
+    # the model-fig618 plant: C of Eq. 6.37 from the rig's magnets, 1 % threshold noise
+    c_model = spin_critical_c(params_from_rig(load_rig(RIGS / "emulated-fig618.toml")), DEFAULT_BREAK_PHI)
+    law = SpinCriticalLaw(c=c_model)
     points = outcome.results["points"]
     assert len(points) == 4
     for p in points:
@@ -47,7 +57,7 @@ def test_spin_critical_pairs_follow_the_plant_law(tmp_path):
     c = outcome.results["fit"]["params"]["C"]
     # no bias: the plant's C lies inside the fit's 95 % interval (registering the last
     # tachometer line before the drop put it 3 stderr above)
-    assert abs(c["value"] - 4.7e5) <= 2 * c["stderr"], c
+    assert abs(c["value"] - c_model) <= 2 * c["stderr"], c
     drops = [json.loads(line) for line in (outcome.session / "events.jsonl").read_text().splitlines()]
     assert any(e["type"] == "drop" and e["cause"] == "balance" for e in drops)
 

@@ -24,7 +24,7 @@ def run_hold(**overrides):
     with use_clock(clock):
         runner = Runner(proto, rig, resolve_params(proto.defaults, overrides), clock=clock, sinks=[sink])
         outcome = runner.run()
-    return outcome, proto.marks, sink, shared_plant("fig525").motor("rotor")
+    return outcome, proto.marks, sink, shared_plant("model-fig525").motor("rotor")
 
 
 def test_normal_end_zeroes_the_motor_at_once():

@@ -11,7 +11,7 @@ from labkit.cli import main
 from labkit.protocols.launch import execute, prepare_run
 from labkit.rig import bundled_rig_path
 
-TRUE_EXPONENT = -1.9   # the emulated rig's balance force: y[g] = 224e6 x[rpm]^-1.9
+TRUE_EXPONENT = -2.0   # the emulated rig's model plant: the PFR of its magnets, ~ w^-2 (Eq. 5.81)
 
 
 @pytest.fixture(scope="module")

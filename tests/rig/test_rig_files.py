@@ -141,7 +141,7 @@ def test_open_rig_instantiates_drivers_and_close_zeroes_the_motor():
         motor.enable()
         motor.set_duty(0.3)
         clock.sleep(0.5)
-        plant = shared_plant("fig525")
+        plant = shared_plant("model-fig525")
         assert plant.motor("rotor").duty == pytest.approx(0.3, abs=0.01)
         opened.close()
         assert plant.motor("rotor").duty == 0.0

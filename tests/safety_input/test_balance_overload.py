@@ -18,7 +18,7 @@ from .conftest import rig_with, run_cli
 
 
 def test_overload_during_a_step_is_one_line_and_the_stop_reason(tmp_path, capsys):
-    where = "seed=3&plant=fig525&role=balance"
+    where = "seed=3&plant=model-fig525&role=balance"
     rig = rig_with(tmp_path, where, where + "&capacity_g=10")
     root = tmp_path / "sessions"
     code, out, err = run_cli(["run", rig, "speed-sweep", "--sessions", root, "--no-progress",
@@ -32,7 +32,7 @@ def test_overload_during_a_step_is_one_line_and_the_stop_reason(tmp_path, capsys
     assert meta["status"] == "failed" and "balance overload at 6" in meta["reason"]
     events = [json.loads(line) for line in (session / "events.jsonl").read_text().splitlines()]
     assert not [e for e in events if e["type"] == "point"]       # no point from overloaded readings
-    motor = shared_plant("fig525").motor("rotor")
+    motor = shared_plant("model-fig525").motor("rotor")
     assert motor.duty_changes and motor.duty_changes[-1][1] == 0.0  # the last command was zero
 
 

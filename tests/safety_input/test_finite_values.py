@@ -52,7 +52,7 @@ def test_rig_value_refused_by_dry_run(old, new, key, reason, tmp_path, capsys):
     rig = rig_with(tmp_path, old, new)
     code, out, err = run_cli(["run", rig, "speed-sweep", "--dry-run"], capsys)
     assert_one_line(code, err, f"{rig}:{key}:", reason)
-    assert shared_plant("fig525").motor("rotor").duty_changes == []
+    assert shared_plant("model-fig525").motor("rotor").duty_changes == []
 
 
 SET_CASES = [

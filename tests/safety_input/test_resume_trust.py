@@ -101,7 +101,8 @@ def test_torn_last_line_is_skipped_silently(complete_session, tmp_path, capsys):
 def test_resume_with_a_rig_that_changes_ports_only(complete_session, tmp_path, capsys):
     session = killed_copy(complete_session, tmp_path / "old")
     text = (session / "rig.toml").read_text()
-    moved = text.replace("seed=3&plant=fig525&role=balance", "seed=3&plant=fig525&role=balance&x=1") \
+    where = "seed=3&plant=model-fig525&role=balance"
+    moved = text.replace(where, where + "&x=1") \
         .replace("baudrate = 9600, timeout = 0.5", "baudrate = 9600, timeout = 0.7")
     assert moved != text
     fixed = tmp_path / "fixed.toml"
@@ -127,7 +128,7 @@ def test_resume_with_a_rig_that_changes_limits_or_bodies_is_refused(complete_ses
 
 
 def test_run_that_fails_before_its_first_step_keeps_no_session(tmp_path, capsys):
-    text = FIG525.read_text().replace('port = "sim://labkit_tach?seed=2&plant=fig525&role=rotor_tach&rate_hz=20"',
+    text = FIG525.read_text().replace('port = "sim://labkit_tach?seed=2&plant=model-fig525&role=rotor_tach&rate_hz=20"',
                                       'port = "socket://127.0.0.1:1"')
     rig = tmp_path / "rig.toml"
     rig.write_text(text)

@@ -31,7 +31,7 @@ def test_bad_input_is_one_line_and_exit_2_before_motion(argv, expected, capsys, 
     assert err.count("\n") == 1 and expected in err, err
     assert err.startswith("labkit run: ")
     assert not list(tmp_path.iterdir())                    # no session was started
-    assert shared_plant("fig525").motor("rotor").duty_changes == []
+    assert shared_plant("model-fig525").motor("rotor").duty_changes == []
 
 
 def test_unwritable_session_directory(capsys, tmp_path):
@@ -41,7 +41,7 @@ def test_unwritable_session_directory(capsys, tmp_path):
     code, out, err = run_cli(argv, capsys)
     assert code == 2 and err.count("\n") == 1
     assert "session directory is not writable" in err
-    assert shared_plant("fig525").motor("rotor").duty_changes == []
+    assert shared_plant("model-fig525").motor("rotor").duty_changes == []
 
 
 @pytest.mark.skipif(os.geteuid() == 0, reason="root can write anywhere")
@@ -58,7 +58,7 @@ def test_dry_run_prints_the_plan_and_moves_nothing(capsys, tmp_path):
     assert code == 0
     assert "2 steps" in out and "up 9000 RPM" in out
     assert not list(tmp_path.iterdir())
-    assert shared_plant("fig525").motor("rotor").duty_changes == []
+    assert shared_plant("model-fig525").motor("rotor").duty_changes == []
 
 
 def test_resuming_a_finished_session_is_refused(capsys, tmp_path):

@@ -28,12 +28,12 @@ def hx711_rig(tmp_path: Path) -> Path:
     """emulated-fig525 with its MT-SICS balance replaced by an HX711 sketch that reboots."""
     text = bundled_rig_path("emulated-fig525").read_text()
     old = '''protocol = "mtsics"
-port = "sim://mtsics?seed=3&plant=fig525&role=balance"
+port = "sim://mtsics?seed=3&plant=model-fig525&role=balance"
 serial = { baudrate = 9600, timeout = 0.5 }'''
     assert old in text
     new = f'''protocol = "line_regex"
 options = {{ preset = "hx711_adc" }}
-port = "sim://hx711?seed=3&plant=fig525&role=balance&preset=hx711_adc&startup_s=0.3&faults=reset_at:{RESET_AT_S}"
+port = "sim://hx711?seed=3&plant=model-fig525&role=balance&preset=hx711_adc&startup_s=0.3&faults=reset_at:{RESET_AT_S}"
 serial = {{ baudrate = 57600, timeout = 0.5 }}'''
     path = tmp_path / "hx711-reboot.toml"
     path.write_text(text.replace(old, new).replace('name = "emulated-fig525"', 'name = "hx711-reboot"'))

@@ -1,0 +1,65 @@
+"""The no-net-spin drive-periodic orbit of the tilted cone (paper Fig. 5.6, Eq. 5.7).
+
+:mod:`labkit.model.tilted_cone` finds orbits that return in the co-rotating frame after one
+drive period T: the dipole axis and the angular momentum come back, but the body may have
+turned about its own axis (the orbits form a family labelled by the conserved spin). The
+paper's conical motion (Eq. 5.7, ``R = R_z(wt) R_x(phi) R_z(-wt)``) is the member on which
+the whole orientation comes back as well: after T the body has no net rotation about its
+dipole axis. Here the spin is a shooting unknown and the extra condition is that the body's
+attitude ``Q`` in the co-rotating frame (``Q' = [Omega - e_z]_x Q``; the lab attitude is
+``R_z(s) Q`` and ``R_z(2 pi) = 1``) returns to itself: ``Q(2 pi) = Q(0)``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.optimize import least_squares
+
+from labkit.model.conical_dynamics import RotatingFieldBody, _rhs_scalar
+from labkit.model.tilted_cone import TiltedOrbit, _coords, _state, describe
+
+
+def _rhs_attitude(s: float, y: np.ndarray, j_c: float, j_s: float, a1: float) -> np.ndarray:
+    """:func:`labkit.model.conical_dynamics._rhs_scalar` plus the attitude ``Q`` (row-major)."""
+    px, py, pz, lx, ly, lz = y[:6]
+    spin = a1 * (lx * px + ly * py + lz * pz)
+    wx, wy, wz = lx + spin * px, ly + spin * py, lz + spin * pz - 1.0
+    q = y[6:].reshape(3, 3)
+    skew = np.array([[0.0, -wz, wy], [wz, 0.0, -wx], [-wy, wx, 0.0]])
+    return np.concatenate([_rhs_scalar(s, y[:6], j_c, j_s, a1), (skew @ q).ravel()])
+
+
+def period_map(body: RotatingFieldBody, y0: np.ndarray) -> tuple[np.ndarray, float]:
+    """State after one drive period and the body's net rotation (rad) about its dipole axis."""
+    start = np.concatenate([y0, np.eye(3).ravel()])
+    sol = solve_ivp(_rhs_attitude, (0.0, 2 * np.pi), start, method="DOP853", rtol=1e-11, atol=1e-13,
+                    args=(body.j_c, body.j_s, body.inertia_ratio - 1.0))
+    end = sol.y[:, -1]
+    q = end[6:].reshape(3, 3)
+    psi = y0[:3] / np.linalg.norm(y0[:3])
+    vee = 0.5 * np.array([q[2, 1] - q[1, 2], q[0, 2] - q[2, 0], q[1, 0] - q[0, 1]])
+    twist = float(np.arctan2(psi @ vee, 0.5 * (np.trace(q) - 1.0)))
+    return end[:6], twist
+
+
+def no_spin_orbit(body: RotatingFieldBody, y_guess: np.ndarray, spin: float) -> tuple[TiltedOrbit, float]:
+    """The drive-periodic orbit with no net rotation about the dipole axis: shooting for the
+    state and the conserved spin together; returns the orbit and its spin (units of w)."""
+    def residual(x: np.ndarray) -> np.ndarray:
+        y0 = _state(x[:4], x[4])
+        end, twist = period_map(body, y0)
+        return np.concatenate([end - y0, [twist]])
+
+    x0 = np.concatenate([_coords(y_guess), [spin]])
+    fit = least_squares(residual, x0, method="lm", xtol=1e-14, ftol=1e-14, gtol=1e-14)
+    return describe(body, _state(fit.x[:4], fit.x[4])), float(fit.x[4])
+
+
+def zenith_centre(body: RotatingFieldBody, y0: np.ndarray) -> float:
+    """Centre of the dipole's zenith range over the orbit, ``(max + min) / 2``: the centre of
+    the elliptic path whose zenith semi-axis is R_X (Fig. 5.6's lambda and R_X)."""
+    from labkit.model.tilted_cone import _flow
+    psi = _flow(body, y0, 2048).y[:3]
+    zen = np.arccos(np.clip(psi[2] / np.linalg.norm(psi, axis=0), -1, 1))
+    return 0.5 * float(zen.max() + zen.min())
