@@ -65,12 +65,12 @@ def rig_views(loops: list[str], devices: list[str]) -> list[Any]:
     views = []
     for loop in loops:
         views.append(rrb.TimeSeriesView(
-            origin=f"/rig/{loop}", name=f"{loop} speed [RPM]",
+            origin=f"/rig/{loop}", name=f"{loop} speed [RPM]", axis_x=_whole_x_axis(),
             contents=["$origin/speed_rpm", "$origin/setpoint_rpm", "$origin/target_rpm"]))
         views.append(rrb.TimeSeriesView(origin=f"/rig/{loop}", name=f"{loop} duty [0-1]",
-                                        contents=["$origin/duty"]))
+                                        axis_x=_whole_x_axis(), contents=["$origin/duty"]))
     for dev in devices:
-        views.append(rrb.TimeSeriesView(origin=f"/rig/{dev}", name=dev,
+        views.append(rrb.TimeSeriesView(origin=f"/rig/{dev}", name=f"{dev} readings", axis_x=_whole_x_axis(),
                                         contents=["$origin/**", "- $origin/frame"]))
     return views
 
@@ -81,7 +81,7 @@ def run_blueprint(protocol: str, loops: list[str], devices: list[str]) -> Any:
 
     figure = FIGURES.get(protocol)
     events = rrb.TextLogView(origin="/events", name="events")
-    rig = rrb.Grid(*rig_views(loops, devices), name="rig over time (timeline: time)")
+    rig = rrb.Vertical(*rig_views(loops, devices), name="rig over time (timeline: time)")
     if figure is None:
         return rrb.Blueprint(rrb.Vertical(rig, events, row_shares=[3, 1]), rrb.TimePanel(timeline="time"),
                              collapse_panels=True)

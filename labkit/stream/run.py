@@ -67,7 +67,7 @@ class RerunRunSink:
         self.rr = rr
         self.rec = rec
         self.loops = loops or ["rotor"]
-        self.devices = devices or ["balance"]
+        self.devices = list(devices or [])
         self.loop_tachs = loop_tachs if loop_tachs is not None else {f"{loop}_tach" for loop in self.loops}
         self.t0: float | None = None
         self.step: int = -1
@@ -124,7 +124,7 @@ class RerunRunSink:
 
     def _on_step(self, e: doc.StepStart) -> None:
         for loop, rad_s in e.targets_rad_s.items():
-            self._scalar(f"/rig/{loop}/target_rpm", rad_s / RAD_S_PER_RPM, "target")
+            self._scalar(f"/rig/{loop}/target_rpm", rad_s / RAD_S_PER_RPM, "target [RPM]")
         rotor = e.targets_rad_s.get(self.loops[0]) if self.loops else None
         if rotor is not None:
             self.step_x = rotor / RAD_S_PER_RPM if self.protocol == "speed-sweep" else rotor
@@ -145,6 +145,9 @@ class RerunRunSink:
         plotted = reading_series(e.device, r.quantity, r.unit, r.value, self.loop_tachs)
         if plotted is not None:
             self._scalar(*plotted)
+            if e.device not in self.devices:   # a device the caller did not list (replay)
+                self.devices.append(e.device)
+                self.rec.send_blueprint(run_blueprint(self.protocol, self.loops, self.devices))
         flags = ";".join(sorted(r.flags))
         self.rec.log(f"/rig/{e.device}/frame",
                      self.rr.AnyValues(raw=r.raw.decode("latin-1"), flags=flags))
@@ -278,7 +281,7 @@ def run_sink(spec: RerunSpec | str, session_path: str | Path | None,
     """Open a rerun stream for a run (``spawn`` without a display saves SESSION/run.rrd).
     The protocol's blueprint is sent when the run starts (it names the protocol)."""
     fallback = Path(session_path or ".") / "run.rrd"
-    loops, devices = loops or ["rotor"], devices or ["balance"]
+    loops, devices = loops or ["rotor"], devices or []
     rec = open_stream(spec, "labkit-run",
                       recording_id=Path(session_path).name if session_path else None,
                       blueprint=run_blueprint("", loops, devices), fallback_file=fallback)
