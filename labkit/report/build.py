@@ -243,7 +243,7 @@ def _fit_sections(table: Table, plan: Plan, out: Path, overlays: tuple[Overlay, 
         done.append((pf.title, report))
         fits_json[pf.slug] = report.to_json()
         fig = fit_figure(report, out / f"fig-{pf.slug}.png", overlays=(*pf.overlays, *overlays),
-                         title=pf.figure_title or pf.title, errors=_errors(table, report))
+                         title=pf.figure_title or pf.title, errors=_errors(table, report), svg=True)
         lines += [f"![{pf.title}]({fig.name})", "", f"Vector version: [{fig.stem}.svg]({fig.stem}.svg)", ""]
         for name, res in report.series.items():
             if len(report.series) > 1 or name != "all":

@@ -28,23 +28,26 @@ DPI = 150
 LOG_LOG = {"power-law", "pfr-force", "mbs-distance"}
 
 
-def save(fig: Figure, path: str | Path, **kwargs) -> Path:
-    """``path`` (PNG) and the same figure as SVG beside it."""
+def save(fig: Figure, path: str | Path, svg: bool = True, **kwargs) -> Path:
+    """``path`` (PNG) and, with ``svg``, the same figure as SVG beside it."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=DPI, **kwargs)
-    with rc_context({"svg.fonttype": "none"}):   # text stays text: searchable, editable
-        fig.savefig(path.with_suffix(".svg"), **kwargs)
+    if svg:
+        with rc_context({"svg.fonttype": "none"}):   # text stays text: searchable, editable
+            fig.savefig(path.with_suffix(".svg"), **kwargs)
     return path
 
 
 def fit_figure(report: FitReport, path: str | Path, *, overlays: Sequence[Overlay] = (),
                title: str | None = None,
-               errors: dict[str, tuple[np.ndarray | None, np.ndarray | None]] | None = None) -> Path:
+               errors: dict[str, tuple[np.ndarray | None, np.ndarray | None]] | None = None,
+               svg: bool = False) -> Path:
     """Data + fitted curve (top) and residuals (bottom) for every series of ``report``.
 
     ``errors`` maps a series name to (x error, y error) arrays aligned with its points (one
-    standard error or standard deviation, as recorded); None draws no bar."""
+    standard error or standard deviation, as recorded); None draws no bar. ``svg`` writes an
+    SVG beside the PNG (the report does; ``labkit fit --plot`` writes only the file named)."""
     fig = Figure(figsize=(7.0, 6.5), dpi=DPI)
     FigureCanvasAgg(fig)
     gs = fig.add_gridspec(2, 1, height_ratios=[3, 1.3], hspace=0.08, left=0.14, right=0.97,
@@ -88,7 +91,7 @@ def fit_figure(report: FitReport, path: str | Path, *, overlays: Sequence[Overla
     axr.grid(True, alpha=0.25)
     ax.legend(fontsize=8, loc="best")
     ax.set_title(title or f"{report.model} fit", fontsize=11)
-    return save(fig, path)  # fixed margins: "tight" would draw the figure twice
+    return save(fig, path, svg=svg)  # fixed margins: "tight" would draw the figure twice
 
 
 def _bar_collections(drawn, xerr, yerr) -> tuple:
