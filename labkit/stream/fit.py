@@ -26,12 +26,23 @@ import numpy as np
 from labkit.stream.core import RerunSpec, open_stream
 
 
-def fit_blueprint(series: list[str]) -> Any:
+def fit_blueprint(series: list[str], y_name: str = "y") -> Any:
+    """Per series: data and fitted curve, residuals beneath (their own axis); then the
+    parameters. Every x axis spans all the data."""
     import rerun.blueprint as rrb
 
-    views = [rrb.TimeSeriesView(origin=f"/fit/{name}", name=f"fit: {name}") for name in series]
-    return rrb.Blueprint(rrb.Vertical(*views, rrb.TextLogView(origin="/fit", name="parameters")),
-                         collapse_panels=True)
+    from labkit.stream.blueprints import _whole_x_axis
+
+    views: list[Any] = []
+    for name in series:
+        title = f"series {name}: {y_name}" if name != "all" else y_name
+        views.append(rrb.TimeSeriesView(origin=f"/fit/{name}", name=f"{title}, data and fit",
+                                        contents=["$origin/data", "$origin/model"], axis_x=_whole_x_axis()))
+        views.append(rrb.TimeSeriesView(origin=f"/fit/{name}", name=f"{title}, residual (data - fit)",
+                                        contents=["$origin/residual"], axis_x=_whole_x_axis()))
+    shares = [3, 1] * len(series) + [1]
+    return rrb.Blueprint(rrb.Vertical(*views, rrb.TextLogView(origin="/fit", name="parameters"),
+                                      row_shares=shares), collapse_panels=True)
 
 
 def x_timeline(x_name: str, x: np.ndarray) -> tuple[str, float]:
@@ -73,12 +84,16 @@ def log_fit_report(rec: Any, report: Any, curve_samples: int = 200) -> None:
                          columns=rr.Scalars.columns(scalars=model[keep]))
         text = ", ".join(f"{p} = {est.value:.5g} +/- {est.stderr:.2g}" for p, est in fit.params.items())
         warn = "; ".join(fit.warnings)
+        rec.set_time(timeline, sequence=int(ticks[-1]))   # on the timeline: the text log lists it
         rec.log(f"{base}/summary", rr.TextLog(f"{name}: {text}" + (f" [warnings: {warn}]" if warn else ""),
-                                             level="WARN" if warn else "INFO"), static=True)
+                                             level="WARN" if warn else "INFO"))
+        rec.disable_timeline(timeline)
 
 
 def stream_fit_report(spec: RerunSpec | str, report: Any) -> None:
-    rec = open_stream(spec, "labkit-fit", blueprint=fit_blueprint(list(report.series)),
+    first = next(iter(report.series.values()), None)
+    y_name = first.y_name if first is not None else "y"
+    rec = open_stream(spec, "labkit-fit", blueprint=fit_blueprint(list(report.series), y_name),
                       fallback_file="fit.rrd")
     try:
         log_fit_report(rec, report)
