@@ -9,7 +9,8 @@ entity                     content
 ``/video/frame/fit``       the fitted circle/ellipse/trochoid, drawn over every frame (static)
 ``/video/frame/center``    the pattern centre
 ``/video/pattern``         text: classification and its numbers, once the analysis ends
-``/video/trace``           the accumulated trace (per-pixel maximum of the analysed frames)
+``/video/trace``           the accumulated trace (per-pixel maximum of the analysed frames, or
+                           minimum when the body is darker than the background)
 ``/video/trace/fit``       the fitted curve over the accumulated trace
 ========================  =========================================================================
 
@@ -74,6 +75,7 @@ class VisionStream:
         self.jpeg_quality = jpeg_quality
         self.frames_logged = 0
         self.trace: np.ndarray | None = None   # per-pixel maximum of the analysed frames
+        self.trace_dark: np.ndarray | None = None   # per-pixel minimum (a dark body on light)
         self.last_time: tuple[int, float] | None = None
 
     def frame(self, index: int, t_s: float, bgr: np.ndarray) -> None:
@@ -90,8 +92,9 @@ class VisionStream:
         self.rec.log("/video/frame", image)
         self.frames_logged += 1
         self.last_time = (int(index), float(t_s))
-        self.trace = bgr.copy() if self.trace is None or self.trace.shape != bgr.shape \
-            else np.maximum(self.trace, bgr)
+        fresh = self.trace is None or self.trace.shape != bgr.shape
+        self.trace = bgr.copy() if fresh else np.maximum(self.trace, bgr)
+        self.trace_dark = bgr.copy() if fresh else np.minimum(self.trace_dark, bgr)
 
     def result(self, result: dict[str, Any]) -> None:
         pattern = result.get("pattern") or result.get("point_pattern") or {}
@@ -111,11 +114,15 @@ class VisionStream:
 
     def _log_trace(self, curve: np.ndarray | None) -> None:
         """The accumulated trace with the fitted curve over it (static: the whole clip)."""
-        if self.trace is None:
+        if self.trace is None or self.trace_dark is None:
             return
         import cv2
 
-        ok, encoded = cv2.imencode(".jpg", self.trace, [cv2.IMWRITE_JPEG_QUALITY, self.jpeg_quality])
+        background = float(np.median(self.trace))
+        bright = float(self.trace.max()) - background
+        dark = background - float(self.trace_dark.min())
+        trace = self.trace if bright >= dark else self.trace_dark   # a bright spot, or a dark body
+        ok, encoded = cv2.imencode(".jpg", trace, [cv2.IMWRITE_JPEG_QUALITY, self.jpeg_quality])
         if ok:
             self.rec.log("/video/trace", self.rr.EncodedImage(contents=encoded.tobytes(),
                                                                media_type="image/jpeg"), static=True)
