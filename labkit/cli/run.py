@@ -154,7 +154,8 @@ def report(outcome: Any) -> int:
     if outcome.status == "completed":
         print(f"completed {len((outcome.results or {}).get('points', []))} points{where}")
         if params:
-            print(f"quick fit ({fit.get('model')}): {params}")
+            from labkit.protocols.quickfit import quick_fit_label
+            print(f"quick fit ({quick_fit_label(str(fit.get('model')))}): {params}")
         return 0
     print(f"labkit run: {outcome.status}: {outcome.reason}{where}", file=sys.stderr)
     if getattr(outcome, "stop_failed", None):

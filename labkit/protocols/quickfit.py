@@ -17,6 +17,19 @@ from __future__ import annotations
 
 import math
 
+#: what each quick fit minimises, and what ``labkit fit`` minimises instead (docs/fitting.md)
+RESIDUALS = {
+    "power-law": ("least squares in y (grams)", "labkit fit --model power-law fits ln y"),
+    "eq6.37": ("least squares in w^2 - v w", "labkit fit --model spin-critical fits the spin v"),
+}
+
+
+def quick_fit_label(model: str) -> str:
+    """The words ``labkit run`` prints beside a quick fit, so it is not mistaken for
+    ``labkit fit``'s (same model, other residuals: the digits differ, docs/fitting.md)."""
+    mine, theirs = RESIDUALS.get(model, ("least squares", "labkit fit may differ"))
+    return f"{model}, {mine}; {theirs}, see docs/fitting.md"
+
 
 def _param(value: float, stderr: float) -> dict[str, float]:
     return {"value": float(value), "stderr": float(stderr)}

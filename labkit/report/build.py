@@ -105,7 +105,7 @@ def _metadata_section(table: Table, run: dict, protocol: str | None, inertia: fl
         if run.get(key) not in (None, ""):
             rows.append([key, run[key]])
     if run.get("params"):
-        rows.append(["params", json.dumps(run["params"], sort_keys=True)])
+        rows.append(["params", ", ".join(f"{k} = {_words(v)}" for k, v in sorted(run["params"].items()))])
     if run.get("versions"):
         rows.append(["versions", ", ".join(f"{k} {v}" for k, v in run["versions"].items())])
     rows.append(["floator inertia (kg m^2)", inertia if inertia else "not given"])
@@ -142,9 +142,65 @@ def _events_section(path: Path) -> list[str]:
     lines = ["## Events", "", md.table(["event", "count"], [[k, v] for k, v in sorted(counts.items())]), ""]
     if notable:
         lines += ["Notable events:", ""]
-        lines += [f"- `{json.dumps(ev, sort_keys=True)[:200]}`" for ev in notable]
+        lines += [f"- {event_in_words(ev)}" for ev in notable]
         lines.append("")
     return lines
+
+
+def _words(value) -> str:
+    """A value as text: numbers to 5 significant digits, lists joined, no JSON."""
+    if isinstance(value, list | tuple):
+        return ", ".join(_words(v) for v in value)
+    if isinstance(value, dict):
+        return "; ".join(f"{k} {_words(v)}" for k, v in value.items())
+    return md.num(value)
+
+
+def event_in_words(ev: dict) -> str:
+    """One line for a notable event: when, what, and its numbers with units."""
+    kind = str(ev.get("type", "?"))
+    when = f"{float(ev['t']):.2f} s" if isinstance(ev.get("t"), int | float) else "?"
+    if kind == "drop":
+        text = (f"the floator dropped ({ev.get('cause', 'cause not recorded')}) at rotor "
+                f"{md.num(ev.get('rotor_rad_s'), 4)} rad/s, spin {md.num(ev.get('spin_rad_s'), 4)} rad/s")
+    elif kind in ("interlock", "fault"):
+        text = f"{kind}: {ev.get('reason', 'no reason recorded')}; motors set to zero"
+    elif kind == "stop":
+        reason = f" ({ev['reason']})" if ev.get("reason") else ""
+        text = f"run {ev.get('status', 'ended')} after {ev.get('steps_done', '?')} steps{reason}"
+    else:
+        rest = {k: v for k, v in ev.items() if k not in ("type", "t")}
+        text = kind.replace("_", " ") + (": " + _words(rest) if rest else "")
+    return f"{when}: {text}"
+
+
+def spread_column(table: Table, column: str) -> np.ndarray | None:
+    """The recorded spread of a column: ``force_g`` -> ``force_stderr_g`` (or ``_std_``),
+    ``speed_rpm`` -> ``speed_std_rpm``; None when the session has none."""
+    head, _, unit = column.rpartition("_")
+    for kind in ("stderr", "std"):
+        name = f"{head}_{kind}_{unit}" if head else ""
+        if name in table.numeric:
+            return np.asarray(table.numeric[name], dtype=float)
+    return None
+
+
+def _errors(table: Table, report: FitReport) -> dict[str, tuple[np.ndarray | None, np.ndarray | None]]:
+    """Per series, the x and y spreads of its points, matched to the table rows by value."""
+    out = {}
+    for name, res in report.series.items():
+        pair = []
+        for col, values in ((res.x_name, res.x), (res.y_name, res.y)):
+            spread = spread_column(table, col) if col in table.numeric else None
+            if spread is None:
+                pair.append(None)
+                continue
+            column = np.asarray(table.numeric[col], dtype=float)
+            rows = [int(np.argmin(np.abs(column - v))) for v in np.asarray(values, dtype=float)]
+            err = np.where(np.isfinite(spread[rows]), spread[rows], 0.0)
+            pair.append(err)
+        out[name] = (pair[0], pair[1])
+    return out
 
 
 def _data_section(table: Table, out: Path) -> list[str]:
@@ -187,8 +243,8 @@ def _fit_sections(table: Table, plan: Plan, out: Path, overlays: tuple[Overlay, 
         done.append((pf.title, report))
         fits_json[pf.slug] = report.to_json()
         fig = fit_figure(report, out / f"fig-{pf.slug}.png", overlays=(*pf.overlays, *overlays),
-                         title=pf.figure_title or pf.title)
-        lines += [f"![{pf.title}]({fig.name})", ""]
+                         title=pf.figure_title or pf.title, errors=_errors(table, report), svg=True)
+        lines += [f"![{pf.title}]({fig.name})", "", f"Vector version: [{fig.stem}.svg]({fig.stem}.svg)", ""]
         for name, res in report.series.items():
             if len(report.series) > 1 or name != "all":
                 lines += [f"**Series {name}**", ""]
@@ -219,6 +275,33 @@ def _comparison(done: list[tuple[str, FitReport]]) -> list[str]:
                       "ΔAIC", "warnings"], rows), ""]
 
 
+def _video_path(source: Path, video: str) -> Path:
+    vpath = Path(video) if Path(video).is_absolute() else (source.parent / video)
+    return vpath if vpath.exists() else Path(video)
+
+
+def _strobe_sections(source: Path, doc: dict, out: Path) -> list[str]:
+    """Motion table (phi, beta, delta with their standard errors when the analysis gave them)
+    and the phase figure (tilt and lateral position against phase, fitted sinusoids)."""
+    from labkit.report.strobe import motion_rows, phase_figure
+
+    lines = ["## Motion (cone angle φ, lateral amplitude β, RC offset δ = β / tan φ, Eq. 5.97)", "",
+             md.table(["quantity", "value", "standard error", "unit"], motion_rows(doc)), ""]
+    if doc.get("rc_offset_direction"):
+        lines += [f"The rotation centre lies {doc['rc_offset_direction']} from the centroid.", ""]
+    lines += ["## Tilt and lateral position against phase", ""]
+    if not doc.get("source") or not doc.get("phase_per_frame"):
+        return lines + ["**Not drawn:** the result names no video or no phase per frame.", ""]
+    try:
+        fig = phase_figure(doc, _video_path(source, doc["source"]), out / "fig-strobe-phase.png")
+    except (LabkitError, ValueError) as exc:
+        return lines + [f"**Not drawn:** {exc}", ""]
+    return lines + ["Each frame's body tilt and centroid, measured again from the video, against the "
+                    "rotation phase the analysis gave that frame, with the fitted sinusoids.", "",
+                    f"![tilt and lateral position against phase]({fig.name})", "",
+                    f"Vector version: [{fig.stem}.svg]({fig.stem}.svg)", ""]
+
+
 def _video_report(source: Path, doc: dict, out: Path) -> Path:
     out.mkdir(parents=True, exist_ok=True)
     strobe = "point_pattern" in doc   # labkit analyse strobe; else analyse laser
@@ -231,13 +314,9 @@ def _video_report(source: Path, doc: dict, out: Path) -> Path:
         rows.append(["size (px)", " x ".join(str(v) for v in doc["size"])])
     lines += [md.table(["item", "value"], rows), ""]
     if strobe:
-        keys = ("tilt_amplitude_rad", "lateral_amplitude_px", "lateral_amplitude_mm", "rc_offset_px",
-                "rc_offset_mm", "rc_offset_direction")
-        motion = [[k, doc.get(k)] for k in keys if k in doc]
-        lines += ["## Motion (cone angle phi, lateral amplitude beta, RC offset delta, Eq. 5.97)", "",
-                  md.table(["quantity", "value"], motion), ""]
+        lines += _strobe_sections(source, doc, out)
     lines += ["## Pattern" + (" of the tracked body point" if strobe else ""), ""]
-    prow = [[k, json.dumps(v) if isinstance(v, list | dict) else v] for k, v in pattern.items()]
+    prow = [[k.replace("_", " "), _words(v)] for k, v in pattern.items() if v is not None]
     lines += [md.table(["quantity", "value"], prow), ""]
     tilt = doc.get("tilt_rad")
     if isinstance(tilt, dict):
@@ -245,9 +324,7 @@ def _video_report(source: Path, doc: dict, out: Path) -> Path:
                   + ", ".join(f"{k} = {md.num(v)}" for k, v in tilt.items()), ""]
     video = doc.get("source")
     if video:
-        vpath = Path(video) if Path(video).is_absolute() else (source.parent / video)
-        if not vpath.exists():
-            vpath = Path(video)
+        vpath = _video_path(source, video)
         try:
             frames = sample_frames(vpath)
             sheet = contact_sheet([overlay(f, pattern) for _, f in frames], [f"frame {i}" for i, _ in frames],

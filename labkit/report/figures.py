@@ -1,8 +1,10 @@
 """Figures for fits and reports (matplotlib's Agg canvas: no display, no global backend).
 
-``fit_figure`` draws data with the fitted curve above and residuals below. Speed sweeps are
-drawn log-log like the paper's Fig. 5.25; spin-critical pairs like Fig. 6.18 (spin against
-rotor speed, one colour per series).
+``fit_figure`` draws data (with error bars from the recorded spread when given) and the fitted
+curve above, residuals below, axes labelled with quantity and unit; the paper's curve is drawn
+dashed on top of the fit, so it stays visible where the two coincide. Speed sweeps are drawn
+log-log like the paper's Fig. 5.25; spin-critical pairs like Fig. 6.18. Every figure is
+written as PNG (150 dpi) and SVG beside it.
 """
 
 from __future__ import annotations
@@ -12,20 +14,41 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+from matplotlib import rc_context
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter
 
 from labkit.fit.overlay import Overlay
 from labkit.fit.table_fit import FitReport
+from labkit.report.labels import axis_label, residual_label
+
+DPI = 150
 
 LOG_LOG = {"power-law", "pfr-force", "mbs-distance"}
 
 
+def save(fig: Figure, path: str | Path, svg: bool = True, **kwargs) -> Path:
+    """``path`` (PNG) and, with ``svg``, the same figure as SVG beside it."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=DPI, **kwargs)
+    if svg:
+        with rc_context({"svg.fonttype": "none"}):   # text stays text: searchable, editable
+            fig.savefig(path.with_suffix(".svg"), **kwargs)
+    return path
+
+
 def fit_figure(report: FitReport, path: str | Path, *, overlays: Sequence[Overlay] = (),
-               title: str | None = None) -> Path:
-    """Data + fitted curve (top) and residuals (bottom) for every series of ``report``."""
-    fig = Figure(figsize=(7.0, 6.5), dpi=110)
+               title: str | None = None,
+               errors: dict[str, tuple[np.ndarray | None, np.ndarray | None]] | None = None,
+               svg: bool = False) -> Path:
+    """Data + fitted curve (top) and residuals (bottom) for every series of ``report``.
+
+    ``errors`` maps a series name to (x error, y error) arrays aligned with its points (one
+    standard error or standard deviation, as recorded); None draws no bar. ``svg`` writes an
+    SVG beside the PNG (the report does; ``labkit fit --plot`` writes only the file named)."""
+    fig = Figure(figsize=(7.0, 6.5), dpi=DPI)
     FigureCanvasAgg(fig)
     gs = fig.add_gridspec(2, 1, height_ratios=[3, 1.3], hspace=0.08, left=0.14, right=0.97,
                           top=0.94, bottom=0.08)
@@ -36,15 +59,23 @@ def fit_figure(report: FitReport, path: str | Path, *, overlays: Sequence[Overla
     for i, (name, res) in enumerate(report.series.items()):
         c = colors[i % len(colors)]
         label = "data" if name == "all" else f"series {name}"
-        ax.plot(res.x, res.y, "o", color=c, ms=5, label=label)
+        xerr, yerr = (errors or {}).get(name, (None, None))
+        bars = xerr is not None or yerr is not None
+        drawn = ax.errorbar(res.x, res.y, xerr=xerr, yerr=yerr, fmt="o", color=c, ms=5,
+                            capsize=3 if bars else 0, elinewidth=1, zorder=3,
+                            label=label + (" (bars: recorded spread)" if bars else ""))
+        for axis_name, collection in zip(("x", "y"), _bar_collections(drawn, xerr, yerr), strict=True):
+            if collection is not None:
+                collection.set_gid(f"errorbar-{axis_name}-{name}")
         lo, hi = float(np.min(res.x)), float(np.max(res.x))
         grid = np.geomspace(lo, hi, 200) if loglog and lo > 0 else np.linspace(lo, hi, 200)
-        ax.plot(grid, res.predict(grid), "-", color=c, lw=1.5, label=f"fit: {_param_text(res)}")
+        ax.plot(grid, res.predict(grid), "-", color=c, lw=2.2, alpha=0.8, zorder=2,
+                label=f"fit: {_param_text(res)}")
         axr.plot(res.x, res.residuals, "o", color=c, ms=4)
     first = next(iter(report.series.values()))
-    for ov in overlays:
+    for ov in overlays:   # on top of the fit, dashed and dark: visible where they coincide
         if ov.fits(first.x_name, first.y_name):
-            ax.plot(ov.x, ov.y, "--", color="0.3", lw=1.2, label=ov.label)
+            ax.plot(ov.x, ov.y, color="black", lw=1.3, dashes=(5, 3), zorder=4, label=ov.label)
     axr.axhline(0.0, color="0.5", lw=0.8)
     if loglog:
         ax.set_xscale("log")
@@ -52,18 +83,23 @@ def fit_figure(report: FitReport, path: str | Path, *, overlays: Sequence[Overla
         for axis in (ax.xaxis, ax.yaxis, axr.xaxis):
             axis.set_major_formatter(FuncFormatter(_plain))
             axis.set_minor_formatter(FuncFormatter(_plain_minor))
-    ax.set_ylabel(first.y_name)
-    axr.set_xlabel(first.x_name)
-    axr.set_ylabel(f"residual\n{first.residual_space}")
+    ax.set_ylabel(axis_label(first.y_name))
+    axr.set_xlabel(axis_label(first.x_name))
+    axr.set_ylabel(f"residual in\n{residual_label(first.residual_space)}", fontsize=9)
     ax.tick_params(which="both", labelbottom=False)
     ax.grid(True, which="both", alpha=0.25)
     axr.grid(True, alpha=0.25)
     ax.legend(fontsize=8, loc="best")
     ax.set_title(title or f"{report.model} fit", fontsize=11)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)  # fixed margins: "tight" would draw the figure twice
-    return path
+    return save(fig, path, svg=svg)  # fixed margins: "tight" would draw the figure twice
+
+
+def _bar_collections(drawn, xerr, yerr) -> tuple:
+    """The x and y bar collections of an ``errorbar`` container (None where not drawn)."""
+    bars = list(drawn.lines[2])
+    x_bars = bars.pop(0) if xerr is not None and bars else None
+    y_bars = bars.pop(0) if yerr is not None and bars else None
+    return x_bars, y_bars
 
 
 def _plain(v: float, _pos=None) -> str:

@@ -3,7 +3,8 @@
 * ``save:FILE`` writes an .rrd file (works anywhere, the CI default for tests).
 * ``connect`` / ``connect:ADDR`` streams to a running viewer over gRPC; the default address
   is the viewer's on localhost (``rerun+http://127.0.0.1:9876/proxy``); ``ADDR`` may be
-  ``HOST:PORT`` or a full ``rerun+http://...`` URL.
+  ``HOST:PORT`` or a full ``rerun+http://...`` URL. When nothing answers on that port, labkit
+  says so and saves to the fallback file instead (as ``spawn`` without a display does).
 * ``spawn`` starts a viewer listening on 127.0.0.1 only (``spawn:ADDRESS``, e.g.
   ``spawn:0.0.0.0``, to let other machines connect; see labkit.stream.viewer). With no
   display (no ``DISPLAY``/``WAYLAND_DISPLAY``) a viewer
@@ -15,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import socket
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,6 +25,8 @@ from typing import Any
 from labkit.errors import LabkitError
 
 DEFAULT_CONNECT_URL = "rerun+http://127.0.0.1:9876/proxy"
+#: how long ``connect`` waits for a viewer's port before it saves to a file instead (s)
+CONNECT_PROBE_S = 2.0
 
 
 @dataclass(frozen=True)
@@ -90,6 +94,20 @@ def has_display() -> bool:
     return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
 
 
+def viewer_answers(url: str, timeout_s: float = CONNECT_PROBE_S) -> bool:
+    """Whether something accepts a TCP connection at the host and port of a
+    ``rerun+http://HOST:PORT/...`` URL (a viewer or ``rerun --serve-grpc``)."""
+    from urllib.parse import urlsplit
+
+    parts = urlsplit(url.replace("rerun+", "", 1))
+    host, port = parts.hostname or "127.0.0.1", parts.port or 9876
+    try:
+        with socket.create_connection((host, port), timeout=timeout_s):
+            return True
+    except OSError:
+        return False
+
+
 def open_stream(spec: RerunSpec | str | None, app_id: str, *, recording_id: str | None = None,
                 blueprint: Any = None, fallback_file: str | Path = "labkit.rrd") -> Any:
     """A ``rerun.RecordingStream`` for ``spec`` (None -> None: nothing is logged).
@@ -114,8 +132,12 @@ def open_stream(spec: RerunSpec | str | None, app_id: str, *, recording_id: str 
         except OSError as exc:
             raise LabkitError(f"--rerun save:{path}: cannot create folder ({exc.strerror})") from None
         rec.save(str(path), default_blueprint=blueprint)
-    elif spec.mode == "connect":
+    elif spec.mode == "connect" and viewer_answers(spec.target):
         rec.connect_grpc(spec.target, default_blueprint=blueprint)
+    elif spec.mode == "connect":
+        print(f"labkit: no rerun viewer answers at {spec.target}; saving to {fallback_file} instead "
+              f"(open it with: rerun {fallback_file})", file=sys.stderr)
+        rec.save(str(fallback_file), default_blueprint=blueprint)
     elif has_display():
         from labkit.stream.viewer import LOCALHOST, spawn_viewer
 

@@ -2,26 +2,35 @@
 
 It is an event sink (:mod:`labkit.protocols.events`): it turns the run's typed documents
 (:mod:`labkit.documents`) into rerun entities. Only entities the run has are logged (a rig
-without a balance gets no force plot; a single loop gets no second speed plot).
+without a balance gets no force plot; a single loop gets no second speed plot). Each
+quantity has one entity in one unit: speed in RPM (the rotor's tachometer is the loop's
+measured speed, so it is not drawn twice), a balance as force in grams, a spin in rad/s.
 
-Entity paths (timelines: ``time`` = clock seconds since start as a duration, ``step`` =
-protocol step index):
+Timelines: ``time`` (clock seconds since the start, a duration), ``step`` (protocol step) and
+the figure's x timeline (:mod:`labkit.stream.blueprints`: ``rotor speed [RPM]`` for the
+speed sweep, ``rotor speed [rad/s]`` for spin-critical), whose values are the x quantity.
 
-=================================  ==========================================================
-entity                              content
-=================================  ==========================================================
-``/rig/<loop>/speed_rpm``          measured speed of each control loop (Scalars)
-``/rig/<loop>/setpoint_rpm``       ramped setpoint the loop is tracking
-``/rig/<loop>/target_rpm``         the step's target
-``/rig/<loop>/duty``               commanded duty cycle (0..1)
-``/rig/<device>/<quantity>``       every device reading in SI (e.g. ``/rig/balance/force``, N)
-``/rig/<device>/frame``            each reading's raw bytes (``raw``, latin-1 text) and flags
-                                   (``flags``: e.g. ``device_reset;tare_lost``, empty if none)
-``/results/points``                one point per finished step, x = speed (kRPM), y = force (g)
-                                   for the sweep, x = rotor, y = spin (rad/s) for spin-critical
-``/results/fit``                   the quick fit's curve over the points, updated each step
-``/events``                        text log: start, steps, settle, drops, interlocks, stop
-=================================  ==========================================================
+=====================================  ======================================================
+entity                                  content
+=====================================  ======================================================
+``/rig/<loop>/speed_rpm``              measured speed of each control loop (RPM)
+``/rig/<loop>/setpoint_rpm``           ramped setpoint the loop is tracking (RPM)
+``/rig/<loop>/target_rpm``             the step's target (RPM)
+``/rig/<loop>/duty``                   commanded duty cycle (0..1, its own plot)
+``/rig/<balance>/force_g``             balance readings as force in grams (mass kg x 1000,
+                                       force N / g0 x 1000)
+``/rig/<tach>/spin_rad_s``             a tachometer that is no loop's (the floator's spin)
+``/rig/<device>/frame``                each reading's raw bytes (``raw``) and ``flags``
+``<fig>/plot/data``                    one point per finished step on the x timeline
+``<fig>/plot/paper``                   the paper's curve (Fig. 5.25: y = 224e6 x^-1.9)
+``<fig>/plot/fit/after_NN``            the fit after NN points with its 95 % band, logged at
+                                       every point; earlier fits are cleared (static Clear)
+``<fig>/residual/after_NN``            data minus fit of that fit, beneath the figure
+``/events``                            text log: start, steps, settle, drops, interlocks, stop
+=====================================  ======================================================
+
+``<fig>`` is ``/fig5_25`` (speed sweep) or ``/fig6_18`` (spin-critical). The fits are
+:mod:`labkit.stream.livefit`'s, i.e. ``labkit fit``'s (ln F for the power law, v for Eq. 6.37).
 """
 
 from __future__ import annotations
@@ -32,28 +41,16 @@ from typing import Any
 import numpy as np
 
 from labkit import documents as doc
+from labkit.devices.base import READING_FLAGS
+from labkit.stream.blueprints import FIGURES, FigureSpec, run_blueprint
 from labkit.stream.core import RerunSpec, open_stream
+from labkit.stream.livefit import LiveFit, eq637_fit, paper_fig525, power_law_fit
 from labkit.units import RAD_S_PER_RPM
 
-
-def run_blueprint(loops: list[str], devices: list[str]) -> Any:
-    """The views a user wants first: speeds, forces and the growing fit, then the log."""
-    import rerun.blueprint as rrb
-
-    series = [rrb.TimeSeriesView(origin=f"/rig/{loop}", name=f"{loop} speed (RPM)") for loop in loops]
-    series += [rrb.TimeSeriesView(origin=f"/rig/{dev}", name=dev) for dev in devices]
-    top = rrb.Horizontal(*series) if series else rrb.TextLogView(origin="/events", name="events")
-    return rrb.Blueprint(
-        rrb.Vertical(
-            top,
-            rrb.Horizontal(
-                rrb.Spatial2DView(origin="/results", name="results and fit"),
-                rrb.TextLogView(origin="/events", name="events"),
-            ),
-            row_shares=[3, 2],
-        ),
-        collapse_panels=True,
-    )
+#: standard gravity (m/s^2): a force in N as grams-force
+G0 = 9.80665
+FIT_COLOURS = [[220, 40, 40], [240, 150, 150], [240, 150, 150]]
+CURVE_SAMPLES = 120
 
 
 #: longest wait for the viewer at the end of a run (s)
@@ -63,15 +60,22 @@ FLUSH_TIMEOUT_S = 5.0
 class RerunRunSink:
     """Event sink streaming a run to rerun. ``close()`` flushes and writes the .rrd footer."""
 
-    def __init__(self, rec: Any) -> None:
+    def __init__(self, rec: Any, loops: list[str] | None = None, devices: list[str] | None = None,
+                 loop_tachs: set[str] | None = None) -> None:
         import rerun as rr
 
         self.rr = rr
         self.rec = rec
+        self.loops = loops or ["rotor"]
+        self.devices = list(devices or [])
+        self.loop_tachs = loop_tachs if loop_tachs is not None else {f"{loop}_tach" for loop in self.loops}
         self.t0: float | None = None
         self.step: int = -1
+        self.step_x: float | None = None
         self.protocol = ""
+        self.figure: FigureSpec | None = None
         self.points: list[tuple[float, float]] = []
+        self.fits: list[LiveFit] = []
         self._styled: set[str] = set()
         self.flush_error: str | None = None
 
@@ -83,16 +87,25 @@ class RerunRunSink:
         if self.step >= 0:
             self.rec.set_time("step", sequence=self.step)
 
+    def _style(self, path: str, style: Any) -> None:
+        if path not in self._styled:
+            self.rec.log(path, style, static=True)
+            self._styled.add(path)
+
     def _scalar(self, path: str, value: float | None, name: str) -> None:
         if value is None or not np.isfinite(value):
             return
-        if path not in self._styled:
-            self.rec.log(path, self.rr.SeriesLines(names=name), static=True)
-            self._styled.add(path)
+        self._style(path, self.rr.SeriesLines(names=name))
         self.rec.log(path, self.rr.Scalars(float(value)))
 
     def _text(self, text: str, level: str = "INFO") -> None:
+        """An event on ``time`` and, once a step has a target, on the figure's x timeline too
+        (the figure's tab opens on that timeline)."""
+        if self.figure is not None and self.step_x is not None:
+            self.rec.set_time(self.figure.timeline, sequence=int(round(self.step_x)))
         self.rec.log("/events", self.rr.TextLog(text, level=level))
+        if self.figure is not None:
+            self.rec.disable_timeline(self.figure.timeline)
 
     # ---- documents ----------------------------------------------------------------------
     def on_event(self, event: doc.RunDocument) -> None:
@@ -105,11 +118,16 @@ class RerunRunSink:
 
     def _on_start(self, e: doc.RunStart) -> None:
         self.protocol = e.protocol
+        self.figure = FIGURES.get(e.protocol)
+        self.rec.send_blueprint(run_blueprint(e.protocol, self.loops, self.devices))
         self._text(f"start {self.protocol} on {e.rig} ({e.n_steps} steps)")
 
     def _on_step(self, e: doc.StepStart) -> None:
         for loop, rad_s in e.targets_rad_s.items():
-            self._scalar(f"/rig/{loop}/target_rpm", rad_s / RAD_S_PER_RPM, "target")
+            self._scalar(f"/rig/{loop}/target_rpm", rad_s / RAD_S_PER_RPM, "target [RPM]")
+        rotor = e.targets_rad_s.get(self.loops[0]) if self.loops else None
+        if rotor is not None:
+            self.step_x = rotor / RAD_S_PER_RPM if self.protocol == "speed-sweep" else rotor
         self._text(f"step {e.index}/{e.n_steps} {e.label}")
 
     def _on_control(self, e: doc.ControlSnapshot) -> None:
@@ -117,19 +135,25 @@ class RerunRunSink:
             for key, name in (("measured_rad_s", "speed_rpm"), ("setpoint_rad_s", "setpoint_rpm")):
                 value = snap.get(key)
                 self._scalar(f"/rig/{loop}/{name}", None if value is None else value / RAD_S_PER_RPM,
-                             name.replace("_rpm", ""))
-            self._scalar(f"/rig/{loop}/duty", snap.get("duty"), "duty")
+                             name.replace("_rpm", " [RPM]"))
+            self._scalar(f"/rig/{loop}/duty", snap.get("duty"), "duty [0-1]")
 
     def _on_reading(self, e: doc.ReadingEvent) -> None:
-        """The value as a scalar; the frame's raw bytes and flags on ``/rig/<device>/frame``
-        (``raw``, ``flags`` joined by ``;``); a flagged reading also as a warning in ``/events``."""
+        """The value in the unit of its quantity (above); the frame's raw bytes and flags on
+        ``/rig/<device>/frame``; a flagged reading also as a warning in ``/events``."""
         r = e.reading
-        self._scalar(f"/rig/{e.device}/{r.quantity}", r.value, f"{r.quantity} [{r.unit}]")
+        plotted = reading_series(e.device, r.quantity, r.unit, r.value, self.loop_tachs)
+        if plotted is not None:
+            self._scalar(*plotted)
+            if e.device not in self.devices:   # a device the caller did not list (replay)
+                self.devices.append(e.device)
+                self.rec.send_blueprint(run_blueprint(self.protocol, self.loops, self.devices))
         flags = ";".join(sorted(r.flags))
         self.rec.log(f"/rig/{e.device}/frame",
                      self.rr.AnyValues(raw=r.raw.decode("latin-1"), flags=flags))
-        if flags:
-            self._text(f"{e.device}: {', '.join(sorted(r.flags))} (raw {r.raw!r})", "WARN")
+        suspect = sorted(f for f in r.flags if READING_FLAGS.get(f, (True, ""))[0])
+        if suspect:   # informational flags (zero_speed, stability_unknown) stay in the frame only
+            self._text(f"{e.device}: {', '.join(suspect)} (raw {r.raw!r})", "WARN")
 
     def _on_settled(self, e: doc.Settled) -> None:
         self._text(f"settled in {e.settle_time_s:.2f} s")
@@ -152,18 +176,57 @@ class RerunRunSink:
                    f"{'(' + str(e.reason) + ')' if e.reason else ''}", level)
 
     def _on_point(self, e: doc.PointDone) -> None:
+        """The point on the figure, then the fit of every point so far with its band."""
         xy = point_xy(self.protocol, e.point)
-        if xy is None:
+        if xy is None or self.figure is None:
             return
         self.points.append(xy)
-        self.rec.log("/results/points", self.rr.Points2D(np.asarray(self.points), radii=0.15,
-                                                         colors=[30, 110, 220]))
+        fig = self.figure
+        self._style(f"{fig.root}/plot/data", self.rr.SeriesPoints(
+            names=fig.y_label, colors=[30, 110, 220], markers="circle", marker_sizes=5))
+        self.rec.set_time(fig.timeline, sequence=int(round(xy[0])))
+        self.rec.log(f"{fig.root}/plot/data", self.rr.Scalars(xy[1]))
+        self.rec.disable_timeline(fig.timeline)
+        self._log_fit()
 
-    def _on_results(self, e: doc.Results) -> None:
-        fit = (e.results or {}).get("fit") or {}
-        curve = fit_curve(self.protocol, fit, self.points)
-        if curve is not None:
-            self.rec.log("/results/fit", self.rr.LineStrips2D([curve], colors=[220, 60, 30]))
+    def _log_fit(self) -> None:
+        fig = self.figure
+        assert fig is not None
+        xs, ys = [p[0] for p in self.points], [p[1] for p in self.points]
+        fit = power_law_fit(xs, ys) if self.protocol == "speed-sweep" else eq637_fit(xs, ys)
+        if fit is None:
+            return
+        grid = np.unique(np.round(np.linspace(min(xs), max(xs), CURVE_SAMPLES)).astype(np.int64))
+        if len(grid) < 2:
+            return
+        if self.fits:   # only the newest fit is drawn: a static value shadows the temporal ones
+            previous = f"after_{self.fits[-1].n:02d}"
+            self.rec.log(f"{fig.root}/plot/fit/{previous}", self.rr.Scalars([np.nan] * 3), static=True)
+            self.rec.log(f"{fig.root}/residual/{previous}", self.rr.Scalars([np.nan]), static=True)
+        self.fits.append(fit)
+        name = f"after_{fit.n:02d}"
+        label = fit_label(fit)
+        self.rec.log(f"{fig.root}/plot/fit/{name}", self.rr.SeriesLines(
+            names=[label, "95 % band", "95 % band"], colors=FIT_COLOURS, widths=[2.5, 1, 1]), static=True)
+        y, lo, hi = fit.curve(grid.astype(float))
+        timeline = [self.rr.TimeColumn(fig.timeline, sequence=grid)]
+        self.rec.send_columns(f"{fig.root}/plot/fit/{name}", indexes=timeline,
+                              columns=self.rr.Scalars.columns(scalars=np.column_stack([y, lo, hi])))
+        if self.protocol == "speed-sweep":
+            self._style(f"{fig.root}/plot/paper", self.rr.SeriesLines(
+                names="paper: y = 224e6 x^-1.9", colors=[120, 120, 120], widths=1.5))
+            self.rec.send_columns(f"{fig.root}/plot/paper", indexes=timeline,
+                                  columns=self.rr.Scalars.columns(scalars=paper_fig525(grid)))
+        x_pts = np.asarray(xs)
+        fitted = fit.curve(x_pts)[0]
+        residual = (100.0 * (np.asarray(ys) / fitted - 1.0) if self.protocol == "speed-sweep"
+                    else np.asarray(ys) - fitted)
+        self.rec.log(f"{fig.root}/residual/{name}", self.rr.SeriesPoints(
+            names="residual", colors=[30, 110, 220], markers="circle", marker_sizes=4), static=True)
+        ticks = np.round(x_pts).astype(np.int64)
+        self.rec.send_columns(f"{fig.root}/residual/{name}",
+                              indexes=[self.rr.TimeColumn(fig.timeline, sequence=ticks)],
+                              columns=self.rr.Scalars.columns(scalars=residual))
 
     def close(self) -> None:
         """Flush (at most ``FLUSH_TIMEOUT_S``) and disconnect. A viewer that cannot be
@@ -177,31 +240,49 @@ class RerunRunSink:
             self.rec.disconnect()
 
 
+def fit_label(fit: LiveFit) -> str:
+    """The legend of a fit: its parameters with standard errors and n."""
+    if fit.model == "power-law":
+        (a, sa), (b, sb) = fit.params["a"], fit.params["b"]
+        return f"fit (ln F): a = {a:.3g} +/- {sa:.1g}, b = {b:.3f} +/- {sb:.3f}, n = {fit.n}"
+    c, sc = fit.params["C"]
+    return f"Eq. 6.37 fit (in v): C = {c:.4g} +/- {sc:.2g}, n = {fit.n}"
+
+
+def reading_series(device: str, quantity: str, unit: str, value: float,
+                   loop_tachs: set[str]) -> tuple[str, float, str] | None:
+    """``(entity, value, legend)`` a reading is drawn as, or None (the rotor's tachometer is
+    the loop's measured speed, drawn once, in RPM)."""
+    if quantity == "mass" and unit == "kg":
+        return f"/rig/{device}/force_g", value * 1000.0, "force [g]"
+    if quantity == "force" and unit == "N":
+        return f"/rig/{device}/force_g", value / G0 * 1000.0, "force [g]"
+    if quantity == "angular_speed":
+        if device in loop_tachs:
+            return None
+        return f"/rig/{device}/spin_rad_s", value, "spin [rad/s]"
+    return f"/rig/{device}/{quantity}", value, f"{quantity} [{unit}]"
+
+
 def point_xy(protocol: str, point: dict[str, Any]) -> tuple[float, float] | None:
-    """The (x, y) a result row is drawn at in ``/results/points``."""
+    """The (x, y) a result row is drawn at: (RPM, g) for the sweep, (rad/s, rad/s) for
+    spin-critical, in the paper's units."""
     if protocol == "speed-sweep" and point.get("force_g") is not None and point.get("speed_rpm"):
-        return float(point["speed_rpm"]) / 1000.0, float(point["force_g"])
-    if protocol == "spin-critical" and point.get("rotor_rad_s") is not None:
-        return float(point["rotor_rad_s"]) / 100.0, float(point.get("spin_rad_s") or 0.0) / 100.0
+        return float(point["speed_rpm"]), float(point["force_g"])
+    if protocol == "spin-critical" and point.get("rotor_rad_s") is not None \
+            and point.get("spin_rad_s") is not None:
+        return float(point["rotor_rad_s"]), float(point["spin_rad_s"])
     return None
 
 
-def fit_curve(protocol: str, fit: dict[str, Any], points: list[tuple[float, float]]) -> np.ndarray | None:
-    """The quick fit drawn over the points (power law y = a x^b, x in RPM, for the sweep)."""
-    params = fit.get("params") or {}
-    if protocol != "speed-sweep" or not points or "a" not in params or "b" not in params:
-        return None
-    a, b = params["a"]["value"], params["b"]["value"]
-    xs = np.linspace(min(p[0] for p in points), max(p[0] for p in points), 64)
-    return np.column_stack([xs, a * (xs * 1000.0) ** b])
-
-
 def run_sink(spec: RerunSpec | str, session_path: str | Path | None,
-             loops: list[str] | None = None, devices: list[str] | None = None) -> RerunRunSink:
-    """Open a rerun stream for a run (``spawn`` without a display saves SESSION/run.rrd)."""
+             loops: list[str] | None = None, devices: list[str] | None = None,
+             loop_tachs: set[str] | None = None) -> RerunRunSink:
+    """Open a rerun stream for a run (``spawn`` without a display saves SESSION/run.rrd).
+    The protocol's blueprint is sent when the run starts (it names the protocol)."""
     fallback = Path(session_path or ".") / "run.rrd"
+    loops, devices = loops or ["rotor"], devices or []
     rec = open_stream(spec, "labkit-run",
                       recording_id=Path(session_path).name if session_path else None,
-                      blueprint=run_blueprint(loops or ["rotor"], devices or ["balance"]),
-                      fallback_file=fallback)
-    return RerunRunSink(rec)
+                      blueprint=run_blueprint("", loops, devices), fallback_file=fallback)
+    return RerunRunSink(rec, loops, devices, loop_tachs)

@@ -11,6 +11,9 @@ entity                     content
 ``/video/pattern``         text: classification, its numbers and the quality verdict, once the analysis ends
 ``/video/overlay``         laser: the fitted curve over the accumulated trace, with the verdict
                            (the image ``labkit analyse laser --overlay OUT.png`` writes; static)
+``/video/trace``           the accumulated trace (per-pixel maximum of the analysed frames, or
+                           minimum when the body is darker than the background)
+``/video/trace/fit``       the fitted curve over the accumulated trace
 ========================  =========================================================================
 
 OpenCV puts pixel centres at integers, rerun at +0.5 (RERUN-OPENCV.md section 3), so every
@@ -34,8 +37,9 @@ def vision_blueprint() -> Any:
     return rrb.Blueprint(
         rrb.Vertical(
             rrb.Horizontal(
+                rrb.Spatial2DView(origin="/video/trace", name="accumulated trace and fitted curve"),
                 rrb.Spatial2DView(origin="/video/frame", name="frames and fit"),
-                rrb.Spatial2DView(origin="/video/overlay", name="fit over the accumulated trace"),
+                rrb.Spatial2DView(origin="/video/overlay", name="overlay with the verdict"),
             ),
             rrb.TextLogView(origin="/video/pattern", name="pattern"),
             row_shares=[5, 1],
@@ -61,6 +65,9 @@ class VisionStream:
         self.every = max(1, int(every))
         self.jpeg_quality = jpeg_quality
         self.frames_logged = 0
+        self.trace: np.ndarray | None = None   # per-pixel maximum of the analysed frames
+        self.trace_dark: np.ndarray | None = None   # per-pixel minimum (a dark body on light)
+        self.last_time: tuple[int, float] | None = None
 
     def frame(self, index: int, t_s: float, bgr: np.ndarray) -> None:
         if index % self.every:
@@ -75,17 +82,44 @@ class VisionStream:
         image = self.rr.EncodedImage(contents=encoded.tobytes(), media_type="image/jpeg")
         self.rec.log("/video/frame", image)
         self.frames_logged += 1
+        self.last_time = (int(index), float(t_s))
+        fresh = self.trace is None or self.trace.shape != bgr.shape
+        self.trace = bgr.copy() if fresh else np.maximum(self.trace, bgr)
+        self.trace_dark = bgr.copy() if fresh else np.minimum(self.trace_dark, bgr)
 
     def result(self, result: dict[str, Any]) -> None:
         pattern = result.get("pattern") or result.get("point_pattern") or {}
         curve = pattern_curve(pattern)
+        self._log_trace(curve)
         if curve is not None:
             strip = self.rr.LineStrips2D([curve + PIXEL_CENTRE], colors=[[0, 255, 0]])
             self.rec.log("/video/frame/fit", strip, static=True)
             center = np.asarray(pattern["center_px"], dtype=float) + PIXEL_CENTRE
             self.rec.log("/video/frame/center", self.rr.Points2D([center], radii=3, colors=[[255, 0, 0]]),
                          static=True)
-        self.rec.log("/video/pattern", self.rr.TextLog(describe(result), level="INFO"), static=True)
+        if self.last_time is not None:   # on the timelines, so the text log view lists it
+            self.rec.set_time("frame", sequence=self.last_time[0])
+            self.rec.set_time("video_time", duration=self.last_time[1])
+        self.rec.log("/video/pattern", self.rr.TextLog(describe(result), level="INFO"),
+                     static=self.last_time is None)
+
+    def _log_trace(self, curve: np.ndarray | None) -> None:
+        """The accumulated trace with the fitted curve over it (static: the whole clip)."""
+        if self.trace is None or self.trace_dark is None:
+            return
+        import cv2
+
+        background = float(np.median(self.trace))
+        bright = float(self.trace.max()) - background
+        dark = background - float(self.trace_dark.min())
+        trace = self.trace if bright >= dark else self.trace_dark   # a bright spot, or a dark body
+        ok, encoded = cv2.imencode(".jpg", trace, [cv2.IMWRITE_JPEG_QUALITY, self.jpeg_quality])
+        if ok:
+            self.rec.log("/video/trace", self.rr.EncodedImage(contents=encoded.tobytes(),
+                                                               media_type="image/jpeg"), static=True)
+        if curve is not None:
+            strip = self.rr.LineStrips2D([curve + PIXEL_CENTRE], colors=[[0, 255, 0]])
+            self.rec.log("/video/trace/fit", strip, static=True)
 
     def overlay(self, bgr: np.ndarray) -> None:
         """Log the overlay image (:func:`labkit.vision.overlay.draw_overlay`) as a static PNG."""

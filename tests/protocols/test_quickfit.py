@@ -35,3 +35,18 @@ def test_eq637_c_exact_on_pairs_on_the_curve():
     v = w - c * (1 - w / 3000) / w
     fit = fit_spin_critical_c(list(w), list(v))
     assert fit["params"]["C"]["value"] == pytest.approx(c, rel=1e-9)
+
+
+
+def test_run_labels_its_quick_fit_as_another_least_squares_than_labkit_fit(tmp_path, capsys):
+    """`labkit run` prints which residuals its quick fit minimises and which `labkit fit` does
+    (the digits differ on purpose: docs/fitting.md)."""
+    from labkit.cli import main
+
+    code = main(["run", "rigs/emulated-fig618.toml", "spin-critical", "--sessions", str(tmp_path),
+                 "--no-progress", "--set", "start_rpm=6600", "--set", "stop_rpm=8000",
+                 "--set", "step_pct=15"])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert ("quick fit (eq6.37, least squares in w^2 - v w; labkit fit --model spin-critical fits the "
+            "spin v, see docs/fitting.md): C = ") in out

@@ -63,3 +63,17 @@ def test_spawn_without_display_falls_back_to_a_file(tmp_path, monkeypatch, capsy
     rec.disconnect()
     assert "no display" in capsys.readouterr().err
     assert fallback.exists() and entity_paths(fallback) == {"/x"}
+
+
+def test_connect_with_no_viewer_saves_to_the_fallback_file(tmp_path, capsys):
+    import socket
+
+    with socket.socket() as s:   # a port nothing listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    fallback = tmp_path / "fallback.rrd"
+    rec = open_stream(f"connect:127.0.0.1:{port}", "labkit-test", fallback_file=fallback)
+    rec.log("/x", rr.Scalars(1.0))
+    rec.disconnect()
+    assert "no rerun viewer answers" in capsys.readouterr().err
+    assert entity_paths(fallback) == {"/x"}

@@ -2,6 +2,8 @@
 
 import json
 
+import numpy as np
+
 from labkit.cli import main
 from labkit.stream.readback import column, entity_paths
 
@@ -12,20 +14,26 @@ def test_demo_streams_speeds_forces_points_fit_and_events(tmp_path, capsys):
                  "--set", "speeds_rpm=6000:12000:2000"])
     assert code == 0, capsys.readouterr().err
     entities = entity_paths(rrd)
-    assert {"/rig/rotor/speed_rpm", "/rig/rotor/setpoint_rpm", "/rig/rotor/target_rpm",
-            "/results/points", "/results/fit", "/events"} <= entities
-    assert any(e.startswith("/rig/balance/") for e in entities)
-    # nothing the fig525 rig does not have
-    assert not any("floator" in e for e in entities)
+    assert {"/rig/rotor/speed_rpm", "/rig/rotor/setpoint_rpm", "/rig/rotor/target_rpm", "/rig/rotor/duty",
+            "/rig/balance/force_g", "/fig5_25/plot/data", "/fig5_25/plot/paper", "/events"} <= entities
+    # one unit per quantity: the rotor's tachometer is the loop's speed, the balance a force in g
+    assert not any(e.endswith(("/angular_speed", "/mass", "/force")) for e in entities)
+    assert not any("floator" in e or e.startswith("/results") for e in entities)
 
     session = next((tmp_path / "s").iterdir())
     results = json.loads((session / "results.json").read_text())
-    steps, points = column(rrd, "/results/points", "Points2D:positions", "step")
-    assert len(points[-1]) == len(results["points"]) == 4
-    # the last logged point is the last result row (x in kRPM, y in grams)
-    last = results["points"][-1]
-    assert abs(points[-1][-1][0] - last["speed_rpm"] / 1000) < 1e-3
-    assert abs(points[-1][-1][1] - last["force_g"]) < 1e-3 * max(1.0, abs(last["force_g"]))
+    n = len(results["points"])
+    assert n == 4
+    # every point is on the x timeline (RPM) with its force in grams
+    x, force = column(rrd, "/fig5_25/plot/data", "Scalars:scalars", "rotor speed [RPM]")
+    assert x == [round(p["speed_rpm"]) for p in results["points"]]
+    assert np.allclose([f[0] for f in force], [p["force_g"] for p in results["points"]], rtol=1e-9)
+    # the fit (with its band and residuals) is logged at every point from the third on
+    assert {e for e in entities if e.startswith("/fig5_25/plot/fit/")} == \
+        {f"/fig5_25/plot/fit/after_{k:02d}" for k in range(3, n + 1)}
+    assert f"/fig5_25/residual/after_{n:02d}" in entities
+    _, curve = column(rrd, f"/fig5_25/plot/fit/after_{n:02d}", "Scalars:scalars", "rotor speed [RPM]")
+    assert all(lo < y < hi for y, lo, hi in curve)
 
     times, speeds = column(rrd, "/rig/rotor/speed_rpm", "Scalars:scalars", "time")
     assert len(speeds) > 10 and max(v[0] for v in speeds) > 11000
@@ -37,7 +45,7 @@ def test_without_rerun_option_the_demo_still_saves_an_rrd_in_the_session(tmp_pat
     session = next(tmp_path.iterdir())
     out = capsys.readouterr().out
     assert f"rerun {session / 'run.rrd'}" in out
-    assert "/results/points" in entity_paths(session / "run.rrd")
+    assert "/fig5_25/plot/data" in entity_paths(session / "run.rrd")
 
 
 def test_replay_of_a_recorded_spin_critical_session_streams_its_pairs(tmp_path, capsys):
@@ -46,11 +54,14 @@ def test_replay_of_a_recorded_spin_critical_session_streams_its_pairs(tmp_path, 
     assert main(["replay", session, "--rerun", f"save:{rrd}"]) == 0
     results = json.loads(open(f"{session}/results.json").read())
     entities = entity_paths(rrd)
-    assert {"/results/points", "/events", "/rig/rotor/speed_rpm"} <= entities
-    assert any(e.startswith("/rig/floator_tach/") for e in entities)
-    _, points = column(rrd, "/results/points", "Points2D:positions", "step")
+    assert {"/fig6_18/plot/data", "/events", "/rig/rotor/speed_rpm"} <= entities
+    assert "/rig/floator_tach/spin_rad_s" in entities
+    _, spins = column(rrd, "/fig6_18/plot/data", "Scalars:scalars", "rotor speed [rad/s]")
     pairs = [p for p in results["points"] if p.get("rotor_rad_s") is not None]
-    assert len(points[-1]) == len(pairs)
+    assert len(spins) == len(pairs)
+    n = len(pairs)   # Eq. 6.37 is refitted at every drop from the second on
+    assert {e for e in entities if e.startswith("/fig6_18/plot/fit/")} == \
+        {f"/fig6_18/plot/fit/after_{k:02d}" for k in range(2, n + 1)}
 
 
 def test_run_spin_critical_with_rerun_logs_both_tachometers_and_the_pairs(tmp_path, capsys):
@@ -60,10 +71,10 @@ def test_run_spin_critical_with_rerun_logs_both_tachometers_and_the_pairs(tmp_pa
                  "--set", "step_pct=15", "--rerun", f"save:{rrd}"])
     assert code == 0, capsys.readouterr().err
     entities = entity_paths(rrd)
-    assert {"/rig/rotor/speed_rpm", "/results/points", "/events"} <= entities
-    assert any(e.startswith("/rig/floator_tach/") for e in entities)
+    assert {"/rig/rotor/speed_rpm", "/fig6_18/plot/data", "/events"} <= entities
+    assert "/rig/floator_tach/spin_rad_s" in entities
     session = next((tmp_path / "s").iterdir())
     results = json.loads((session / "results.json").read_text())
     pairs = [p for p in results["points"] if p.get("rotor_rad_s") is not None]
-    _, points = column(rrd, "/results/points", "Points2D:positions", "step")
-    assert pairs and len(points[-1]) == len(pairs)
+    x, spins = column(rrd, "/fig6_18/plot/data", "Scalars:scalars", "rotor speed [rad/s]")
+    assert pairs and x == [round(p["rotor_rad_s"]) for p in pairs]

@@ -17,7 +17,8 @@ def test_laser_analysis_streams_frames_and_fitted_ellipse(tmp_path, capsys):
     rrd, out = tmp_path / "laser.rrd", tmp_path / "laser.json"
     assert main(["analyse", "laser", str(clip), "--json", str(out), "--rerun", f"save:{rrd}"]) == 0
     result = json.loads(out.read_text())
-    assert {"/video/frame", "/video/frame/fit", "/video/frame/center", "/video/pattern"} <= entity_paths(rrd)
+    assert {"/video/frame", "/video/frame/fit", "/video/frame/center", "/video/pattern",
+            "/video/trace", "/video/trace/fit"} <= entity_paths(rrd)
     frames, _ = column(rrd, "/video/frame", "EncodedImage:blob", "frame")
     assert len(frames) == result["quality"]["frames_analysed"]
 

@@ -1,0 +1,107 @@
+"""Rerun blueprints of a protocol run: the paper's figure as an x-y plot, the rig over time.
+
+Rerun's time-series view plots scalars against the timeline selected in the time panel, and
+that choice is global (one timeline for every view: rerun issues #6828, #8050). An x-y plot
+is therefore a time-series view on a timeline whose values are the x quantity
+(``rotor speed [RPM]`` for Fig. 5.25, ``rotor speed [rad/s]`` for Fig. 6.18, integer
+sequences at 1 RPM or 1 rad/s resolution). The blueprint opens on that timeline, in a tab
+with the figure, its residuals and the events; the rig's speed, duty and readings over the
+``time`` timeline are a second tab (select the ``time`` timeline to see them). No spatial
+view draws results: a 2-D spatial view has image coordinates, y down, and no axes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+
+@dataclass(frozen=True)
+class FigureSpec:
+    """What a protocol's x-y figure plots: timeline (x), entity root, titles, units."""
+
+    title: str
+    timeline: str
+    root: str
+    y_label: str
+    residual_label: str
+    legend_corner: str = "RightTop"
+
+
+FIGURES: dict[str, FigureSpec] = {
+    "speed-sweep": FigureSpec("Fig. 5.25: force [g] against rotor speed [RPM]", "rotor speed [RPM]",
+                              "/fig5_25", "force [g]", "residual [%] (data / fit - 1)"),
+    "spin-critical": FigureSpec("Fig. 6.18: spin [rad/s] against rotor speed [rad/s] at the drop",
+                                "rotor speed [rad/s]", "/fig6_18", "spin [rad/s]",
+                                "residual [rad/s] (data - fit)", "LeftTop"),
+}
+
+
+def _whole_x_axis() -> Any:
+    import rerun.blueprint as rrb
+
+    everything = rrb.components.TimeRange(start=rrb.TimeRangeBoundary.infinite(),
+                                          end=rrb.TimeRangeBoundary.infinite())
+    return rrb.TimeAxis(link="Independent", view_range=everything)
+
+
+def figure_views(figure: FigureSpec) -> list[Any]:
+    """The figure (data, paper curve, fit and band) and its residuals beneath."""
+    import rerun.blueprint as rrb
+
+    return [
+        rrb.TimeSeriesView(origin=f"{figure.root}/plot", name=figure.title, axis_x=_whole_x_axis(),
+                           plot_legend=rrb.PlotLegend(corner=figure.legend_corner)),
+        rrb.TimeSeriesView(origin=f"{figure.root}/residual", name=figure.residual_label,
+                           axis_x=_whole_x_axis(), plot_legend=rrb.PlotLegend(visible=False)),
+    ]
+
+
+def rig_views(loops: list[str], devices: list[str]) -> list[Any]:
+    """Speed (RPM, with setpoint and target), duty (0-1, its own axis), and each device's
+    readings in their own unit, over the ``time`` timeline."""
+    import rerun.blueprint as rrb
+
+    views = []
+    for loop in loops:
+        views.append(rrb.TimeSeriesView(
+            origin=f"/rig/{loop}", name=f"{loop} speed [RPM]", axis_x=_whole_x_axis(),
+            contents=["$origin/speed_rpm", "$origin/setpoint_rpm", "$origin/target_rpm"]))
+        views.append(rrb.TimeSeriesView(origin=f"/rig/{loop}", name=f"{loop} duty [0-1]",
+                                        axis_x=_whole_x_axis(), contents=["$origin/duty"]))
+    for dev in devices:
+        views.append(rrb.TimeSeriesView(origin=f"/rig/{dev}", name=f"{dev} readings", axis_x=_whole_x_axis(),
+                                        contents=["$origin/**", "- $origin/frame"]))
+    return views
+
+
+def run_blueprint(protocol: str, loops: list[str], devices: list[str]) -> Any:
+    """The blueprint of a run of ``protocol``: its figure tab first, the rig over time next."""
+    import rerun.blueprint as rrb
+
+    figure = FIGURES.get(protocol)
+    events = rrb.TextLogView(origin="/events", name="events")
+    rig = rrb.Vertical(*rig_views(loops, devices), name="rig over time (timeline: time)")
+    if figure is None:
+        return rrb.Blueprint(rrb.Vertical(rig, events, row_shares=[3, 1]), rrb.TimePanel(timeline="time"),
+                             collapse_panels=True)
+    plot, residual = figure_views(figure)
+    tab = rrb.Vertical(plot, residual, events, row_shares=[5, 2, 2], name=figure.title.split(":")[0])
+    return rrb.Blueprint(rrb.Tabs(tab, rig, active_tab=0),
+                         rrb.TimePanel(timeline=figure.timeline, play_state="paused"),
+                         collapse_panels=True)
+
+
+def view_kinds(blueprint: Any) -> list[tuple[str, str]]:
+    """``(view class, origin)`` of every view in a blueprint (walks its containers)."""
+    out: list[tuple[str, str]] = []
+
+    def walk(node: Any) -> None:
+        if hasattr(node, "class_identifier"):   # a view
+            out.append((str(node.class_identifier), str(node.origin)))
+            return
+        for child in getattr(node, "contents", None) or ():
+            walk(child)
+
+    walk(blueprint.root_container)
+    return out
