@@ -38,7 +38,9 @@ def run(args: argparse.Namespace) -> int:
     from labkit.report.build import build_report
 
     overlays = tuple(ov for csv in args.overlay for ov in overlays_from_csv(csv))
-    if Path(args.source).exists():  # a missing source stays a one-line error
+    # a note for a person at a terminal; on a pipe or in a script stderr keeps only what went wrong
+    # (a missing or bad source stays a one-line error)
+    if Path(args.source).exists() and sys.stderr.isatty():
         print(f"labkit report: fitting and drawing {args.source} (a few seconds)...", file=sys.stderr,
               flush=True)
     path = build_report(args.source, args.out, model=args.model, x=args.x, y=args.y,

@@ -69,7 +69,7 @@ def run_signalled(rig_text: str | None = None, kp: float | None = None, **overri
     with use_clock(clock):
         runner = Runner(proto, rig, resolve_params(proto.defaults, overrides), clock=clock, sinks=[sink])
         outcome = runner.run()
-    return outcome, proto.marks, sink, shared_plant("fig525").motor("rotor")
+    return outcome, proto.marks, sink, shared_plant("model-fig525").motor("rotor")
 
 
 @pytest.mark.parametrize("name", ["SIGTERM", "SIGHUP", "SIGQUIT"])

@@ -24,7 +24,7 @@ def rig_open():
     reset_plants()
     clock = VirtualClock()
     with use_clock(clock), open_rig(load_rig(RIG), clock) as opened:
-        yield opened, clock, shared_plant("fig618").motor("rotor")
+        yield opened, clock, shared_plant("model-fig618").motor("rotor")
     reset_plants()
 
 
@@ -82,7 +82,7 @@ def test_tachometer_loss_trips_the_handles_interlock():
         handle.set_speed_rpm(8000)
         with pytest.raises(SafetyError, match="rotor_tach"):
             handle.hold(5.0)
-        assert shared_plant("fig618").motor("rotor").duty == 0.0
+        assert shared_plant("model-fig618").motor("rotor").duty == 0.0
     reset_plants()
 
 
