@@ -16,9 +16,10 @@ width, fractions of the curve and of the light, the frame's size.
 * size: the curve against the frame (a semi-axis larger than the frame is not a pattern).
 * conditioning: a trochoid's second term (``b`` x scale) against the line width; under one line
   width the small loops are not formed and ``loops``, ``a`` and ``b`` are not determined.
-* light left out: the share of the trace set apart as lying away from the pattern
-  (:mod:`labkit.vision.clusters`: a burnt-in timestamp, a stray reflection); when it is a large
-  part of the light, which part is the pattern is itself a guess.
+* light left out: light set apart as lying away from the pattern (:mod:`labkit.vision.clusters`:
+  a burnt-in timestamp, a stray reflection). Small, compact or far light is clearly not the
+  pattern, however many points it has (a timestamp is dense text); when its largest part is at
+  least half the pattern's size (points x extent), which light is the pattern is a guess.
 * runner-up: how close the best different pattern came, on the score that ranks trochoids
   (:func:`labkit.vision.fit.two_way_rms`).
 * steadiness: how far each time chunk's trace sits from the fitted curve as a whole (a wandering
@@ -180,10 +181,11 @@ def laser_findings(evidence: dict, frame_size: tuple[int, int]) -> list[Finding]
                f"the trace moves {evidence['chunk_wander_px']:.1f} px (rms) between parts of the clip "
                "beyond a steady drift (shaking camera or wandering centre): centre and size are averages"),
     ]
-    left_out = evidence.get("light_left_out", 0.0)
-    out.append(graded("light left out", left_out, 1 / 3, math.inf,
-                      f"{100 * left_out:.0f} % of the light lies away from the pattern and was left out "
-                      "(burnt-in text, reflections, a second pattern)"))
+    left_out, rival = evidence.get("light_left_out", 0.0), evidence.get("left_out_rival", 0.0)
+    out.append(graded("light left out", rival, 0.5, math.inf,
+                      f"{100 * left_out:.0f} % of the light lies away from the pattern and was left out, "
+                      f"and its largest part is {rival:.1f}x the pattern's size (points x extent): which "
+                      "light is the pattern is a guess"))
     if evidence["chunks_checked"] is not None and evidence["chunks_checked"] < 3:
         out.append(graded("straight drift", evidence["centre_travel_px"] / width, 1.0, math.inf,
                           f"the pattern moved {evidence['centre_travel_px']:.0f} px over the clip, and too "
