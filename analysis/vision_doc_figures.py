@@ -1,9 +1,10 @@
 """Figures of docs/vision.md (laser part): loops and symmetry of Eq. 6.38's patterns, and the
 ``--overlay`` picture for an ok, a doubtful and a failed result.
 
-    python analysis/vision_doc_figures.py [OUT_DIR]      # default docs/img
+    python analysis/vision_doc_figures.py [OUT_DIR]      # default out/vision-doc-figures
 
-Writes loops-symmetry.png and overlay-{ok,doubtful,failed}.png (small PNGs, committed).
+Writes loops-symmetry.png and overlay-{ok,doubtful,failed}.png. The copies docs/vision.md shows
+are committed under docs/img (small PNGs): refresh them with ``... docs/img``.
 """
 
 from __future__ import annotations
@@ -89,4 +90,4 @@ def main(out: Path) -> None:
 
 
 if __name__ == "__main__":
-    main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path("docs/img"))
+    main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path("out/vision-doc-figures"))

@@ -26,18 +26,20 @@ GROW = 0.25  # other groups count as pattern if their centre lies in its box gro
 @dataclass
 class Separation:
     """``keep``: mask of the points that belong to the pattern; ``left_out_share``: share of the
-    points left out; ``groups``: how many groups were left out."""
+    points left out; ``groups``: how many groups were left out; ``rival``: the largest left-out
+    group's size (points x box diagonal) against the pattern's (1: as large)."""
 
     keep: np.ndarray
     left_out_share: float
     groups: int
+    rival: float = 0.0
 
 
 def separate_pattern(points: np.ndarray, line_width_px: float) -> Separation:
     """Split ``points`` (N, 2) into the pattern and light away from it (see module docstring)."""
     n = len(points)
     if n == 0:
-        return Separation(np.zeros(0, bool), 0.0, 0)
+        return Separation(np.zeros(0, bool), 0.0, 0, 0.0)
     cell = max(2.0, LINK_WIDTHS * (line_width_px if math.isfinite(line_width_px) else 2.0)) / 2
     origin = points.min(axis=0)
     idx = np.floor((points - origin) / cell).astype(int)
@@ -48,7 +50,7 @@ def separate_pattern(points: np.ndarray, line_width_px: float) -> Separation:
     count, labels = cv2.connectedComponents(grid, connectivity=8)
     label = labels[idx[:, 1] + 1, idx[:, 0] + 1]
     if count <= 2:
-        return Separation(np.ones(n, bool), 0.0, 0)
+        return Separation(np.ones(n, bool), 0.0, 0, 0.0)
     groups = [np.flatnonzero(label == j) for j in range(1, count)]
     groups = [g for g in groups if len(g)]
 
@@ -60,11 +62,12 @@ def separate_pattern(points: np.ndarray, line_width_px: float) -> Separation:
     lo, hi = points[main].min(axis=0), points[main].max(axis=0)
     margin = GROW * (hi - lo)
     keep = np.zeros(n, bool)
-    left = 0
+    left, rival = 0, 0.0
     for g in groups:
         centre = points[g].mean(axis=0)
         if g is main or bool(np.all((centre >= lo - margin) & (centre <= hi + margin))):
             keep[g] = True
         else:
             left += 1
-    return Separation(keep, float(1.0 - keep.mean()), left)
+            rival = max(rival, size(g) / max(size(main), 1e-9))
+    return Separation(keep, float(1.0 - keep.mean()), left, rival)

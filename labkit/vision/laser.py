@@ -266,7 +266,7 @@ def symmetry_of(kind: str, k: int) -> int | None:
 def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | None,
                  band: tuple | None = None, prior: Classification | None = None,
                  centre_time: float | None = None, line_width_px: float = math.nan,
-                 frame_size: tuple[int, int] | None = None, left_out: float = 0.0,
+                 frame_size: tuple[int, int] | None = None, left_out: tuple[float, float] = (0.0, 0.0),
                  start: Classification | None = None) -> tuple[dict, dict]:
     """Classify and fit a trace; returns the JSON ``pattern`` object and fit diagnostics, which
     include the quality verdict (:mod:`labkit.vision.laser_checks`) when ``frame_size`` is given.
@@ -287,7 +287,7 @@ def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | No
 
 def _pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | None, band: tuple | None,
                   prior: Classification | None, centre_time: float | None, line_width_px: float,
-                  frame_size: tuple[int, int] | None, left_out: float,
+                  frame_size: tuple[int, int] | None, left_out: tuple[float, float],
                   start: Classification | None) -> tuple[dict, dict]:
     cls = start if start is not None else classify(points, weights, times, band=band, prior=prior)
     cls, wander, points = _steadied(cls, points, weights, times, band, line_width_px)
@@ -320,7 +320,7 @@ def _pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | N
             "candidate_residuals_px": residuals, "candidate_coverage_px": coverage}
     if frame_size is not None:
         evidence = {**laser_evidence(cls, points, times, line_width_px, frame_size, wander),
-                    "light_left_out": round(left_out, 4)}
+                    "light_left_out": round(left_out[0], 4), "left_out_rival": round(left_out[1], 4)}
         diag = {**laser_verdict(evidence, frame_size), **diag}
     return pattern, diag
 
@@ -390,14 +390,14 @@ def _second_readings(pattern: dict, diag: dict, points: np.ndarray, weights: np.
         return VERDICTS.index(candidate[1]["verdict"]) < VERDICTS.index(diag["verdict"])
 
     *parts, left_out = without_stray_light(points, weights, times, band, width)
-    if 0 < left_out < 0.5:  # the pattern is most of the light, or this is a fragment of it
+    if 0 < left_out[0] < 0.5:  # the pattern is most of the light, or this is a fragment of it
         points, weights, times, band = parts
         second = pattern_dict(points, weights, times if drift else None, band, None, middle, width, size,
                               left_out)
         if better(second):
             pattern, diag = second
     else:
-        left_out = 0.0
+        left_out = (0.0, 0.0)
     start = one_chunk_start(points, weights, times) if drift and diag["verdict"] != "ok" else None
     if start is not None:
         third = pattern_dict(points, weights, times, band, None, middle, width, size, left_out, start=start)

@@ -13,12 +13,19 @@ width, fractions of the curve and of the light, the frame's size.
 * light explained: the share of trace points within 1.5 line widths of the curve (a stray
   reflection or a second pattern is light the curve does not explain; the centre line of a right
   fit stays within half a width, its spurs where lines cross within about one).
+* extent: how far the light reaches from the centre (99.5th percentile, on points within three
+  line widths of the curve) against how far the curve reaches. The centre line runs to the tips
+  of the light, so a right curve matches it within a line width (spurs of a saturated halo at
+  slow tips reach about that far, as for light explained); tips that overshoot or fall short of
+  the light by more than 1.5 widths are extrapolated (thick hypotrochoid tips, loops the light
+  fills).
 * size: the curve against the frame (a semi-axis larger than the frame is not a pattern).
 * conditioning: a trochoid's second term (``b`` x scale) against the line width; under one line
   width the small loops are not formed and ``loops``, ``a`` and ``b`` are not determined.
-* light left out: the share of the trace set apart as lying away from the pattern
-  (:mod:`labkit.vision.clusters`: a burnt-in timestamp, a stray reflection); when it is a large
-  part of the light, which part is the pattern is itself a guess.
+* light left out: light set apart as lying away from the pattern (:mod:`labkit.vision.clusters`:
+  a burnt-in timestamp, a stray reflection). Small, compact or far light is clearly not the
+  pattern, however many points it has (a timestamp is dense text); when its largest part is at
+  least half the pattern's size (points x extent), which light is the pattern is a guess.
 * runner-up: how close the best different pattern came, on the score that ranks trochoids
   (:func:`labkit.vision.fit.two_way_rms`).
 * steadiness: how far each time chunk's trace sits from the fitted curve as a whole (a wandering
@@ -45,6 +52,7 @@ MIN_LINE_WIDTH_PX = 2.0  # a trace is never judged against less than this (sub-p
 RUNNER_UP_FACTOR = 1.25
 MAX_EVIDENCE_POINTS = 4000
 LIGHT_NEAR_WIDTHS = 1.5  # trace points within this many line widths of the curve are explained
+EXTENT_NEAR_WIDTHS = 3.0  # the light's reach is measured on points this close to the curve
 
 
 def _name(fit: CurveFit) -> str:
@@ -82,6 +90,9 @@ def laser_evidence(cls: Classification, points: np.ndarray, times: np.ndarray | 
     light_to_curve, _ = cKDTree(_xy(curve)).query(_xy(still))
     curve_to_light, _ = cKDTree(_xy(still)).query(_xy(curve))
     radius = np.abs(curve - best.c)
+    near = light_to_curve <= EXTENT_NEAR_WIDTHS * width
+    reach = np.abs(still[near] - best.c)
+    light_reach = float(np.percentile(reach, 99.5)) if len(reach) else float(radius.max())
     w, h = frame_size
     outside = max(0.0, float(-curve.real.min()), float(curve.real.max() - (w - 1)),
                   float(-curve.imag.min()), float(curve.imag.max() - (h - 1)))
@@ -93,6 +104,7 @@ def laser_evidence(cls: Classification, points: np.ndarray, times: np.ndarray | 
         "curve_covered": round(float(np.sum(share[curve_to_light <= width])), 4),
         "light_explained": round(float(np.mean(light_to_curve <= LIGHT_NEAR_WIDTHS * width)), 4),
         "largest_radius_px": round(float(radius.max()), 2),
+        "extent_mismatch_line_widths": round((light_reach - float(radius.max())) / width, 3),
         "curve_outside_frame_px": round(outside, 2),
         "second_term_line_widths": None if best.k == -1 else round(abs(best.b) / width, 3),
         "runner_up": runner,
@@ -162,6 +174,7 @@ def laser_findings(evidence: dict, frame_size: tuple[int, int]) -> list[Finding]
     """The checks of the module docstring as :class:`Finding` objects."""
     w, h = frame_size
     width = evidence["line_width_px"]
+    mismatch = evidence["extent_mismatch_line_widths"]
     out = [
         graded("residual", evidence["residual_line_widths"], 0.5, 2.0,
                "the trace lies {value:.1f} line widths (rms) from the fitted curve"),
@@ -171,6 +184,10 @@ def laser_findings(evidence: dict, frame_size: tuple[int, int]) -> list[Finding]
         graded("light explained", 1.0 - evidence["light_explained"], 0.05, 0.5,
                f"{100 * (1 - evidence['light_explained']):.0f} % of the light lies off the fitted curve "
                "(a stray reflection, a second pattern, or the wrong pattern)"),
+        graded("extent", abs(mismatch), LIGHT_NEAR_WIDTHS, math.inf,
+               f"the fitted curve reaches {abs(mismatch):.1f} line widths "
+               f"{'short of' if mismatch > 0 else 'beyond'} the farthest light from the centre: "
+               "the extent (semi-axes, tips) is extrapolated, not measured"),
         graded("size", evidence["largest_radius_px"] / math.hypot(w, h), 0.5, 1.0,
                f"the fitted curve reaches {evidence['largest_radius_px']:.0f} px from its centre "
                f"on a {w}x{h} frame"),
@@ -180,10 +197,11 @@ def laser_findings(evidence: dict, frame_size: tuple[int, int]) -> list[Finding]
                f"the trace moves {evidence['chunk_wander_px']:.1f} px (rms) between parts of the clip "
                "beyond a steady drift (shaking camera or wandering centre): centre and size are averages"),
     ]
-    left_out = evidence.get("light_left_out", 0.0)
-    out.append(graded("light left out", left_out, 1 / 3, math.inf,
-                      f"{100 * left_out:.0f} % of the light lies away from the pattern and was left out "
-                      "(burnt-in text, reflections, a second pattern)"))
+    left_out, rival = evidence.get("light_left_out", 0.0), evidence.get("left_out_rival", 0.0)
+    out.append(graded("light left out", rival, 0.5, math.inf,
+                      f"{100 * left_out:.0f} % of the light lies away from the pattern and was left out, "
+                      f"and its largest part is {rival:.1f}x the pattern's size (points x extent): which "
+                      "light is the pattern is a guess"))
     if evidence["chunks_checked"] is not None and evidence["chunks_checked"] < 3:
         out.append(graded("straight drift", evidence["centre_travel_px"] / width, 1.0, math.inf,
                           f"the pattern moved {evidence['centre_travel_px']:.0f} px over the clip, and too "

@@ -26,16 +26,17 @@ from labkit.vision.fit import MIN_POINTS, Classification, classify
 def without_stray_light(points: np.ndarray, weights: np.ndarray, times: np.ndarray, band: tuple | None,
                         width: float) -> tuple:
     """The trace without light away from the pattern: points, weights, times, band (its pixels
-    near a kept point), and the share of points left out (0: nothing was)."""
+    near a kept point), and ``(share, rival)``: the share of points left out (0: nothing was) and
+    the largest left-out group's size against the pattern's (:class:`labkit.vision.clusters.Separation`)."""
     sep = separate_pattern(points, width)
     if sep.groups == 0:
-        return points, weights, times, band, 0.0
+        return points, weights, times, band, (0.0, 0.0)
     kept = points[sep.keep]
     if band is not None:
         near, _ = cKDTree(kept).query(band[0], distance_upper_bound=LINK_WIDTHS * max(width, 2.0))
         inside = np.isfinite(near)
         band = tuple(None if part is None else np.asarray(part)[inside] for part in band)
-    return kept, weights[sep.keep], times[sep.keep], band, sep.left_out_share
+    return kept, weights[sep.keep], times[sep.keep], band, (sep.left_out_share, sep.rival)
 
 
 def one_chunk_start(points: np.ndarray, weights: np.ndarray,
