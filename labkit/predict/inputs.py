@@ -18,14 +18,14 @@ from labkit.predict.magnets import (
     parse_magnet_spec,
     remanence_for_grade,
 )
-from labkit.rig import Body, bundled_rig_path, parse_body, read_rig_text
+from labkit.rig import BodySpec, bundled_rig_path, parse_body, read_rig_text
 
 
 class PredictInputError(LabkitError):
     """A bad ``labkit predict`` option (the message names it)."""
 
 
-def magnet_from_body(body: Body, remanence_t: float | None = None) -> Magnet:
+def magnet_from_body(body: BodySpec, remanence_t: float | None = None) -> Magnet:
     """A :class:`Magnet` from a rig file's body (sizes by shape: sphere diameter; cylinder
     diameter and length; cube length; block width, diameter as depth, length along the dipole).
     Raises ValueError naming what is missing."""
