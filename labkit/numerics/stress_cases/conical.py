@@ -149,7 +149,7 @@ def s3(level: str) -> Verdict:
         res = _run(conical_scene(I_S1, OMEGA_S1, TAU_C_S1, tau_s, f"S3-{label}"), cycles)
         phi = signed_cone_angle(res, OMEGA_S1)
         first = phi[: 8 * 10 + 1]  # the first 10 cycles
-        expected = cone_angle_isotropic(OMEGA_S1, TAU_C_S1, tau_s, I_S1)
+        expected = cone_angle_isotropic(omega=OMEGA_S1, tau_c=TAU_C_S1, tau_s=tau_s, inertia=I_S1)
         growth = metrics.drift_growth(res.invariant_values)
         measured[f"phi_{label}_first_10_cycles_rad"] = float(np.mean(first))
         measured[f"phi_{label}_eq5_24_rad"] = expected
