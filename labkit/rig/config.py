@@ -277,12 +277,7 @@ def parse_rig_config(text: str, file: str = "<rig>", check_device: DeviceCheck |
     ``check_device`` (:class:`labkit.rig.against_drivers.DriverCheck`) also checks each device
     against the driver registry and the emulators, at the point of the file it belongs to.
     """
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise RigFileError(file, "(syntax)", str(exc)) from None
-    except RecursionError:
-        raise RigFileError(file, "(syntax)", "nested too deeply") from None
+    data = load_toml(text, file)
     top = _Section(file, "", data)
     rig_sec = _Section(file, "rig", top.raw("rig", dict, required=True))
     name = rig_sec.raw("name", str, required=True)
@@ -326,6 +321,16 @@ def parse_rig_config(text: str, file: str = "<rig>", check_device: DeviceCheck |
     control = _control(file, top.raw("control", dict, default={}), devices)
     top.finish()
     return Rig(Path(file), name, description, devices, bodies, geometry, limits, control, text)
+
+
+def load_toml(text: str, file: str) -> dict[str, Any]:
+    """Rig-file text -> tables; a syntax error is a RigFileError at key ``(syntax)``."""
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise RigFileError(file, "(syntax)", str(exc)) from None
+    except RecursionError:
+        raise RigFileError(file, "(syntax)", "nested too deeply") from None
 
 
 def find_rig_file(path: str | Path) -> Path:
