@@ -11,7 +11,7 @@ entity                     content
 ``/video/pattern``         text: classification and its numbers, once the analysis ends
 ========================  =========================================================================
 
-OpenCV puts pixel centres at integers, rerun at +0.5 (RERUN-OPENCV.md section 3), so every
+OpenCV puts pixel centres at integers, rerun at +0.5 (docs/design/rerun-notes.md#pixel-centres), so every
 pixel coordinate is shifted by +0.5 when logged.
 """
 

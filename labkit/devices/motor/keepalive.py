@@ -1,6 +1,7 @@
 """What every motor driver shares: guarded writes, clocked reads, the >= 20 Hz keep-alive.
 
-Safety rules (ARCHITECTURE rule 3, PROTOCOLS 5.3 rule 5): a driver never moves the motor on
+Safety rules (docs/design/architecture.md#safe-state-on-every-exit-path,
+docs/design/device-rules.md#driver-rules rule 5): a driver never moves the motor on
 open; once ``enable()`` is called a clock job (``clock.every(0.05, ...)``, a thread on a
 real clock) re-sends the setpoint at 20 Hz so the controller's own command timeout never
 fires while we are alive and always fires when we are not; ``stop()`` cancels the job and

@@ -1,4 +1,5 @@
-"""The labkit pulse-counter tachometer line protocol (PROTOCOLS 2.3, labkit-defined).
+"""The labkit pulse-counter tachometer line protocol
+(docs/devices-tach-motor.md#labkit_tach-the-labkit-pulse-tachometer-labkit-defined).
 
 An Arduino (``firmware/labkit_tach``) times pulses from an optical or Hall sensor with the
 period method, averaging over every pulse of an output window, and prints one line per

@@ -50,7 +50,8 @@ def s1(level: str) -> Verdict:
         "drift_growth": metrics.drift_growth(base.invariant_values),
     }
     detail = (
-        "psi error: final azimuth at t = 1e4 T (NUMERICS.md 2.3); the dipole direction's max "
+        "psi error: final azimuth at t = 1e4 T (docs/design/numerics-notes.md#exact-conical-motion); "
+        "the dipole direction's max "
         "deviation over the run is a bounded offset reached in the first cycles, not a growth"
     )
     if level == "full":
