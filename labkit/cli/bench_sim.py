@@ -318,7 +318,8 @@ def _print_kernels(k: dict) -> None:
     )
     print(
         f"projected stability map of 1e4 points x 1e3 cycles (64 steps per period) with it: "
-        f"{k['projected_1e4_points_1e3_cycles_min']:.1f} min (target T5: 15 min, docs/design/numerics-notes.md#targets)"
+        f"{k['projected_1e4_points_1e3_cycles_min']:.1f} min "
+        "(target T5: 15 min, docs/design/numerics-notes.md#targets)"
     )
 
 
