@@ -11,6 +11,8 @@ The flat public face for scripts and notebooks (docs/scripting.md, docs/notebook
 Every name is imported on first use (PEP 562 ``__getattr__``), so ``import labkit`` and
 ``labkit --help`` stay fast. The fit function is ``fit_data``, not ``fit``: ``labkit.fit`` is the
 subpackage of fit models. The package is typed (``py.typed``).
+
+See README.md for the two commands that set up and run it, and docs/DEVELOPING.md for the layout.
 """
 
 from __future__ import annotations
@@ -45,7 +47,7 @@ _FACE: dict[str, tuple[str, str]] = {
     "SessionError": ("labkit.session.writer", "SessionError"),
 }
 
-__all__ = [  # tests/packaging/test_public_face.py checks this equals the names above
+__all__ = [  # tests/distribution/test_public_face.py checks this equals the names above
     "FitOptions", "LabkitError", "SessionError", "SessionFrames", "__version__", "analyse_laser",
     "analyse_strobe", "build_report", "execute", "fit_data", "fit_table", "load_rig", "load_scene",
     "load_session", "load_tables", "open_rig", "prepare_run", "replay_session", "simulate",

@@ -14,28 +14,11 @@ from pathlib import Path
 from typing import Any
 
 from labkit.errors import RigFileError
-from labkit.units import G0, RAD_S_PER_RPM
+from labkit.units import RAD_S_PER_RPM
+from labkit.units import UNIT_SUFFIXES as _UNIT_SUFFIXES
 
-#: key suffix -> (SI unit, factor to SI). The longest matching suffix wins.
-UNIT_SUFFIXES: dict[str, tuple[str, float]] = {
-    "rpm_per_s": ("rad/s^2", RAD_S_PER_RPM),
-    "rad_s2": ("rad/s^2", 1.0),
-    "rpm": ("rad/s", RAD_S_PER_RPM),
-    "rad_s": ("rad/s", 1.0),
-    "kg_m2": ("kg m^2", 1.0),
-    "g_mm2": ("kg m^2", 1e-9),
-    "a_m2": ("A m^2", 1.0),
-    "kg": ("kg", 1.0),
-    "g": ("kg", 1e-3),
-    "mm": ("m", 1e-3),
-    "m": ("m", 1.0),
-    "deg": ("rad", math.pi / 180.0),
-    "rad": ("rad", 1.0),
-    "ms": ("s", 1e-3),
-    "s": ("s", 1.0),
-    "gf": ("N", 1e-3 * G0),
-    "n": ("N", 1.0),
-}
+#: key suffix -> (SI unit, factor to SI): the one table, in labkit/units.py
+UNIT_SUFFIXES = _UNIT_SUFFIXES
 
 #: Absolute sanity caps, whatever a rig file says (docs/rig-files.md, "Caps"). A value beyond
 #: one is a typo or a unit mistake, never a setting: the fastest rotor of the paper turns at

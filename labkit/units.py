@@ -1,6 +1,10 @@
-"""Unit constants used across labkit (SI inside; these convert at the edges).
+"""Units used across labkit (SI inside; these convert at the edges).
 
-One definition each, so a rig file, a driver, an emulator and a plot agree to the last bit.
+One definition each, so a rig file, a data table, a driver, an emulator and a plot agree to
+the last bit. :data:`UNIT_SUFFIXES` is the one table of unit suffixes in names: rig-file keys
+(``max_speed_rpm``, via :mod:`labkit.rig_checks`) and the columns of fit tables (``speed_rpm``,
+``force_gf``, via :func:`column_to_si`) are read with it. ``_g`` is grams of *mass* and
+``_gf`` grams-*force* (docs/rig-files.md, docs/fitting.md).
 """
 
 from __future__ import annotations
@@ -11,6 +15,58 @@ import math
 RAD_S_PER_RPM = 2.0 * math.pi / 60.0
 #: m/s^2, standard gravity (grams-force -> newtons)
 G0 = 9.80665
+
+#: name suffix -> (SI unit, factor to SI). The longest matching suffix wins.
+UNIT_SUFFIXES: dict[str, tuple[str, float]] = {
+    "rpm_per_s": ("rad/s^2", RAD_S_PER_RPM),
+    "rad_s2": ("rad/s^2", 1.0),
+    "rpm": ("rad/s", RAD_S_PER_RPM),
+    "hz": ("rad/s", 2.0 * math.pi),       # revolutions per second
+    "rad_s": ("rad/s", 1.0),
+    "kg_m2": ("kg m^2", 1.0),
+    "g_mm2": ("kg m^2", 1e-9),
+    "a_m2": ("A m^2", 1.0),
+    "kg": ("kg", 1.0),
+    "g": ("kg", 1e-3),                    # grams of mass
+    "mm": ("m", 1e-3),
+    "m": ("m", 1.0),
+    "deg": ("rad", math.pi / 180.0),
+    "rad": ("rad", 1.0),
+    "ms": ("s", 1e-3),
+    "s": ("s", 1.0),
+    "gf": ("N", 1e-3 * G0),               # grams-force (what a balance shows)
+    "n": ("N", 1.0),
+}
+#: SI unit -> the suffix a converted name gets
+SI_SUFFIXES: dict[str, str] = {
+    "rad/s^2": "rad_s2", "rad/s": "rad_s", "kg m^2": "kg_m2", "A m^2": "a_m2", "kg": "kg",
+    "m": "m", "rad": "rad", "s": "s", "N": "n",
+}
+#: In data tables (fit inputs, session results) a ``_g`` column has always held a balance
+#: reading, i.e. grams-force; it is read as ``_gf``. New tables write ``_gf``.
+TABLE_SUFFIX_ALIASES: dict[str, str] = {"g": "gf"}
+
+
+def split_suffix(name: str) -> tuple[str, str] | None:
+    """``"mass_g"`` -> ``("mass", "g")``: the longest unit suffix of ``name`` (any case), or None."""
+    lowered = name.lower()
+    for suffix in sorted(UNIT_SUFFIXES, key=len, reverse=True):
+        if lowered.endswith("_" + suffix):
+            return name[: -len(suffix) - 1], suffix
+    return None
+
+
+def column_to_si(name: str) -> tuple[str, float]:
+    """A data-table column name -> (its SI name, factor): ``speed_rpm`` -> (``speed_rad_s``,
+    0.1047...), ``force_gf`` and the older ``force_g`` -> (``force_n``, 9.80665e-3).
+    A name without a unit suffix is returned unchanged with factor 1."""
+    split = split_suffix(name)
+    if split is None:
+        return name, 1.0
+    base, suffix = split
+    suffix = TABLE_SUFFIX_ALIASES.get(suffix, suffix)
+    unit, factor = UNIT_SUFFIXES[suffix]
+    return f"{base}_{SI_SUFFIXES[unit]}", factor
 
 
 def rpm_to_rad_s(rpm: float) -> float:

@@ -15,7 +15,8 @@ Options (sim:// query or rig file): ``unit`` (g, or N where the device can), ``d
 A&D also ``mode=stream``, ``ack=0|1``; HX711 ``preset``, ``calibration`` (counts/g for
 ``unit=raw``), ``startup_s``, ``tare_s``.
 
-Fault knobs besides the common ones (PROTOCOLS 5.2): ``overload`` / ``underload``
+Fault knobs besides the common ones (docs/design/device-rules.md#emulator-faults): ``overload`` /
+``underload``
 (probability per weight reply), ``unstable`` (probability a reply is forced dynamic),
 ``error_reply`` (probability a command gets ``EL`` / ``EC,E02``), ``reset_at`` (s after
 open: power-on junk, ``I4`` line on MT-SICS, zero and tare lost), ``mid_frame`` (the first

@@ -5,7 +5,8 @@ Both read the shared plant: ``source=rotor`` (default; any motor name of the pla
 ``plant.floator_spin(t)`` (the Fig. 6.18 set-up's second tachometer). They write their own
 bytes with their own formatting code (no code shared with the drivers).
 
-Fault knobs besides the common ones of :mod:`labkit.emulators.base` (PROTOCOLS 5.2):
+Fault knobs besides the common ones of :mod:`labkit.emulators.base`
+(docs/design/device-rules.md#emulator-faults):
 
 * ``overload`` - Lutron: over-range frames; labkit-tach: every line flagged ``O``.
 * ``mid_frame`` - the first bytes after open are the tail of a frame/line.
@@ -101,10 +102,12 @@ class _StreamingTachEmulator(Emulator):
 
 @register_emulator
 class Lutron16Emulator(_StreamingTachEmulator):
-    """A Lutron-format tachometer display streaming 16-byte frames (PROTOCOLS 2.1).
+    """A Lutron-format tachometer display streaming 16-byte frames
+    (docs/devices-tach-motor.md#lutron16-lutron-16-byte-stream).
 
     Options: ``rate_hz`` (1), ``annunciator`` (two digits, default ``00``: the real RPM code
-    is model-specific, PROTOCOLS 6), ``display`` (``1``), ``noise_rpm`` (Gaussian, 0),
+    is model-specific, docs/design/device-rules.md#open-on-real-hardware), ``display`` (``1``),
+    ``noise_rpm`` (Gaussian, 0),
     ``no_target`` (``zero`` or ``hold``: what the meter shows when the beam sees nothing).
     Resolution follows the DT-2236 class: 0.1 RPM below 10 000, 1 RPM up to 99 999, then
     over-range.
@@ -139,7 +142,9 @@ class Lutron16Emulator(_StreamingTachEmulator):
 
 @register_emulator
 class LabkitTachEmulator(_StreamingTachEmulator):
-    """The labkit Arduino pulse tachometer (PROTOCOLS 2.3, ``firmware/labkit_tach``).
+    """The labkit Arduino pulse tachometer
+    (docs/devices-tach-motor.md#labkit_tach-the-labkit-pulse-tachometer-labkit-defined,
+    ``firmware/labkit_tach``).
 
     Emulates the firmware's period method: pulse edges at ``ppr`` per revolution are
     time-stamped with ``micros()`` (``tick_us`` resolution, 4 us on a 16 MHz AVR, plus
@@ -295,7 +300,8 @@ class LabkitTachEmulator(_StreamingTachEmulator):
 
 @register_emulator
 class MonarchEmulator(_StreamingTachEmulator):
-    """A Monarch panel tachometer (ACT-3X class) answering ``@`` commands (PROTOCOLS 2.2).
+    """A Monarch panel tachometer (ACT-3X class) answering ``@`` commands
+    (docs/devices-tach-motor.md#monarch_at-monarch--commands-act-1b-act-3x-f2a1x-tier-2).
 
     ``@PI`` -> product and firmware lines, ``@D0`` -> one value line, ``@D1``/``@D2`` ->
     ``OK`` and start/stop continuous display data (``rate_hz``, default 2: the display

@@ -1,6 +1,7 @@
 """The VESC emulator (``sim://vesc``): UART packets, GET_VALUES in the layout of the
 firmware version it announces, SET_* commands driving the shared plant, the 1 s
-communication timeout (PROTOCOLS 3.2; fault knobs in :mod:`labkit.emulators.motors`).
+communication timeout (docs/devices-tach-motor.md#vesc-vesc-uart-packets; fault knobs in
+:mod:`labkit.emulators.motors`).
 """
 
 from __future__ import annotations

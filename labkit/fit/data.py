@@ -4,7 +4,8 @@ or the JSON of ``labkit analyse laser|strobe`` (one clip = one row).
 A session directory holds ``results.json`` ``{"protocol", "points": [{...}, ...], "fit": {...}}``
 and ``run.json`` (rig and run metadata). A results JSON may also be a bare list of point
 objects. Columns keep the names of the file; units are in the names (``speed_rpm``,
-``force_g``) and :func:`to_si` converts them by suffix.
+``force_gf``; the older ``force_g`` is read as grams-force too) and :func:`to_si` converts
+them by suffix (labkit/units.py).
 
 An analysis JSON (recognised by its keys, see :func:`analysis_kind`) becomes the row
 ``speed_rpm`` (its ``rotor_speed_rpm``), ``cone_angle_rad`` (laser ``tilt_rad.major``, strobe
@@ -27,18 +28,11 @@ from pathlib import Path
 import numpy as np
 
 from labkit.errors import DataFileError
-from labkit.units import G0, RAD_S_PER_RPM
+from labkit.units import column_to_si
 
 #: The largest data file read (CSV or JSON); a bigger one is refused before it is read.
 MAX_DATA_FILE_BYTES = 256_000_000
 
-SI_FACTORS = {  # suffix -> (SI suffix, factor)
-    "_rpm": ("_rad_s", RAD_S_PER_RPM),
-    "_hz": ("_rad_s", 2.0 * math.pi),
-    "_g": ("_n", G0 * 1e-3),
-    "_mm": ("_m", 1e-3),
-    "_deg": ("_rad", math.pi / 180.0),
-}
 
 
 @dataclass
@@ -70,11 +64,11 @@ class Table:
 
 
 def to_si(name: str, values: np.ndarray) -> tuple[str, np.ndarray]:
-    """Convert a column to SI by its unit suffix: ``speed_rpm`` -> (``speed_rad_s``, rad/s)."""
-    for suffix, (si_suffix, factor) in SI_FACTORS.items():
-        if name.endswith(suffix):
-            return name[: -len(suffix)] + si_suffix, np.asarray(values, dtype=float) * factor
-    return name, np.asarray(values, dtype=float)
+    """Convert a column to SI by its unit suffix (the table of labkit/units.py):
+    ``speed_rpm`` -> (``speed_rad_s``, rad/s); ``force_gf`` (and the older ``force_g``,
+    grams-force) -> ``force_n``."""
+    si_name, factor = column_to_si(name)
+    return si_name, np.asarray(values, dtype=float) * factor
 
 
 def load_table(path: str | Path) -> Table:

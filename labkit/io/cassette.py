@@ -1,4 +1,5 @@
-"""Cassettes: what went over one serial port, byte-exact, as JSON lines (ANCHORS 9.2.2).
+"""Cassettes: what went over one serial port, byte-exact, as JSON lines
+(docs/design/architecture.md#cassettes).
 
 Line 1 is a header::
 

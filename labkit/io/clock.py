@@ -1,4 +1,5 @@
-"""Injected time (ARCHITECTURE rule 2): every wait, settle, ramp and timeout goes through a Clock.
+"""Injected time (docs/design/architecture.md#injected-time): every wait, settle, ramp and timeout goes
+through a Clock.
 
 * :class:`RealClock` is ``time.monotonic`` and real sleeps; periodic jobs run on threads.
 * :class:`VirtualClock` jumps. ``sleep(dt)`` advances time at once and runs every periodic

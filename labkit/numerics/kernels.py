@@ -3,7 +3,8 @@
 The scene family is the paper's Sec. 5.1-5.1.6 problem: an axisymmetric body (radial moment
 ``I_R``, axial ``I_A``, dipole on the symmetry axis) turning about its fixed CM in the uniform
 field ``B = B_C [-sin th, cos th, 0] + B_S z``, ``th = omega t + phase`` (Eq. 5.21). It is
-integrated **nondimensionally** (NUMERICS.md 3.1): time ``s = omega t``, angular momentum
+integrated **nondimensionally** (docs/design/numerics-notes.md#scaling): time ``s = omega t``, angular
+momentum
 ``l = L / (I_R omega)``, torque coefficients ``j_C = tau_C / (I_R omega^2)`` and
 ``j_S = tau_S / (I_R omega^2)`` (Eq. 5.22), inertia ratio ``a = I_A / I_R``. So a 5 mg fragment
 at 11 000 rad/s and a 7 g floator at 250 rad/s with the same ``j`` are the same ODE.
@@ -20,7 +21,8 @@ Two implementations of the same arithmetic, measured against each other by
 * :func:`run_batch_numpy`: vectorised numpy over the batch (structure of arrays, lock-step).
 
 Both return the stroboscopic zenith angle of the dipole (Eq. 5.7's ``phi``) and the
-Jacobi-type invariant ``K = T + U - omega J_z`` (NUMERICS.md 2.2) in units of ``I_R omega^2``.
+Jacobi-type invariant ``K = T + U - omega J_z`` (docs/design/numerics-notes.md#the-jacobi-constant) in
+units of ``I_R omega^2``.
 """
 
 from __future__ import annotations

@@ -16,7 +16,7 @@ import numpy as np
 
 from labkit.numerics import kernels
 from labkit.numerics.checks import DEFAULT_MEMORY_BYTES, NumericsError
-from labkit.sim.equilibrium import cone_angle_axisymmetric, conical_angular_velocity, conical_orientation
+from labkit.sim.equilibrium import cone_angle_axisymmetric, conical_angular_velocity_at, conical_orientation
 
 EARLY_FRACTION = 0.02  # the deviation in the first 2 % of the run sets the scale of the kick
 GROWTH_FACTOR = 10.0
@@ -90,9 +90,10 @@ def batch_spec(points: list[dict]) -> tuple[kernels.BatchSpec, np.ndarray]:
         tau_s = p["ratio"] * p["tau_c"]
         w, i_r, i_a = p["omega"], p["i_r"], p["i_a"]
         spin_k = p.get("spin_k", -1.0)
-        phi[k] = cone_angle_axisymmetric(w, p["tau_c"], tau_s, i_r, i_a, spin_k)
+        phi[k] = cone_angle_axisymmetric(omega=w, tau_c=p["tau_c"], tau_s=tau_s, i_radial=i_r,
+                                         i_axial=i_a, spin_k=spin_k)
         R[k] = conical_orientation(phi[k], 0.0)
-        omega_vec = conical_angular_velocity(w, phi[k], 0.0, spin_k) + np.array(
+        omega_vec = conical_angular_velocity_at(omega=w, phi=phi[k], theta=0.0, spin_k=spin_k) + np.array(
             [0.0, p.get("bias_y", 0.0), 0.0]
         )
         inertia_lab = R[k] @ np.diag([i_r, i_r, i_a]) @ R[k].T

@@ -8,7 +8,8 @@ on disk (a torn last line is ignored and its points are run again).
 
 Where the chunks run:
 
-* by default in this process, one chunk after the other (NUMERICS.md 4.1: on a 2-core machine a
+* by default in this process, one chunk after the other
+(docs/design/numerics-notes.md#one-process-by-default: on a 2-core machine a
   process pool buys ~1.0x; the batch kernel is what makes a sweep fast);
 * ``workers > 1``: a local process pool;
 * ``scheduler="tcp://host:8786"``: a ``dask.distributed`` cluster (optional dependency

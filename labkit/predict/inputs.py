@@ -7,7 +7,6 @@ are :class:`PredictInputError` naming the option.
 from __future__ import annotations
 
 import math
-import tomllib
 from pathlib import Path
 
 from labkit.errors import LabkitError, RigFileError
@@ -18,14 +17,15 @@ from labkit.predict.magnets import (
     parse_magnet_spec,
     remanence_for_grade,
 )
-from labkit.rig import Body, bundled_rig_path, parse_body, read_rig_text
+from labkit.rig import BodySpec, find_rig_file, parse_body, read_rig_text
+from labkit.rig.config import load_toml
 
 
 class PredictInputError(LabkitError):
     """A bad ``labkit predict`` option (the message names it)."""
 
 
-def magnet_from_body(body: Body, remanence_t: float | None = None) -> Magnet:
+def magnet_from_body(body: BodySpec, remanence_t: float | None = None) -> Magnet:
     """A :class:`Magnet` from a rig file's body (sizes by shape: sphere diameter; cylinder
     diameter and length; cube length; block width, diameter as depth, length along the dipole).
     Raises ValueError naming what is missing."""
@@ -49,20 +49,9 @@ def magnet_from_body(body: Body, remanence_t: float | None = None) -> Magnet:
 def magnets_from_rig(path: str | Path, remanence_t: float | None = None) -> tuple[Magnet, Magnet, float]:
     """(rotator, floator, rotator tilt in rad) from the ``[bodies]`` of a rig file (or a bundled
     rig's name). Only the bodies are read, so a rig still being planned needs no devices."""
-    p = Path(path)
-    if not p.exists():
-        bundled = bundled_rig_path(str(path))
-        if bundled is None:
-            raise RigFileError(str(path), "(file)", "no such rig file")
-        p = bundled
+    p = find_rig_file(path)
     file = str(path)
-    text = read_rig_text(p)  # bounded (a rig path of /dev/zero), UTF-8 checked
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise RigFileError(file, "(syntax)", str(exc)) from None
-    except RecursionError:
-        raise RigFileError(file, "(syntax)", "nested too deeply") from None
+    data = load_toml(read_rig_text(p), file)  # bounded (a rig path of /dev/zero), UTF-8 checked
     tables = data.get("bodies")
     if not isinstance(tables, dict):
         raise RigFileError(file, "bodies",

@@ -10,7 +10,8 @@ parameters, then runs each with plain Python using the :class:`RunContext` verbs
 * opens the rig (every port recorded into the session's cassettes), starts the speed loops;
 * on the first Ctrl-C - or SIGTERM (``kill``), SIGHUP (terminal closed), SIGQUIT (Ctrl-\\) -
   commands every motor to zero at the next control tick and stops at the next checkpoint;
-  on a second Ctrl-C trips the interlock at once (ANCHORS 9.2.7); ``run.json`` names the
+  on a second Ctrl-C trips the interlock at once (docs/design/architecture.md#two-ctrl-c); ``run.json``
+  names the
   signal (docs/safety.md);
 * whatever happens (interlock, exception, Ctrl-C, normal end) stops the loops, zeroes
   every motor, closes the ports and writes ``results.json`` and the exit status.

@@ -26,7 +26,7 @@ _HOME = {
     "SimResult": "labkit.sim.result",
     "simulate": "labkit.sim.run",
     **{name: "labkit.sim.scene" for name in (
-        "Body", "Rotator", "Scene", "SceneError", "Shape", "UniformField", "bundled_scenes",
+        "Body", "Rotator", "Scene", "SceneBody", "SceneError", "Shape", "UniformField", "bundled_scenes",
         "load_scene", "scene_from_dict")},
     "validate_scene": "labkit.sim.scene_checks",
 }
@@ -40,6 +40,7 @@ if TYPE_CHECKING:  # pragma: no cover
         Body,
         Rotator,
         Scene,
+        SceneBody,
         SceneError,
         Shape,
         UniformField,
@@ -66,6 +67,7 @@ __all__ = [
     "INTEGRATORS",
     "Rotator",
     "Scene",
+    "SceneBody",
     "SceneError",
     "Shape",
     "SimResult",

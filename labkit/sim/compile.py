@@ -31,7 +31,7 @@ from labkit.sim.integrators.kernels import (
     K_M,
     SRC_WIDTH,
 )
-from labkit.sim.scene import Body, Scene
+from labkit.sim.scene import Scene, SceneBody
 
 
 @dataclass
@@ -113,7 +113,7 @@ class CompiledSystem:
         return out
 
 
-def _principal(body: Body) -> tuple[np.ndarray, np.ndarray, int, str]:
+def _principal(body: SceneBody) -> tuple[np.ndarray, np.ndarray, int, str]:
     """Principal moments (symmetric-top axis third), frame change V (det +1), free kind, label."""
     inertia = np.asarray(body.inertia_kg_m2, dtype=float)
     eig, vec = np.linalg.eigh(inertia)
@@ -135,7 +135,7 @@ def _principal(body: Body) -> tuple[np.ndarray, np.ndarray, int, str]:
     return eig, vec, kind, label
 
 
-def _dipole_lab(body: Body) -> np.ndarray:
+def _dipole_lab(body: SceneBody) -> np.ndarray:
     return body.rotation @ np.asarray(body.moment_Am2, dtype=float)
 
 

@@ -23,15 +23,18 @@ import numpy as np
 from labkit.sim.rotations import euler_zxz, rot_x
 
 if TYPE_CHECKING:  # pragma: no cover
-    from labkit.sim.scene import Body, Scene
+    from labkit.sim.scene import Scene, SceneBody
 
 MU0_OVER_4PI = 1e-7  # T m / A (paper, below Eq. 4.3)
 
 
 def cone_angle_isotropic(
-    omega: float, tau_c: float, tau_s: float, inertia: float, spin_k: float = -1.0
+    *, omega: float, tau_c: float, tau_s: float, inertia: float, spin_k: float = -1.0
 ) -> float:
     """Cone angle (rad) for equal principal moments: Eq. 5.24 (``k = -1``), Eq. 5.68 otherwise.
+
+    Keyword-only, like every cone function here: :func:`labkit.model.cone.cone_angle` takes the
+    same quantities in another order (docs/decisions/0007-names.md).
 
     ``phi = atan(tau_C / (-k I omega^2 - tau_S))``; its sign flips when ``tau_S > I omega^2``.
     """
@@ -42,7 +45,7 @@ def cone_angle_isotropic(
 
 
 def cone_angle_axisymmetric(
-    omega: float, tau_c: float, tau_s: float, i_radial: float, i_axial: float, spin_k: float = -1.0
+    *, omega: float, tau_c: float, tau_s: float, i_radial: float, i_axial: float, spin_k: float = -1.0
 ) -> float:
     """Cone angle (rad) solving ``tau_C cos phi + tau_S sin phi = omega^2 sin phi (-k I_A +
     (I_R - I_A) cos phi)`` (Eq. 5.64; Eq. 5.35 for ``k = -1``), nearest the isotropic guess."""
@@ -51,7 +54,8 @@ def cone_angle_axisymmetric(
         s, c = math.sin(phi), math.cos(phi)
         return tau_c * c + tau_s * s - omega**2 * s * (-spin_k * i_axial + (i_radial - i_axial) * c)
 
-    guess = cone_angle_isotropic(omega, tau_c, tau_s, 0.5 * (i_radial + i_axial), spin_k)
+    guess = cone_angle_isotropic(omega=omega, tau_c=tau_c, tau_s=tau_s,
+                                 inertia=0.5 * (i_radial + i_axial), spin_k=spin_k)
     if i_radial == i_axial:
         return guess
     from scipy.optimize import brentq  # only anisotropic bodies need a root finder
@@ -64,8 +68,11 @@ def cone_angle_axisymmetric(
     raise ValueError("no conical equilibrium angle exists for these torques and inertia (Eq. 5.35)")
 
 
-def conical_angular_velocity(omega: float, phi: float, theta: float, spin_k: float = -1.0) -> np.ndarray:
-    """Lab angular velocity on the cone (Eq. 5.62; Eq. 5.12 for ``k = -1``) at azimuth ``theta``."""
+def conical_angular_velocity_at(
+    *, omega: float, phi: float, theta: float, spin_k: float = -1.0
+) -> np.ndarray:
+    """Lab angular velocity on the cone (Eq. 5.62; Eq. 5.12 for ``k = -1``) at azimuth ``theta``
+    (one point; :func:`labkit.model.cone.conical_angular_velocity` is the vectorised one, in time)."""
     s, c = math.sin(theta), math.cos(theta)
     sp, cp = math.sin(phi), math.cos(phi)
     return omega * np.array([spin_k * s * sp, -spin_k * c * sp, 1.0 + spin_k * cp])
@@ -84,7 +91,7 @@ def dipole_torque_coefficients(
     return big_m * math.cos(tilt), 2.0 * big_m * math.sin(tilt)
 
 
-def _drive(body: Body, scene: Scene) -> tuple[float, float, float, float]:
+def _drive(body: SceneBody, scene: Scene) -> tuple[float, float, float, float]:
     """``(omega, phase, tau_C, tau_S)`` of the drive acting on ``body``."""
     m = float(np.linalg.norm(body.moment_Am2))
     if m == 0.0:
@@ -121,7 +128,7 @@ def _drive(body: Body, scene: Scene) -> tuple[float, float, float, float]:
     )
 
 
-def apply_conical(body: Body, scene: Scene, spin_k: float = -1.0) -> float:
+def apply_conical(body: SceneBody, scene: Scene, spin_k: float = -1.0) -> float:
     """Set ``body``'s orientation and angular velocity on the conical equilibrium; return phi.
 
     The body must be axisymmetric about body z with its dipole on that axis (Eq. 5.33).
@@ -139,11 +146,13 @@ def apply_conical(body: Body, scene: Scene, spin_k: float = -1.0) -> float:
             "with its dipole on body z (Eq. 5.33)"
         )
     omega, phase, tau_c, tau_s = _drive(body, scene)
-    phi = cone_angle_axisymmetric(omega, tau_c, tau_s, inertia[0, 0], inertia[2, 2], spin_k)
+    phi = cone_angle_axisymmetric(omega=omega, tau_c=tau_c, tau_s=tau_s, i_radial=inertia[0, 0],
+                                  i_axial=inertia[2, 2], spin_k=spin_k)
     rotation = conical_orientation(phi, phase)
     if m[2] < 0:  # dipole along -z: flip the body so that its dipole is on the cone
         rotation = rotation @ rot_x(math.pi)
     body.rotation = rotation
-    body.angular_velocity_rad_s = conical_angular_velocity(omega, phi, phase, spin_k)
+    body.angular_velocity_rad_s = conical_angular_velocity_at(
+        omega=omega, phi=phi, theta=phase, spin_k=spin_k)
     body.spin_k = spin_k
     return phi

@@ -298,7 +298,8 @@ def _cone_angle_closed_form(scene: Scene, body) -> float | None:
     try:
         omega, _, tau_c, tau_s = equilibrium._drive(body, scene)
         return equilibrium.cone_angle_axisymmetric(
-            omega, tau_c, tau_s, inertia[0, 0], inertia[2, 2], body.spin_k
+            omega=omega, tau_c=tau_c, tau_s=tau_s, i_radial=inertia[0, 0], i_axial=inertia[2, 2],
+            spin_k=body.spin_k,
         )
     except ValueError:
         return None

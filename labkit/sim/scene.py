@@ -70,8 +70,10 @@ class Shape:
 
 
 @dataclass
-class Body:
-    """A rigid body with a point dipole. ``inertia_kg_m2`` is the 3x3 tensor about the CM in
+class SceneBody:
+    """A rigid body with a point dipole, placed in a simulated scene (not
+    :class:`labkit.rig.BodySpec`, a magnet as a rig file declares it). ``inertia_kg_m2`` is
+    the 3x3 tensor about the CM in
     the body frame; ``moment_Am2`` the dipole vector in the body frame (default along body z);
     ``rotation`` maps body to lab; ``angular_velocity_rad_s`` is in the lab frame."""
 
@@ -121,7 +123,7 @@ class UniformField:
 @dataclass
 class Scene:
     name: str
-    bodies: list[Body]
+    bodies: list[SceneBody]
     rotators: list[Rotator] = field(default_factory=list)
     field: UniformField | None = None
     gravity_m_s2: np.ndarray | None = None
@@ -347,7 +349,7 @@ def _moment(t: _Table) -> np.ndarray:
     return np.array([0.0, 0.0, m])
 
 
-def _body(t: _Table, i: int) -> tuple[Body, _Table | None]:
+def _body(t: _Table, i: int) -> tuple[SceneBody, _Table | None]:
     name = t.string("name", f"body{i}")
     mass = t.quantity("mass", MASS_UNITS, required=True)
     inertia = _inertia(t)
@@ -359,11 +361,11 @@ def _body(t: _Table, i: int) -> tuple[Body, _Table | None]:
     damp_rot = t.number("damping_rot_N_m_s", 0.0)
     init = t.sub("initial")
     t.finish()
-    body = Body(name, mass, inertia, moment, offset, shape, pinned, damp, damp_rot)
+    body = SceneBody(name, mass, inertia, moment, offset, shape, pinned, damp, damp_rot)
     return body, init
 
 
-def _initial(body: Body, t: _Table, scene: Scene) -> None:
+def _initial(body: SceneBody, t: _Table, scene: Scene) -> None:
     body.position_m = _vec3(t, "position", LENGTH_UNITS, [0, 0, 0])
     body.velocity_m_s = _vec3(t, "velocity", {"m_s": 1.0}, [0, 0, 0])
     euler = t.quantity("euler_zxz", ANGLE_UNITS, shape=(3,))
@@ -478,3 +480,7 @@ def bundled_scenes() -> list[str]:
     """Names of the scenes shipped in ``labkit/data/scenes``."""
     d = Path(__file__).resolve().parent.parent / "data" / "scenes"
     return sorted(p.stem for p in d.glob("*.toml"))
+
+
+#: the old name of :class:`SceneBody` (docs/decisions/0007-names.md); kept for scripts
+Body = SceneBody

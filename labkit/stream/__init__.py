@@ -1,4 +1,4 @@
-"""Every rerun call of labkit lives in this package (ARCHITECTURE: `stream`).
+"""Every rerun call of labkit lives in this package (docs/design/architecture.md#one-package-for-rerun).
 
 Only the CLI and sinks import it; the library never does. Entity paths and timelines are
 documented in docs/streams.md. The rerun API churns, so this is the one place to change

@@ -18,8 +18,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from labkit.devices.base import driver_class
+from labkit.devices.link import FrameError
 from labkit.devices.loadcell import line_regex
-from labkit.devices.loadcell.linkio import FrameError
 from labkit.emulators.hx711_sketch import Hx711SketchEmulator
 from labkit.emulators.plant import RigPlant, shared_plant
 from labkit.errors import DeviceTimeout

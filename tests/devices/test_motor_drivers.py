@@ -4,6 +4,7 @@ start on open, zero on close and on exceptions, keep-alive >= 20 Hz) and the fau
 from __future__ import annotations
 
 import pytest
+from sim_driver import open_sim_driver
 
 from labkit.devices.base import driver_class
 from labkit.emulators.plant import RAD_S_PER_RPM, shared_plant
@@ -16,11 +17,7 @@ MAX_SPEED = 2500.0  # rad/s at duty 1: the plant's default motor
 
 def open_motor(protocol: str, query: str = "", clock: VirtualClock | None = None,
                settings: dict | None = None, **options):
-    clock = clock or VirtualClock()
-    cls = driver_class("motor", protocol)
-    port = open_port(f"sim://{protocol}?plant=m{query}", clock=clock, timeout=0,
-                     **(settings or cls.default_serial))
-    return cls(port, clock, name=f"rotor_motor ({protocol})", **options), clock
+    return open_sim_driver("motor", protocol, "m", "rotor_motor", query, clock, settings, **options)
 
 
 def rotor_speed(clock) -> float:

@@ -6,21 +6,17 @@ from __future__ import annotations
 import math
 
 import pytest
+from sim_driver import open_sim_driver
 
 from labkit.devices.base import driver_class
 from labkit.emulators.plant import RAD_S_PER_RPM, reset_plants, shared_plant
 from labkit.errors import DeviceDisconnected, DeviceReplyError, DeviceTimeout
 from labkit.io.clock import VirtualClock
-from labkit.io.ports import open_port
 
 
 def open_tach(protocol: str, query: str = "", clock: VirtualClock | None = None,
               settings: dict | None = None, **options):
-    clock = clock or VirtualClock()
-    cls = driver_class("tach", protocol)
-    port = open_port(f"sim://{protocol}?plant=t{query}", clock=clock, timeout=0,
-                     **(settings or cls.default_serial))
-    return cls(port, clock, name=f"rotor_tach ({protocol})", **options), clock
+    return open_sim_driver("tach", protocol, "t", "rotor_tach", query, clock, settings, **options)
 
 
 def spin_rotor(rpm: float, t: float = 0.0) -> float:

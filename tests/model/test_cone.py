@@ -116,7 +116,16 @@ def test_initial_state_obeys_eulers_equation_under_the_magnetic_torque():
 
 
 def test_a_positional_call_is_refused_not_swapped():
-    """labkit.sim.equilibrium.cone_angle_axisymmetric takes (omega, tau_c, tau_s, i_radial, i_axial):
-    the model's version must not accept the same numbers in its own order without names."""
+    """The model's and the simulator's cone functions order the same quantities differently:
+    both refuse positional calls, and by name they agree."""
+    from labkit.sim.equilibrium import cone_angle_axisymmetric, cone_angle_isotropic
+
     with pytest.raises(TypeError):
         cone_angles_axisymmetric(1e-3, 2e-4, 1e-7, 1e-7, W)  # type: ignore[misc]
+    with pytest.raises(TypeError):
+        cone_angle_axisymmetric(W, 1e-3, 2e-4, 1e-7, 2e-7)  # type: ignore[misc]
+    with pytest.raises(TypeError):
+        cone_angle_isotropic(W, 1e-3, 2e-4, 1e-7)  # type: ignore[misc]
+    sim = cone_angle_axisymmetric(omega=W, tau_c=1e-3, tau_s=2e-4, i_radial=2e-7, i_axial=1e-7)
+    model = cone_angles_axisymmetric(tau_c=1e-3, tau_s=2e-4, i_axial=1e-7, i_radial=2e-7, omega=W)
+    assert float(np.asarray(model).ravel()[0]) == pytest.approx(sim, rel=1e-9)

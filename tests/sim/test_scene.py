@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from labkit.errors import LabkitError
-from labkit.sim import Body, Scene, SceneError, UniformField, bundled_scenes, load_scene, validate_scene
+from labkit.sim import Scene, SceneBody, SceneError, UniformField, bundled_scenes, load_scene, validate_scene
 from labkit.sim.equilibrium import cone_angle_axisymmetric, cone_angle_isotropic
 
 from .conftest import bundled_dict, make
@@ -91,7 +91,7 @@ def test_missing_file_and_bad_toml(tmp_path):
 
 
 def test_python_scene_validated():
-    body = Body("b", 1e-3, np.diag([1e-7, 1e-7, 1e-7]), np.array([0, 0, 1.0]))
+    body = SceneBody("b", 1e-3, np.diag([1e-7, 1e-7, 1e-7]), np.array([0, 0, 1.0]))
     scene = Scene("py", [body], field=UniformField("rotating", 1e-3, 0.0, 100.0))
     validate_scene(scene)
     bad = copy.deepcopy(scene)
@@ -114,15 +114,15 @@ def test_conical_equilibrium_helper_matches_eq_5_24_and_5_12(conical):
 
 def test_cone_angle_sign_flip_and_axisymmetric_limit():
     # tau_S > I w^2 flips the sign of phi (Sec. 5.1: 4.633e-3 and 8e-3 give the same |phi|)
-    a = cone_angle_isotropic(80 * math.pi, 1e-3, 4.633e-3, 1e-7)
-    b = cone_angle_isotropic(80 * math.pi, 1e-3, 8e-3, 1e-7)
+    a = cone_angle_isotropic(omega=80 * math.pi, tau_c=1e-3, tau_s=4.633e-3, inertia=1e-7)
+    b = cone_angle_isotropic(omega=80 * math.pi, tau_c=1e-3, tau_s=8e-3, inertia=1e-7)
     assert a == pytest.approx(-b, abs=2e-3)
     # Eq. 5.35 residual vanishes and reduces to Eq. 5.24 for equal moments
     w, tc, ts, ir, ia = 60 * math.pi, 7.5e-4, 0.3 * 7.5e-4, 1.058e-7, 8.099e-8
-    phi = cone_angle_axisymmetric(w, tc, ts, ir, ia)
+    phi = cone_angle_axisymmetric(omega=w, tau_c=tc, tau_s=ts, i_radial=ir, i_axial=ia)
     resid = tc * math.cos(phi) + ts * math.sin(phi) - w**2 * math.sin(phi) * (ia + (ir - ia) * math.cos(phi))
     assert abs(resid) < 1e-15
     assert phi == pytest.approx(0.2102, abs=1e-4)  # Table 5.3 row 1, phi-calc column
-    assert cone_angle_axisymmetric(w, tc, ts, 1e-7, 1e-7) == pytest.approx(
-        cone_angle_isotropic(w, tc, ts, 1e-7)
+    assert cone_angle_axisymmetric(omega=w, tau_c=tc, tau_s=ts, i_radial=1e-7, i_axial=1e-7) == pytest.approx(
+        cone_angle_isotropic(omega=w, tau_c=tc, tau_s=ts, inertia=1e-7)
     )

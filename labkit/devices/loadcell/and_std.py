@@ -1,4 +1,5 @@
-"""A&D standard format (EK-i, FX-i/FZ-i, GX/GF, EJ, GC; PROTOCOLS 1.2): parse/format + driver.
+"""A&D standard format (EK-i, FX-i/FZ-i, GX/GF, EJ, GC;
+docs/devices-balance.md#and_std-ad-standard-format): parse/format + driver.
 
 Data lines are 17 bytes: ``ST,+00012.34  g`` CR LF (``ST`` stable, ``US`` unstable, ``QT``
 count, ``OL`` out of range with *filler* digits that are never a reading). The manuals' own
@@ -18,8 +19,8 @@ from typing import Any
 import serial
 
 from labkit.devices.base import Balance, Reading, register_driver, register_parser_benchmark
+from labkit.devices.link import FrameError, LineLink, LinkTailMixin, eol_bytes
 from labkit.devices.loadcell.continuous import ContinuousMixin
-from labkit.devices.loadcell.linkio import FrameError, LineLink, LinkTailMixin, eol_bytes
 from labkit.devices.loadcell.units import UnitError, to_si
 from labkit.errors import DeviceReplyError
 from labkit.io.clock import Clock
@@ -156,7 +157,8 @@ class AndStdBalance(ContinuousMixin, LinkTailMixin, Balance):
     (True: ``erCd`` = 1, control commands are acknowledged; False: nothing comes back and
     zero/tare wait ``settle_s``), ``mode`` (``"command"`` or ``"stream"`` for a balance
     set to stream output), ``command_timeout_s`` (2), ``settle_s`` (3).
-    On open (command mode): flush, send ``C`` (cancel ``S``/``SIR``; PROTOCOLS 5.3).
+    On open (command mode): flush, send ``C`` (cancel ``S``/``SIR``;
+    docs/design/device-rules.md#driver-rules).
     ``start_continuous()`` sends ``SIR`` (command mode) and reads the stream on a reader;
     ``stop_continuous()`` sends ``C``.
     """

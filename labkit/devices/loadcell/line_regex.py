@@ -1,4 +1,5 @@
-"""Configurable line reader for third-party HX711 + Arduino sketches (PROTOCOLS 1.4).
+"""Configurable line reader for third-party HX711 + Arduino sketches
+(docs/devices-balance.md#line_regex-hx711--arduino-sketches).
 
 There is no HX711 serial standard: each sketch prints its own lines. A *preset* names a
 known sketch (its line pattern, baud rate and tare command); any option can be overridden
@@ -39,15 +40,15 @@ from typing import Any
 import serial
 
 from labkit.devices.base import Balance, Reading, register_driver, register_parser_benchmark
+from labkit.devices.link import FrameError, LineLink, LinkTailMixin, eol_bytes
 from labkit.devices.loadcell.continuous import ContinuousMixin
-from labkit.devices.loadcell.linkio import FrameError, LineLink, LinkTailMixin, eol_bytes
 from labkit.devices.loadcell.units import UnitError, to_si
 from labkit.errors import DeviceError, DeviceReplyError
 from labkit.io.clock import Clock
 
 FLOAT = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d{1,3})?"
 
-#: HX711 24-bit two's complement saturation codes (PROTOCOLS 1.4)
+#: HX711 24-bit two's complement saturation codes (docs/devices-balance.md#line_regex-hx711--arduino-sketches)
 HX711_MAX = 0x7FFFFF
 HX711_MIN = -0x800000
 
@@ -282,7 +283,8 @@ class LineRegexBalance(ContinuousMixin, LinkTailMixin, Balance):
             flags |= {"device_reset", "tare_lost"}
         shown = (parsed.value - self.offset) * self.scale
         unit = parsed.unit or self.unit
-        # a printed saturation code is overload whatever the calibration (PROTOCOLS 1.4)
+        # a printed saturation code is overload whatever the calibration
+        # (docs/design/device-rules.md#driver-rules, rule 4)
         overload = parsed.value >= HX711_MAX or parsed.value <= HX711_MIN
         overload = overload or (self.capacity is not None and abs(shown) > self.capacity)
         if unit == "raw":

@@ -1,4 +1,5 @@
-"""Mettler Toledo MT-SICS (PROTOCOLS 1.1): pure parse/format functions + the driver.
+"""Mettler Toledo MT-SICS (docs/devices-balance.md#mtsics-mettler-toledo-mt-sics): pure parse/format
+functions + the driver.
 
 Also the protocol of the labkit HX711 sketch (MT-SICS level-0 subset), so one driver
 covers Mettler balances and DIY load cells. Lines: ``ID Status Fields CR LF``; weight
@@ -16,8 +17,8 @@ from typing import Any
 import serial
 
 from labkit.devices.base import Balance, Reading, register_driver, register_parser_benchmark
+from labkit.devices.link import FrameError, LineLink, LinkTailMixin, eol_bytes
 from labkit.devices.loadcell.continuous import ContinuousMixin
-from labkit.devices.loadcell.linkio import FrameError, LineLink, LinkTailMixin, eol_bytes
 from labkit.devices.loadcell.units import UnitError, to_si
 from labkit.errors import DeviceReplyError
 from labkit.io.clock import Clock
@@ -124,7 +125,8 @@ def parse_weight(line: bytes) -> MtWeight:
 
 def format_weight(command: str, status: str, value: float | None, unit: str = "g",
                   decimals: int = 2) -> bytes:
-    """Format a weight reply: value right-aligned in 10 characters (PROTOCOLS 1.1)."""
+    """Format a weight reply: value right-aligned in 10 characters
+    (docs/devices-balance.md#mtsics-mettler-toledo-mt-sics)."""
     if value is None or status in "+-IL":
         return f"{command} {status}".encode("ascii") + b"\r\n"
     return f"{command} {status} {value:>10.{decimals}f} {unit}".encode("ascii") + b"\r\n"
@@ -154,7 +156,8 @@ class MtSicsBalance(ContinuousMixin, LinkTailMixin, Balance):
     Options (rig file ``[devices.balance.options]``): ``eol`` (``"CRLF"`` default, ``"CR"``,
     ``"LF"``), ``command_timeout_s`` (2, for immediate commands).
     On open: flush input, send ``@`` (reset to a known state, cancels ``SIR``), wait for
-    the ``I4`` reply (PROTOCOLS 5.3 rule 3). ``start_continuous()`` sends ``SIR`` and reads
+    the ``I4`` reply (docs/design/device-rules.md#driver-rules, rule 3). ``start_continuous()`` sends
+    ``SIR`` and reads
     the stream on a reader (``latest()``, ``readings_since(t)``); ``stop_continuous()``
     sends ``@``.
     """

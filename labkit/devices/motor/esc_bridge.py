@@ -1,4 +1,6 @@
-"""The labkit hobby-ESC bridge (PROTOCOLS 3.3, ``firmware/labkit_esc_bridge``).
+"""The labkit hobby-ESC bridge
+(docs/devices-tach-motor.md#esc_bridge-hobby-esc-through-the-labkit-arduino-bridge,
+``firmware/labkit_esc_bridge``).
 
 An Arduino turns a Pololu-SMC compact-protocol subset into RC servo pulses for an ESC:
 ``83`` exit safe start, ``85`` speed 0..3200 -> 1000..2000 us, ``86`` (reverse) -> 1000 us,

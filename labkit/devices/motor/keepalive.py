@@ -1,6 +1,7 @@
 """What every motor driver shares: guarded writes, clocked reads, the >= 20 Hz keep-alive.
 
-Safety rules (ARCHITECTURE rule 3, PROTOCOLS 5.3 rule 5): a driver never moves the motor on
+Safety rules (docs/design/architecture.md#safe-state-on-every-exit-path,
+docs/design/device-rules.md#driver-rules rule 5): a driver never moves the motor on
 open; once ``enable()`` is called a clock job (``clock.every(0.05, ...)``, a thread on a
 real clock) re-sends the setpoint at 20 Hz so the controller's own command timeout never
 fires while we are alive and always fires when we are not; ``stop()`` cancels the job and
@@ -25,16 +26,9 @@ from typing import Any, ClassVar
 import serial
 
 from labkit.devices.base import MotorController
-from labkit.errors import DeviceDisconnected, DeviceError, DeviceTimeout, SafetyError
+from labkit.devices.link import PORT_ERRORS, LinkTailMixin, PacketLink
+from labkit.errors import DeviceDisconnected, SafetyError
 from labkit.io.clock import Clock, PeriodicJob
-
-try:  # a hung-up pty raises termios.error (not an OSError) from tcflush
-    from termios import error as _TermiosError
-except ImportError:  # pragma: no cover - Windows
-    _TermiosError = OSError  # type: ignore[assignment,misc]
-
-#: what a dead port raises
-PORT_ERRORS = (serial.SerialException, OSError, _TermiosError)
 
 KEEPALIVE_PERIOD_S = 0.05  # 20 Hz
 #: the controller's command timeout must be at least this many keep-alive periods ...
@@ -58,7 +52,7 @@ def stop_failure_text(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}"
 
 
-class KeepAliveMotor(MotorController):
+class KeepAliveMotor(LinkTailMixin, MotorController):
     """Base of the motor drivers: subclasses implement ``send_setpoint`` and ``send_zero``."""
 
     keepalive_period_s: float = KEEPALIVE_PERIOD_S
@@ -101,7 +95,7 @@ class KeepAliveMotor(MotorController):
     def __init__(self, port: serial.SerialBase, clock: Clock, name: str = "", **options: Any):
         super().__init__(port, clock, name, **options)
         self.io_lock = threading.RLock()      # one query (request + reply) at a time
-        self._write_lock = threading.Lock()   # one packet on the wire at a time
+        self.link = PacketLink(port, clock, self.name)  # one packet on the wire at a time
         self.enabled = False
         self.keepalive_count = 0
         self._job: PeriodicJob | None = None
@@ -126,58 +120,20 @@ class KeepAliveMotor(MotorController):
         raise SafetyError(f"{self.name}: {command} {value!r} is not a finite number; refused, "
                           "motor commanded to zero")
 
-    # ---- byte I/O -----------------------------------------------------------------------
+    # ---- byte I/O (the transport: labkit.devices.link.PacketLink) ------------------------
     def write(self, data: bytes, command: str) -> None:
-        """Write one whole packet; a dead port becomes DeviceDisconnected naming the command.
-
-        Only the write itself is locked, not a query's wait for its reply (``io_lock``), so
-        the keep-alive thread is never held up by a slow status read.
-        """
-        with self._write_lock:
-            try:
-                self.port.write(data)
-            except PORT_ERRORS as exc:
-                raise DeviceDisconnected(self.name, command, self.last_bytes, str(exc)) from exc
+        """Write one whole packet (see :meth:`PacketLink.write <labkit.devices.link.PacketLink.write>`)."""
+        self.link.write(data, command)
 
     def read_available(self, command: str) -> bytes:
-        try:
-            waiting = self.port.in_waiting
-            data = self.port.read(waiting) if waiting else b""
-        except PORT_ERRORS as exc:
-            raise DeviceDisconnected(self.name, command, self.last_bytes, str(exc)) from exc
-        if data:
-            self.last_bytes = (self.last_bytes + data)[-64:]
-        return data
+        return self.link.read_available(command)
 
     def flush_input(self, command: str) -> None:
-        try:
-            self.port.reset_input_buffer()
-        except PORT_ERRORS as exc:
-            raise DeviceDisconnected(self.name, command, self.last_bytes, str(exc)) from exc
+        self.link.flush_input(command)
 
     def read_exact(self, n: int, timeout: float, command: str, quiet_s: float = 0.0) -> bytes:
-        """Read exactly ``n`` bytes within ``timeout`` (clock time), polling the port.
-
-        With ``quiet_s`` > 0 the line must then stay silent that long: extra bytes mean the
-        reply was garbled (junk before/after it) and raise DeviceError.
-        """
-        deadline = self.clock.now() + timeout
-        got = bytearray()
-        while len(got) < n:
-            got += self.read_available(command)
-            if len(got) >= n:
-                break
-            if self.clock.now() >= deadline:
-                raise DeviceTimeout(self.name, command, bytes(got) or self.last_bytes,
-                                    f"{len(got)} of {n} reply bytes in {timeout} s")
-            self.clock.sleep(0.001)
-        if quiet_s > 0:
-            self.clock.sleep(quiet_s)
-            got += self.read_available(command)
-        if len(got) != n:
-            raise DeviceError(self.name, command, bytes(got),
-                              f"garbled reply: {len(got)} bytes where {n} were expected")
-        return bytes(got)
+        """Exactly ``n`` bytes within ``timeout`` (see :meth:`labkit.devices.link.PacketLink.read_exact`)."""
+        return self.link.read_exact(n, timeout, command, quiet_s)
 
     # ---- keep-alive ---------------------------------------------------------------------
     def send_setpoint(self) -> None:  # pragma: no cover - interface

@@ -1,4 +1,5 @@
-"""VESC UART packets (PROTOCOLS 3.2): BLDC controllers with closed-loop ERPM.
+"""VESC UART packets (docs/devices-tach-motor.md#vesc-vesc-uart-packets): BLDC controllers with
+closed-loop ERPM.
 
 Framing: ``02 LEN payload CRChi CRClo 03`` (payload <= 255 bytes), ``03 LENhi LENlo ...``
 for longer payloads. The CRC is CRC-16/XMODEM (poly 0x1021, init 0) over the payload,

@@ -1,4 +1,5 @@
-"""The labkit pulse-counter tachometer line protocol (PROTOCOLS 2.3, labkit-defined).
+"""The labkit pulse-counter tachometer line protocol
+(docs/devices-tach-motor.md#labkit_tach-the-labkit-pulse-tachometer-labkit-defined).
 
 An Arduino (``firmware/labkit_tach``) times pulses from an optical or Hall sensor with the
 period method, averaging over every pulse of an output window, and prints one line per
@@ -23,16 +24,14 @@ from __future__ import annotations
 
 import math
 import threading
-from collections import deque
 from dataclasses import dataclass
 from typing import Any
 
-import serial
-
 from labkit.devices.base import Reading, register_driver, register_parser_benchmark
+from labkit.devices.link import ReplyQueue
 from labkit.devices.stream import LineFramer
 from labkit.devices.tachometer.streaming import StreamingTachometer
-from labkit.errors import DeviceDisconnected, DeviceReplyError, DeviceTimeout
+from labkit.errors import DeviceReplyError, DeviceTimeout
 from labkit.units import rpm_to_rad_s
 
 FLAG_NAMES = {"Z": "zero_speed", "O": "over_range", "N": "noisy"}
@@ -166,12 +165,12 @@ class LabkitTachometer(StreamingTachometer):
         self.banner: dict[str, str] = {}
         self.resets = 0
         self.lines_lost = 0
-        self._replies: deque[bytes] = deque()
         self._state_lock = threading.Lock()
         self._alive = False
-        self._write_lock = threading.Lock()
         self._flag_reset = False
         self._last_seq: int | None = None
+        self.replies = ReplyQueue(port, clock, name, check=self._check_reader,
+                                  tail=lambda: self.reader.last_bytes)
         super().__init__(port, clock, name, **options)
         try:
             self._wait_alive(float(options.get("boot_timeout_s", 3.0)))
@@ -203,7 +202,7 @@ class LabkitTachometer(StreamingTachometer):
                     self._resend_config()
             return None
         if is_reply(line):
-            self._replies.append(line)
+            self.replies.put(line)
             return None
         sample = parse_tach_sample(line)
         self._alive = True  # a well-formed line, even at another PPR: the device is there
@@ -239,16 +238,10 @@ class LabkitTachometer(StreamingTachometer):
         data = format_command(text, value)
         label = data.decode().strip()
         for _attempt in range(3):
-            self._replies.clear()
+            self.replies.replies.clear()
             self.write(data, label)
-            deadline = self.clock.now() + self.reply_timeout_s
-            while not self._replies:
-                self.reader.check()
-                if self.clock.now() >= deadline:
-                    break
-                self.clock.sleep(0.002)
-            if self._replies:
-                reply = self._replies.popleft()
+            if self.replies.wait(bool, self.reply_timeout_s):
+                reply = self.replies.replies.popleft()
                 if reply.startswith(b"ERR"):
                     raise DeviceReplyError(self.name, label, self.reader.last_bytes,
                                            f"device answered {reply.decode('ascii', 'replace')!r}")
@@ -258,11 +251,7 @@ class LabkitTachometer(StreamingTachometer):
 
     def write(self, data: bytes, label: str) -> None:
         """Write to the device; a dead port becomes DeviceDisconnected naming the command."""
-        try:
-            with self._write_lock:
-                self.port.write(data)
-        except (serial.SerialException, OSError) as exc:
-            raise DeviceDisconnected(self.name, label, self.reader.last_bytes, str(exc)) from exc
+        self.replies.write(data, label)
 
     def config_commands(self) -> list[tuple[str, int]]:
         commands = [("PPR", self.ppr)]
@@ -281,7 +270,7 @@ class LabkitTachometer(StreamingTachometer):
         the OKs (a reader must not block); lines at the wrong PPR fail the consistency check
         until the device has them."""
         try:
-            with self._write_lock:
+            with self.replies.write_lock:
                 for name, value in self.config_commands():
                     self.port.write(format_command(name, value))
         except Exception:  # noqa: BLE001 - a dead port is reported by the reader itself

@@ -1,4 +1,5 @@
-"""Lutron 16-byte RS-232 stream (PROTOCOLS 2.1): hand-held and panel tachometers.
+"""Lutron 16-byte RS-232 stream (docs/devices-tach-motor.md#lutron16-lutron-16-byte-stream): hand-held
+and panel tachometers.
 
 The meter streams continuously at 9600 8N1; the host never writes. One frame is exactly
 16 bytes, D15 first::
@@ -13,7 +14,8 @@ The meter streams continuously at 9600 8N1; the host never writes. One frame is 
     D8..D1  reading, 8 digits, most significant first
     D0   CR (0x0D)
 
-Resync (PROTOCOLS 5.3 rule 2): scan for 0x02 and accept only when the 16th byte is 0x0D;
+Resync (docs/design/device-rules.md#driver-rules, rule 2): scan for 0x02 and accept only when the 16th
+byte is 0x0D;
 otherwise drop that 0x02 and scan again. Over-range ("no signal", "OL") frames carry
 non-digit characters in D8..D1; they become readings flagged ``overload`` with value NaN,
 never a number.
@@ -204,7 +206,7 @@ class Lutron16Tachometer(StreamingTachometer):
                        raw=frame, device=self.name)
 
 
-#: PROTOCOLS 2.1 example frame: main display, +1234.5 (annunciator 00 as a placeholder)
+#: an example frame of the protocol: main display, +1234.5 (annunciator 00 as a placeholder)
 SAMPLE_FRAME = b"\x02" + b"4" + b"1" + b"00" + b"0" + b"1" + b"00012345" + b"\r"
 
 register_parser_benchmark("lutron16", SAMPLE_FRAME, parse_lutron16)

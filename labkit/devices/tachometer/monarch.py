@@ -1,4 +1,5 @@
-"""Monarch Instrument "@" command protocol (PROTOCOLS 2.2, Tier 2): ACT-1B, ACT-3X, F2A1X.
+"""Monarch Instrument "@" command protocol
+(docs/devices-tach-motor.md#monarch_at-monarch--commands-act-1b-act-3x-f2a1x-tier-2): ACT-1B, ACT-3X, F2A1X.
 
 9600 8N1 through Monarch's USB programming cable. Commands are ``@`` + name + CR:
 ``@PI`` product and firmware (two lines), ``@D0`` the display value once, ``@D1``/``@D2``
@@ -11,15 +12,13 @@ signed decimal number optionally followed by ``RPM``, and nothing else.
 from __future__ import annotations
 
 import re
-import threading
 from collections import deque
 from typing import Any
 
-import serial
-
 from labkit.devices.base import Reading, register_driver, register_parser_benchmark
+from labkit.devices.link import ReplyQueue
 from labkit.devices.tachometer.streaming import StreamingTachometer
-from labkit.errors import DeviceDisconnected, DeviceReplyError, DeviceTimeout
+from labkit.errors import DeviceReplyError, DeviceTimeout
 from labkit.units import rpm_to_rad_s
 
 VALUE_LINE = re.compile(rb"^\s*([+-]?\d{1,9}(?:\.\d{1,6})?)\s*(?:RPM|rpm)?\s*$")
@@ -80,9 +79,10 @@ class MonarchTachometer(StreamingTachometer):
 
     def __init__(self, port: Any, clock: Any, name: str = "", **options: Any):
         self.reply_timeout_s = float(options.get("reply_timeout_s", 1.0))
-        self._replies: deque[bytes] = deque()
         self._capture = 0
-        self._write_lock = threading.Lock()
+        self.replies = ReplyQueue(port, clock, name, check=self._check_reader,
+                                  tail=lambda: self.reader.last_bytes, poll_s=0.005)
+        self._replies = self.replies.replies
         super().__init__(port, clock, name, **options)
         self.send("D2")
         self.send("D1")
@@ -94,42 +94,36 @@ class MonarchTachometer(StreamingTachometer):
         line = frame.strip()
         if self._capture > 0 and line not in (b"OK", b""):
             self._capture -= 1                 # an identification line, even if it looks numeric
-            self._replies.append(line)
+            self.replies.put(line)
             return None
         try:
             rpm = parse_display_value(line)
         except ValueError:
             if line and all(32 <= b < 127 for b in line):
-                self._replies.append(line)     # OK / ERR / identification text
+                self.replies.put(line)     # OK / ERR / identification text
                 return None
             raise
         return Reading(t, "angular_speed", rpm_to_rad_s(rpm), "rad/s", raw=frame, device=self.name)
 
     def send(self, name: str) -> None:
         """Write ``@name`` without waiting for an answer (a dead port: DeviceDisconnected)."""
-        try:
-            with self._write_lock:
-                self.port.write(format_command(name))
-        except (serial.SerialException, OSError) as exc:
-            raise DeviceDisconnected(self.name, f"@{name}", self.reader.last_bytes, str(exc)) from exc
+        self.replies.write(format_command(name), f"@{name}")
 
     def command(self, name: str, lines: int = 1) -> list[bytes]:
         """Send ``@name``; return its ``lines`` reply lines (``OK`` lines of earlier
         commands are skipped; value lines go to the reading buffer); ``ERR`` raises."""
         self._replies.clear()
         self.send(name)
-        deadline = self.clock.now() + self.reply_timeout_s
-        while True:
-            while self._replies and self._replies[0] == b"OK":
-                self._replies.popleft()
-            if len(self._replies) >= lines or (self._replies and self._replies[0] == b"ERR"):
-                break
-            self.reader.check()
-            if self.clock.now() >= deadline:
-                got = len(self._replies)
-                raise DeviceTimeout(self.name, f"@{name}", self.reader.last_bytes,
-                                    f"{got} of {lines} reply lines in {self.reply_timeout_s} s")
-            self.clock.sleep(0.005)
+
+        def ready(replies: deque[bytes]) -> bool:
+            while replies and replies[0] == b"OK":
+                replies.popleft()
+            return len(replies) >= lines or bool(replies and replies[0] == b"ERR")
+
+        if not self.replies.wait(ready, self.reply_timeout_s):
+            got = len(self._replies)
+            raise DeviceTimeout(self.name, f"@{name}", self.reader.last_bytes,
+                                f"{got} of {lines} reply lines in {self.reply_timeout_s} s")
         if self._replies[0] == b"ERR":
             raise DeviceReplyError(self.name, f"@{name}", self.reader.last_bytes, "device answered ERR")
         return [self._replies.popleft() for _ in range(lines)]

@@ -33,7 +33,8 @@ class ModelSpec:
 
 MODELS: dict[str, ModelSpec] = {
     "power-law": ModelSpec("power-law", "y = a x^b (Fig. 5.25)",
-                           ("speed_rpm", "speed_rad_s", "x"), ("force_g", "force_n", "y"), si=False),
+                           ("speed_rpm", "speed_rad_s", "x"), ("force_gf", "force_g", "force_n", "y"),
+                           si=False),
     "pfr-force": ModelSpec("pfr-force", "F = K / (I omega^2 - tau_S) (Eq. 5.81, 5.24)",
                            ("speed_rad_s", "speed_rpm"), ("force_n", "force_g"), si=True,
                            options=("inertia", "fix tau_S")),

@@ -50,7 +50,8 @@ def s1(level: str) -> Verdict:
         "drift_growth": metrics.drift_growth(base.invariant_values),
     }
     detail = (
-        "psi error: final azimuth at t = 1e4 T (NUMERICS.md 2.3); the dipole direction's max "
+        "psi error: final azimuth at t = 1e4 T (docs/design/numerics-notes.md#exact-conical-motion); "
+        "the dipole direction's max "
         "deviation over the run is a bounded offset reached in the first cycles, not a growth"
     )
     if level == "full":
@@ -149,7 +150,7 @@ def s3(level: str) -> Verdict:
         res = _run(conical_scene(I_S1, OMEGA_S1, TAU_C_S1, tau_s, f"S3-{label}"), cycles)
         phi = signed_cone_angle(res, OMEGA_S1)
         first = phi[: 8 * 10 + 1]  # the first 10 cycles
-        expected = cone_angle_isotropic(OMEGA_S1, TAU_C_S1, tau_s, I_S1)
+        expected = cone_angle_isotropic(omega=OMEGA_S1, tau_c=TAU_C_S1, tau_s=tau_s, inertia=I_S1)
         growth = metrics.drift_growth(res.invariant_values)
         measured[f"phi_{label}_first_10_cycles_rad"] = float(np.mean(first))
         measured[f"phi_{label}_eq5_24_rad"] = expected

@@ -5,7 +5,8 @@ State per body: position, velocity, rotation matrix (9), lab angular momentum;
 body's magnetic force (3 per body, for the cycle-averaged force) and the damping's share of
 ``E - w J_z`` (1, for the energy or Jacobi budget). Absolute tolerances are ``rtol`` times
 a scale per component (length, length * omega, 1, I * omega), so tiny bodies at high speed are
-controlled as well as big slow ones (NUMERICS.md 3.1). Contact and escape are terminal events.
+controlled as well as big slow ones (docs/design/numerics-notes.md#scaling). Contact and escape are
+terminal events.
 These are validation paths: their invariants drift (no geometric structure), which the result
 reports.
 """

@@ -1,12 +1,12 @@
-"""Rig files (``rigs/*.toml``): which devices sit on which port, the magnets, the limits.
+"""Rig files (``rigs/*.toml``) as data: the dataclasses, their validation and units, bundled rigs.
 
-:func:`load_rig` reads and validates a rig file and converts every unit-suffixed key to SI
-(``max_speed_rpm = 24000`` -> ``limits.max_speed_rad_s = 2513.3``). Every problem raises
-:class:`labkit.errors.RigFileError` as ``file:key: reason`` before any port is opened.
-:func:`open_rig` opens the ports (optionally through ``record://`` into a session's
-cassettes) and instantiates the drivers; closing an :class:`OpenRig` commands every motor
-to zero first. Keys are documented in ``docs/rig-files.md``; unit suffixes, caps, role names
-and the table reader live in :mod:`labkit.rig_checks`.
+:func:`parse_rig_config` validates rig-file text and converts every unit-suffixed key to SI
+(``max_speed_rpm = 24000`` -> ``limits.max_speed_rad_s = 2513.3``, one table:
+:data:`labkit.units.UNIT_SUFFIXES`). Every problem raises :class:`labkit.errors.RigFileError`
+as ``file:key: reason``. This module imports no device, emulator or port code: checking a
+rig against the driver registry and the emulators is :mod:`labkit.rig.against_drivers`,
+opening it :mod:`labkit.rig.open`. Keys are documented in ``docs/rig-files.md``; caps, role
+names and the table reader live in :mod:`labkit.rig_checks`.
 """
 
 from __future__ import annotations
@@ -14,31 +14,34 @@ from __future__ import annotations
 import math
 import tomllib
 import urllib.parse
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 from labkit.errors import RigFileError
-from labkit.rig_checks import (  # noqa: F401 - re-exported: labkit.rig is the public module
+from labkit.rig_checks import (
     MAX_CONTROL_PERIOD_S,
     MAX_DURATION_S,
-    MAX_RAMP_RPM_PER_S,
-    MAX_RIG_FILE_BYTES,
-    MAX_SPEED_RPM,
     MAX_TACH_TIMEOUT_S,
-    ROLE_PATTERN,
-    UNIT_SUFFIXES,
     _check_finite,
     _Section,
     check_role,
-    read_rig_text,
-    split_unit,
 )
 
 KINDS = ("balance", "tach", "motor")
 SHAPES = ("sphere", "cylinder", "ring", "block", "cube")
+
+class DeviceCheck(Protocol):
+    """Checks of a device against code outside the config (drivers, emulators); each raises
+    ``sec.error(key, reason)``. Implemented by :class:`labkit.rig.against_drivers.DriverCheck`."""
+
+    def protocol(self, sec: _Section, kind: str, protocol: str) -> None: ...
+    def port(self, sec: _Section, url: str) -> None: ...
+    def options(self, sec: _Section, kind: str, protocol: str, port: str,
+                options: dict[str, Any]) -> None: ...
+
+
 SERIAL_KEYS: dict[str, type | tuple[type, ...]] = {
     "baudrate": int, "bytesize": int, "parity": str, "stopbits": (int, float),
     "timeout": (int, float), "write_timeout": (int, float), "xonxoff": bool, "rtscts": bool,
@@ -59,8 +62,11 @@ class DeviceConfig:
 
 
 @dataclass(frozen=True)
-class Body:
-    """A magnet (rotator or floator). SI: m, kg, kg m^2, A m^2, rad."""
+class BodySpec:
+    """A magnet (rotator or floator) as a rig file declares it. SI: m, kg, kg m^2, A m^2, rad.
+
+    (Not :class:`labkit.sim.scene.SceneBody`, a body placed in a simulated scene.)
+    """
 
     name: str
     shape: str
@@ -123,7 +129,7 @@ class Rig:
     name: str
     description: str
     devices: dict[str, DeviceConfig]
-    bodies: dict[str, Body]
+    bodies: dict[str, BodySpec]
     geometry: Geometry
     limits: Limits
     control: ControlSettings
@@ -141,43 +147,27 @@ class Rig:
         return dev
 
 
-def _check_port_url(sec: _Section, url: str) -> None:
+def _check_port_url(sec: _Section, url: str, check_device: DeviceCheck | None) -> None:
     if not url.strip():
         raise sec.error("port", "empty port URL")
     scheme = urllib.parse.urlsplit(url).scheme
     if scheme == "" and not url.startswith("/") and not url.upper().startswith("COM"):
         raise sec.error("port", f"{url!r} is neither a device path nor a URL (sim://, socket://, ...)")
-    if scheme == "sim":
-        # an emulated device is checked whole here (emulator, seed, fault names), before any
-        # port opens, so a typo is a file:key error and not a failed, "resumable" session
-        from labkit.emulators.base import emulator_class
-        from labkit.emulators.urls import parse_sim_url
-        from labkit.errors import PortURLError
-
-        try:
-            emulator_class(parse_sim_url(url).protocol)
-        except PortURLError as exc:
-            raise sec.error("port", exc.reason) from None
-        except KeyError as exc:
-            raise sec.error("port", str(exc.args[0])) from None
+    if check_device is not None:
+        check_device.port(sec, url)
 
 
-def _device(file: str, role: str, table: Any, check_protocols: bool) -> DeviceConfig:
+def _device(file: str, role: str, table: Any, check_device: DeviceCheck | None) -> DeviceConfig:
     check_role(file, f"devices.{role}", role)
     sec = _Section(file, f"devices.{role}", table)
     kind = sec.raw("kind", str, required=True)
     if kind not in KINDS:
         raise sec.error("kind", f"must be one of {', '.join(KINDS)}, got {kind!r}")
     protocol = sec.raw("protocol", str, required=True)
-    if check_protocols:
-        from labkit.devices.base import driver_class
-
-        try:
-            driver_class(kind, protocol)
-        except KeyError as exc:
-            raise sec.error("protocol", str(exc.args[0])) from None
+    if check_device is not None:
+        check_device.protocol(sec, kind, protocol)
     port = sec.raw("port", str, required=True)
-    _check_port_url(sec, port)
+    _check_port_url(sec, port, check_device)
     serial = dict(sec.raw("serial", dict, default={}))
     ssec = _Section(file, sec.key("serial"), serial)
     for name, typ in SERIAL_KEYS.items():
@@ -203,28 +193,18 @@ def _device(file: str, role: str, table: Any, check_protocols: bool) -> DeviceCo
         if scale is not None and isinstance(value, int | float) and not isinstance(value, bool) \
                 and not 0 <= value <= MAX_DURATION_S * scale:
             raise sec.error(f"options.{name}", f"must be in [0, {MAX_DURATION_S * scale:.0f}], got {value!r}")
-    if check_protocols:
-        from labkit.devices.base import driver_class, unknown_options, unknown_options_message
-
-        cls = driver_class(kind, protocol)
-        unknown = unknown_options(cls, options)
-        if unknown:
-            raise sec.error(f"options.{unknown[0]}", unknown_options_message(cls, unknown))
-        watchdog = getattr(cls, "watchdog_problem", None)  # motors: the controller's own timeout
-        if watchdog is not None:
-            problem = watchdog(options, required=not port.startswith(("sim://", "replay://")))
-            if problem is not None:
-                raise sec.error(*problem)
+    if check_device is not None:
+        check_device.options(sec, kind, protocol, port, options)
     sec.finish()
     return DeviceConfig(role, kind, protocol, port, serial, options)
 
 
-def _body(file: str, name: str, table: Any) -> Body:
+def _body(file: str, name: str, table: Any) -> BodySpec:
     sec = _Section(file, f"bodies.{name}", table)
     shape = sec.raw("shape", str, required=True)
     if shape not in SHAPES:
         raise sec.error("shape", f"must be one of {', '.join(SHAPES)}, got {shape!r}")
-    body = Body(
+    body = BodySpec(
         name=name, shape=shape,
         diameter_m=sec.quantity("diameter", "m"),
         length_m=sec.quantity("length", "m"),
@@ -242,7 +222,7 @@ def _body(file: str, name: str, table: Any) -> Body:
     return body
 
 
-def parse_body(file: str, name: str, table: Any) -> Body:
+def parse_body(file: str, name: str, table: Any) -> BodySpec:
     """Validate one ``[bodies.NAME]`` table on its own (``labkit predict`` reads only the
     bodies of a rig file). Raises RigFileError as ``file:bodies.NAME.key: reason``."""
     return _body(file, name, table)
@@ -291,14 +271,13 @@ def _control(file: str, table: Any, devices: dict[str, DeviceConfig]) -> Control
     return ControlSettings(loops=tuple(loops), **values)
 
 
-def parse_rig(text: str, file: str = "<rig>", check_protocols: bool = True) -> Rig:
-    """Validate rig-file text and build a :class:`Rig` (SI inside). Raises RigFileError."""
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise RigFileError(file, "(syntax)", str(exc)) from None
-    except RecursionError:
-        raise RigFileError(file, "(syntax)", "nested too deeply") from None
+def parse_rig_config(text: str, file: str = "<rig>", check_device: DeviceCheck | None = None) -> Rig:
+    """Validate rig-file text and build a :class:`Rig` (SI inside). Raises RigFileError.
+
+    ``check_device`` (:class:`labkit.rig.against_drivers.DriverCheck`) also checks each device
+    against the driver registry and the emulators, at the point of the file it belongs to.
+    """
+    data = load_toml(text, file)
     top = _Section(file, "", data)
     rig_sec = _Section(file, "rig", top.raw("rig", dict, required=True))
     name = rig_sec.raw("name", str, required=True)
@@ -308,7 +287,7 @@ def parse_rig(text: str, file: str = "<rig>", check_protocols: bool = True) -> R
     dev_tables = top.raw("devices", dict, required=True)
     if not dev_tables:
         raise RigFileError(file, "devices", "no devices")
-    devices = {role: _device(file, role, t, check_protocols) for role, t in dev_tables.items()}
+    devices = {role: _device(file, role, t, check_device) for role, t in dev_tables.items()}
 
     bodies = {n: _body(file, n, t) for n, t in top.raw("bodies", dict, default={}).items()}
     for n in bodies:
@@ -344,15 +323,25 @@ def parse_rig(text: str, file: str = "<rig>", check_protocols: bool = True) -> R
     return Rig(Path(file), name, description, devices, bodies, geometry, limits, control, text)
 
 
-def load_rig(path: str | Path, check_protocols: bool = True) -> Rig:
-    """Read and validate a rig file. ``path`` may also name a bundled rig (``emulated-fig525``)."""
+def load_toml(text: str, file: str) -> dict[str, Any]:
+    """Rig-file text -> tables; a syntax error is a RigFileError at key ``(syntax)``."""
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise RigFileError(file, "(syntax)", str(exc)) from None
+    except RecursionError:
+        raise RigFileError(file, "(syntax)", "nested too deeply") from None
+
+
+def find_rig_file(path: str | Path) -> Path:
+    """``path``, or the bundled rig it names (``emulated-fig525``); RigFileError if neither."""
     p = Path(path)
     if not p.exists():
         bundled = bundled_rig_path(str(path))
         if bundled is None:
             raise RigFileError(str(path), "(file)", "no such rig file")
         p = bundled
-    return parse_rig(read_rig_text(p), str(p), check_protocols)
+    return p
 
 
 def bundled_rig_names() -> list[str]:
@@ -365,109 +354,3 @@ def bundled_rig_path(name: str) -> Path | None:
     stem = Path(name).name.removesuffix(".toml")
     candidate = resources.files("labkit") / "data" / "rigs" / f"{stem}.toml"
     return Path(str(candidate)) if candidate.is_file() else None
-
-
-# ---- opening a rig ------------------------------------------------------------------------
-PortOpener = Callable[..., Any]
-
-
-def _record_url(inner: str, cassette: Path, role: str) -> str:
-    check_role("<rig>", f"devices.{role}", role)  # a Rig built in Python skips load_rig's check
-    query = urllib.parse.urlencode({"cassette": str(cassette), "port": role})
-    return f"record://{inner}?{query}" if "?" not in inner else f"record://{inner}&{query}"
-
-
-class OpenRig:
-    """A rig with open ports and live drivers, by role. ``close()`` zeroes motors first.
-
-    ``devices[role]`` is the driver for balances and tachometers and a rig-aware
-    :class:`labkit.control.handle.RigMotor` for motors (speeds within the rig's limits and
-    interlocks); ``devices[role].raw_driver`` (or ``drivers[role]``) is the bare motor driver.
-    """
-
-    def __init__(self, rig: Rig, clock: Any) -> None:
-        self.rig = rig
-        self.clock = clock
-        self.drivers: dict[str, Any] = {}
-        self.port_urls: dict[str, str] = {}
-        self.stop_failures: dict[str, str] = {}
-        self._handles: dict[str, Any] = {}
-
-    @property
-    def devices(self) -> dict[str, Any]:
-        from labkit.control.handle import RigMotor
-
-        out = {}
-        for role, driver in self.drivers.items():
-            if self.rig.devices[role].kind == "motor":
-                out[role] = self._handles.setdefault(role, RigMotor(self, role))
-            else:
-                out[role] = driver
-        return out
-
-    def motors(self) -> dict[str, Any]:
-        """The motor drivers themselves (raw), by role."""
-        return {r: d for r, d in self.drivers.items() if self.rig.devices[r].kind == "motor"}
-
-    def stop_motors(self) -> list[str]:
-        """Command every motor to zero; never raises. Returns the roles whose STOP was not
-        delivered (their reason is in ``stop_failures``)."""
-        failed = []
-        for role, motor in self.motors().items():
-            try:
-                motor.stop()
-                problem = getattr(motor, "stop_error", None)
-            except Exception as exc:  # noqa: BLE001 - keep stopping the others
-                problem = str(exc)
-            if problem:
-                self.stop_failures[role] = problem
-                failed.append(role)
-        return failed
-
-    def close(self) -> None:
-        for handle in self._handles.values():
-            if handle._control is not None:
-                handle._control.stop("rig closed")
-        self.stop_motors()
-        for role in sorted(self.drivers, key=lambda r: self.rig.devices[r].kind != "motor"):
-            try:
-                self.drivers[role].close()
-            except Exception:  # noqa: BLE001 - closing must reach every device
-                pass
-        self.drivers.clear()
-
-    def __enter__(self) -> OpenRig:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
-
-def open_rig(rig: Rig, clock: Any, record_to: str | Path | None = None,
-             port_override: Callable[[DeviceConfig], str] | None = None) -> OpenRig:
-    """Open every port of ``rig`` and instantiate its drivers.
-
-    ``record_to``: a cassette folder; each port is wrapped as
-    ``record://<url>?cassette=<folder>/<role>.jsonl&port=<role>``. ``port_override(dev)``
-    may replace a device's URL (``labkit replay`` points ports at ``replay://`` cassettes).
-    If anything fails, everything already opened is closed (motors zeroed) and the error
-    is re-raised.
-    """
-    from labkit.devices.base import driver_class
-    from labkit.io.ports import open_port
-
-    opened = OpenRig(rig, clock)
-    try:
-        for role, dev in rig.devices.items():
-            url = port_override(dev) if port_override else dev.port
-            if record_to is not None:
-                url = _record_url(url, Path(record_to) / f"{role}.jsonl", role)
-            cls = driver_class(dev.kind, dev.protocol)
-            settings = {**getattr(cls, "default_serial", {}), **dev.serial}
-            port = open_port(url, clock=clock, **settings)
-            opened.port_urls[role] = url
-            opened.drivers[role] = cls(port, clock, name=role, **dev.options)
-    except BaseException:
-        opened.close()
-        raise
-    return opened
