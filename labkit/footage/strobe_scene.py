@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
@@ -30,6 +30,7 @@ from labkit.footage.camera import (
     Camera,
     Lighting,
     ambient_image,
+    apply_psf,
     burn_timestamp,
     develop,
     flicker_rows,
@@ -137,6 +138,7 @@ def _roi(shot: StrobeShot) -> tuple[int, int, int, int]:
     w, h = shot.camera.size
     reach = shot.body.radius_px + abs(shot.swing.delta_px * math.tan(shot.swing.phi_rad))
     reach += math.hypot(*shot.lamp.shadow_px) + 3 * shot.mount.wander_px + 4 * shot.mount.shake_px + 6
+    reach += 4 * max(shot.camera.psf_core_px, shot.camera.psf_halo_px if shot.camera.halo_fraction else 0.0)
     t_all = np.array([0.0, shot.frames / shot.camera.fps])
     offs = shot.mount.offset(t_all)
     cx0, cy0 = shot.centre_px[0] + offs[:, 0].min(), shot.centre_px[1] + offs[:, 1].min()
@@ -187,7 +189,8 @@ def render_strobe(shot: StrobeShot) -> Iterator[np.ndarray]:
             body_energy /= np.maximum(flash[y0:y0 + rh, None], 1e-9)
             flash[:] = 1.0
         image = np.repeat(bg_level * flash[:, None], w, axis=1)
-        image[y0:y0 + rh, x0:x0 + rw] += body_energy
+        # lens blur of the body's edges (core and halo; the wide glow matters for bright spots only)
+        image[y0:y0 + rh, x0:x0 + rw] += apply_psf(body_energy, replace(cam, glow_fraction=0.0))
         if shot.ambient > 0:
             ghost = _ghost(shot, roi, k / cam.fps + cam.exposure_s / 2)
             amb = np.full((h, w), shot.ambient * bg_level, np.float32)
@@ -238,6 +241,6 @@ def strobe_truth(shot: StrobeShot) -> dict:
         "flashes_per_exposure": None if shot.lamp.hz is None else cam.exposure_s * shot.lamp.hz,
         "camera_is_strobe": shot.lamp.hz is None, "body": shot.body.shape,
         "rest_deg": shot.rest_deg, "roll_deg": shot.roll_deg, "axis_image_deg": shot.axis_image_deg,
-        "analysis_inputs": {"rotor_hz": sw.rotor_hz, "strobe_hz": f_strobe},
+        "analysis_inputs": {"rotor_hz": sw.rotor_hz, **({"strobe_hz": shot.lamp.hz} if shot.lamp.hz else {})},
         "per_frame": per_frame, "spec": asdict(shot),
     }

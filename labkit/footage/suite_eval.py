@@ -24,7 +24,7 @@ from labkit.footage.strobe_scene import render_strobe, strobe_truth
 from labkit.footage.suite import CaseSpec
 from labkit.footage.suite_build import build_shot
 
-RENDER_VERSION = 2  # bump when the renderer's output changes: the cache key includes it
+RENDER_VERSION = 3  # bump when the renderer's output changes: the cache key includes it
 CONICS = ("circle", "ellipse")
 
 
@@ -54,9 +54,9 @@ def render_case(case: CaseSpec, cache: Path | None = None) -> tuple[Path, dict]:
     truth["case"] = asdict(case)
     tmp = path.with_name("tmp-" + path.name)
     write_footage(tmp, frames, shot.camera.fps, truth, jpeg_quality=shot.camera.jpeg_quality)
-    tmp.rename(path)
     truth_path(tmp).rename(tpath)
-    return path, truth
+    tmp.rename(path)
+    return path, json.loads(tpath.read_text())  # as read back from the cache next time
 
 
 @dataclass
@@ -75,8 +75,19 @@ class Outcome:
 
     def to_dict(self) -> dict:
         return {"case": asdict(self.case), "passed": self.passed, "reported": self.reported,
-                "verdict": self.verdict, "failures": self.failures, "errors": self.errors,
+                "verdict": self.verdict, "failures": self.failures, "errors": _finite(self.errors),
                 "message": self.message}
+
+
+def _finite(value):
+    """JSON-safe: infinities and NaN (a quantity the analysis did not give) become None."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_finite(v) for v in value]
+    return value
 
 
 def _rel(got: float | None, want: float) -> float:
@@ -132,6 +143,15 @@ def score_strobe(result: dict, truth: dict) -> tuple[list[str], dict]:
     return fails, err
 
 
+def analysis_inputs(truth: dict) -> dict:
+    """What a user passes to ``analyse_strobe``: the rotor and lamp frequencies; with no lamp (the
+    camera's exposure is the strobe) the rotor frequency alone (the file gives the frame rate)."""
+    inputs = dict(truth["analysis_inputs"])
+    if truth.get("camera_is_strobe"):
+        inputs.pop("strobe_hz", None)
+    return inputs
+
+
 def _call(fn, path: Path, inputs: dict) -> dict:
     """Call an analysis with the inputs a user would give, keeping those it accepts."""
     accepted = inspect.signature(fn).parameters
@@ -148,7 +168,7 @@ def evaluate_case(case: CaseSpec, cache: Path | None = None) -> Outcome:
     strobe = case.family == "strobe"
     try:
         if strobe:
-            result = _call(analyse_strobe, path, truth["analysis_inputs"])
+            result = _call(analyse_strobe, path, analysis_inputs(truth))
         else:
             result = analyse_laser(str(path))
     except LabkitError as exc:

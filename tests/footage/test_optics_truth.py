@@ -6,6 +6,7 @@ import cmath
 import json
 import math
 
+import cv2
 import numpy as np
 import pytest
 
@@ -21,6 +22,7 @@ from labkit.footage import (
     laser_truth,
     loops_ratio,
     reflect,
+    render_laser,
     spot_px,
     truth_path,
     write_footage,
@@ -132,3 +134,18 @@ def test_truth_json_beside_footage_matches_motion_and_mount(tmp_path):
     # scale: 0.15 of L = 500 mm at 4 mm/px
     assert truth["pattern"]["trochoid"]["scale_px"] == pytest.approx(0.15 * 500 / 4)
     assert truth["tilt_rad"]["max"] == pytest.approx(0.5 * math.atan(0.2), rel=1e-5)
+
+
+def test_long_exposure_photo_draws_the_truth_circle(tmp_path):
+    cam = Camera((320, 240), exposure_s=0.5, psf_core_px=1.0)
+    shot = LaserShot(SimulatedCone(cycle_hz=23.0), Screen(30.0), ScreenView((160.0, 120.0), 0.6), cam,
+                     photo=True, power=1.0)
+    truth = laser_truth(shot)
+    path = write_footage(tmp_path / "cone.jpg", render_laser(shot), cam.fps, truth)
+    image = cv2.imread(str(path))
+    assert image.shape == (240, 320, 3)
+    red = image[:, :, 2].astype(float)
+    ys, xs = np.nonzero(red > 0.8 * red.max())
+    r = np.hypot(xs - truth["pattern"]["center_px"][0], ys - truth["pattern"]["center_px"][1])
+    assert len(r) > 200
+    assert np.abs(r - truth["pattern"]["semi_axes_px"][0]).max() < 1.5  # the lit ring is the truth circle
