@@ -17,6 +17,7 @@ TILT_TOL_REL, TILT_TOL_ABS = 0.05, 0.005
 LATERAL_TOL_REL, LATERAL_TOL_PX = 0.05, 0.5
 MIN_DETECTED = 0.9  # of the frames
 MIN_BODY_RADIUS_PX = 6.0  # half diagonal of the silhouette
+SUBPIXEL_BIAS_PX = 0.2  # systematic error at the body's ends that the fit's scatter does not show
 MAX_BODY_FRACTION = 0.45  # half length against the frame's shorter side
 MAX_AREA_SPREAD = 0.2  # relative standard deviation of the body's area
 AMBIGUOUS_ANISOTROPY = (0.12, 0.35)  # between square (4-fold) and elongated (2-fold)
@@ -54,6 +55,10 @@ def _amplitude_checks(v: Verdict, e: dict) -> None:
     tol = max(TILT_TOL_REL * phi, TILT_TOL_ABS)
     if phi_se > 10 * tol:
         v.fail(f"no tilt above the noise: {phi:.4f} +- {phi_se:.4f} rad")
+    elif SUBPIXEL_BIAS_PX / e["body_radius_px"] > tol:
+        v.doubt(f"body small for its tilt: {e['body_radius_px']:.1f} px from centre to corner, so a "
+                f"{SUBPIXEL_BIAS_PX} px bias at its ends (pixels, lens blur, compression) turns it by "
+                f"{SUBPIXEL_BIAS_PX / e['body_radius_px']:.4f} rad, more than the tolerance of {tol:.4f} rad")
     elif 3 * phi_se > tol:
         v.doubt(f"tilt amplitude uncertain: {phi:.4f} +- {phi_se:.4f} rad (1 sigma) against a tolerance "
                 f"of {tol:.4f} rad")
