@@ -9,23 +9,30 @@ check below, the numbers are within them.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 OK, DOUBTFUL, FAILED = "ok", "doubtful", "failed"
 TILT_TOL_REL, TILT_TOL_ABS = 0.05, 0.005
 LATERAL_TOL_REL, LATERAL_TOL_PX = 0.05, 0.5
 MIN_DETECTED = 0.9  # of the frames
-MIN_BODY_HALF_LENGTH_PX = 6.0
+MIN_BODY_RADIUS_PX = 6.0  # half diagonal of the silhouette
+SUBPIXEL_BIAS_PX = 0.2  # systematic error at the body's ends that the fit's scatter does not show
 MAX_BODY_FRACTION = 0.45  # half length against the frame's shorter side
 MAX_AREA_SPREAD = 0.2  # relative standard deviation of the body's area
 AMBIGUOUS_ANISOTROPY = (0.12, 0.35)  # between square (4-fold) and elongated (2-fold)
 MIN_PHASE_SPREAD, FAILED_PHASE_SPREAD = 0.3, 0.08
 MAX_RESIDUAL_RATIO = 2.5  # sinusoid residual against the phase-neighbour noise
 RUNNER_UP_CLOSE = 0.9  # runner-up frequency explains this much of what the best does
-MAX_FLASH_SPREAD_CYCLES = 0.1
+MAX_FLASH_SPREAD_CYCLES = 0.125  # flashes spread over u cycles shrink amplitudes by 1 - sinc(u): 2.5 %, half
+# the tolerance
 LOCKED_WEAK, LOCKED_STRONG = 0.5, 0.8  # explained variance of tilt vs lateral (they move together)
 GHOST_DOUBT = 0.08  # ghost fraction (strobe.ghost_fraction)
 MAX_BEND_PX = 0.4  # midline of a straight body: measured <= 0.27 px with noise, blur and compression
+
+
+def _sinc(u: float) -> float:
+    return math.sin(math.pi * u) / (math.pi * u) if u else 1.0
 
 
 @dataclass
@@ -48,6 +55,10 @@ def _amplitude_checks(v: Verdict, e: dict) -> None:
     tol = max(TILT_TOL_REL * phi, TILT_TOL_ABS)
     if phi_se > 10 * tol:
         v.fail(f"no tilt above the noise: {phi:.4f} +- {phi_se:.4f} rad")
+    elif SUBPIXEL_BIAS_PX / e["body_radius_px"] > tol:
+        v.doubt(f"body small for its tilt: {e['body_radius_px']:.1f} px from centre to corner, so a "
+                f"{SUBPIXEL_BIAS_PX} px bias at its ends (pixels, lens blur, compression) turns it by "
+                f"{SUBPIXEL_BIAS_PX / e['body_radius_px']:.4f} rad, more than the tolerance of {tol:.4f} rad")
     elif 3 * phi_se > tol:
         v.doubt(f"tilt amplitude uncertain: {phi:.4f} +- {phi_se:.4f} rad (1 sigma) against a tolerance "
                 f"of {tol:.4f} rad")
@@ -86,17 +97,18 @@ def _phase_checks(v: Verdict, e: dict) -> None:
                     "motion; a rolling shutter with the camera as strobe, or a wrong body axis, does this")
     spread_cycles = e.get("flash_spread_cycles")
     if spread_cycles is not None and spread_cycles > MAX_FLASH_SPREAD_CYCLES:
-        v.doubt(f"each frame superimposes flashes {spread_cycles:.2f} cycles apart: the body is seen at "
-                "several phases at once")
+        v.doubt(f"each frame superimposes flashes up to {spread_cycles:.2f} cycles apart: the body is seen "
+                f"at several phases at once, which can shrink amplitudes by up to "
+                f"{1 - _sinc(spread_cycles):.1%} (give --exposure-s to know)")
 
 
 def _body_checks(v: Verdict, e: dict) -> None:
     seen, frames = e["frames_with_body"], e["frames"]
     if seen < MIN_DETECTED * frames:
         v.doubt(f"body found in only {seen} of {frames} frames")
-    half = e["body_half_length_px"]
-    if half < MIN_BODY_HALF_LENGTH_PX:
-        v.doubt(f"body small: half length {half:.1f} px; tilt is poorly resolved")
+    radius = e["body_radius_px"]
+    if radius < MIN_BODY_RADIUS_PX:
+        v.doubt(f"body small: {radius:.1f} px from its centre to a corner; tilt is poorly resolved")
     if e["body_size_fraction"] > MAX_BODY_FRACTION:
         v.doubt(f"body large against the frame ({e['body_size_fraction']:.0%} of its shorter side)")
     if e["body_area_spread"] > MAX_AREA_SPREAD:

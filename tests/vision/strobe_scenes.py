@@ -39,7 +39,7 @@ class Scene:
     phi_rad: float = 0.12
     delta_px: float = 40.0  # Eq. 5.97; the rotation centre lies on the axis towards the end opposite rest_deg
     rest_deg: float = 90.0  # rest axis direction from image +x, counter-clockwise as seen on screen
-    length_px: float = 60.0
+    length_px: float = 80.0
     width_px: float = 20.0  # equal to length for a cube
     centre_px: tuple[float, float] = (160.0, 120.0)
     dark_body: bool = True

@@ -22,7 +22,7 @@ CASES = {
     # second strobe harmonic (rotor near 2 x lamp), axis near horizontal the other way
     "lamp-harmonic-2": Scene(rotor_hz=398.2, strobe_hz=199.5, rest_deg=170.0, phi_rad=0.3, seed=3),
     # a square silhouette (cube), axis 10 deg off horizontal
-    "cube": Scene(length_px=40, width_px=40, rest_deg=10.0, seed=4),
+    "cube": Scene(length_px=56, width_px=56, rest_deg=10.0, seed=4),
     # a plate seen edge-on: its magnet axis is the short side
     "flat-plate": Scene(length_px=16, width_px=70, rest_deg=80.0, delta_px=50.0, seed=5),
     # rolling shutter with a lamp: bright and dark bands across the frame
