@@ -290,14 +290,15 @@ def _strobe_sections(source: Path, doc: dict, out: Path) -> list[str]:
     if doc.get("rc_offset_direction"):
         lines += [f"The rotation centre lies {doc['rc_offset_direction']} from the centroid.", ""]
     lines += ["## Tilt and lateral position against phase", ""]
-    if not doc.get("source") or not doc.get("phase_per_frame"):
-        return lines + ["**Not drawn:** the result names no video or no phase per frame.", ""]
+    if not doc.get("phase_per_frame"):
+        return lines + ["**Not drawn:** the result has no phase per frame.", ""]
     try:
-        fig = phase_figure(doc, _video_path(source, doc["source"]), out / "fig-strobe-phase.png")
-    except (LabkitError, ValueError) as exc:
+        fig = phase_figure(doc, out / "fig-strobe-phase.png")
+    except (LabkitError, ValueError, KeyError) as exc:
         return lines + [f"**Not drawn:** {exc}", ""]
-    return lines + ["Each frame's body tilt and centroid, measured again from the video, against the "
-                    "rotation phase the analysis gave that frame, with the fitted sinusoids.", "",
+    return lines + ["Each frame's body tilt (about the body's rest axis) and lateral position, as the "
+                    "analysis measured and fitted them, against the rotation phase it gave that frame, "
+                    "with the fitted sinusoids of Eq. 5.97.", "",
                     f"![tilt and lateral position against phase]({fig.name})", "",
                     f"Vector version: [{fig.stem}.svg]({fig.stem}.svg)", ""]
 

@@ -4,10 +4,9 @@ rotation phase, with the fitted sinusoids of Eq. 5.97 (docs/reports.md).
 A strobe analysis (``labkit analyse strobe --json``) records each frame's phase
 (``phase_per_frame``) and the fitted amplitudes: cone angle phi (``tilt_amplitude_rad``),
 lateral amplitude beta (``lateral_amplitude_px``) and RC offset delta = beta / tan(phi)
-(``rc_offset_px``, Eq. 5.97). The per-frame tilt and position are measured again here from
-the video with the analysis' own segmentation (:func:`labkit.vision.strobe.segment_body`).
-Standard errors are read from the JSON when the analysis wrote them; the report never
-invents one.
+(``rc_offset_px``, Eq. 5.97), and the per-frame tilt and lateral position it fitted
+(``per_frame``). Standard errors are read from the JSON's ``uncertainty`` object when the
+analysis wrote them; the report never invents one.
 """
 
 from __future__ import annotations
@@ -37,9 +36,15 @@ MOTION = (
 )
 
 
-def find_stderr(doc: dict[str, Any], keys: tuple[str, ...]) -> float | None:
-    """The first of ``keys`` found in the result, its ``quality`` or ``stderr``/``uncertainty``
-    objects; None when the analysis recorded none."""
+def find_stderr(doc: dict[str, Any], keys: tuple[str, ...], value_key: str | None = None) -> float | None:
+    """The standard error of ``value_key``: ``uncertainty[value_key]`` as ``labkit analyse strobe``
+    writes it, else the first of ``keys`` found in the result, its ``quality`` or
+    ``stderr``/``uncertainty`` objects; None when the analysis recorded none."""
+    written = doc.get("uncertainty")
+    if value_key is not None and isinstance(written, dict):
+        value = written.get(value_key)
+        if isinstance(value, int | float) and math.isfinite(value):
+            return float(value)
     places = [doc] + [doc.get(k) for k in ("quality", "stderr", "uncertainty", "uncertainties")]
     for place in places:
         if not isinstance(place, dict):
@@ -58,26 +63,21 @@ def motion_rows(doc: dict[str, Any]) -> list[list[str]]:
         value = doc.get(key)
         if not isinstance(value, int | float):
             continue
-        stderr = find_stderr(doc, stderr_keys)
+        stderr = find_stderr(doc, stderr_keys, key)
         shown = f"{value:.4g}" + (f" ({math.degrees(value):.2f}°)" if unit == "rad" else "")
         rows.append([label, shown, "no uncertainty (not in the analysis result)" if stderr is None
                      else f"{stderr:.2g}", unit])
     return rows
 
 
-def measure_frames(video: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(frame index, x centroid [px], tilt [rad])`` of every frame with a body."""
-    from labkit.vision.frames import open_frames
-    from labkit.vision.strobe import segment_body
-
-    idx, xs, tilts = [], [], []
-    for index, frame in open_frames(video).frames():
-        pose = segment_body(frame)
-        if pose is not None:
-            idx.append(index)
-            xs.append(pose.x)
-            tilts.append(pose.tilt_rad)
-    return np.array(idx, dtype=int), np.array(xs), np.array(tilts)
+def fitted_frames(doc: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(frame index, lateral position [px], tilt [rad])`` the analysis fitted (``per_frame``)."""
+    per_frame = doc.get("per_frame")
+    if not isinstance(per_frame, dict):
+        raise ValueError("the strobe result has no per-frame tilt and position (written by an older "
+                         "labkit): run labkit analyse strobe --json again")
+    return (np.asarray(per_frame["index"], dtype=int), np.asarray(per_frame["lateral_px"], dtype=float),
+            np.asarray(per_frame["tilt_rad"], dtype=float))
 
 
 def sinusoid(phase: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float]:
@@ -91,10 +91,10 @@ def _curve(coef: np.ndarray, grid: np.ndarray) -> np.ndarray:
     return coef[0] + coef[1] * np.sin(grid) + coef[2] * np.cos(grid)
 
 
-def phase_figure(doc: dict[str, Any], video: str | Path, path: str | Path) -> Path:
+def phase_figure(doc: dict[str, Any], path: str | Path) -> Path:
     """Tilt (top) and lateral position (bottom) against phase, with the fitted sinusoids."""
     phases_all = np.asarray(doc["phase_per_frame"], dtype=float)
-    idx, x, tilt = measure_frames(video)
+    idx, x, tilt = fitted_frames(doc)
     keep = idx < len(phases_all)
     idx, x, tilt = idx[keep], x[keep], tilt[keep]
     if len(idx) < 3:

@@ -224,7 +224,11 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
            "uncertainty": {"tilt_amplitude_rad": motion.phi_se, "lateral_amplitude_px": motion.beta_se,
                            "rc_offset_px": motion.delta_se,
                            "method": "1-sigma from the least-squares residuals (scatter only, see docs)"},
-           "phase_per_frame": phases, "point_pattern": point_pattern,
+           "phase_per_frame": phases,
+           # what the Eq. 5.97 fit was given, frame by frame (the report's phase figure draws it)
+           "per_frame": {"index": idx.tolist(), "tilt_rad": [float(v) for v in tilt],
+                         "lateral_px": [float(v) for v in lateral]},
+           "point_pattern": point_pattern,
            "rc_offset_direction": direction, "phase_source": model.source, "phase_model": model.to_dict(),
            "body": {"rest_axis_deg": (orient.rest_axis_deg - math.degrees(motion.tilt.coef[0])) % 180.0,
                     "symmetry": orient.symmetry,

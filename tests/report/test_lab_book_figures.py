@@ -61,13 +61,15 @@ def test_strobe_report_draws_tilt_and_position_against_phase(tmp_path: Path, cap
     assert (report.parent / "fig-strobe-phase.png").read_bytes()[:8] == PNG
     svg = (report.parent / "fig-strobe-phase.svg").read_text()
     assert "tilt θ [rad]" in svg and "rotation phase ψ [rad]" in svg
-    assert text.count("no uncertainty (not in the analysis result)") >= 3
+    # the strobe analysis writes a standard error for phi, beta and delta (its "uncertainty")
+    assert "no uncertainty" not in text
+    assert text.count(" rad |") >= 1 and text.count(" px |") >= 2
 
 
 def test_strobe_report_shows_standard_errors_the_analysis_wrote(tmp_path: Path, capsys):
     result = _strobe_result(tmp_path, capsys)
     doc = json.loads(result.read_text())
-    doc.update(tilt_amplitude_stderr_rad=0.0012, lateral_amplitude_stderr_px=0.034, rc_offset_stderr_px=0.56)
+    doc["uncertainty"].update(tilt_amplitude_rad=0.0012, lateral_amplitude_px=0.034, rc_offset_px=0.56)
     result.write_text(json.dumps(doc))
     text = build_report(result, tmp_path / "r").read_text()
     assert "| 0.0012 | rad |" in text and "| 0.034 | px |" in text and "| 0.56 | px |" in text
