@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from labkit.emulators.twin_model import TwinParams
+from labkit.errors import LabkitError
 
 FOOTAGE_RPM = 6000.0
 CLIPS = 4
@@ -80,8 +81,8 @@ def laser_cone_angle(phi: float, work: Path, seed: int, clip: int) -> float:
 
 
 def strobe_swing(phi: float, delta_m: float, body_mm: tuple[float, float], work: Path, seed: int,
-                 clip: int) -> tuple[float, float]:
-    """Render one strobe clip; return the analysed (tilt amplitude rad, RC offset m)."""
+                 clip: int) -> tuple[float, float, str]:
+    """Render one strobe clip; return the analysed (tilt amplitude rad, RC offset m, verdict)."""
     from labkit.footage import (
         Body,
         Camera,
@@ -106,7 +107,7 @@ def strobe_swing(phi: float, delta_m: float, body_mm: tuple[float, float], work:
     path = write_footage(work / f"strobe-{clip}.mp4", render_strobe(shot), FPS, strobe_truth(shot))
     r = analyse_strobe(str(path), rotor_hz=rotor_hz, strobe_hz=FPS)
     tilt = r["tilt_amplitude_rad"]
-    return tilt, r["lateral_amplitude_px"] * scale * 1e-3 / math.tan(tilt)
+    return tilt, r["lateral_amplitude_px"] * scale * 1e-3 / math.tan(tilt), r["quality"]["verdict"]
 
 
 def footage_rows(params: TwinParams, work: Path, seed: int) -> tuple[list[dict], dict]:
@@ -117,7 +118,14 @@ def footage_rows(params: TwinParams, work: Path, seed: int) -> tuple[list[dict],
     folder.mkdir(parents=True, exist_ok=True)
     cones = [laser_cone_angle(motion["phi"], folder, seed, k) for k in range(CLIPS)]
     body = (15.0, 7.5)
-    swings = [strobe_swing(motion["phi"], motion["delta_m"], body, folder, seed, k) for k in range(CLIPS)]
+    every = [strobe_swing(motion["phi"], motion["delta_m"], body, folder, seed, k) for k in range(CLIPS)]
+    # a clip the analysis itself calls doubtful or failed (e.g. a body too small for the tilt
+    # tolerance at the farthest camera distance) is left out, as a user should leave it out
+    swings = [s for s in every if s[2] == "ok"]
+    if len(swings) < 2:
+        verdicts = ", ".join(s[2] for s in every)
+        raise LabkitError(f"twin strobe footage: only {len(swings)} of {len(every)} clips analysed ok "
+                          f"({verdicts}); no interval can be formed")
     rows = [compare("laser", "cone_angle", motion["phi"], _interval(cones), "rad"),
             compare("strobe", "tilt_amplitude", motion["phi"], _interval([s[0] for s in swings]), "rad"),
             compare("strobe", "rc_offset", motion["delta_m"], _interval([s[1] for s in swings]), "mm", 1e3)]
