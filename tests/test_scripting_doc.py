@@ -6,36 +6,21 @@ from __future__ import annotations
 
 import contextlib
 import io
-import math
 import os
-import re
 from pathlib import Path
 
 import pytest
 
+from labkit.testing.doc_pages import page_cells, same_output
+
 REPO = Path(__file__).resolve().parents[1]
 PAGE = REPO / "docs" / "scripting.md"
-BLOCK = re.compile(r"```(python|text)\n(.*?)```", re.S)
-NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?")
 
 
 def snippets() -> list[tuple[str, str | None]]:
     """(code, expected output or None) for every python block of the page."""
-    out: list[tuple[str, str | None]] = []
-    for kind, body in BLOCK.findall(PAGE.read_text()):
-        if kind == "python":
-            out.append((body, None))
-        elif out and out[-1][1] is None:
-            out[-1] = (out[-1][0], body)
-    return out
+    return page_cells(PAGE)
 
-
-def same_output(got: str, expected: str) -> bool:
-    """Equal text apart from numbers, which agree to a relative 1e-2 (absolute 1e-3)."""
-    if NUMBER.sub("#", got).split() != NUMBER.sub("#", expected).split():
-        return False
-    pairs = zip(NUMBER.findall(got), NUMBER.findall(expected), strict=True)
-    return all(math.isclose(float(a), float(b), rel_tol=1e-2, abs_tol=1e-3) for a, b in pairs)
 
 
 def test_the_page_has_the_five_tasks():

@@ -16,6 +16,7 @@ import math
 import sys
 
 from labkit.cli.output import add_json_argument, write_json
+from labkit.cli.parsers import command_parser
 from labkit.errors import LabkitError, VideoError
 
 
@@ -53,12 +54,7 @@ def _add_speed_arguments(parser: argparse.ArgumentParser, rotor_hz_note: str = "
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    parser = sub.add_parser(
-        "analyse",
-        help="analyse laser-trace or stroboscope video",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    parser = command_parser(sub, "analyse", "analyse laser-trace or stroboscope video", __doc__)
     kinds = parser.add_subparsers(dest="kind", metavar="KIND")
 
     laser = kinds.add_parser("laser", help="circle/ellipse/trochoid pattern of a reflected laser beam")

@@ -27,6 +27,8 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from labkit.cli.parsers import command_parser
+
 if TYPE_CHECKING:  # OpenCV and the vision stack load when the benchmark runs, not for --help
     from labkit.vision.laser import LaserQuality
 
@@ -62,12 +64,8 @@ def _size(text: str) -> tuple[int, int]:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    parser = sub.add_parser(
-        "vision",
-        help="video analysis: accuracy vs time, throughput vs decode-only",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    parser = command_parser(sub, "vision", "video analysis: accuracy vs time, throughput vs decode-only",
+                            __doc__)
     parser.add_argument("--size", type=_size, default=(1280, 720), help="WxH (default 1280x720)")
     parser.add_argument("--frames", type=int, default=300, help="clip length (default 300 = 10 s)")
     parser.add_argument("--pattern", choices=["ellipse", "epitrochoid", "hypotrochoid"], default="ellipse")

@@ -15,18 +15,14 @@ import math
 import sys
 
 from labkit.cli.output import add_json_argument, note_first_compile, write_json
+from labkit.cli.parsers import command_parser
 from labkit.sim.integrators import DEFAULT_INTEGRATOR, INTEGRATORS
 
 SINK_MODULE = "labkit.stream.sim_sink"
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "simulate",
-        help="simulate a scene (rigid magnetic bodies, rotators, fields)",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    p = command_parser(sub, "simulate", "simulate a scene (rigid magnetic bodies, rotators, fields)", __doc__)
     p.add_argument("scene", nargs="?", help="scene TOML file or bundled scene name")
     p.add_argument(
         "--cycles", type=float, default=None, help="drive periods to simulate (default: the scene's)"

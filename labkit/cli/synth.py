@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from labkit.cli.output import add_json_argument, write_json
+from labkit.cli.parsers import command_parser
 from labkit.errors import VideoError
 
 if TYPE_CHECKING:  # numpy loads when a clip is written, not for --help
@@ -49,12 +50,8 @@ def _bgr(text: str) -> tuple[float, float, float]:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    parser = sub.add_parser(
-        "synth",
-        help="synthetic laser-screen and stroboscope footage with ground truth",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    parser = command_parser(sub, "synth", "synthetic laser-screen and stroboscope footage with ground truth",
+                            __doc__)
     kinds = parser.add_subparsers(dest="kind", metavar="KIND")
 
     laser = kinds.add_parser("laser", help="laser trace on a screen")

@@ -6,34 +6,21 @@ from __future__ import annotations
 
 import contextlib
 import io
-import math
 import os
-import re
 from pathlib import Path
 
 import pytest
 
+from labkit.testing.doc_pages import page_cells, same_output
+
 REPO = Path(__file__).resolve().parents[2]
 PAGE = REPO / "docs" / "notebook.md"
-BLOCK = re.compile(r"```(python|text)\n(.*?)```", re.S)
-NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?")
 
 
 def cells() -> list[tuple[str, str | None]]:
-    out: list[tuple[str, str | None]] = []
-    for kind, body in BLOCK.findall(PAGE.read_text()):
-        if kind == "python":
-            out.append((body, None))
-        elif out and out[-1][1] is None:
-            out[-1] = (out[-1][0], body)
-    return out
+    """(code, expected output or None) for every python block of the page."""
+    return page_cells(PAGE)
 
-
-def same_output(got: str, expected: str) -> bool:
-    if NUMBER.sub("#", got).split() != NUMBER.sub("#", expected).split():
-        return False
-    pairs = zip(NUMBER.findall(got), NUMBER.findall(expected), strict=True)
-    return all(math.isclose(float(a), float(b), rel_tol=1e-2, abs_tol=1e-3) for a, b in pairs)
 
 
 def test_the_page_walks_run_load_fit_figure() -> None:
