@@ -4,14 +4,12 @@ each prints matches the ```text block after it (words exactly, numbers to a rela
 
 from __future__ import annotations
 
-import contextlib
-import io
 import os
 from pathlib import Path
 
 import pytest
 
-from labkit.testing.doc_pages import page_cells, same_output
+from labkit.testing.doc_pages import page_cells, run_page, same_output
 
 REPO = Path(__file__).resolve().parents[1]
 PAGE = REPO / "docs" / "scripting.md"
@@ -41,10 +39,4 @@ def test_every_snippet_runs_and_prints_what_the_page_shows(tmp_path, monkeypatch
     for name in ("rigs", "recordings"):
         os.symlink(REPO / name, tmp_path / name)
     monkeypatch.chdir(tmp_path)
-    namespace: dict = {"__name__": "scripting_doc"}
-    for number, (code, expected) in enumerate(snippets(), 1):
-        buffer = io.StringIO()
-        with contextlib.redirect_stdout(buffer):
-            exec(compile(code, f"docs/scripting.md snippet {number}", "exec"), namespace)  # noqa: S102
-        assert same_output(buffer.getvalue(), expected or ""), (
-            f"snippet {number} printed:\n{buffer.getvalue()}\nthe page shows:\n{expected}")
+    run_page(PAGE, "scripting_doc")

@@ -25,6 +25,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from labkit.control.pi import PIGains, PIState, SettleDetector, pi_step, ramp_toward
+from labkit.control.stopping import stop_motor
 from labkit.documents import Interlock, RunDocument
 from labkit.errors import LabkitError, SafetyError
 
@@ -178,11 +179,7 @@ class SpeedControl:
         failed = []
         for motor in self.all_motors:
             name = str(getattr(motor, "name", motor))
-            try:
-                motor.stop()
-                problem = getattr(motor, "stop_error", None)
-            except Exception as exc:  # noqa: BLE001 - keep stopping the others
-                problem = str(exc)
+            problem = stop_motor(motor)
             if problem:
                 self.stop_failures[name] = problem
                 failed.append(f"{name}: {problem}")

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from labkit.control.handle import RigMotor
+from labkit.control.stopping import stop_motor
 from labkit.devices.base import Balance, MotorController, Tachometer, driver_class
 from labkit.io.ports import open_port
 from labkit.rig.config import DeviceConfig, Rig
@@ -90,11 +91,7 @@ class OpenRig:
         delivered (their reason is in ``stop_failures``)."""
         failed = []
         for role, motor in self.motors().items():
-            try:
-                motor.stop()
-                problem = getattr(motor, "stop_error", None)
-            except Exception as exc:  # noqa: BLE001 - keep stopping the others
-                problem = str(exc)
+            problem = stop_motor(motor)
             if problem:
                 self.stop_failures[role] = problem
                 failed.append(role)

@@ -29,3 +29,19 @@ def same_output(got: str, expected: str) -> bool:
         return False
     pairs = zip(NUMBER.findall(got), NUMBER.findall(expected), strict=True)
     return all(math.isclose(float(a), float(b), rel_tol=1e-2, abs_tol=1e-3) for a, b in pairs)
+
+
+def run_page(page: Path, name: str) -> None:
+    """Run every python block of ``page`` in order in one namespace (``__name__`` = ``name``);
+    AssertionError naming the block when what it prints differs from the page."""
+    import contextlib
+    import io
+
+    namespace: dict = {"__name__": name}
+    for number, (code, expected) in enumerate(page_cells(page), 1):
+        buffer = io.StringIO()
+        with contextlib.redirect_stdout(buffer):
+            exec(compile(code, f"{page.name} block {number}", "exec"), namespace)  # noqa: S102
+        if not same_output(buffer.getvalue(), expected or ""):
+            raise AssertionError(f"{page.name} block {number} printed:\n{buffer.getvalue()}\n"
+                                 f"the page shows:\n{expected}")

@@ -4,14 +4,12 @@ holding the repository's rigs/, and what each prints matches the ```text block a
 
 from __future__ import annotations
 
-import contextlib
-import io
 import os
 from pathlib import Path
 
 import pytest
 
-from labkit.testing.doc_pages import page_cells, same_output
+from labkit.testing.doc_pages import page_cells, run_page, same_output
 
 REPO = Path(__file__).resolve().parents[2]
 PAGE = REPO / "docs" / "notebook.md"
@@ -36,11 +34,5 @@ def test_the_page_walks_run_load_fit_figure() -> None:
 def test_every_cell_runs_and_prints_what_the_page_shows(tmp_path, monkeypatch) -> None:
     os.symlink(REPO / "rigs", tmp_path / "rigs")
     monkeypatch.chdir(tmp_path)
-    namespace: dict = {"__name__": "notebook_doc"}
-    for number, (code, expected) in enumerate(cells(), 1):
-        buffer = io.StringIO()
-        with contextlib.redirect_stdout(buffer):
-            exec(compile(code, f"docs/notebook.md cell {number}", "exec"), namespace)  # noqa: S102
-        assert same_output(buffer.getvalue(), expected or ""), (
-            f"cell {number} printed:\n{buffer.getvalue()}\nthe page shows:\n{expected}")
+    run_page(PAGE, "notebook_doc")
     assert (tmp_path / "force-vs-speed.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
