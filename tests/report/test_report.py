@@ -161,5 +161,5 @@ def test_strobe_result_report(tmp_path: Path):
     text = report.read_text()
     assert "stroboscope" in text and "towards body top" in text
     assert "| cone angle φ | 0.213 (12.20°) | no uncertainty (not in the analysis result) | rad |" in text
-    assert "**Not drawn:** the result names no video or no phase per frame." in text
+    assert "**Not drawn:** the result has no phase per frame." in text
     assert (report.parent / "contact-sheet.png").read_bytes()[:8] == PNG
