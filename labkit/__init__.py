@@ -19,32 +19,34 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+from labkit.lazy import lazy_attributes
+
 __version__ = "0.1.0"
 
-#: public name -> (module, attribute), imported on first access
-_FACE: dict[str, tuple[str, str]] = {
+#: public name -> the module it lives in, imported on first access
+_FACE: dict[str, str] = {
     # rigs and devices
-    "load_rig": ("labkit.rig", "load_rig"),
-    "open_rig": ("labkit.rig", "open_rig"),
+    "load_rig": "labkit.rig",
+    "open_rig": "labkit.rig",
     # runs and sessions
-    "prepare_run": ("labkit.protocols.launch", "prepare_run"),
-    "execute": ("labkit.protocols.launch", "execute"),
-    "replay_session": ("labkit.protocols.launch", "replay_session"),
-    "load_session": ("labkit.session.frames", "load_session"),
-    "SessionFrames": ("labkit.session.frames", "SessionFrames"),
+    "prepare_run": "labkit.protocols.launch",
+    "execute": "labkit.protocols.launch",
+    "replay_session": "labkit.protocols.launch",
+    "load_session": "labkit.session.frames",
+    "SessionFrames": "labkit.session.frames",
     # video analysis
-    "analyse_laser": ("labkit.vision.laser", "analyse_laser"),
-    "analyse_strobe": ("labkit.vision.strobe", "analyse_strobe"),
+    "analyse_laser": "labkit.vision.laser",
+    "analyse_strobe": "labkit.vision.strobe",
     # fits, reports, simulation
-    "load_tables": ("labkit.fit.data", "load_tables"),
-    "fit_table": ("labkit.fit.table_fit", "fit_table"),
-    "FitOptions": ("labkit.fit.table_fit", "FitOptions"),
-    "build_report": ("labkit.report.build", "build_report"),
-    "load_scene": ("labkit.sim.scene", "load_scene"),
-    "simulate": ("labkit.sim.run", "simulate"),
+    "load_tables": "labkit.fit.data",
+    "fit_table": "labkit.fit.table_fit",
+    "FitOptions": "labkit.fit.table_fit",
+    "build_report": "labkit.report.build",
+    "load_scene": "labkit.sim.scene",
+    "simulate": "labkit.sim.run",
     # errors
-    "LabkitError": ("labkit.errors", "LabkitError"),
-    "SessionError": ("labkit.session.writer", "SessionError"),
+    "LabkitError": "labkit.errors",
+    "SessionError": "labkit.session.writer",
 }
 
 __all__ = [  # tests/distribution/test_public_face.py checks this equals the names above
@@ -84,15 +86,7 @@ def fit_data(inputs: str | Path | Sequence[str | Path], model: str, **options: A
     return fit_table(load_tables([str(p) for p in paths]), model, FitOptions(**options))
 
 
-def __getattr__(name: str) -> Any:
-    if name in _FACE:
-        import importlib
-
-        module, attribute = _FACE[name]
-        value = getattr(importlib.import_module(module), attribute)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'labkit' has no attribute {name!r}")
+__getattr__ = lazy_attributes(__name__, _FACE)
 
 
 def __dir__() -> list[str]:

@@ -13,8 +13,9 @@ Sweeps (stability maps) live in :mod:`labkit.numerics.sweep`; the batch kernels 
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING
+
+from labkit.lazy import lazy_attributes
 
 #: where each public name lives; imported on first use (PEP 562) so that importing
 #: ``labkit.numerics.checks`` (argument checks of ``labkit sweep``) does not load numba and scipy.
@@ -41,13 +42,7 @@ if TYPE_CHECKING:  # pragma: no cover
     )
 
 
-def __getattr__(name: str):
-    home = _HOME.get(name)
-    if home is None:
-        raise AttributeError(f"module 'labkit.numerics' has no attribute {name!r}")
-    value = getattr(importlib.import_module(home), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_attributes(__name__, _HOME)
 
 
 __all__ = [

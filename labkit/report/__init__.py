@@ -5,15 +5,11 @@ device flags (:func:`session_flags`), data, fits and figures. Imported on first 
 (matplotlib is not loaded by ``import labkit.report``).
 """
 
-from importlib import import_module
-from typing import Any
+from labkit.lazy import lazy_attributes
 
 _PUBLIC = {"build_report": "labkit.report.build", "session_flags": "labkit.report.flags"}
 
 __all__ = sorted(_PUBLIC)
 
 
-def __getattr__(name: str) -> Any:
-    if name in _PUBLIC:
-        return getattr(import_module(_PUBLIC[name]), name)
-    raise AttributeError(f"module 'labkit.report' has no attribute {name!r}")
+__getattr__ = lazy_attributes(__name__, _PUBLIC)

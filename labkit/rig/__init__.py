@@ -11,9 +11,8 @@ Keys are documented in docs/rig-files.md. The names of ``against_drivers`` and `
 on first use, so ``import labkit.rig.config`` (predict, report) pulls in no device code.
 """
 
-from importlib import import_module
-from typing import Any
 
+from labkit.lazy import lazy_attributes
 from labkit.rig.config import (
     KINDS,
     SERIAL_KEYS,
@@ -46,17 +45,11 @@ from labkit.rig_checks import (
     split_unit,
 )
 
-_LAZY = {"DriverCheck": "against_drivers", "load_rig": "against_drivers", "parse_rig": "against_drivers",
-         "OpenRig": "open", "PortOpener": "open", "open_rig": "open"}
+_LAZY = {**{name: "labkit.rig.against_drivers" for name in ("DriverCheck", "load_rig", "parse_rig")},
+         **{name: "labkit.rig.open" for name in ("OpenRig", "PortOpener", "open_rig")}}
 
 
-def __getattr__(name: str) -> Any:
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module 'labkit.rig' has no attribute {name!r}")
-    value = getattr(import_module(f"labkit.rig.{module}"), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_attributes(__name__, _LAZY)
 
 
 #: the old name of :class:`BodySpec` (ADR docs/decisions/0007-names.md); kept for scripts

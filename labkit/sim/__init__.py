@@ -12,8 +12,9 @@ Public interface::
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING
+
+from labkit.lazy import lazy_attributes
 
 #: where each public name lives; imported on first use (PEP 562) so that ``labkit --help``
 #: and ``import labkit.sim.scene`` do not pay for numba and scipy.
@@ -51,13 +52,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from labkit.sim.scene_checks import validate_scene
 
 
-def __getattr__(name: str):
-    home = _HOME.get(name)
-    if home is None:
-        raise AttributeError(f"module 'labkit.sim' has no attribute {name!r}")
-    value = getattr(importlib.import_module(home), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_attributes(__name__, _HOME)
 
 
 __all__ = [

@@ -14,8 +14,7 @@ The public face (imported on first use, so ``import labkit.vision`` does not loa
 :func:`analyse_laser`, :func:`analyse_strobe`, :func:`open_frames`, :class:`Pattern`.
 """
 
-from importlib import import_module
-from typing import Any
+from labkit.lazy import lazy_attributes
 
 _PUBLIC = {"analyse_laser": "labkit.vision.laser", "analyse_strobe": "labkit.vision.strobe",
            "open_frames": "labkit.vision.frames", "Pattern": "labkit.vision.curves"}
@@ -23,7 +22,4 @@ _PUBLIC = {"analyse_laser": "labkit.vision.laser", "analyse_strobe": "labkit.vis
 __all__ = sorted(_PUBLIC)
 
 
-def __getattr__(name: str) -> Any:
-    if name in _PUBLIC:
-        return getattr(import_module(_PUBLIC[name]), name)
-    raise AttributeError(f"module 'labkit.vision' has no attribute {name!r}")
+__getattr__ = lazy_attributes(__name__, _PUBLIC)
