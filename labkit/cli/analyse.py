@@ -192,12 +192,18 @@ def run_laser(args: argparse.Namespace) -> int:
     finally:
         if stream:
             stream.close()
+    return _finish("laser", args, result, _print_laser, "no pattern")
+
+
+def _finish(kind: str, args: argparse.Namespace, result: dict, print_result, no_reason: str) -> int:
+    """Write the JSON, print the result (unless the JSON goes to stdout), and turn a ``failed``
+    verdict into one stderr line naming the file and the first reason, and exit status 1."""
     _write_json(result, args.json)
     if args.json != "-":
-        _print_laser(result)
+        print_result(result)
     if result["quality"]["verdict"] == "failed":
         reasons = result["quality"]["reasons"]
-        print(f"labkit analyse laser: {args.path}: result failed: {reasons[0] if reasons else 'no pattern'}",
+        print(f"labkit analyse {kind}: {args.path}: result failed: {reasons[0] if reasons else no_reason}",
               file=sys.stderr)
         return 1
     return 0
@@ -304,15 +310,7 @@ def run_strobe(args: argparse.Namespace) -> int:
     finally:
         if stream:
             stream.close()
-    _write_json(result, args.json)
-    if args.json != "-":
-        _print_strobe(result)
-    if result["quality"]["verdict"] == "failed":
-        reasons = result["quality"]["reasons"]
-        print(f"labkit analyse strobe: {args.path}: result failed: {reasons[0] if reasons else 'no reason'}",
-              file=sys.stderr)
-        return 1
-    return 0
+    return _finish("strobe", args, result, _print_strobe, "no reason")
 
 
 def _strobe_overlay(drawing: dict, result: dict, out: str | None, stream) -> None:
