@@ -202,7 +202,7 @@ def main(args: argparse.Namespace) -> int:
     from labkit.control.supervisor import needs_supervisor, supervised
 
     if needs_supervisor(prep.rig):  # real motor ports: a supervisor stops them if this run dies
-        return supervised(prep.rig, lambda: run_prepared(args, prep))
+        return supervised(prep.rig, lambda: run_prepared(args, prep), sessions=args.sessions)
     return run_prepared(args, prep)
 
 

@@ -66,10 +66,13 @@ def _die_with_parent(parent: int) -> None:
         os.kill(os.getpid(), signal.SIGTERM)
 
 
-def supervised(rig: Any, work: Callable[[], int], err: Any = None) -> int:
+def supervised(rig: Any, work: Callable[[], int], err: Any = None,
+               sessions: str | Path | None = None) -> int:
     """Run ``work()`` in a forked worker watched by this process; the worker's exit status.
 
     In the worker this function returns what ``work()`` returns (the caller exits with it).
+    If the worker dies without closing its session under ``sessions``, the supervisor records
+    it as ``killed`` after stopping the motors (labkit.session.orphans).
     """
     err = err or sys.stderr
     sigset = set(FORWARDED) | {signal.SIGCHLD}
@@ -86,7 +89,7 @@ def supervised(rig: Any, work: Callable[[], int], err: Any = None) -> int:
         status = _watch(worker, sigset)
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)
-    return _after_worker(rig, worker, status, err)
+    return _after_worker(rig, worker, status, err, sessions)
 
 
 def _watch(worker: int, sigset: set[int]) -> int:
@@ -108,7 +111,7 @@ def _watch(worker: int, sigset: set[int]) -> int:
             return status
 
 
-def _after_worker(rig: Any, worker: int, status: int, err: Any) -> int:
+def _after_worker(rig: Any, worker: int, status: int, err: Any, sessions: str | Path | None = None) -> int:
     if os.WIFSIGNALED(status):
         signum = os.WTERMSIG(status)
         how, code = f"was killed by {signal.Signals(signum).name}", 128 + signum
@@ -123,7 +126,22 @@ def _after_worker(rig: Any, worker: int, status: int, err: Any) -> int:
           f"{', '.join(stopped) or 'no motor'} to zero", file=err)
     for role, why in failed.items():
         print(f"labkit run: could not stop {role}: {why}; cut the motor's power", file=err)
+    if sessions is not None:
+        _close_sessions(sessions, worker, how, failed, err)
     return 3 if failed else code
+
+
+def _close_sessions(sessions: str | Path, worker: int, how: str, failed: dict[str, str], err: Any) -> None:
+    """Record the dead worker's session as ``killed`` and say how to resume it."""
+    from labkit.session.orphans import close_killed_sessions
+
+    stop = ("the supervisor could not stop " + ", ".join(failed)) if failed else "the supervisor stopped the motors"
+    for session in close_killed_sessions(sessions, worker, f"the run process (PID {worker}) {how}; {stop}"):
+        if failed:
+            print(f"labkit run: session {session} recorded as killed", file=err)
+        else:
+            print(f"labkit run: session {session} recorded as killed; resume with: labkit run --resume {session}",
+                  file=err)
 
 
 def stop_motors(rig: Any) -> dict[str, str]:

@@ -15,7 +15,8 @@ Layout (documented in docs/protocols.md)::
 
 Lines are flushed to the OS at least once a second (events at once), so SIGKILL loses at
 most the last second. ``run.json`` is replaced atomically (write + rename) so it is never
-half-written; a session killed mid-run keeps ``"status": "running"``.
+half-written; a session killed mid-run keeps ``"status": "running"`` unless a supervisor closes
+it (labkit.session.orphans).
 """
 
 from __future__ import annotations
@@ -41,7 +42,7 @@ class SessionError(LabkitError):
     """A session directory cannot be created, written or read. Names the path."""
 
 
-def _utc_now() -> str:
+def utc_now() -> str:
     return _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
 
 
@@ -154,7 +155,7 @@ class Session:
             "rig": rig_name,
             "rig_file": "rig.toml",
             "clock": clock,
-            "started": _utc_now(),
+            "started": utc_now(),
             "ended": None,
             "status": "running",
             "reason": None,
@@ -164,6 +165,7 @@ class Session:
             "versions": _versions(),
             "git_commit": _git_commit(),
             "host": platform.node(),
+            "pid": os.getpid(),  # lets a supervisor find and close the session of a killed run
         }
         try:
             (path / "rig.toml").write_text(rig_text, encoding="utf-8")
@@ -229,4 +231,4 @@ class Session:
                 readings_to_parquet(role_file, role_file.with_suffix(".parquet"))
         except Exception:  # noqa: BLE001 - the JSONL files stay the primary record
             pass
-        self.update_meta(ended=_utc_now(), status=status, reason=reason)
+        self.update_meta(ended=utc_now(), status=status, reason=reason)

@@ -103,6 +103,11 @@ def test_sigkill_of_the_worker_the_supervisor_stops_the_rotor(lab, tmp_path):
     assert_clean(stderr)
     assert "was killed by SIGKILL; the supervisor commanded rotor_motor to zero" in stderr
     assert run.proc.returncode == 128 + signal.SIGKILL
+    # the session the worker could not close is closed by the supervisor, and stays resumable
+    meta = run.run_json()
+    assert meta["status"] == "killed", meta
+    assert "killed by SIGKILL" in meta["reason"] and meta["ended"]
+    assert f"recorded as killed; resume with: labkit run --resume {run.session()}" in stderr
 
 
 def test_sigkill_of_every_labkit_process_leaves_the_controllers_watchdog(lab, tmp_path):
