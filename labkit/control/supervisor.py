@@ -135,7 +135,9 @@ def _close_sessions(sessions: str | Path, worker: int, how: str, failed: dict[st
     """Record the dead worker's session as ``killed`` and say how to resume it."""
     from labkit.session.orphans import close_killed_sessions
 
-    stop = ("the supervisor could not stop " + ", ".join(failed)) if failed else "the supervisor stopped the motors"
+    stop = "the supervisor stopped the motors"
+    if failed:
+        stop = "the supervisor could not stop " + ", ".join(failed)
     for session in close_killed_sessions(sessions, worker, f"the run process (PID {worker}) {how}; {stop}"):
         if failed:
             print(f"labkit run: session {session} recorded as killed", file=err)
