@@ -139,11 +139,8 @@ def _close_sessions(sessions: str | Path, worker: int, how: str, failed: dict[st
     if failed:
         stop = "the supervisor could not stop " + ", ".join(failed)
     for session in close_killed_sessions(sessions, worker, f"the run process (PID {worker}) {how}; {stop}"):
-        if failed:
-            print(f"labkit run: session {session} recorded as killed", file=err)
-        else:
-            print(f"labkit run: session {session} recorded as killed; resume with: labkit run --resume {session}",
-                  file=err)
+        hint = "" if failed else f"; resume with: labkit run --resume {session}"
+        print(f"labkit run: session {session} recorded as killed{hint}", file=err)
 
 
 def stop_motors(rig: Any) -> dict[str, str]:
