@@ -2,7 +2,7 @@
 
 One definition each, so a rig file, a data table, a driver, an emulator and a plot agree to
 the last bit. :data:`UNIT_SUFFIXES` is the one table of unit suffixes in names: rig-file keys
-(``max_speed_rpm``, via :mod:`labkit.rig_checks`) and the columns of fit tables (``speed_rpm``,
+(``max_speed_rpm``, via :mod:`labkit.rig.checks`) and the columns of fit tables (``speed_rpm``,
 ``force_gf``, via :func:`column_to_si`) are read with it. ``_g`` is grams of *mass* and
 ``_gf`` grams-*force* (docs/rig-files.md, docs/fitting.md).
 """

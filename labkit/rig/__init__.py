@@ -4,7 +4,7 @@
 * :mod:`labkit.rig.against_drivers` - :func:`parse_rig` / :func:`load_rig`: the config checked
   against the driver registry and the emulators;
 * :mod:`labkit.rig.open` - :func:`open_rig` and the typed :class:`OpenRig`;
-* caps, role names and the table reader: :mod:`labkit.rig_checks`; the unit-suffix table:
+* caps, role names and the table reader: :mod:`labkit.rig.checks`; the unit-suffix table:
   :data:`labkit.units.UNIT_SUFFIXES`.
 
 Keys are documented in docs/rig-files.md. The names of ``against_drivers`` and ``open`` load
@@ -13,6 +13,19 @@ on first use, so ``import labkit.rig.config`` (predict, report) pulls in no devi
 
 
 from labkit.lazy import lazy_attributes
+from labkit.rig.checks import (
+    MAX_CONTROL_PERIOD_S,
+    MAX_DURATION_S,
+    MAX_RAMP_RPM_PER_S,
+    MAX_RIG_FILE_BYTES,
+    MAX_SPEED_RPM,
+    MAX_TACH_TIMEOUT_S,
+    ROLE_PATTERN,
+    UNIT_SUFFIXES,
+    check_role,
+    read_rig_text,
+    split_unit,
+)
 from labkit.rig.config import (
     KINDS,
     SERIAL_KEYS,
@@ -30,19 +43,6 @@ from labkit.rig.config import (
     find_rig_file,
     parse_body,
     parse_rig_config,
-)
-from labkit.rig_checks import (
-    MAX_CONTROL_PERIOD_S,
-    MAX_DURATION_S,
-    MAX_RAMP_RPM_PER_S,
-    MAX_RIG_FILE_BYTES,
-    MAX_SPEED_RPM,
-    MAX_TACH_TIMEOUT_S,
-    ROLE_PATTERN,
-    UNIT_SUFFIXES,
-    check_role,
-    read_rig_text,
-    split_unit,
 )
 
 _LAZY = {**{name: "labkit.rig.against_drivers" for name in ("DriverCheck", "load_rig", "parse_rig")},

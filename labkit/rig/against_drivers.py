@@ -15,8 +15,8 @@ from labkit.devices.base import driver_class, unknown_options, unknown_options_m
 from labkit.emulators.base import emulator_class
 from labkit.emulators.urls import parse_sim_url
 from labkit.errors import PortURLError
+from labkit.rig.checks import _Section, read_rig_text
 from labkit.rig.config import Rig, find_rig_file, parse_rig_config
-from labkit.rig_checks import _Section, read_rig_text
 
 
 class DriverCheck:

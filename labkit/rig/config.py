@@ -6,7 +6,7 @@
 as ``file:key: reason``. This module imports no device, emulator or port code: checking a
 rig against the driver registry and the emulators is :mod:`labkit.rig.against_drivers`,
 opening it :mod:`labkit.rig.open`. Keys are documented in ``docs/rig-files.md``; caps, role
-names and the table reader live in :mod:`labkit.rig_checks`.
+names and the table reader live in :mod:`labkit.rig.checks`.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any, Protocol
 
 from labkit.errors import RigFileError
-from labkit.rig_checks import (
+from labkit.rig.checks import (
     MAX_CONTROL_PERIOD_S,
     MAX_DURATION_S,
     MAX_TACH_TIMEOUT_S,

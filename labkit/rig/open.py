@@ -16,8 +16,8 @@ from labkit.control.handle import RigMotor
 from labkit.control.stopping import stop_motor
 from labkit.devices.base import Balance, MotorController, Tachometer, driver_class
 from labkit.io.ports import open_port
+from labkit.rig.checks import check_role
 from labkit.rig.config import DeviceConfig, Rig
-from labkit.rig_checks import check_role
 
 PortOpener = Callable[..., Any]
 

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from labkit.rig import bundled_rig_path
-from labkit.rig_checks import read_rig_text
+from labkit.rig.checks import read_rig_text
 
 
 def _value(v: Any) -> str:

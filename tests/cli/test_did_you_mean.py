@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from labkit.rig import parse_rig
-from labkit.rig_checks import RigFileError
+from labkit.rig.checks import RigFileError
 
 TEMPLATE = (Path(__file__).resolve().parents[2] / "rigs" / "template-balance.toml").read_text()
 

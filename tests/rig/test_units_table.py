@@ -8,14 +8,14 @@ import pytest
 
 from labkit.fit.data import to_si
 from labkit.rig import parse_body
-from labkit.rig_checks import split_unit
+from labkit.rig.checks import split_unit
 from labkit.units import G0, UNIT_SUFFIXES, column_to_si
 
 
 def test_rig_files_and_fit_tables_share_the_table():
-    import labkit.rig_checks
+    import labkit.rig.checks
 
-    assert labkit.rig_checks.UNIT_SUFFIXES is UNIT_SUFFIXES
+    assert labkit.rig.checks.UNIT_SUFFIXES is UNIT_SUFFIXES
     assert split_unit("max_speed_rpm") == ("max_speed", "rad/s", pytest.approx(2 * np.pi / 60))
 
 
