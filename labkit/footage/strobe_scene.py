@@ -37,6 +37,7 @@ from labkit.footage.camera import (
     quantise,
 )
 from labkit.footage.mount import Mount
+from labkit.footage.sim_swing import SimulatedSwing
 
 GHOST_SAMPLES = 12
 FLASH_SUBSAMPLES = 3
@@ -83,7 +84,7 @@ class StrobeShot:
     relative to the lamp (the ghost of the revolution)."""
 
     body: Body
-    swing: Swing
+    swing: Swing | SimulatedSwing  # kinematic (Eq. 5.97) or integrated by labkit.sim
     lamp: Lamp
     camera: Camera
     centre_px: tuple[float, float]

@@ -106,6 +106,26 @@ def _strobe_cases() -> list[CaseSpec]:
         cases.append(CaseSpec(f"strobe-{body}-{i:02d}-{d}", "strobe", d, 5000 + i, size, body=body,
                               rest_deg=rest, flashes=fl, apparent_cpf=cpf, harmonic=harmonic,
                               rolling=rolling))
+    return cases + _simulated_strobe_cases()
+
+
+def _simulated_strobe_cases() -> list[CaseSpec]:
+    """Strobe clips whose body motion is integrated by labkit.sim (``source="sim"``): a cylinder or
+    a square plate floator bound beneath a spinning rotator (footage.sim_swing)."""
+    cases = []
+    rests = (0.0, 90.0, -60.0, 35.0)
+    flashes = (2.0, 0.0, 4.0, 3.3)
+    cpfs = (0.07, -0.1, 0.12, -0.05)
+    sizes = ((640, 480), (1280, 720), (1920, 1080), (320, 240))
+    for i in range(12):
+        d, j = DIFFICULTIES[i % 3], i // 3
+        body, rest, fl = ("cylinder", "cuboid")[i % 2], rests[j], flashes[j]
+        rolling, harmonic = i % 4 in (1, 2), 2 if i % 5 == 4 else 1
+        if d == "easy":
+            rest, fl, rolling, harmonic = 0.0, 1.0, False, 1
+        cases.append(CaseSpec(f"strobe-sim-{body}-{i:02d}-{d}", "strobe", d, 6000 + i, sizes[(i + j) % 4],
+                              source="sim", body=body, rest_deg=rest, flashes=fl, apparent_cpf=cpfs[j],
+                              harmonic=harmonic, rolling=rolling))
     return cases
 
 

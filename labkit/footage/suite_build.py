@@ -16,6 +16,7 @@ from labkit.footage.laser_scene import LaserShot, StrayReflection, laser_truth
 from labkit.footage.motion import PrecessionNutation, SimulatedCone, loops_ratio
 from labkit.footage.mount import Mount
 from labkit.footage.optics import Screen, ScreenView
+from labkit.footage.sim_swing import SimulatedSwing
 from labkit.footage.strobe_scene import Lamp, StrobeShot, Swing
 from labkit.footage.suite import CaseSpec
 
@@ -156,10 +157,15 @@ def build_strobe(case: CaseSpec) -> StrobeShot:
         shadow = tuple(float(v) * unit for v in rng.uniform(-8, 8, 2)) if d == "hard" else (0.0, 0.0)
         lamp = Lamp(f_strobe, float(rng.uniform(0.1, 0.9)) / f_strobe, float(rng.uniform(10e-6, 40e-6)),
                     shadow, 0.35 if d == "hard" else 0.0)
-    harmonic = case.harmonic * (8 if lamp.hz is None else 1)  # a camera-strobe films a fast rotor
+    # a camera-strobe (or, for simulated motion, an easy 30 Hz lamp) films a fast rotor
+    fast = 8 if case.source == "kinematic" else 7
+    harmonic = case.harmonic * (fast if lamp.hz is None or (case.source == "sim" and d == "easy") else 1)
     rotor = harmonic * f_strobe + f_app
-    phi = float(rng.uniform(0.06, 0.22))
-    delta = float(rng.uniform(0.4, 1.3)) * length * float(rng.choice([-1.0, 1.0]))
+    if case.source == "sim":
+        body, swing = _simulated_body(case, rng, length, rotor)
+    else:  # the draws keep their order: the cached footage of these cases stays valid
+        phi = float(rng.uniform(0.06, 0.22))
+        delta = float(rng.uniform(0.4, 1.3)) * length * float(rng.choice([-1.0, 1.0]))
     cam = _camera(case, rng, exposure, laser=False)
     if case.rolling:
         cam = replace(cam, readout_s=float(rng.uniform(0.5, 0.9)) / FPS)
@@ -167,11 +173,30 @@ def build_strobe(case: CaseSpec) -> StrobeShot:
     centre = (w / 2 + float(rng.uniform(-0.1, 0.1)) * w, h / 2 + float(rng.uniform(-0.1, 0.1)) * h)
     ambient = {"easy": 0.0, "medium": 0.1, "hard": 0.3}[d] if lamp.hz is not None else 0.0
     frames = 48 if max(case.size) > 1300 else 60
-    shot = StrobeShot(body, Swing(phi, delta, rotor, float(rng.uniform(0, 2 * math.pi))), lamp, cam, centre,
+    if case.source != "sim":
+        swing = Swing(phi, delta, rotor, float(rng.uniform(0, 2 * math.pi)))
+    shot = StrobeShot(body, swing, lamp, cam, centre,
                       case.rest_deg, roll, _lighting(d, rng, dark=False), ambient, Mount(),
                       backlit=bool(d != "hard" or rng.random() < 0.5), frames=frames, seed=case.seed)
     mount = Mount() if d != "hard" else Mount((0.0, 0.0), 1.5 * unit, 0.2, case.seed, 0.0)
     return replace(shot, mount=mount)
+
+
+def _simulated_body(case: CaseSpec, rng: np.random.Generator, length_px: float,
+                    rotor_hz: float) -> tuple[Body, SimulatedSwing]:
+    """A floator magnet bound beneath a 6x3 mm rotator, its motion integrated by labkit.sim; the
+    image scale makes its length along the dipole ``length_px``."""
+    if case.body == "cylinder":
+        diameter, height = float(rng.uniform(6, 10)), float(rng.uniform(5, 9))
+        spec, body = f"cylinder:{diameter:.2f}x{height:.2f}mm", ("cylinder", height, diameter)
+    else:  # a square plate, thin along its dipole (Fig. 6.20)
+        side = float(rng.uniform(8, 12))
+        spec, body = f"block:{side:.2f}x{side:.2f}x{0.35 * side:.2f}mm", ("cuboid", 0.35 * side, side)
+    mm_per_px = body[1] / length_px if case.body == "cylinder" else body[2] / length_px
+    swing = SimulatedSwing("cylinder:6x3mm", spec, float(rng.uniform(6, 12)), rotor_hz, mm_per_px,
+                           float(rng.uniform(0, 2 * math.pi)))
+    spin = {"spin_hz": float(rng.uniform(0.3, 3.0))} if case.body == "cuboid" else {}
+    return Body(body[0], body[1] / mm_per_px, body[2] / mm_per_px, **spin), swing
 
 
 def build_shot(case: CaseSpec) -> LaserShot | StrobeShot:

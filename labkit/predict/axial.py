@@ -19,6 +19,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
 Force = Callable[[float], float]
@@ -60,10 +61,24 @@ class AxialBoundState:
 
 
 def stiffness_limit(force_away: Force, r_min: float, r_max: float, xtol: float) -> tuple[float, float]:
-    """Distance of the largest net attraction on [r_min, r_max] (S = 0 there) and that attraction."""
+    """Distance of the largest net attraction on [r_min, r_max] (S = 0 there) and that attraction;
+    the search starts where the force is defined (:func:`first_solved`)."""
+    r_min = first_solved(force_away, r_min, r_max) or r_min
     res = minimize_scalar(lambda r: force_away(r), bounds=(r_min, r_max), method="bounded",
                           options={"xatol": xtol})
     return float(res.x), -float(res.fun)
+
+
+def first_solved(net: Force, r_min: float, r_max: float, steps: int = 64) -> float | None:
+    """``r_min``, or the nearest distance above it (on a geometric grid to ``r_max``) where ``net``
+    is finite: close to contact the steady state can fail to exist (the cone opens past its limit),
+    and a root search must start where the force is defined."""
+    if math.isfinite(net(r_min)):
+        return r_min
+    for r in np.geomspace(r_min, r_max, steps)[1:]:
+        if math.isfinite(net(float(r))):
+            return float(r)
+    return None
 
 
 def axial_bound_state(force_away: Force, load: float, r_min: float, r_max: float,
@@ -83,12 +98,18 @@ def axial_bound_state(force_away: Force, load: float, r_min: float, r_max: float
     def net(r: float) -> float:
         return force_away(r) + load
 
-    if net(r_min) <= 0:
+    r_start = first_solved(net, r_min, r_lim)
+    if r_start is None:
         return AxialBoundState(False, nan, nan, nan, nan, r_lim, max_load,
-                               "the attraction wins down to contact: the magnets snap together")
-    if r_lim <= r_min * (1 + 1e-9):
+                               "no co-rotating steady state between contact and the stiffness limit")
+    if net(r_start) <= 0:
+        where = ("down to contact" if r_start == r_min
+                 else f"down to {r_start * 1e3:.3g} mm (closer: no steady state)")
+        return AxialBoundState(False, nan, nan, nan, nan, r_lim, max_load,
+                               f"the attraction wins {where}: the magnets snap together")
+    if r_lim <= r_start * (1 + 1e-9):
         return AxialBoundState(False, nan, nan, nan, nan, r_lim, max_load, "no stable branch outside contact")
-    r1 = brentq(net, r_min, r_lim, xtol=xtol, rtol=1e-15)
-    r2 = brentq(net, r_min, r_lim, xtol=xtol / 2, rtol=1e-15)
+    r1 = brentq(net, r_start, r_lim, xtol=xtol, rtol=1e-15)
+    r2 = brentq(net, r_start, r_lim, xtol=xtol / 2, rtol=1e-15)
     s = stiffness(force_away, r2)
     return AxialBoundState(True, r2, max(abs(r1 - r2), xtol / 2), s.value, s.error, r_lim, max_load)
