@@ -28,6 +28,7 @@ import math
 from dataclasses import dataclass
 from functools import lru_cache
 
+from labkit.errors import LabkitError
 from labkit.units import G0
 
 #: Eq. 6.37's reference speed (rad/s): -k w^2 = C (1 - w / W_REF)
@@ -115,8 +116,9 @@ def weakest_hold(p, omega: float, r_lo: float, r_hi: float, near: float | None =
     return float(res.fun), float(res.x)
 
 
-class NoBreakUp(ValueError):
-    """The rig's magnets cannot hold the floator beneath the rotator at any searched speed."""
+class NoBreakUp(LabkitError, ValueError):
+    """The rig's magnets cannot hold the floator beneath the rotator at any searched speed
+    (a LabkitError: the CLI prints it as one line)."""
 
 
 @lru_cache(maxsize=32)
@@ -133,8 +135,9 @@ def break_up(p) -> BreakUp:
 
     lo, hi = OMEGA_RANGE_RAD_S
     if hold(hi)[0] >= 0:
-        raise NoBreakUp(f"the floator is not held beneath the rotator even at {hi * 60 / (2 * math.pi):.0f} "
-                        f"RPM (static attraction too weak: rotator tilt {math.degrees(p.tilt_rad):.2f} deg); "
+        raise NoBreakUp(f"Fig. 6.18 model plant: the floator is not held beneath the rotator even at "
+                        f"{hi * 60 / (2 * math.pi):.0f} RPM (static attraction too weak: rotator tilt "
+                        f"{math.degrees(p.tilt_rad):.2f} deg); "
                         "set [geometry] break_phi_rad to fix C instead")
     w_held, w = hi, hi / 1.5
     while w >= lo and (last := hold(w))[0] < 0:        # down to the first speed that drops it

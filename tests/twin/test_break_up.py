@@ -92,3 +92,14 @@ def test_bad_break_phi_names_file_and_key(tmp_path):
 def test_untilted_rotator_cannot_hold_the_floator_and_says_so():
     with pytest.raises(NoBreakUp, match="not held beneath the rotator.*tilt 0.00 deg.*break_phi_rad"):
         break_up(replace(TwinParams(), tilt_rad=0.0))
+
+
+def test_run_on_an_untilted_fig618_rig_fails_with_one_line(tmp_path, capsys):
+    from labkit.cli import main
+    rig = tmp_path / "untilted.toml"
+    rig.write_text((RIGS / "emulated-fig618.toml").read_text().replace("tilt_deg = 6.9", "tilt_deg = 0"))
+    code = main(["run", str(rig), "spin-critical", "--sessions", str(tmp_path / "s")])
+    err = capsys.readouterr().err
+    assert code != 0 and "Traceback" not in err
+    [line] = [x for x in err.splitlines() if "not held beneath the rotator" in x]
+    assert "break_phi_rad" in line and "tilt 0.00 deg" in line
