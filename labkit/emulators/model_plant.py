@@ -22,8 +22,9 @@ import math
 import random
 from dataclasses import dataclass, field
 
+from labkit.emulators.break_up import break_up
 from labkit.emulators.plant import FloatorPlant, MotorPlant, RigPlant, SpinCriticalLaw
-from labkit.emulators.twin_model import TwinParams, balance_force_table, spin_critical_c
+from labkit.emulators.twin_model import TwinParams, balance_force_table, default_params
 
 
 @dataclass
@@ -105,19 +106,15 @@ class ModelPlant(RigPlant):
         return self.table.force_n(omega)
 
 
-#: cone angle at the break-up of Eq. 6.37 (rad): the paper says < 0.1 rad; 0.0855 gives the
-#: shipped rig C = 4.7e5, the paper's series-1 value
-DEFAULT_BREAK_PHI = 0.0855
-
-
 def model_plant(preset: str, seed: int = 0, params: TwinParams | None = None,
-                imperfections: Imperfections | None = None,
-                break_phi: float = DEFAULT_BREAK_PHI) -> ModelPlant:
-    """A model plant: ``model-fig525`` (balance force) or ``model-fig618`` (spin-critical)."""
-    p = params or TwinParams()
+                imperfections: Imperfections | None = None) -> ModelPlant:
+    """A model plant: ``model-fig525`` (balance force) or ``model-fig618`` (spin-critical, C of
+    Eq. 6.37 from :func:`labkit.emulators.break_up.break_up`: derived from the magnets, or from
+    the rig file's ``break_phi_rad`` when it gives one)."""
+    p = params or default_params(preset)
     plant = ModelPlant(seed=seed, params=p, imperfections=imperfections or Imperfections(), preset=preset)
     if preset == "model-fig618":
-        law = SpinCriticalLaw(c=spin_critical_c(p, break_phi))
+        law = SpinCriticalLaw(c=break_up(p).c)
         plant.floator = FloatorPlant(law=law, mass_kg=p.mass_kg, seed=seed)
     return plant
 

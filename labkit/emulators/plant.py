@@ -260,14 +260,14 @@ def make_plant(name: str, seed: int = 0, rig: Any = None) -> RigPlant:
     """A fresh plant for ``name``: the preset named by the part before the first dot, else the
     fitted law of Fig. 5.25. ``model-fig525`` / ``model-fig618`` build the model plant of
     :mod:`labkit.emulators.model_plant` from ``rig`` (a loaded rig file; None: the magnets of
-    the shipped emulated rig)."""
+    the shipped emulated rig of that preset)."""
     head = name.split(".", 1)[0]
     if head.startswith("model-"):
         from labkit.emulators.model_plant import MODEL_PRESETS, model_plant
-        from labkit.emulators.twin_model import TwinParams, params_from_rig
+        from labkit.emulators.twin_model import params_from_rig
         if head not in MODEL_PRESETS:
             raise ValueError(f"plant={name}: unknown model preset {head!r} (use {', '.join(MODEL_PRESETS)})")
-        return model_plant(head, seed, params_from_rig(rig) if rig is not None else TwinParams())
+        return model_plant(head, seed, params_from_rig(rig) if rig is not None else None)
     preset = PLANT_PRESETS.get(head)
     return preset(seed) if preset else RigPlant(seed=seed)
 

@@ -13,10 +13,8 @@
   rotator (Eq. 5.85) does not depend on speed and goes into the tare. Between table nodes the
   force is interpolated (cubic Hermite in log-log); :func:`table_error` measures that error against fresh
   steady-state solves (docs/twin.md quotes it).
-* :func:`spin_critical_c` - C of Eq. 6.37, ``C = (tau_C cos phi + tau_S sin phi) / (I sin phi)``
-  with ``tau_C = M / r^3`` (Eq. 5.73), ``tau_S = 2 tan(gamma) tau_C`` (Eq. 5.29), ``I`` the
-  floator's radial moment of inertia and ``phi`` its cone angle at the break-up (the paper:
-  "smaller than 0.1 rad in these tests"; a plant knob, ``break_phi``).
+* C of Eq. 6.37 for the Fig. 6.18 floator: :func:`labkit.emulators.break_up.break_up` derives
+  the break-up (speed, height, cone angle) from the same magnets through Eq. 6.33-6.34.
 """
 
 from __future__ import annotations
@@ -45,6 +43,7 @@ class TwinParams:
     i_radial: float = DEFAULT_BODIES["i_radial"]      # floator, about an axis across its dipole
     i_axial: float = DEFAULT_BODIES["i_axial"]        # floator, about its dipole axis
     tilt_rad: float = DEFAULT_BODIES["tilt_rad"]      # rotator dipole tilt from the rotation plane
+    break_phi: float | None = None                    # fixed cone angle at the Fig. 6.18 break-up
 
     @property
     def moment_product(self) -> float:
@@ -54,6 +53,16 @@ class TwinParams:
     def with_product(self, product: float) -> TwinParams:
         """The same rig with the floator moment scaled so that m_R m_F = ``product``."""
         return _replace(self, m_floator=product / self.m_rotator)
+
+
+#: where rigs/emulated-fig618.toml differs from DEFAULT_BODIES: its rotator tilt and gap
+FIG618_CHANGES = {"tilt_rad": math.radians(6.9), "gap_m": 0.0264}
+
+
+def default_params(preset: str) -> TwinParams:
+    """The magnets of the shipped emulated rig of ``preset`` (``model-fig525``/``model-fig618``):
+    what a model plant built without a rig file (a bare ``sim://`` URL, a real-clock run) uses."""
+    return _replace(TwinParams(), **FIG618_CHANGES) if preset == "model-fig618" else TwinParams()
 
 
 def _replace(p: TwinParams, **changes: float) -> TwinParams:
@@ -76,7 +85,7 @@ def params_from_rig(rig: Any) -> TwinParams:
         d["i_axial"] = flo.inertia_axial_kg_m2 or flo.inertia_radial_kg_m2 or d["i_axial"]
     if rig.geometry.gap_m:
         d["gap_m"] = rig.geometry.gap_m
-    return TwinParams(**d)
+    return TwinParams(**d, break_phi=rig.geometry.break_phi_rad)
 
 
 def missing_from_rig(rig: Any) -> list[str]:
@@ -164,11 +173,3 @@ def table_error(p: TwinParams, omegas: list[float] | None = None) -> float:
 def force_g(p: TwinParams, omega: float) -> float:
     """:class:`ForceTable` force in grams-force (the balance's unit)."""
     return balance_force_table(p).force_n(omega) / 1e-3 / G0
-
-
-def spin_critical_c(p: TwinParams, break_phi: float) -> float:
-    """C of Eq. 6.37 for rig ``p`` with cone angle ``break_phi`` (rad) at the break-up."""
-    from labkit.model.dipole import K_M
-    tau_c = K_M * p.moment_product / p.gap_m**3
-    tau_s = 2.0 * math.tan(p.tilt_rad) * tau_c
-    return (tau_c * math.cos(break_phi) + tau_s * math.sin(break_phi)) / (p.i_radial * math.sin(break_phi))

@@ -56,10 +56,21 @@ def no_spin_orbit(body: RotatingFieldBody, y_guess: np.ndarray, spin: float) -> 
     return describe(body, _state(fit.x[:4], fit.x[4])), float(fit.x[4])
 
 
-def zenith_centre(body: RotatingFieldBody, y0: np.ndarray) -> float:
-    """Centre of the dipole's zenith range over the orbit, ``(max + min) / 2``: the centre of
-    the elliptic path whose zenith semi-axis is R_X (Fig. 5.6's lambda and R_X)."""
+def tilt_angles(body: RotatingFieldBody, y0: np.ndarray, samples: int = 2048) -> tuple[float, float]:
+    """Fig. 5.6's lambda and R_X: centre and half-range of the dipole's *signed* angle from z
+    in the tilt plane (the plane of z and the orbit's mean axis; Fig. 5.4: "rotation lambda
+    aligned with axis-x", i.e. the rotation about the horizontal axis normal to that plane).
+
+    The zenith angle is not signed: once the path comes within R_X of the pole (lambda < R_X,
+    Fig. 5.6 row 3: 0.2666 < 0.275) its range folds at 0 and its centre and half-range swap
+    lambda and R_X. Elsewhere both definitions agree.
+    """
     from labkit.model.tilted_cone import _flow
-    psi = _flow(body, y0, 2048).y[:3]
-    zen = np.arccos(np.clip(psi[2] / np.linalg.norm(psi, axis=0), -1, 1))
-    return 0.5 * float(zen.max() + zen.min())
+    sol = _flow(body, y0, samples)
+    s = sol.t
+    psi = sol.y[:3] / np.linalg.norm(sol.y[:3], axis=0)
+    lab = np.stack([np.cos(s) * psi[0] - np.sin(s) * psi[1], np.sin(s) * psi[0] + np.cos(s) * psi[1], psi[2]])
+    axis = lab.mean(axis=1)
+    azimuth = np.arctan2(axis[1], axis[0])
+    signed = np.arctan2(np.cos(azimuth) * lab[0] + np.sin(azimuth) * lab[1], lab[2])
+    return 0.5 * float(signed.max() + signed.min()), 0.5 * float(signed.max() - signed.min())

@@ -4,15 +4,17 @@ The orbits are found by shooting (:mod:`labkit.model.tilted_cone`) for the isotr
 the caption (I = 0.998e-7 kg m^2, w = 60 pi rad/s, tau_C = 1e-3 N m; the caption's 1e-7 is a
 misprint). The family of periodic orbits is labelled by the conserved spin, which the paper
 does not state. ``fig5.6/N/lambda``: the no-net-spin orbit (:mod:`labkit.model.no_spin_orbit`:
-orientation and angular velocity both return after one drive period, as Eq. 5.7 does), lambda
-the centre of its zenith range (the centre of the ellipse whose zenith semi-axis is R_X).
-``fig5.6/N/lambda_spin_free``: the spin-free orbit (k = -1 about its own tilted axis, spin
-close to Fig. 5.4's v_z = -4.891 rad/s ~ -0.026 w), same lambda, for comparison: the spin
-moves lambda by under 1.5 % on every row; the cycle *mean* of the zenith (labkit's earlier
-lambda) is 5-32 % off on rows 3-7, because the path is not symmetric in zenith there.
-Row 3 (ratio 0.140, just below the threshold 0.144 of Eq. 5.46, where lambda is steep in the
-ratio) stays 3.3 % high on both orbits: not reproduced within 2.5 % (its R_X is 2 % low too).
-Rows are solved outwards from row 7 (Fig. 5.4's case), each starting from the nearest orbit.
+orientation and angular velocity both return after one drive period, as Eq. 5.7 does).
+lambda and R_X are the centre and half-range of the dipole's *signed* angle from z in the tilt
+plane (:func:`~labkit.model.no_spin_orbit.tilt_angles`). On row 3 (ratio 0.140, 0.004 below the
+threshold 0.1439 of Eq. 5.46) the path encloses the pole (paper: lambda 0.2666 < R_X 0.275), so
+the zenith range folds at 0 and its centre and half-range would swap lambda and R_X (+3.3 % and
+-2 %); elsewhere both definitions agree. ``fig5.6/N/lambda_spin_free``: the spin-free orbit
+(k = -1 about its own tilted axis, spin close to Fig. 5.4's v_z = -4.891 rad/s ~ -0.026 w),
+same lambda, for comparison: the spin moves lambda by under 1.5 % on every row; the cycle
+*mean* of the zenith (labkit's earlier lambda) is 5-32 % off on rows 3-7, because the path is
+not symmetric in zenith there. Rows are solved outwards from row 7 (Fig. 5.4's case), each
+starting from the nearest orbit.
 """
 
 from __future__ import annotations
@@ -21,15 +23,20 @@ import math
 
 from labkit.model import conical_dynamics as cd
 from labkit.model import tilted_cone as tc
-from labkit.model.no_spin_orbit import no_spin_orbit, zenith_centre
+from labkit.model.no_spin_orbit import no_spin_orbit, tilt_angles
 from labkit.reproduce import Row, compare
 from labkit.reproduce.paper_data import FIG_5_6
 
 INERTIA, OMEGA, TAU_C = 0.998e-7, 60 * math.pi, 1e-3
 R_X = {1: 0.287, 2: 0.286, 3: 0.275, 4: 0.256, 5: 0.227, 6: 0.2006, 7: 0.186, 8: 0.119, 9: 0.0792,
        10: 0.0337, 11: 0.0198, 12: 0.00985, 13: 0.00645, 14: 0.0}
-NO_SPIN_NOTE = "no-net-spin orbit (spin {:.4f} w), lambda = centre of the zenith range"
-SPIN_NOTE = "spin-free orbit (spin {:.4f} w), lambda = centre of the zenith range"
+NO_SPIN_NOTE = "no-net-spin orbit (spin {:.4f} w), lambda = centre of the signed tilt-plane angle"
+SPIN_NOTE = "spin-free orbit (spin {:.4f} w), lambda = centre of the signed tilt-plane angle"
+# Row 3: d lambda / d ratio = -25 rad there (ratios 0.1395-0.1405, Fig. 5.6 body); the ratio is
+# printed to 3 decimals, so its half last digit (0.0005) alone moves lambda by +-4.7 %.
+ROW3_NOTE = ("; 0.004 below the threshold ratio 0.1439 (Eq. 5.46): the path encloses the pole "
+             "(lambda < R_X, as the paper's), d lambda/d ratio = -25, so the printed ratio's "
+             "+-0.0005 alone is +-4.7 % in lambda")
 LAMBDA_TOL = 0.025
 QUICK_ROWS = (7,)
 
@@ -55,8 +62,8 @@ def rows(quick: bool = False, prefix: str = "") -> list[Row]:
         guess = results[nearest][3] if nearest is not None else tc.tilted_guess(body, lam, 0.2)
         orbit, spin = tc.spin_free_orbit(body, guess, spin)
         nonet, nonet_spin = no_spin_orbit(body, orbit.y0, spin)
-        results[no] = (zenith_centre(body, nonet.y0), orbit.r_x, spin, orbit.y0,
-                       zenith_centre(body, orbit.y0), nonet_spin)
+        got_lam, r_x = tilt_angles(body, nonet.y0)
+        results[no] = (got_lam, r_x, spin, orbit.y0, tilt_angles(body, orbit.y0)[0], nonet_spin)
     for no, _ratio, lam in data:
         got_lam, r_x, spin = results[no][:3]
         if spin is None:
@@ -69,13 +76,13 @@ def rows(quick: bool = False, prefix: str = "") -> list[Row]:
         row = compare(f"fig5.6/{no}/lambda", "tilt lambda of the cone axis (rad)", lam, got_lam, tol,
                       note, abs_tol=5e-3)
         if no == 3 and spin is not None:
-            row.note += "; 0.004 below the threshold ratio 0.144 (Eq. 5.46): not reproduced within 2.5 %"
+            row.note += ROW3_NOTE
         out.append(row)
         if spin is not None and spin != 0.0:
             out.append(compare(f"fig5.6/{no}/lambda_spin_free", "tilt lambda, spin-free orbit (rad)", lam,
                                results[no][4], 0.05, SPIN_NOTE.format(spin), abs_tol=5e-3))
         if spin is not None:
-            rx_note = "zenith half-range, independent of the spin"
+            rx_note = "half-range of the signed tilt-plane angle, no-net-spin orbit"
             if no == 13:
                 rx_note += ("; the paper's 0.00645 breaks its own trend (R_X ~ 2 tau_S/tau_C here: "
                             "rows 10-12 give 0.0337, 0.0198, 0.00985)")

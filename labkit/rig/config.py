@@ -86,6 +86,7 @@ class Geometry:
     axis: str = "vertical"
     gap_m: float | None = None            # rotator centre to floator centre
     balance_under: str = "rotator"        # what the balance carries: "rotator" | "floator"
+    break_phi_rad: float | None = None    # fixes the Fig. 6.18 break-up cone angle (model plant)
 
 
 @dataclass(frozen=True)
@@ -301,7 +302,12 @@ def parse_rig_config(text: str, file: str = "<rig>", check_device: DeviceCheck |
     under = gsec.raw("balance_under", str, default="rotator")
     if under not in ("rotator", "floator"):
         raise gsec.error("balance_under", f"must be rotator or floator, got {under!r}")
-    geometry = Geometry(axis=axis, gap_m=gsec.quantity("gap", "m"), balance_under=under)
+    break_phi = gsec.quantity("break_phi", "rad")
+    if break_phi is not None and break_phi >= math.pi / 2:
+        key = next(k for k in gsec.table if k.startswith("break_phi_"))
+        raise gsec.error(key, "must be below 90 degrees")
+    geometry = Geometry(axis=axis, gap_m=gsec.quantity("gap", "m"), balance_under=under,
+                        break_phi_rad=break_phi)
     gsec.finish()
 
     lsec = _Section(file, "limits", top.raw("limits", dict, required=True))

@@ -8,7 +8,8 @@
 * :func:`fit_gap` - the rotator-floator distance with the moments held (fresh steady-state
   solves at the measured speeds).
 * C of Eq. 6.37 comes from the spin-critical protocol's own fit; :func:`break_phi_from_c`
-  inverts Eq. 6.37 for the cone angle at the break-up.
+  inverts Eq. 6.37 for the cone angle at the break-up (at the break-up height and speed of
+  :func:`labkit.emulators.break_up.break_up`).
 
 Every fit returns value, stderr (the residual-scaled covariance of weighted least squares)
 and the 95 % interval ``value +/- t_{0.975, n-1} stderr``.
@@ -66,14 +67,9 @@ def fit_gap(params: TwinParams, points: list[dict]) -> dict:
 
 
 def break_phi_from_c(params: TwinParams, c: dict) -> dict:
-    """Cone angle at the break-up (rad) from C of Eq. 6.37: ``C I = tau_C / tan(phi) + tau_S``."""
-    from labkit.model.dipole import K_M
-    tau_c = K_M * params.moment_product / params.gap_m**3
-    tau_s = 2.0 * math.tan(params.tilt_rad) * tau_c
-
-    def phi(cv: float) -> float:
-        return math.atan(tau_c / (cv * params.i_radial - tau_s))
-
+    """Cone angle at the break-up (rad) from C of Eq. 6.37 (:meth:`BreakUp.phi_from_c`)."""
+    from labkit.emulators.break_up import break_up
+    phi = break_up(params).phi_from_c
     lo, hi = c["ci95"]
     return {"value": phi(c["value"]), "stderr": abs(phi(c["value"] + c["stderr"]) - phi(c["value"])),
             "ci95": sorted([phi(lo), phi(hi)]), "n": c["n"]}

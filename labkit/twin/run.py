@@ -7,8 +7,8 @@ import math
 from pathlib import Path
 from typing import Any
 
-from labkit.emulators.model_plant import DEFAULT_BREAK_PHI
-from labkit.emulators.twin_model import TwinParams, missing_from_rig, params_from_rig, spin_critical_c
+from labkit.emulators.break_up import break_up
+from labkit.emulators.twin_model import TwinParams, missing_from_rig, params_from_rig
 from labkit.twin.fits import break_phi_from_c, fit_gap, fit_moment_product
 from labkit.twin.rigtext import write_twin_rig
 
@@ -50,11 +50,11 @@ def balance_rows(user_rig: Path, params: TwinParams, work: Path, seed: int) -> t
     return rows, {"session": str(outcome.session), "points": points}
 
 
-def spin_plan(params: TwinParams, break_phi: float) -> list[str]:
+def spin_plan(params: TwinParams) -> list[str]:
     """spin-critical plan: from 5 % above the model's lowest trapping speed, +10 % per run."""
     from labkit.emulators.plant import SpinCriticalLaw
     from labkit.units import rad_s_to_rpm
-    w0 = SpinCriticalLaw(c=spin_critical_c(params, break_phi)).min_trap_speed()
+    w0 = SpinCriticalLaw(c=break_up(params).c).min_trap_speed()
     start = rad_s_to_rpm(1.05 * w0)
     return [f"start_rpm={start:.0f}", f"stop_rpm={min(1.8 * start, 15000):.0f}", "step_pct=10",
             "max_trials=3"]
@@ -63,13 +63,14 @@ def spin_plan(params: TwinParams, break_phi: float) -> list[str]:
 def spin_rows(user_rig: Path, params: TwinParams, work: Path, seed: int) -> tuple[list[dict], dict]:
     """Fig. 6.18: the spin-critical protocol; C of Eq. 6.37 and the break-up cone angle."""
     rig_file = write_twin_rig(user_rig, "fig618", work / "rigs")
-    outcome = _run(rig_file, "spin-critical", spin_plan(params, DEFAULT_BREAK_PHI), work / "sessions", seed)
+    outcome = _run(rig_file, "spin-critical", spin_plan(params), work / "sessions", seed)
     c_fit = outcome.results["fit"]["params"]["C"]
     n = outcome.results["fit"].get("n", len(outcome.results["points"]))
     from labkit.twin.fits import _interval
     c = _interval(c_fit["value"], c_fit["stderr"], n)
-    rows = [compare("fig6.18", "C", spin_critical_c(params, DEFAULT_BREAK_PHI), c, "rad^2/s^2"),
-            compare("fig6.18", "break_phi", DEFAULT_BREAK_PHI, break_phi_from_c(params, c), "rad")]
+    put_in = break_up(params)
+    rows = [compare("fig6.18", "C", put_in.c, c, "rad^2/s^2"),
+            compare("fig6.18", "break_phi", put_in.phi, break_phi_from_c(params, c), "rad")]
     return rows, {"session": str(outcome.session), "points": outcome.results["points"]}
 
 

@@ -5,9 +5,9 @@ from pathlib import Path
 
 import pytest
 
-from labkit.emulators.model_plant import DEFAULT_BREAK_PHI
+from labkit.emulators.break_up import break_up
 from labkit.emulators.plant import SpinCriticalLaw
-from labkit.emulators.twin_model import force_g, params_from_rig, spin_critical_c
+from labkit.emulators.twin_model import force_g, params_from_rig
 from labkit.errors import LabkitError, RigFileError, SafetyError
 from labkit.protocols.launch import execute, prepare_run
 from labkit.protocols.quickfit import quick_fit_power_law
@@ -44,7 +44,7 @@ def test_spin_critical_pairs_follow_the_plant_law(tmp_path):
     outcome = execute(prep, tmp_path)
     assert outcome.status == "completed", outcome.reason
     # the model-fig618 plant: C of Eq. 6.37 from the rig's magnets, 1 % threshold noise
-    c_model = spin_critical_c(params_from_rig(load_rig(RIGS / "emulated-fig618.toml")), DEFAULT_BREAK_PHI)
+    c_model = break_up(params_from_rig(load_rig(RIGS / "emulated-fig618.toml"))).c
     law = SpinCriticalLaw(c=c_model)
     points = outcome.results["points"]
     assert len(points) == 4

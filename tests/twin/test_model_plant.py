@@ -1,18 +1,18 @@
 """The model plant: the balance force and the spin-critical C come from the rig file's magnets."""
 
 import math
-from dataclasses import replace
 from pathlib import Path
 
 import pytest
 
-from labkit.emulators.model_plant import DEFAULT_BREAK_PHI, Imperfections, model_plant
+from labkit.emulators.break_up import break_up
+from labkit.emulators.model_plant import Imperfections, model_plant
 from labkit.emulators.plant import Emulation, make_plant
 from labkit.emulators.twin_model import (
     TwinParams,
     balance_force_table,
+    default_params,
     params_from_rig,
-    spin_critical_c,
     steady_force_n,
     table_error,
 )
@@ -61,14 +61,18 @@ def test_shipped_rig_file_feeds_the_model_plant(tmp_path):
     assert stronger / plant.model_force_n(1500.0) > 1.3
 
 
-def test_fig618_model_c_follows_eq_6_37_and_the_fitted_preset_stays():
-    plant = make_plant("model-fig618", seed=1)
-    c = plant.floator.law.c
-    assert c == pytest.approx(spin_critical_c(TwinParams(), DEFAULT_BREAK_PHI))
-    assert c == pytest.approx(4.7e5, rel=0.01)          # the shipped magnets give the paper's series 1
+def test_fig618_model_c_follows_the_break_up_and_the_fitted_preset_stays():
+    shipped = params_from_rig(load_rig(RIGS / "emulated-fig618.toml"))
+    assert default_params("model-fig618") == shipped    # a bare sim:// URL: the shipped rig's magnets
+    assert default_params("model-fig525") == params_from_rig(load_rig(RIGS / "emulated-fig525.toml"))
+    c = make_plant("model-fig618", seed=1).floator.law.c
+    assert c == pytest.approx(break_up(shipped).c)
+    assert c == pytest.approx(4.7e5, rel=0.01)          # the shipped rig gives the paper's series 1
     assert make_plant("fig618").floator.law.c == 4.7e5  # the paper's fitted law as a preset
-    weaker = spin_critical_c(replace(TwinParams(), m_floator=1.6), DEFAULT_BREAK_PHI)
-    assert weaker < 0.85 * c
+    # the fig525 rig's magnets (rotator tilt 5 deg instead of 6.9) break up elsewhere
+    fig525_magnets = model_plant("model-fig618", 1, TwinParams()).floator.law.c
+    assert fig525_magnets == pytest.approx(break_up(TwinParams()).c)
+    assert break_up(TwinParams()).c > 1.5 * c
 
 
 def test_imperfections_are_seeded_and_off_when_zeroed():
