@@ -9,6 +9,7 @@ alternating pairs so a busy machine slows both alike; the ratio is decode time /
     python analysis/whole_command_bench.py                  # renders a 720p 10 s clip first
     python analysis/whole_command_bench.py --clip my.mp4 --pairs 7
     python analysis/whole_command_bench.py --help-only
+    python analysis/whole_command_bench.py --video-only --compare-with /tmp/old   # before/after
 
 Prints medians and the range; nothing is asserted (benchmarks print, tests do not time).
 """
@@ -91,14 +92,19 @@ def clip_for(args: argparse.Namespace, tmp: Path) -> Path:
     return clip
 
 
-def analyse_pairs(clip: Path, pairs: int) -> None:
-    """Interleaved rounds of the two decode-only processes and ``labkit analyse laser``."""
+def analyse_pairs(clip: Path, pairs: int, compare_with: str | None = None) -> None:
+    """Interleaved rounds of the two decode-only processes and ``labkit analyse laser`` (and, with
+    ``compare_with``, the same command from another copy of labkit, e.g. the previous commit)."""
     jobs = {
         "decode-only, labkit.vision.frames (bench vision's reference)":
             [sys.executable, "-c", DECODE_FRAMES, str(clip)],
         "decode-only, bare cv2 read loop": [sys.executable, "-c", DECODE_ONLY, str(clip)],
         "labkit analyse laser": [sys.executable, "-m", "labkit", "analyse", "laser", str(clip)],
     }
+    if compare_with:
+        jobs[f"labkit analyse laser from {compare_with}"] = [
+            "env", f"PYTHONPATH={compare_with}", sys.executable, "-m", "labkit", "analyse", "laser",
+            str(clip)]
     for argv in jobs.values():  # warm the page cache and numba/OpenCV caches
         wall(argv)
     times: dict[str, list[float]] = {name: [] for name in jobs}
@@ -106,14 +112,17 @@ def analyse_pairs(clip: Path, pairs: int) -> None:
     for i in range(pairs):
         for name in order if i % 2 == 0 else order[::-1]:
             times[name].append(wall(jobs[name]))
-    analyse = times["labkit analyse laser"]
-    print(f"analyse laser {clip.name} as a whole process, {pairs} interleaved rounds:")
+    print(f"analyse laser {clip.name} as a whole process, {pairs} interleaved rounds "
+          f"(load average {os.getloadavg()[0]:.1f} at the end, {os.cpu_count()} cores):")
     for name, ts in times.items():
-        print(f"  {name:62s} median {statistics.median(ts):.3f} s")
-    for name in order[:2]:
-        ratios = [d / a for d, a in zip(times[name], analyse, strict=True)]
-        print(f"  throughput vs {name}: {statistics.median(ratios):.2f}x "
-              f"(range {min(ratios):.2f}-{max(ratios):.2f}; target >= 0.8)")
+        med = statistics.median(ts)
+        print(f"  {name:62s} median {med:.3f} s  range {min(ts):.3f}-{max(ts):.3f} s "
+              f"({min(ts) / med:.2f}-{max(ts) / med:.2f} of its median)")
+    for analysed in [n for n in order if n.startswith("labkit analyse laser")]:
+        for name in order[:2]:
+            ratios = [d / a for d, a in zip(times[name], times[analysed], strict=True)]
+            print(f"  {analysed} vs {name}: {statistics.median(ratios):.2f}x "
+                  f"(range {min(ratios):.2f}-{max(ratios):.2f}; target >= 0.8)")
 
 
 def main() -> int:
@@ -124,12 +133,15 @@ def main() -> int:
     ap.add_argument("--repeats", type=int, default=3, help="runs per --help timing (default 3)")
     ap.add_argument("--help-only", action="store_true", help="only the start-up timings")
     ap.add_argument("--video-only", action="store_true", help="only the analyse laser pairs")
+    ap.add_argument("--compare-with", metavar="PYTHONPATH",
+                    help="also time `analyse laser` from this copy of labkit "
+                         "(e.g. an unpacked `git archive HEAD~1 labkit`)")
     args = ap.parse_args()
     if not args.video_only:
         help_times(args.repeats)
     if not args.help_only:
         with tempfile.TemporaryDirectory() as tmp:
-            analyse_pairs(clip_for(args, Path(tmp)), args.pairs)
+            analyse_pairs(clip_for(args, Path(tmp)), args.pairs, args.compare_with)
     return 0
 
 
