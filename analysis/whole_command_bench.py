@@ -10,6 +10,7 @@ alternating pairs so a busy machine slows both alike; the ratio is decode time /
     python analysis/whole_command_bench.py --clip my.mp4 --pairs 7
     python analysis/whole_command_bench.py --help-only
     python analysis/whole_command_bench.py --video-only --compare-with /tmp/old   # before/after
+    python analysis/whole_command_bench.py --video-only --pairs 0 --timeline 5    # where the time goes
 
 Prints medians and the range; nothing is asserted (benchmarks print, tests do not time).
 """
@@ -45,6 +46,72 @@ import sys
 from labkit.vision.frames import open_frames
 print(open_frames(sys.argv[1]).decode_only())
 """
+
+
+TIMELINE = """
+import atexit, os, resource, sys, time
+t0 = time.perf_counter()
+marks = {}
+import cv2
+_Capture = cv2.VideoCapture
+class Capture:  # stamps the first and the last frame any reader gets
+    def __init__(self, *a, **k):
+        self._c = _Capture(*a, **k)
+    def __getattr__(self, name):
+        return getattr(self._c, name)
+    def _stamp(self, ok):
+        if ok:
+            now = time.perf_counter() - t0
+            marks.setdefault("first_frame", now)
+            marks["last_frame"] = now
+        return ok
+    def read(self, *a):
+        r = self._c.read(*a)
+        self._stamp(r[0])
+        return r
+    def grab(self):
+        return self._stamp(self._c.grab())
+cv2.VideoCapture = Capture
+def report():  # registered first, so it runs after every other atexit handler
+    marks["exit_handlers_done"] = time.perf_counter() - t0
+    print("@@TIMELINE@@", time.time(), marks, file=sys.stderr)
+atexit.register(report)
+sys.argv = ["labkit", "analyse", "laser", sys.argv[1]]
+from labkit.cli import main
+code = main()
+marks["command_done"] = time.perf_counter() - t0
+sys.exit(code)
+"""
+
+
+def timeline(clip: Path, runs: int, trees: list[str | None]) -> None:
+    """Where the whole process spends its time: start to the first frame, the last frame to the
+    end of the command, and the interpreter's exit after the atexit handlers (median of ``runs``,
+    alternating the copies of labkit in ``trees``; None is the one on the current path)."""
+    import ast
+
+    rows: dict[str | None, list[dict]] = {t: [] for t in trees}
+    for i in range(runs):
+        for tree in trees if i % 2 == 0 else trees[::-1]:
+            env = dict(os.environ, **({"PYTHONPATH": tree} if tree else {}))
+            start = time.time()
+            proc = subprocess.run([sys.executable, "-c", TIMELINE, str(clip)], capture_output=True, text=True,
+                                  env=env)
+            end = time.time()
+            line = proc.stderr.rpartition("@@TIMELINE@@")[2].strip()
+            stamp, _, marks = line.partition(" ")
+            m = ast.literal_eval(marks)
+            rows[tree].append({"to first frame": m["first_frame"],
+                               "frames": m["last_frame"] - m["first_frame"],
+                               "last frame to result": m["command_done"] - m["last_frame"],
+                               "interpreter exit": end - float(stamp), "whole": end - start})
+    print(f"analyse laser {clip.name}: where the process spends its time, median (range) of {runs} runs "
+          f"(load average {os.getloadavg()[0]:.1f})")
+    for tree, runs_of in rows.items():
+        parts = "  ".join(f"{k} {statistics.median(r[k] for r in runs_of):.3f} "
+                          f"({min(r[k] for r in runs_of):.3f}-{max(r[k] for r in runs_of):.3f})"
+                          for k in runs_of[0])
+        print(f"  {tree or 'this labkit'}: {parts} s")
 
 
 def cpu_of_child(argv: list[str]) -> tuple[float, float]:
@@ -133,6 +200,8 @@ def main() -> int:
     ap.add_argument("--repeats", type=int, default=3, help="runs per --help timing (default 3)")
     ap.add_argument("--help-only", action="store_true", help="only the start-up timings")
     ap.add_argument("--video-only", action="store_true", help="only the analyse laser pairs")
+    ap.add_argument("--timeline", type=int, metavar="RUNS", default=0,
+                    help="also time start-up, frames, the work after the last frame and the exit")
     ap.add_argument("--compare-with", metavar="PYTHONPATH",
                     help="also time `analyse laser` from this copy of labkit "
                          "(e.g. an unpacked `git archive HEAD~1 labkit`)")
@@ -141,7 +210,11 @@ def main() -> int:
         help_times(args.repeats)
     if not args.help_only:
         with tempfile.TemporaryDirectory() as tmp:
-            analyse_pairs(clip_for(args, Path(tmp)), args.pairs, args.compare_with)
+            clip = clip_for(args, Path(tmp))
+            if args.pairs:
+                analyse_pairs(clip, args.pairs, args.compare_with)
+            if args.timeline:
+                timeline(clip, args.timeline, [None] + ([args.compare_with] if args.compare_with else []))
     return 0
 
 
