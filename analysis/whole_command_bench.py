@@ -93,10 +93,9 @@ def timeline(clip: Path, runs: int, trees: list[str | None]) -> None:
     rows: dict[str | None, list[dict]] = {t: [] for t in trees}
     for i in range(runs):
         for tree in trees if i % 2 == 0 else trees[::-1]:
-            env = dict(os.environ, **({"PYTHONPATH": tree} if tree else {}))
             start = time.time()
             proc = subprocess.run([sys.executable, "-c", TIMELINE, str(clip)], capture_output=True, text=True,
-                                  env=env)
+                                  env=child_env(tree), cwd=tempfile.gettempdir())
             end = time.time()
             line = proc.stderr.rpartition("@@TIMELINE@@")[2].strip()
             stamp, _, marks = line.partition(" ")
@@ -114,18 +113,28 @@ def timeline(clip: Path, runs: int, trees: list[str | None]) -> None:
         print(f"  {tree or 'this labkit'}: {parts} s")
 
 
-def cpu_of_child(argv: list[str]) -> tuple[float, float]:
+def cpu_of_child(argv: list[str], env: dict[str, str] | None = None) -> tuple[float, float]:
     """(wall, CPU user + system) of one run of ``argv``; CPU time is what load from other jobs
     disturbs least."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t = wall(argv)
+    t = wall(argv, env)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     return t, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
-def wall(argv: list[str]) -> float:
+REPO = Path(__file__).resolve().parents[1]
+
+
+def child_env(tree: str | None = None) -> dict[str, str]:
+    """Environment of a timed child: labkit from ``tree`` (default: this repository). Children run
+    in a neutral folder, since ``python -m``/``-c`` put the current folder first on sys.path."""
+    return dict(os.environ, PYTHONPATH=str(tree or REPO))
+
+
+def wall(argv: list[str], env: dict[str, str] | None = None) -> float:
     t0 = time.perf_counter()
-    proc = subprocess.run(argv, capture_output=True, text=True)
+    proc = subprocess.run(argv, capture_output=True, text=True, env=env or child_env(),
+                          cwd=tempfile.gettempdir())
     dt = time.perf_counter() - t0
     if proc.returncode not in (0, 1):
         raise SystemExit(f"{' '.join(argv)} failed ({proc.returncode}): {proc.stderr.strip()[-400:]}")
@@ -168,23 +177,28 @@ def analyse_pairs(clip: Path, pairs: int, compare_with: str | None = None) -> No
         "decode-only, bare cv2 read loop": [sys.executable, "-c", DECODE_ONLY, str(clip)],
         "labkit analyse laser": [sys.executable, "-m", "labkit", "analyse", "laser", str(clip)],
     }
+    envs = {name: child_env() for name in jobs}
     if compare_with:
-        jobs[f"labkit analyse laser from {compare_with}"] = [
-            "env", f"PYTHONPATH={compare_with}", sys.executable, "-m", "labkit", "analyse", "laser",
-            str(clip)]
-    for argv in jobs.values():  # warm the page cache and numba/OpenCV caches
-        wall(argv)
+        name = f"labkit analyse laser from {compare_with}"
+        jobs[name] = [sys.executable, "-m", "labkit", "analyse", "laser", str(clip)]
+        envs[name] = child_env(compare_with)
+    for name, argv in jobs.items():  # warm the page cache and numba/OpenCV caches
+        wall(argv, envs[name])
     times: dict[str, list[float]] = {name: [] for name in jobs}
+    cpu: dict[str, list[float]] = {name: [] for name in jobs}
     order = list(jobs)
     for i in range(pairs):
         for name in order if i % 2 == 0 else order[::-1]:
-            times[name].append(wall(jobs[name]))
+            t, c = cpu_of_child(jobs[name], envs[name])
+            times[name].append(t)
+            cpu[name].append(c)
     print(f"analyse laser {clip.name} as a whole process, {pairs} interleaved rounds "
           f"(load average {os.getloadavg()[0]:.1f} at the end, {os.cpu_count()} cores):")
     for name, ts in times.items():
         med = statistics.median(ts)
         print(f"  {name:62s} median {med:.3f} s  range {min(ts):.3f}-{max(ts):.3f} s "
-              f"({min(ts) / med:.2f}-{max(ts) / med:.2f} of its median)")
+              f"({min(ts) / med:.2f}-{max(ts) / med:.2f} of its median); "
+              f"CPU {statistics.median(cpu[name]):.3f} s")
     for analysed in [n for n in order if n.startswith("labkit analyse laser")]:
         for name in order[:2]:
             ratios = [d / a for d, a in zip(times[name], times[analysed], strict=True)]
