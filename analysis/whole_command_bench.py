@@ -9,6 +9,8 @@ alternating pairs so a busy machine slows both alike; the ratio is decode time /
     python analysis/whole_command_bench.py                  # renders a 720p 10 s clip first
     python analysis/whole_command_bench.py --clip my.mp4 --pairs 7
     python analysis/whole_command_bench.py --help-only
+    python analysis/whole_command_bench.py --video-only --compare-with /tmp/old   # before/after
+    python analysis/whole_command_bench.py --video-only --pairs 0 --timeline 5    # where the time goes
 
 Prints medians and the range; nothing is asserted (benchmarks print, tests do not time).
 """
@@ -46,18 +48,93 @@ print(open_frames(sys.argv[1]).decode_only())
 """
 
 
-def cpu_of_child(argv: list[str]) -> tuple[float, float]:
+TIMELINE = """
+import atexit, os, resource, sys, time
+t0 = time.perf_counter()
+marks = {}
+import cv2
+_Capture = cv2.VideoCapture
+class Capture:  # stamps the first and the last frame any reader gets
+    def __init__(self, *a, **k):
+        self._c = _Capture(*a, **k)
+    def __getattr__(self, name):
+        return getattr(self._c, name)
+    def _stamp(self, ok):
+        if ok:
+            now = time.perf_counter() - t0
+            marks.setdefault("first_frame", now)
+            marks["last_frame"] = now
+        return ok
+    def read(self, *a):
+        r = self._c.read(*a)
+        self._stamp(r[0])
+        return r
+    def grab(self):
+        return self._stamp(self._c.grab())
+cv2.VideoCapture = Capture
+def report():  # registered first, so it runs after every other atexit handler
+    marks["exit_handlers_done"] = time.perf_counter() - t0
+    print("@@TIMELINE@@", time.time(), marks, file=sys.stderr)
+atexit.register(report)
+sys.argv = ["labkit", "analyse", "laser", sys.argv[1]]
+from labkit.cli import main
+code = main()
+marks["command_done"] = time.perf_counter() - t0
+sys.exit(code)
+"""
+
+
+def timeline(clip: Path, runs: int, trees: list[str | None]) -> None:
+    """Where the whole process spends its time: start to the first frame, the last frame to the
+    end of the command, and the interpreter's exit after the atexit handlers (median of ``runs``,
+    alternating the copies of labkit in ``trees``; None is the one on the current path)."""
+    import ast
+
+    rows: dict[str | None, list[dict]] = {t: [] for t in trees}
+    for i in range(runs):
+        for tree in trees if i % 2 == 0 else trees[::-1]:
+            start = time.time()
+            proc = subprocess.run([sys.executable, "-c", TIMELINE, str(clip)], capture_output=True, text=True,
+                                  env=child_env(tree), cwd=tempfile.gettempdir())
+            end = time.time()
+            line = proc.stderr.rpartition("@@TIMELINE@@")[2].strip()
+            stamp, _, marks = line.partition(" ")
+            m = ast.literal_eval(marks)
+            rows[tree].append({"to first frame": m["first_frame"],
+                               "frames": m["last_frame"] - m["first_frame"],
+                               "last frame to result": m["command_done"] - m["last_frame"],
+                               "interpreter exit": end - float(stamp), "whole": end - start})
+    print(f"analyse laser {clip.name}: where the process spends its time, median (range) of {runs} runs "
+          f"(load average {os.getloadavg()[0]:.1f})")
+    for tree, runs_of in rows.items():
+        parts = "  ".join(f"{k} {statistics.median(r[k] for r in runs_of):.3f} "
+                          f"({min(r[k] for r in runs_of):.3f}-{max(r[k] for r in runs_of):.3f})"
+                          for k in runs_of[0])
+        print(f"  {tree or 'this labkit'}: {parts} s")
+
+
+def cpu_of_child(argv: list[str], env: dict[str, str] | None = None) -> tuple[float, float]:
     """(wall, CPU user + system) of one run of ``argv``; CPU time is what load from other jobs
     disturbs least."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t = wall(argv)
+    t = wall(argv, env)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     return t, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
-def wall(argv: list[str]) -> float:
+REPO = Path(__file__).resolve().parents[1]
+
+
+def child_env(tree: str | None = None) -> dict[str, str]:
+    """Environment of a timed child: labkit from ``tree`` (default: this repository). Children run
+    in a neutral folder, since ``python -m``/``-c`` put the current folder first on sys.path."""
+    return dict(os.environ, PYTHONPATH=str(tree or REPO))
+
+
+def wall(argv: list[str], env: dict[str, str] | None = None) -> float:
     t0 = time.perf_counter()
-    proc = subprocess.run(argv, capture_output=True, text=True)
+    proc = subprocess.run(argv, capture_output=True, text=True, env=env or child_env(),
+                          cwd=tempfile.gettempdir())
     dt = time.perf_counter() - t0
     if proc.returncode not in (0, 1):
         raise SystemExit(f"{' '.join(argv)} failed ({proc.returncode}): {proc.stderr.strip()[-400:]}")
@@ -91,29 +168,42 @@ def clip_for(args: argparse.Namespace, tmp: Path) -> Path:
     return clip
 
 
-def analyse_pairs(clip: Path, pairs: int) -> None:
-    """Interleaved rounds of the two decode-only processes and ``labkit analyse laser``."""
+def analyse_pairs(clip: Path, pairs: int, compare_with: str | None = None) -> None:
+    """Interleaved rounds of the two decode-only processes and ``labkit analyse laser`` (and, with
+    ``compare_with``, the same command from another copy of labkit, e.g. the previous commit)."""
     jobs = {
         "decode-only, labkit.vision.frames (bench vision's reference)":
             [sys.executable, "-c", DECODE_FRAMES, str(clip)],
         "decode-only, bare cv2 read loop": [sys.executable, "-c", DECODE_ONLY, str(clip)],
         "labkit analyse laser": [sys.executable, "-m", "labkit", "analyse", "laser", str(clip)],
     }
-    for argv in jobs.values():  # warm the page cache and numba/OpenCV caches
-        wall(argv)
+    envs = {name: child_env() for name in jobs}
+    if compare_with:
+        name = f"labkit analyse laser from {compare_with}"
+        jobs[name] = [sys.executable, "-m", "labkit", "analyse", "laser", str(clip)]
+        envs[name] = child_env(compare_with)
+    for name, argv in jobs.items():  # warm the page cache and numba/OpenCV caches
+        wall(argv, envs[name])
     times: dict[str, list[float]] = {name: [] for name in jobs}
+    cpu: dict[str, list[float]] = {name: [] for name in jobs}
     order = list(jobs)
     for i in range(pairs):
         for name in order if i % 2 == 0 else order[::-1]:
-            times[name].append(wall(jobs[name]))
-    analyse = times["labkit analyse laser"]
-    print(f"analyse laser {clip.name} as a whole process, {pairs} interleaved rounds:")
+            t, c = cpu_of_child(jobs[name], envs[name])
+            times[name].append(t)
+            cpu[name].append(c)
+    print(f"analyse laser {clip.name} as a whole process, {pairs} interleaved rounds "
+          f"(load average {os.getloadavg()[0]:.1f} at the end, {os.cpu_count()} cores):")
     for name, ts in times.items():
-        print(f"  {name:62s} median {statistics.median(ts):.3f} s")
-    for name in order[:2]:
-        ratios = [d / a for d, a in zip(times[name], analyse, strict=True)]
-        print(f"  throughput vs {name}: {statistics.median(ratios):.2f}x "
-              f"(range {min(ratios):.2f}-{max(ratios):.2f}; target >= 0.8)")
+        med = statistics.median(ts)
+        print(f"  {name:62s} median {med:.3f} s  range {min(ts):.3f}-{max(ts):.3f} s "
+              f"({min(ts) / med:.2f}-{max(ts) / med:.2f} of its median); "
+              f"CPU {statistics.median(cpu[name]):.3f} s")
+    for analysed in [n for n in order if n.startswith("labkit analyse laser")]:
+        for name in order[:2]:
+            ratios = [d / a for d, a in zip(times[name], times[analysed], strict=True)]
+            print(f"  {analysed} vs {name}: {statistics.median(ratios):.2f}x "
+                  f"(range {min(ratios):.2f}-{max(ratios):.2f}; target >= 0.8)")
 
 
 def main() -> int:
@@ -124,12 +214,21 @@ def main() -> int:
     ap.add_argument("--repeats", type=int, default=3, help="runs per --help timing (default 3)")
     ap.add_argument("--help-only", action="store_true", help="only the start-up timings")
     ap.add_argument("--video-only", action="store_true", help="only the analyse laser pairs")
+    ap.add_argument("--timeline", type=int, metavar="RUNS", default=0,
+                    help="also time start-up, frames, the work after the last frame and the exit")
+    ap.add_argument("--compare-with", metavar="PYTHONPATH",
+                    help="also time `analyse laser` from this copy of labkit "
+                         "(e.g. an unpacked `git archive HEAD~1 labkit`)")
     args = ap.parse_args()
     if not args.video_only:
         help_times(args.repeats)
     if not args.help_only:
         with tempfile.TemporaryDirectory() as tmp:
-            analyse_pairs(clip_for(args, Path(tmp)), args.pairs)
+            clip = clip_for(args, Path(tmp))
+            if args.pairs:
+                analyse_pairs(clip, args.pairs, args.compare_with)
+            if args.timeline:
+                timeline(clip, args.timeline, [None] + ([args.compare_with] if args.compare_with else []))
     return 0
 
 

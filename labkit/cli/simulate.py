@@ -49,6 +49,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         "invariant and quantities of interest are then taken on the stored samples",
     )
     p.add_argument(
+        "--attitude",
+        choices=["axis", "matrix"],
+        default="axis",
+        help="what to store of each body's attitude: 'axis' keeps an axisymmetric body's axis "
+        "(3 numbers per sample) and any other body's rotation matrix; 'matrix' keeps every "
+        "rotation matrix, also the turn of an axisymmetric body about its axis (default axis)",
+    )
+    p.add_argument(
         "--target-error",
         type=float,
         metavar="E",
@@ -101,6 +109,7 @@ def run(args: argparse.Namespace) -> int:
         drift_threshold=args.drift_threshold,
         system=system,
         decimate=args.decimate,
+        attitude=args.attitude,
     )
     if args.rerun:
         result.spec["rerun"] = args.rerun

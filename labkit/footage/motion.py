@@ -81,7 +81,7 @@ def _simulated(scene_name: str, cycles: int, samples_per_period: int):
         raise RuntimeError(f"simulation of {scene_name} ended with status {result.status}")
     axis = np.asarray(scene.bodies[0].moment_Am2, dtype=float)
     axis /= np.linalg.norm(axis)
-    normals = np.einsum("nij,j->ni", result.rotations[:, 0], axis)
+    normals = result.dipole_directions(0, axis)
     period = float(result.times_s[1] - result.times_s[0]) * samples_per_period
     return np.asarray(result.times_s, dtype=float), normals, period
 

@@ -40,8 +40,8 @@ def stroboscopic_indices(times_s: np.ndarray, period_s: float, tol: float = 1e-9
 
 def dipole_axes(result: SimResult, moments: list | None = None) -> np.ndarray:
     """(n, bodies, 3) unit dipole direction of every body in the lab (body z where no dipole)."""
-    nb = result.rotations.shape[1]
-    out = np.empty(result.rotations.shape[:2] + (3,))
+    nb = result.axes.shape[1]
+    out = np.empty(result.axes.shape)
     for b in range(nb):
         m = None if moments is None else np.asarray(moments[b], dtype=float)
         out[:, b] = result.dipole_directions(b, m if m is not None and np.linalg.norm(m) > 0 else None)

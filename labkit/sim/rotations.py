@@ -38,12 +38,15 @@ def axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
     return np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * (k @ k)
 
 
-def orthonormality_residual(r: np.ndarray) -> float:
-    """Frobenius norm of ``R^T R - I`` (largest over leading axes): zero for a rotation."""
-    r = np.asarray(r, dtype=float)
-    eye = np.eye(3)
-    res = np.einsum("...ji,...jk->...ik", r, r) - eye
-    return float(np.max(np.sqrt(np.sum(res * res, axis=(-2, -1))))) if res.size else 0.0
+def orthonormality_residual(r: np.ndarray, chunk: int = 65536) -> float:
+    """Frobenius norm of ``R^T R - I`` (largest over leading axes): zero for a rotation. Taken
+    ``chunk`` matrices at a time, so a long run's check needs no second copy of its samples."""
+    flat = np.asarray(r, dtype=float).reshape(-1, 3, 3)
+    worst = 0.0
+    for start in range(0, len(flat), chunk):
+        res = np.einsum("nji,njk->nik", flat[start:start + chunk], flat[start:start + chunk]) - np.eye(3)
+        worst = max(worst, float(np.max(np.sqrt(np.sum(res * res, axis=(-2, -1))))))
+    return worst
 
 
 def zenith_angle(vectors: np.ndarray) -> np.ndarray:

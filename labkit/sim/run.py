@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from labkit.sim import equilibrium
+from labkit.sim.attitude import ATTITUDES, body_axis
 from labkit.sim.compile import CompiledSystem, compile_scene
 from labkit.sim.integrators import DEFAULT_INTEGRATOR, RawRun, SimulationError, get_integrator
 from labkit.sim.integrators.kernels import invariants_over_samples
@@ -37,15 +38,20 @@ def simulate(
     rotation_threshold: float = 1e-6,
     system: CompiledSystem | None = None,
     decimate: int = 1,
+    attitude: str = "axis",
 ) -> SimResult:
     """Simulate ``cycles`` drive periods of ``scene`` (a :class:`Scene`, a TOML path or a bundled name).
 
     ``steps_per_period`` applies to splittings (automatic if None), ``rtol`` to scipy references.
     ``decimate`` keeps every ``decimate``-th of the ``samples_per_period`` samples (and the last):
     memory then grows as ``cycles * samples_per_period / decimate`` (long runs, docs/simulator.md).
+    ``attitude`` "axis" keeps an axisymmetric body's axis and any other body's rotation matrix;
+    "matrix" keeps every body's rotation matrix (:mod:`labkit.sim.attitude`).
     """
     if not (isinstance(decimate, int) and decimate >= 1):
         raise SimulationError(f"decimate must be a whole number >= 1, got {decimate!r}")
+    if attitude not in ATTITUDES:
+        raise SimulationError(f"attitude must be one of {', '.join(ATTITUDES)}, got {attitude!r}")
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
     system = system or compile_scene(scene)
@@ -57,7 +63,7 @@ def simulate(
         decimate=decimate,
     )
     wall = time.perf_counter() - start - raw.extra.get("compile_s", 0.0)
-    return assemble(scene, system, raw, cycles, wall, drift_threshold, rotation_threshold)
+    return assemble(scene, system, raw, cycles, wall, drift_threshold, rotation_threshold, attitude)
 
 
 def assemble(
@@ -68,12 +74,14 @@ def assemble(
     wall: float,
     drift_threshold: float = 1e-6,
     rotation_threshold: float = 1e-6,
+    attitude: str = "axis",
 ) -> SimResult:
     """Turn an integrator's :class:`RawRun` into a :class:`SimResult` (invariants, status, QoIs)."""
+    axis_body, keep = _attitudes(scene, attitude)
     if system.reduced is not None:
-        parts = _reduced_parts(system, raw)
+        parts = _reduced_parts(system, raw, axis_body, keep)
     else:
-        parts = _rigid_parts(system, raw)
+        parts = _rigid_parts(system, raw, axis_body, keep)
     code = Status(raw.status)
     status = code.label
     detail = MESSAGES[code].format(r_escape=system.r_escape, message=raw.message)
@@ -99,7 +107,9 @@ def assemble(
         body_names=system.body_names,
         positions_m=parts["x"],
         velocities_m_s=parts["v"],
-        rotations=parts["R"],
+        axes=parts["axes"],
+        axis_body=axis_body,
+        rotation_matrices=parts["matrices"],
         angular_velocities_rad_s=parts["w"],
         invariant=system.invariant,
         invariant_values=parts["inv"],
@@ -126,14 +136,25 @@ def _rel_drift(values: np.ndarray, scale: float) -> float:
     return float(np.max(d) / scale) if np.all(np.isfinite(values)) else math.inf
 
 
-def _reduced_parts(system: CompiledSystem, raw: RawRun) -> dict:
+def _attitudes(scene: Scene, attitude: str) -> tuple[np.ndarray, list[bool]]:
+    """Each body's axis (body frame) and whether its rotation matrix is kept."""
+    axis_body, keep = np.zeros((len(scene.bodies), 3)), []
+    for b, body in enumerate(scene.bodies):
+        axis_body[b], symmetric = body_axis(body.inertia_kg_m2, body.moment_Am2, body.dipole_offset_m)
+        keep.append(attitude == "matrix" or not symmetric)
+    return axis_body, keep
+
+
+def _reduced_parts(system: CompiledSystem, raw: RawRun, axis_body: np.ndarray, keep: list[bool]) -> dict:
     rf = system.reduced
     body = system.scene.bodies[0]
     n = len(raw.t)
     axis_rot, axis = (
         (rot_x, np.array([1.0, 0.0, 0.0])) if rf.form == 0 else (rot_z, np.array([0.0, 0.0, 1.0]))
     )
-    R = np.array([axis_rot(a - rf.y0) @ body.rotation for a in raw.y]).reshape(n, 1, 3, 3)
+    R = np.array([axis_rot(a - rf.y0) @ body.rotation for a in raw.y]).reshape(n, 3, 3)
+    axes = (R @ axis_body[0])[:, None, :]
+    matrices = {0: R} if keep[0] else {}
     w = (raw.yd[:, None] * axis)[:, None, :]
     x = np.repeat(np.asarray(body.position_m, float)[None, None, :], n, axis=0)
     v = np.zeros_like(x)
@@ -144,7 +165,8 @@ def _reduced_parts(system: CompiledSystem, raw: RawRun) -> dict:
         drift = _rel_drift(inv, scale)
     else:
         inv, drift = np.full(n, math.nan), None
-    return {"x": x, "v": v, "R": R, "w": w, "inv": inv, "drift": drift, "rot_res": 0.0}
+    return {"x": x, "v": v, "axes": axes, "matrices": matrices, "w": w, "inv": inv, "drift": drift,
+            "rot_res": 0.0}
 
 
 def _free_flight(system: CompiledSystem, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -170,17 +192,23 @@ def _free_flight(system: CompiledSystem, t: np.ndarray) -> tuple[np.ndarray, np.
     return np.stack(xs, 1), np.stack(vs, 1)
 
 
-def _rigid_parts(system: CompiledSystem, raw: RawRun) -> dict:
+def _rigid_parts(system: CompiledSystem, raw: RawRun, axis_body: np.ndarray, keep: list[bool]) -> dict:
     bf = system.bf
-    Rp = raw.R
-    R_body = np.einsum("nbij,bkj->nbik", Rp, system.frames)
+    Rp = raw.R  # principal frame -> lab; body -> lab is Rp V^T (V: system.frames)
+    axes = np.empty(Rp.shape[:2] + (3,))
+    matrices = {}
+    for b, frame in enumerate(system.frames):
+        axes[:, b] = Rp[:, b] @ (frame.T @ axis_body[b])
+        if keep[b]:
+            matrices[b] = Rp[:, b] @ frame.T
     pi = np.einsum("nbji,nbj->nbi", Rp, raw.L)
     w = np.einsum("nbij,nbj->nbi", Rp, pi / bf[None, :, 1:4])
     if system.bi[:, 0].any():
         x, v = raw.x, raw.v
     else:
         x, v = _free_flight(system, raw.t)
-    out = {"x": x, "v": v, "R": R_body, "w": w, "rot_res": orthonormality_residual(Rp) if len(Rp) else 0.0}
+    out = {"x": x, "v": v, "axes": axes, "matrices": matrices, "w": w,
+           "rot_res": orthonormality_residual(Rp) if len(Rp) else 0.0}
     if not len(raw.t):
         out.update(inv=np.zeros(0), drift=None)
         return out
@@ -231,7 +259,7 @@ def _qoi(scene: Scene, system: CompiledSystem, raw: RawRun, parts: dict) -> dict
         entry: dict = {}
         m = np.asarray(body.moment_Am2, float)
         if np.linalg.norm(m) > 0 and len(t):
-            zen = zenith_angle(parts["R"][:, b] @ m)
+            zen = zenith_angle(parts["axes"][:, b])  # the axis of a body with a dipole is its direction
             entry["cone_angle_rad"] = {
                 "mean": float(zen.mean()),
                 "min": float(zen.min()),

@@ -54,16 +54,15 @@ def log_sim_result(rec: Any, result: Any, stride: int = 1, arm_m: float | None =
     times = np.asarray(result.times_s)[idx]
     time_col = [rr.TimeColumn("sim_time", duration=times)]
     positions = np.asarray(result.positions_m)[idx]
-    rotations = np.asarray(result.rotations)[idx]
     scale = arm_m if arm_m is not None else _arm_length(positions)
     for b, name in enumerate(result.body_names):
         path = f"/world/{name}"
         rec.send_columns(path, indexes=time_col,
                          columns=rr.Transform3D.columns(translation=positions[:, b],
-                                                        mat3x3=rotations[:, b]))
-        rec.log(f"{path}/dipole", rr.Arrows3D(vectors=[[0.0, 0.0, scale]], colors=[[220, 60, 30]]),
-                static=True)
-        axis = rotations[:, b] @ np.array([0.0, 0.0, 1.0])
+                                                        mat3x3=result.display_rotations(b)[idx]))
+        rec.log(f"{path}/dipole", rr.Arrows3D(vectors=[scale * np.asarray(result.axis_body[b])],
+                                              colors=[[220, 60, 30]]), static=True)
+        axis = np.asarray(result.axes)[idx, b]
         tip = positions[:, b] + scale * axis
         rec.log(f"{path}/trace", rr.LineStrips3D([tip], colors=[[30, 110, 220]]), static=True)
         rec.log(f"{path}/cm_path", rr.LineStrips3D([positions[:, b]], colors=[[120, 120, 120]]),

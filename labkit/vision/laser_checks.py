@@ -38,14 +38,17 @@ width, fractions of the curve and of the light, the frame's size.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from labkit.vision.fit import Classification, CurveFit, coverage_rms, two_way_rms
 from labkit.vision.quality import Finding, graded, verdict
 from labkit.vision.wander import Wander, chunk_offsets, dense_curve
 from labkit.vision.wander import xy as _xy
+
+if TYPE_CHECKING:
+    from scipy.spatial import cKDTree
 
 MIN_LINE_WIDTH_PX = 2.0  # a trace is never judged against less than this (sub-pixel lines)
 # a different pattern whose score is within this factor of the chosen one's is a real alternative
@@ -79,6 +82,7 @@ def laser_evidence(cls: Classification, points: np.ndarray, times: np.ndarray | 
                    line_width_px: float, frame_size: tuple[int, int], wander: Wander | None = None) -> dict:
     """The measures of the module docstring for the chosen fit ``cls.best`` (JSON-ready);
     ``wander``: the centre's wander as followed (:func:`labkit.vision.wander.follow_wander`)."""
+    from scipy.spatial import cKDTree  # loaded after the frames (see labkit.vision.fit)
     best = cls.best
     keep = np.random.default_rng(3).permutation(len(points))[:MAX_EVIDENCE_POINTS]
     pts = np.asarray(points, float)[keep]
@@ -127,6 +131,7 @@ def _runner_up(cls: Classification, width: float, pts: np.ndarray, tau: np.ndarr
     with loops too small to see, against an ellipse) is the same answer and does not count; a
     'ratio' under 1 means a different pattern scored better but lost to the rule that prefers
     the simpler pattern."""
+    from scipy.spatial import cKDTree  # loaded after the frames (see labkit.vision.fit)
     best = cls.best
     z = pts[:, 0] + 1j * pts[:, 1]
     candidates = [cls.ellipse] + list(cls.fits.values())
@@ -158,6 +163,7 @@ def _runner_up(cls: Classification, width: float, pts: np.ndarray, tau: np.ndarr
 def _departure(fit: CurveFit, other: np.ndarray, other_tree: cKDTree) -> float:
     """How far two curves visibly differ: the larger of the 90th percentiles of the distances
     from each to the other (px)."""
+    from scipy.spatial import cKDTree  # loaded after the frames (see labkit.vision.fit)
     mine, _ = dense_curve(fit, 1.0)
     there, _ = other_tree.query(_xy(mine))
     back, _ = cKDTree(_xy(mine)).query(_xy(other))
@@ -165,6 +171,7 @@ def _departure(fit: CurveFit, other: np.ndarray, other_tree: cKDTree) -> float:
 
 
 def _residual(fit: CurveFit, z: np.ndarray, tau: np.ndarray) -> float:
+    from scipy.spatial import cKDTree  # loaded after the frames (see labkit.vision.fit)
     curve, _ = dense_curve(fit, 0.5)
     d, _ = cKDTree(_xy(curve)).query(_xy(z - fit.drift * tau))
     return float(np.sqrt(np.mean(d * d)))

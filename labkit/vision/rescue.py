@@ -17,7 +17,6 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from labkit.vision.clusters import LINK_WIDTHS, separate_pattern
 from labkit.vision.fit import MIN_POINTS, Classification, classify
@@ -28,6 +27,7 @@ def without_stray_light(points: np.ndarray, weights: np.ndarray, times: np.ndarr
     """The trace without light away from the pattern: points, weights, times, band (its pixels
     near a kept point), and ``(share, rival)``: the share of points left out (0: nothing was) and
     the largest left-out group's size against the pattern's (:class:`labkit.vision.clusters.Separation`)."""
+    from scipy.spatial import cKDTree  # loaded after the frames (see labkit.vision.fit)
     sep = separate_pattern(points, width)
     if sep.groups == 0:
         return points, weights, times, band, (0.0, 0.0)

@@ -18,7 +18,6 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from labkit.vision.fit import (
     SIMPLER_TOLERANCE,
@@ -64,6 +63,7 @@ def chunk_offsets(fit: CurveFit, still: np.ndarray, chunk: np.ndarray, chunks: i
     (within ``width`` px) gets NaN: on a part of the pattern a shift and a change of shape look
     alike (symmetric copies do not help here: a shift moves opposite sides the same way, a change
     of size opposite ways, and only seeing both tells them apart)."""
+    from scipy.spatial import cKDTree  # loaded after the frames (see labkit.vision.fit)
     curve, share = dense_curve(fit, 0.5)
     tree = cKDTree(xy(curve))
     _, idx = tree.query(xy(still))
@@ -101,6 +101,7 @@ def filled(offsets: np.ndarray, mid_times: np.ndarray) -> np.ndarray:
 def robust_rms(fit: CurveFit, still: np.ndarray) -> float:
     """Rms distance of points ``still`` (drift taken out) from the curve, leaving out points
     farther than 3 x the median distance (spurs of the centre line, specks)."""
+    from scipy.spatial import cKDTree  # loaded after the frames (see labkit.vision.fit)
     curve, _ = dense_curve(fit, 0.5)
     d, _ = cKDTree(xy(curve)).query(xy(still))
     d = d[d <= 3 * max(float(np.median(d)), 1 / 3)]

@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -65,3 +66,52 @@ def test_parser_names_match_their_registries():
 
     assert names.FIT_MODELS == tuple(MODELS)
     assert names.PAPER_OMEGA_C == PAPER_OMEGA_C
+
+
+LASER_FIRST_FRAME = """
+import json, sys
+from labkit.vision.laser import analyse_laser
+seen = []
+def on_frame(index, t_s, bgr):
+    if not seen:
+        seen.append(sorted(m for m in sys.modules if m.split(".")[0] == "scipy"))
+result = analyse_laser(sys.argv[1], on_frame=on_frame)
+after = sorted(m for m in sys.modules if m.split(".")[0] == "scipy")
+print(json.dumps({"at_first_frame": seen[0], "after": after, "pattern": result["pattern"]["type"]}))
+"""
+
+
+def test_analyse_laser_reaches_its_first_frame_before_scipy():
+    """Issue 15: ``analyse laser`` starts decoding at once; scipy (cKDTree, about 0.3 s to import)
+    is loaded only for the fit, while later frames decode. The second assertion shows the probe
+    can see scipy."""
+    clip = Path(__file__).resolve().parents[2] / "recordings" / "videos" / "laser-ellipse-medium.mp4"
+    proc = subprocess.run([sys.executable, "-c", LASER_FIRST_FRAME, str(clip)], capture_output=True,
+                          text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    seen = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert seen["at_first_frame"] == [], f"loaded before the first frame: {seen['at_first_frame']}"
+    assert "scipy.spatial" in seen["after"] and seen["pattern"] == "ellipse"
+
+
+END_PROBE = """
+import gc, sys
+from labkit.cli import main
+sys.argv = ["labkit", "rig", "--help"]
+try:
+    main() if {program} else main(["rig", "--help"])
+except SystemExit:
+    pass
+print("@@FROZEN@@", gc.get_freeze_count())
+"""
+
+
+@pytest.mark.parametrize("program", [True, False])
+def test_only_the_program_itself_ends_quickly(program):
+    """``labkit ...`` freezes the garbage collector before the interpreter exits (``end_quickly``);
+    ``main(argv)`` called inside another process (tests, notebooks) leaves it alone."""
+    proc = subprocess.run([sys.executable, "-c", END_PROBE.format(program=program)], capture_output=True,
+                          text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    frozen = int(proc.stdout.rpartition("@@FROZEN@@")[2])
+    assert (frozen > 0) == program, frozen

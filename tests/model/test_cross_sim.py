@@ -23,7 +23,7 @@ def test_table_5_3_row_22_axis_deviation_matches_labkit_sim():
     result = sim.simulate(scene)
     assert result.status == "ok"
     t = result.times_s
-    psi = result.rotations[:, 0, :, 2]
+    psi = result.dipole_directions(0, [0.0, 0.0, 1.0])  # body z
     c, s = np.cos(w * t), np.sin(w * t)  # rotate into the co-rotating frame
     psi_rot = np.stack([c * psi[:, 0] + s * psi[:, 1], -s * psi[:, 0] + c * psi[:, 1], psi[:, 2]], axis=1)
     body = cd.RotatingFieldBody.from_si(tau_c, tau_s, 1e-7, 1e-7, w)

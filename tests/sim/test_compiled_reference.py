@@ -16,7 +16,8 @@ from labkit.sim import SimulationError, compile_scene, load_scene, simulate
 
 pytest.importorskip("CyRK")
 
-KW = {"samples_per_period": 2, "drift_threshold": math.inf, "rotation_threshold": math.inf}
+KW = {"samples_per_period": 2, "drift_threshold": math.inf, "rotation_threshold": math.inf,
+      "attitude": "matrix"}  # the full attitudes, also the turn about an axisymmetric body's axis
 
 
 @pytest.mark.parametrize("scene_name", ["conical_5_1", "mbs_fig6_1"])

@@ -90,14 +90,18 @@ def check_memory(n_samples: int, nb: int) -> None:
 
 def get_integrator(name: str):
     """Look up an integrator's run function by name."""
-    from labkit.sim.integrators import compiled_reference, reference, splitting_run
-
-    key = name.lower()
+    key = name.lower()  # each family imported when asked for (scipy only for its references)
     if key in SPLITTINGS:
+        from labkit.sim.integrators import splitting_run
+
         return lambda system, cycles, **kw: splitting_run.run(system, cycles, SPLITTINGS[key], name=key, **kw)
     if key in REFERENCES:
+        from labkit.sim.integrators import reference
+
         return lambda system, cycles, **kw: reference.run(system, cycles, REFERENCES[key], name=key, **kw)
     if key in COMPILED:
+        from labkit.sim.integrators import compiled_reference
+
         method = COMPILED[key]
         return lambda system, cycles, **kw: compiled_reference.run(system, cycles, method, name=key, **kw)
     raise SimulationError(f"unknown integrator {name!r} (choose from {', '.join(INTEGRATORS)})")

@@ -117,14 +117,19 @@ def _integrate_rigid(
     status, _, n_s, event_time, n_force = result
     out_t, out_x, out_v, out_R, out_L, out_acc, impulse = out
     samples = {
-        "x": out_x[:n_s].copy(),
-        "v": out_v[:n_s].copy(),
-        "R": out_R[:n_s].copy(),
-        "L": out_L[:n_s].copy(),
+        "x": _rows(out_x, n_s),
+        "v": _rows(out_v, n_s),
+        "R": _rows(out_R, n_s),
+        "L": _rows(out_L, n_s),
         "impulse": impulse,
-        "budget": out_acc[:n_s].copy(),
+        "budget": _rows(out_acc, n_s),
     }
-    return int(status), float(event_time), int(n_force), out_t[:n_s].copy(), samples
+    return int(status), float(event_time), int(n_force), _rows(out_t, n_s), samples
+
+
+def _rows(buffer: np.ndarray, n: int) -> np.ndarray:
+    """The first ``n`` sample rows: the buffer itself when full (no second copy of a long run)."""
+    return buffer if n == len(buffer) else buffer[:n].copy()
 
 
 _WARM: set[str] = set()
