@@ -58,7 +58,7 @@ def _one_period(rotator: str, floator: str, tilt_deg: float, speed_rpm: float,
     result = simulate(scene, cycles=SIM_PERIODS, samples_per_period=samples)
     if result.status != "ok":
         raise SimulatedSwingError(f"simulation ended with status {result.status}")
-    n = result.rotations[:, 0, :, 2]  # body z: the dipole axis
+    n = result.axes[:, 0]  # the floator's dipole axis (an axisymmetric body keeps only its axis)
     theta = np.arctan2(n[:, 0], np.abs(n[:, 2]))
     x = result.positions_m[:, 0, 0]
     last, before = slice(-samples - 1, -1), slice(-2 * samples - 1, -samples - 1)
