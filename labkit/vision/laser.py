@@ -31,8 +31,9 @@ from labkit.vision.framepath import (
 )
 from labkit.vision.frames import FrameSource, open_frames
 from labkit.vision.laser_checks import MIN_LINE_WIDTH_PX, laser_evidence, laser_verdict, no_pattern_verdict
+from labkit.vision.loops_seen import tip_limited
 from labkit.vision.overlay import accumulated_trace
-from labkit.vision.quality import VERDICTS
+from labkit.vision.quality import rank
 from labkit.vision.rescue import one_chunk_start, without_stray_light
 from labkit.vision.trace import TracePoints, trace_points
 from labkit.vision.wander import Wander, follow_wander
@@ -274,13 +275,14 @@ def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | No
     middle of the recording), or at the mean time of the points fitted.
 
     A result refined from ``prior`` (the first part's classification) that the checks do not
-    call ``ok`` is done again from scratch, and the fresh result kept unless its verdict is worse:
+    call ``ok`` is done again from scratch, and the fresh result kept unless it ranks worse
+    (:func:`labkit.vision.quality.rank`: a worse verdict, or the same with more checks not ``ok``):
     the first part may have shown too little of the pattern."""
     args = (centre_time, line_width_px, frame_size, left_out)
     pattern, diag = _pattern_dict(points, weights, times, band, prior, *args, start)
     if prior is not None and diag.get("verdict", "ok") != "ok":
         fresh = _pattern_dict(points, weights, times, band, None, *args, None)
-        if VERDICTS.index(fresh[1]["verdict"]) <= VERDICTS.index(diag["verdict"]):
+        if rank(fresh[1]) <= rank(diag):
             return fresh
     return pattern, diag
 
@@ -291,6 +293,7 @@ def _pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | N
                   start: Classification | None) -> tuple[dict, dict]:
     cls = start if start is not None else classify(points, weights, times, band=band, prior=prior)
     cls, wander, points = _steadied(cls, points, weights, times, band, line_width_px)
+    cls, wander = _tips_in_light(cls, wander, points, weights, times, line_width_px)
     best, ell = cls.best, cls.ellipse.pattern
     centre = best.c
     if times is not None and centre_time is not None:
@@ -323,6 +326,20 @@ def _pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | N
                     "light_left_out": round(left_out[0], 4), "left_out_rival": round(left_out[1], 4)}
         diag = {**laser_verdict(evidence, frame_size), **diag}
     return pattern, diag
+
+
+def _tips_in_light(cls: Classification, wander: Wander | None, points: np.ndarray, weights: np.ndarray,
+                   times: np.ndarray | None, line_width_px: float) -> tuple[Classification, Wander | None]:
+    """The classification with b set by where the light ends when the fit's tips overshoot it
+    and its loops are filled in (:func:`labkit.vision.loops_seen.tip_limited`), else unchanged."""
+    width = max(MIN_LINE_WIDTH_PX, line_width_px if math.isfinite(line_width_px) else 0.0)
+    limited = tip_limited(cls.best, points, weights, times, width)
+    if limited is None:
+        return cls, wander
+    t_ref = float(np.mean(times)) if times is not None else cls.t_ref
+    if wander is not None:
+        wander = replace(wander, fit=limited, t_ref=t_ref)
+    return replace(cls, best=limited, t_ref=t_ref), wander
 
 
 def _steadied(cls: Classification, points: np.ndarray, weights: np.ndarray, times: np.ndarray | None,
@@ -387,7 +404,7 @@ def _second_readings(pattern: dict, diag: dict, points: np.ndarray, weights: np.
     """The first fit is not ok: try the readings of :mod:`labkit.vision.rescue` in turn and keep
     whichever gives the best verdict (the first fit on a tie)."""
     def better(candidate: tuple[dict, dict]) -> bool:
-        return VERDICTS.index(candidate[1]["verdict"]) < VERDICTS.index(diag["verdict"])
+        return rank(candidate[1])[0] < rank(diag)[0]
 
     *parts, left_out = without_stray_light(points, weights, times, band, width)
     if 0 < left_out[0] < 0.5:  # the pattern is most of the light, or this is a fragment of it
