@@ -34,7 +34,7 @@ from labkit.vision.laser_checks import MIN_LINE_WIDTH_PX, laser_evidence, laser_
 from labkit.vision.loops_seen import tip_limited
 from labkit.vision.overlay import accumulated_trace
 from labkit.vision.quality import rank
-from labkit.vision.rescue import one_chunk_start, without_stray_light
+from labkit.vision.rescue import STRAY_LIGHT_GROWS, one_chunk_start, without_stray_light
 from labkit.vision.trace import TracePoints, trace_points
 from labkit.vision.wander import Wander, follow_wander
 
@@ -406,15 +406,18 @@ def _second_readings(pattern: dict, diag: dict, points: np.ndarray, weights: np.
     def better(candidate: tuple[dict, dict]) -> bool:
         return rank(candidate[1])[0] < rank(diag)[0]
 
-    *parts, left_out = without_stray_light(points, weights, times, band, width)
-    if 0 < left_out[0] < 0.5:  # the pattern is most of the light, or this is a fragment of it
-        points, weights, times, band = parts
-        second = pattern_dict(points, weights, times if drift else None, band, None, middle, width, size,
-                              left_out)
-        if better(second):
+    original, left_out = (points, weights, times, band), (0.0, 0.0)
+    for grow in STRAY_LIGHT_GROWS:  # the pattern's box as grouped, then its own box only
+        *parts, found = without_stray_light(*original, width, grow=grow)
+        if found[0] <= 0 or diag["verdict"] == "ok":
+            continue  # tried even when the light left out outweighs the pattern (bold timestamp text)
+        second = pattern_dict(parts[0], parts[1], parts[2] if drift else None, parts[3], None, middle, width,
+                              size, found)
+        took = better(second)
+        if took:
             pattern, diag = second
-    else:
-        left_out = (0.0, 0.0)
+        if took or (left_out[0] == 0 and found[0] < 0.5):  # the pattern is most of the light
+            (points, weights, times, band), left_out = parts, found
     start = one_chunk_start(points, weights, times) if drift and diag["verdict"] != "ok" else None
     if start is not None:
         third = pattern_dict(points, weights, times, band, None, middle, width, size, left_out, start=start)
