@@ -134,3 +134,12 @@ def test_overlay_to_an_unwritable_place_is_one_clear_error(tmp_path, capsys):
     rc = main(["analyse", "laser", str(clip), "--overlay", str(tmp_path / "missing" / "o.png")])
     text = capsys.readouterr()
     assert rc == 2 and "cannot write the overlay image" in text.err and "Traceback" not in text.err
+
+
+def test_rank_orders_by_verdict_then_by_how_many_checks_failed():
+    from labkit.vision.quality import rank
+
+    one = {"verdict": "doubtful", "reasons": ["a"]}
+    six = {"verdict": "doubtful", "reasons": list("abcdef")}
+    assert rank({"verdict": "ok", "reasons": []}) < rank(one) < rank(six) < rank({"verdict": "failed",
+                                                                                     "reasons": ["x"]})
