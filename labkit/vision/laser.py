@@ -30,8 +30,8 @@ from labkit.vision.framepath import (
     measure_frame_path,
 )
 from labkit.vision.frames import FrameSource, open_frames
-from labkit.vision.laser_checks import MIN_LINE_WIDTH_PX, laser_evidence, laser_verdict, no_pattern_verdict
-from labkit.vision.loops_seen import tip_limited
+from labkit.vision.laser_checks import judged_width, laser_evidence, laser_verdict, no_pattern_verdict
+from labkit.vision.loops_seen import tips_in_light
 from labkit.vision.overlay import accumulated_trace
 from labkit.vision.quality import rank
 from labkit.vision.rescue import STRAY_LIGHT_GROWS, one_chunk_start, without_stray_light
@@ -293,7 +293,8 @@ def _pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | N
                   start: Classification | None) -> tuple[dict, dict]:
     cls = start if start is not None else classify(points, weights, times, band=band, prior=prior)
     cls, wander, points = _steadied(cls, points, weights, times, band, line_width_px)
-    cls, wander = _tips_in_light(cls, wander, points, weights, times, line_width_px)
+    before = cls.best
+    cls, wander = tips_in_light(cls, wander, points, weights, times, judged_width(line_width_px))
     best, ell = cls.best, cls.ellipse.pattern
     centre = best.c
     if times is not None and centre_time is not None:
@@ -320,26 +321,13 @@ def _pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | N
     diag = {"drift_px_s": [float(best.drift.real), float(best.drift.imag)],
             "wander_px": None if wander is None else {"rms": round(wander.rms_px, 3), "chunk_offsets": [
                 [round(float(o.real), 3), round(float(o.imag), 3)] for o in wander.offsets]},
-            "candidate_residuals_px": residuals, "candidate_coverage_px": coverage}
+            "candidate_residuals_px": residuals, "candidate_coverage_px": coverage,
+            "b_from_tips": None if best is before else {"fitted_b": before.pattern.b, "b": best.pattern.b}}
     if frame_size is not None:
         evidence = {**laser_evidence(cls, points, times, line_width_px, frame_size, wander),
                     "light_left_out": round(left_out[0], 4), "left_out_rival": round(left_out[1], 4)}
         diag = {**laser_verdict(evidence, frame_size), **diag}
     return pattern, diag
-
-
-def _tips_in_light(cls: Classification, wander: Wander | None, points: np.ndarray, weights: np.ndarray,
-                   times: np.ndarray | None, line_width_px: float) -> tuple[Classification, Wander | None]:
-    """The classification with b set by where the light ends when the fit's tips overshoot it
-    and its loops are filled in (:func:`labkit.vision.loops_seen.tip_limited`), else unchanged."""
-    width = max(MIN_LINE_WIDTH_PX, line_width_px if math.isfinite(line_width_px) else 0.0)
-    limited = tip_limited(cls.best, points, weights, times, width)
-    if limited is None:
-        return cls, wander
-    t_ref = float(np.mean(times)) if times is not None else cls.t_ref
-    if wander is not None:
-        wander = replace(wander, fit=limited, t_ref=t_ref)
-    return replace(cls, best=limited, t_ref=t_ref), wander
 
 
 def _steadied(cls: Classification, points: np.ndarray, weights: np.ndarray, times: np.ndarray | None,
@@ -349,7 +337,7 @@ def _steadied(cls: Classification, points: np.ndarray, weights: np.ndarray, time
     following it does not explain the trace clearly better (:attr:`Wander.needed`). A wander over
     half a line width (rms) blurs the accumulated trace enough to mislead the classification:
     the steadied points are then classified again and the wander followed anew."""
-    width = max(MIN_LINE_WIDTH_PX, line_width_px if math.isfinite(line_width_px) else 0.0)
+    width = judged_width(line_width_px)
     wander = follow_wander(cls, points, weights, times, width, band) if times is not None else None
     if wander is None:
         return cls, None, points
@@ -408,13 +396,14 @@ def _second_readings(pattern: dict, diag: dict, points: np.ndarray, weights: np.
 
     original, left_out = (points, weights, times, band), (0.0, 0.0)
     for grow in STRAY_LIGHT_GROWS:  # the pattern's box as grouped, then its own box only
+        if diag["verdict"] == "ok":
+            break
         *parts, found = without_stray_light(*original, width, grow=grow)
-        if found[0] <= 0 or diag["verdict"] == "ok":
-            continue  # tried even when the light left out outweighs the pattern (bold timestamp text)
+        if found[0] <= 0:
+            continue  # else tried even when the light left out outweighs the pattern (bold timestamp text)
         second = pattern_dict(parts[0], parts[1], parts[2] if drift else None, parts[3], None, middle, width,
                               size, found)
-        took = better(second)
-        if took:
+        if took := better(second):
             pattern, diag = second
         if took or (left_out[0] == 0 and found[0] < 0.5):  # the pattern is most of the light
             (points, weights, times, band), left_out = parts, found

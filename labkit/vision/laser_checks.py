@@ -63,6 +63,11 @@ LIGHT_NEAR_WIDTHS = 1.5  # trace points within this many line widths of the curv
 EXTENT_NEAR_WIDTHS = 3.0  # the light's reach is measured on points this close to the curve
 
 
+def judged_width(line_width_px: float) -> float:
+    """The line width a trace is judged against: the measured one, at least ``MIN_LINE_WIDTH_PX``."""
+    return max(MIN_LINE_WIDTH_PX, float(line_width_px) if math.isfinite(line_width_px) else 0.0)
+
+
 def _name(fit: CurveFit) -> str:
     p = fit.pattern
     return "ellipse" if fit.k == -1 else f"{p.kind}-{p.loops}"
@@ -93,7 +98,7 @@ def laser_evidence(cls: Classification, points: np.ndarray, times: np.ndarray | 
     tms = None if times is None else np.asarray(times, float)[keep]
     tau = np.zeros(len(pts)) if tms is None else tms - cls.t_ref
     still = pts[:, 0] + 1j * pts[:, 1] - best.drift * tau
-    width = max(MIN_LINE_WIDTH_PX, float(line_width_px) if math.isfinite(line_width_px) else 0.0)
+    width = judged_width(line_width_px)
     curve, share = dense_curve(best)
     light_to_curve, _ = cKDTree(_xy(curve)).query(_xy(still))
     curve_to_light, _ = cKDTree(_xy(still)).query(_xy(curve))

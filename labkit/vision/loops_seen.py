@@ -25,13 +25,21 @@ Pure functions, no I/O.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from labkit.vision.curves import trochoid_from_coefficients
-from labkit.vision.fit import CurveFit, _closest_parameters, _newton_parameters, _prepare, _Rows
-from labkit.vision.wander import dense_curve, xy
+from labkit.vision.fit import (
+    Classification,
+    CurveFit,
+    _closest_parameters,
+    _newton_parameters,
+    _prepare,
+    _Rows,
+)
+from labkit.vision.wander import Wander, dense_curve, xy
 
 
 def loop_width(k: int, b: float, scale: float, samples: int = 4000) -> float:
@@ -196,3 +204,17 @@ def _where_tips_leave_light(bs: np.ndarray, gaps: np.ndarray, lit: float) -> flo
     if slope <= 0:
         return last_level
     return float(np.clip(b1 - (g1 - floor) / slope, last_level, b1))
+
+
+def tips_in_light(cls: Classification, wander: Wander | None, points: np.ndarray, weights: np.ndarray | None,
+                  times: np.ndarray | None, width: float) -> tuple[Classification, Wander | None]:
+    """The classification (and the centre's wander, :mod:`labkit.vision.wander`) with b set by
+    where the light ends when :func:`tip_limited` applies, else both unchanged. The new fit's
+    centre refers to the mean time of ``times``."""
+    limited = tip_limited(cls.best, points, weights, times, width)
+    if limited is None:
+        return cls, wander
+    t_ref = float(np.mean(times)) if times is not None else cls.t_ref
+    if wander is not None:
+        wander = replace(wander, fit=limited, t_ref=t_ref)
+    return replace(cls, best=limited, t_ref=t_ref), wander

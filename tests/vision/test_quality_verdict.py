@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from labkit.cli import main
-from labkit.vision.quality import Finding, graded, in_words, verdict, worst
+from labkit.vision.quality import Finding, graded, in_words, rank, verdict, worst
 
 
 def test_the_verdict_is_the_worst_finding_and_lists_the_reasons_of_the_others():
@@ -137,8 +137,6 @@ def test_overlay_to_an_unwritable_place_is_one_clear_error(tmp_path, capsys):
 
 
 def test_rank_orders_by_verdict_then_by_how_many_checks_failed():
-    from labkit.vision.quality import rank
-
     one = {"verdict": "doubtful", "reasons": ["a"]}
     six = {"verdict": "doubtful", "reasons": list("abcdef")}
     assert rank({"verdict": "ok", "reasons": []}) < rank(one) < rank(six) < rank({"verdict": "failed",
