@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from labkit.vision.curves import Pattern, k_for
-from labkit.vision.fit import fit_trochoid
+from labkit.vision.fit import Classification, fit_ellipse, fit_trochoid
+from labkit.vision.laser_checks import laser_evidence, laser_verdict
 from labkit.vision.loops_seen import cusp_fit, loop_width, tip_gap, tip_limited
 
 
@@ -99,3 +100,23 @@ def test_tip_limit_leaves_right_fits_and_seen_loops_alone():
     pts = cloud(big)
     grown = cusp_fit(fit_trochoid(pts, "epitrochoid", 4), pts, b=0.7)
     assert tip_limited(grown, pts, None, None, width=4.0) is None  # loops wide open: seen
+
+
+def test_the_verdict_says_when_the_tips_lie_beyond_the_light_and_the_loops_are_filled_in():
+    truth = Pattern("hypotrochoid", (160.0, 120.0), 0.3, scale=50.0, b=0.54, loops=3)
+    pts = cloud(truth)
+    right = fit_trochoid(pts, "hypotrochoid", 3)
+    grown = cusp_fit(right, pts, b=0.62)
+
+    def checks(fit, width):
+        cls = Classification(fit, fit_ellipse(pts))
+        return laser_verdict(laser_evidence(cls, pts, None, width, (320, 240)), (320, 240))
+
+    ok = checks(right, 8.0)
+    assert ok["checks"]["tips lit"] == "ok" and ok["tip_gap_line_widths"] < 0.5
+    thick = checks(grown, 8.0)  # 8 px line: the grown fit's 5.7 px loops have no opening
+    assert thick["checks"]["tips lit"] == "doubtful" and thick["verdict"] != "ok"
+    assert any("outer tips" in r and "filled in" in r for r in thick["reasons"])
+    thin = checks(grown, 2.0)  # a thin line shows the loops: the tips still lie in dark screen
+    assert thin["checks"]["tips lit"] == "doubtful"
+    assert not any("filled in" in r for r in thin["reasons"])
