@@ -35,8 +35,9 @@ class Separation:
     rival: float = 0.0
 
 
-def separate_pattern(points: np.ndarray, line_width_px: float) -> Separation:
-    """Split ``points`` (N, 2) into the pattern and light away from it (see module docstring)."""
+def separate_pattern(points: np.ndarray, line_width_px: float, grow: float = GROW) -> Separation:
+    """Split ``points`` (N, 2) into the pattern and light away from it (see module docstring;
+    ``grow``: the share by which the pattern's box is grown, ``GROW`` unless given)."""
     n = len(points)
     if n == 0:
         return Separation(np.zeros(0, bool), 0.0, 0, 0.0)
@@ -60,7 +61,7 @@ def separate_pattern(points: np.ndarray, line_width_px: float) -> Separation:
 
     main = max(groups, key=size)
     lo, hi = points[main].min(axis=0), points[main].max(axis=0)
-    margin = GROW * (hi - lo)
+    margin = grow * (hi - lo)
     keep = np.zeros(n, bool)
     left, rival = 0, 0.0
     for g in groups:

@@ -30,10 +30,11 @@ from labkit.vision.framepath import (
     measure_frame_path,
 )
 from labkit.vision.frames import FrameSource, open_frames
-from labkit.vision.laser_checks import MIN_LINE_WIDTH_PX, laser_evidence, laser_verdict, no_pattern_verdict
+from labkit.vision.laser_checks import judged_width, laser_evidence, laser_verdict, no_pattern_verdict
+from labkit.vision.loops_seen import tips_in_light
 from labkit.vision.overlay import accumulated_trace
-from labkit.vision.quality import VERDICTS
-from labkit.vision.rescue import one_chunk_start, without_stray_light
+from labkit.vision.quality import rank
+from labkit.vision.rescue import STRAY_LIGHT_GROWS, one_chunk_start, without_stray_light
 from labkit.vision.trace import TracePoints, trace_points
 from labkit.vision.wander import Wander, follow_wander
 
@@ -274,13 +275,14 @@ def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | No
     middle of the recording), or at the mean time of the points fitted.
 
     A result refined from ``prior`` (the first part's classification) that the checks do not
-    call ``ok`` is done again from scratch, and the fresh result kept unless its verdict is worse:
+    call ``ok`` is done again from scratch, and the fresh result kept unless it ranks worse
+    (:func:`labkit.vision.quality.rank`: a worse verdict, or the same with more checks not ``ok``):
     the first part may have shown too little of the pattern."""
     args = (centre_time, line_width_px, frame_size, left_out)
     pattern, diag = _pattern_dict(points, weights, times, band, prior, *args, start)
     if prior is not None and diag.get("verdict", "ok") != "ok":
         fresh = _pattern_dict(points, weights, times, band, None, *args, None)
-        if VERDICTS.index(fresh[1]["verdict"]) <= VERDICTS.index(diag["verdict"]):
+        if rank(fresh[1]) <= rank(diag):
             return fresh
     return pattern, diag
 
@@ -291,6 +293,8 @@ def _pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | N
                   start: Classification | None) -> tuple[dict, dict]:
     cls = start if start is not None else classify(points, weights, times, band=band, prior=prior)
     cls, wander, points = _steadied(cls, points, weights, times, band, line_width_px)
+    before = cls.best
+    cls, wander = tips_in_light(cls, wander, points, weights, times, judged_width(line_width_px))
     best, ell = cls.best, cls.ellipse.pattern
     centre = best.c
     if times is not None and centre_time is not None:
@@ -317,7 +321,8 @@ def _pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | N
     diag = {"drift_px_s": [float(best.drift.real), float(best.drift.imag)],
             "wander_px": None if wander is None else {"rms": round(wander.rms_px, 3), "chunk_offsets": [
                 [round(float(o.real), 3), round(float(o.imag), 3)] for o in wander.offsets]},
-            "candidate_residuals_px": residuals, "candidate_coverage_px": coverage}
+            "candidate_residuals_px": residuals, "candidate_coverage_px": coverage,
+            "b_from_tips": None if best is before else {"fitted_b": before.pattern.b, "b": best.pattern.b}}
     if frame_size is not None:
         evidence = {**laser_evidence(cls, points, times, line_width_px, frame_size, wander),
                     "light_left_out": round(left_out[0], 4), "left_out_rival": round(left_out[1], 4)}
@@ -332,7 +337,7 @@ def _steadied(cls: Classification, points: np.ndarray, weights: np.ndarray, time
     following it does not explain the trace clearly better (:attr:`Wander.needed`). A wander over
     half a line width (rms) blurs the accumulated trace enough to mislead the classification:
     the steadied points are then classified again and the wander followed anew."""
-    width = max(MIN_LINE_WIDTH_PX, line_width_px if math.isfinite(line_width_px) else 0.0)
+    width = judged_width(line_width_px)
     wander = follow_wander(cls, points, weights, times, width, band) if times is not None else None
     if wander is None:
         return cls, None, points
@@ -387,17 +392,21 @@ def _second_readings(pattern: dict, diag: dict, points: np.ndarray, weights: np.
     """The first fit is not ok: try the readings of :mod:`labkit.vision.rescue` in turn and keep
     whichever gives the best verdict (the first fit on a tie)."""
     def better(candidate: tuple[dict, dict]) -> bool:
-        return VERDICTS.index(candidate[1]["verdict"]) < VERDICTS.index(diag["verdict"])
+        return rank(candidate[1])[0] < rank(diag)[0]
 
-    *parts, left_out = without_stray_light(points, weights, times, band, width)
-    if 0 < left_out[0] < 0.5:  # the pattern is most of the light, or this is a fragment of it
-        points, weights, times, band = parts
-        second = pattern_dict(points, weights, times if drift else None, band, None, middle, width, size,
-                              left_out)
-        if better(second):
+    original, left_out = (points, weights, times, band), (0.0, 0.0)
+    for grow in STRAY_LIGHT_GROWS:  # the pattern's box as grouped, then its own box only
+        if diag["verdict"] == "ok":
+            break
+        *parts, found = without_stray_light(*original, width, grow=grow)
+        if found[0] <= 0:
+            continue  # else tried even when the light left out outweighs the pattern (bold timestamp text)
+        second = pattern_dict(parts[0], parts[1], parts[2] if drift else None, parts[3], None, middle, width,
+                              size, found)
+        if took := better(second):
             pattern, diag = second
-    else:
-        left_out = (0.0, 0.0)
+        if took or (left_out[0] == 0 and found[0] < 0.5):  # the pattern is most of the light
+            (points, weights, times, band), left_out = parts, found
     start = one_chunk_start(points, weights, times) if drift and diag["verdict"] != "ok" else None
     if start is not None:
         third = pattern_dict(points, weights, times, band, None, middle, width, size, left_out, start=start)

@@ -20,6 +20,13 @@ width, fractions of the curve and of the light, the frame's size.
   the light by more than 1.5 widths are extrapolated (thick hypotrochoid tips, loops the light
   fills).
 * size: the curve against the frame (a semi-axis larger than the frame is not a pattern).
+* tips lit: how far the fitted curve's outer tips lie from the nearest light, in line widths
+  (:func:`labkit.vision.loops_seen.tip_gap`). A right curve's tips lie on the centre line of the
+  light (within half a line width, as the residual); a fit whose small loops grew larger than the
+  light shows, as on a thick line whose loops are filled in (the opening inside a loop,
+  :func:`labkit.vision.loops_seen.loop_width` less a line width, narrower than the line),
+  reaches past the end of the light while its residual still looks good: its outer extent and
+  b are extrapolated. (Such a fit is first corrected, :func:`labkit.vision.loops_seen.tip_limited`.)
 * conditioning: a trochoid's second term (``b`` x scale) against the line width; under one line
   width the small loops are not formed and ``loops``, ``a`` and ``b`` are not determined.
 * light left out: light set apart as lying away from the pattern (:mod:`labkit.vision.clusters`:
@@ -43,6 +50,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from labkit.vision.fit import Classification, CurveFit, coverage_rms, two_way_rms
+from labkit.vision.loops_seen import LOOP_SEEN_WIDTHS, TIPS_LIT_WIDTHS, loop_width, tip_gap
 from labkit.vision.quality import Finding, graded, verdict
 from labkit.vision.wander import Wander, chunk_offsets, dense_curve
 from labkit.vision.wander import xy as _xy
@@ -56,6 +64,11 @@ RUNNER_UP_FACTOR = 1.25
 MAX_EVIDENCE_POINTS = 4000
 LIGHT_NEAR_WIDTHS = 1.5  # trace points within this many line widths of the curve are explained
 EXTENT_NEAR_WIDTHS = 3.0  # the light's reach is measured on points this close to the curve
+
+
+def judged_width(line_width_px: float) -> float:
+    """The line width a trace is judged against: the measured one, at least ``MIN_LINE_WIDTH_PX``."""
+    return max(MIN_LINE_WIDTH_PX, float(line_width_px) if math.isfinite(line_width_px) else 0.0)
 
 
 def _name(fit: CurveFit) -> str:
@@ -89,7 +102,7 @@ def laser_evidence(cls: Classification, points: np.ndarray, times: np.ndarray | 
     tms = None if times is None else np.asarray(times, float)[keep]
     tau = np.zeros(len(pts)) if tms is None else tms - cls.t_ref
     still = pts[:, 0] + 1j * pts[:, 1] - best.drift * tau
-    width = max(MIN_LINE_WIDTH_PX, float(line_width_px) if math.isfinite(line_width_px) else 0.0)
+    width = judged_width(line_width_px)
     curve, share = dense_curve(best)
     light_to_curve, _ = cKDTree(_xy(curve)).query(_xy(still))
     curve_to_light, _ = cKDTree(_xy(still)).query(_xy(curve))
@@ -111,6 +124,9 @@ def laser_evidence(cls: Classification, points: np.ndarray, times: np.ndarray | 
         "extent_mismatch_line_widths": round((light_reach - float(radius.max())) / width, 3),
         "curve_outside_frame_px": round(outside, 2),
         "second_term_line_widths": None if best.k == -1 else round(abs(best.b) / width, 3),
+        "tip_gap_line_widths": round(tip_gap(best, still) / width, 3),
+        "loop_width_line_widths": None if best.k == -1 else round(
+            loop_width(best.k, best.pattern.b, best.pattern.scale) / width, 3),
         "runner_up": runner,
         "chunk_wander_px": round(steadiness, 3),
         "centre_travel_px": round(_travel_px(best, times), 3),
@@ -214,6 +230,7 @@ def laser_findings(evidence: dict, frame_size: tuple[int, int]) -> list[Finding]
                           f"the pattern moved {evidence['centre_travel_px']:.0f} px over the clip, and too "
                           "few parts of the clip show enough of the pattern to check that it moved in a "
                           "straight line (short arcs per frame): centre and size assume it did"))
+    out.append(_tips_lit(evidence))
     if evidence["second_term_line_widths"] is not None:
         second = evidence["second_term_line_widths"]
         out.append(graded("conditioning", 1.0 / max(second, 1e-9), 1.0, math.inf,
@@ -225,6 +242,17 @@ def laser_findings(evidence: dict, frame_size: tuple[int, int]) -> list[Finding]
                            f"{runner['pattern']} explains the trace nearly as well "
                            f"(score {runner['score_px']:.2f} px against {runner['chosen_score_px']:.2f} px)"))
     return out
+
+
+def _tips_lit(evidence: dict) -> Finding:
+    """The *tips lit* check: the curve's outer tips must lie on the light."""
+    gap, loop = evidence["tip_gap_line_widths"], evidence["loop_width_line_widths"]
+    unseen = loop is not None and 0 < loop < LOOP_SEEN_WIDTHS
+    filled = ("; the opening of its small loops is narrower than the line (filled in, not seen), so the "
+              "light does not show how large they are" if unseen else "")
+    return graded("tips lit", gap, TIPS_LIT_WIDTHS, math.inf,
+                  "the fitted curve's outer tips lie {value:.1f} line widths beyond the nearest light: "
+                  "the outer extent (semi-axes) and b are extrapolated, not measured" + filled)
 
 
 def runner_up_is_close(runner: dict, width: float) -> bool:

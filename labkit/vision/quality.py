@@ -65,3 +65,9 @@ def in_words(quality: dict) -> str:
     v = quality.get("verdict", "ok")
     reasons = quality.get("reasons") or []
     return f"result {v}" + (": " + "; ".join(reasons) if reasons else "")
+
+
+def rank(quality: dict) -> tuple[int, int]:
+    """Order of two results of the same clip, better first: by verdict, and between equal verdicts
+    by how many checks are not ``ok`` (a doubtful fit with one reason beats one with six)."""
+    return VERDICTS.index(quality.get("verdict", "ok")), len(quality.get("reasons") or [])

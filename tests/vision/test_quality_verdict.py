@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from labkit.cli import main
-from labkit.vision.quality import Finding, graded, in_words, verdict, worst
+from labkit.vision.quality import Finding, graded, in_words, rank, verdict, worst
 
 
 def test_the_verdict_is_the_worst_finding_and_lists_the_reasons_of_the_others():
@@ -134,3 +134,10 @@ def test_overlay_to_an_unwritable_place_is_one_clear_error(tmp_path, capsys):
     rc = main(["analyse", "laser", str(clip), "--overlay", str(tmp_path / "missing" / "o.png")])
     text = capsys.readouterr()
     assert rc == 2 and "cannot write the overlay image" in text.err and "Traceback" not in text.err
+
+
+def test_rank_orders_by_verdict_then_by_how_many_checks_failed():
+    one = {"verdict": "doubtful", "reasons": ["a"]}
+    six = {"verdict": "doubtful", "reasons": list("abcdef")}
+    assert rank({"verdict": "ok", "reasons": []}) < rank(one) < rank(six) < rank({"verdict": "failed",
+                                                                                     "reasons": ["x"]})
