@@ -57,22 +57,33 @@ def _parallel(v: np.ndarray, u: np.ndarray) -> bool:
     return bool(np.linalg.norm(np.cross(v, u)) <= _TOLERANCE * max(np.linalg.norm(v), 1e-300))
 
 
-def shortest_turns(axis_body: np.ndarray, axes_lab: np.ndarray) -> np.ndarray:
-    """(n, 3, 3) rotations taking the body-frame vector ``axis_body`` to each of ``axes_lab``
-    (n, 3) by the shortest turn (Rodrigues); a half turn is about a fixed perpendicular. For
-    drawing an axisymmetric body, which looks the same after any turn about its axis."""
-    a = np.asarray(axis_body, dtype=float)
-    b = np.asarray(axes_lab, dtype=float)
+def _near_turns(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Rodrigues' shortest turns from ``a`` to each ``b`` with ``b . a >= 0`` (well conditioned:
+    ``1 + cos`` stays >= 1)."""
     k = np.cross(a, b)  # sin(angle) * unit rotation axis
     c = b @ a  # cos(angle)
     kx = np.zeros(b.shape[:-1] + (3, 3))
     kx[..., 0, 1], kx[..., 0, 2], kx[..., 1, 2] = -k[..., 2], k[..., 1], -k[..., 0]
     kx[..., 1, 0], kx[..., 2, 0], kx[..., 2, 1] = k[..., 2], -k[..., 1], k[..., 0]
-    opposite = c < -1.0 + 1e-12
-    scale = np.where(opposite, 0.0, 1.0 / np.where(opposite, 1.0, 1.0 + c))
-    out = np.eye(3) + kx + (kx @ kx) * scale[..., None, None]
-    if np.any(opposite):
+    return np.eye(3) + kx + (kx @ kx) / (1.0 + c)[..., None, None]
+
+
+def shortest_turns(axis_body: np.ndarray, axes_lab: np.ndarray) -> np.ndarray:
+    """(n, 3, 3) rotations taking the body-frame vector ``axis_body`` to each of ``axes_lab``
+    (n, 3) by the shortest turn (Rodrigues); a half turn is about a fixed perpendicular. For
+    drawing an axisymmetric body, which looks the same after any turn about its axis.
+
+    A target more than a quarter turn away is reached as a half turn about that perpendicular
+    followed by the short turn from ``-axis_body``: Rodrigues' ``1 / (1 + cos)`` would lose all
+    precision for nearly opposite vectors."""
+    a = np.asarray(axis_body, dtype=float)
+    b = np.asarray(axes_lab, dtype=float)
+    far = (b @ a) < 0.0
+    out = np.empty(b.shape[:-1] + (3, 3))
+    out[~far] = _near_turns(a, b[~far])
+    if np.any(far):
         p = np.cross(a, [1.0, 0.0, 0.0] if abs(a[0]) < 0.9 else [0.0, 1.0, 0.0])
         p /= np.linalg.norm(p)
-        out[opposite] = 2.0 * np.outer(p, p) - np.eye(3)  # half turn about p
+        half = 2.0 * np.outer(p, p) - np.eye(3)  # half turn about p: a -> -a
+        out[far] = _near_turns(-a, b[far]) @ half
     return out

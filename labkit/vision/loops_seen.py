@@ -28,7 +28,6 @@ import math
 from dataclasses import replace
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from labkit.vision.curves import trochoid_from_coefficients
 from labkit.vision.fit import (
@@ -135,6 +134,8 @@ def tip_gap(fit: CurveFit, still: np.ndarray) -> float:
     overshoots the light does so at every tip."""
     if len(still) == 0:
         return math.inf
+    from scipy.spatial import cKDTree  # loaded after the frames (see labkit.vision.fit)
+
     gaps, _ = cKDTree(xy(still)).query(xy(outer_tips(fit)))
     return float(np.median(gaps))
 
