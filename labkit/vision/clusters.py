@@ -3,20 +3,27 @@ reflection beside the pattern, a bright screw in the frame. Trace extraction kee
 that stands out of the background; this module sets apart the light that lies away from the
 pattern before the fit sees it.
 
-The trace points are grouped by closeness (points within one and a half line widths belong
-together: a pattern is one connected curve, or a few arcs broken by the screen's hole or by
-short exposures that lie inside one region). The pattern is the group that is both long and wide
-(largest number of points x diagonal of its bounding box: text is long but small, a reflection
-small and short). Other groups most of whose points lie inside the pattern's convex hull (grown
-by a few line widths) are kept as parts of it; the rest is left out and reported. Pure
+The trace points are grouped by closeness: points within one and a half line widths belong
+together (a pattern is one connected curve, or a few arcs broken by the screen's hole or by
+short exposures). The pattern is the group that is both long and wide (largest number of points
+x diagonal of its bounding box: text is long but small, a reflection small and short). Other
+groups most of whose points lie inside the pattern's convex hull, grown by a few line widths,
+are kept as parts of it. With the points' weights given, groups left out are then checked
+against the curve fitted to the light kept, and those lying on it are taken back (an arc on the
+pattern's outer edge can stick out of the hull). The rest is left out and reported. Pure
 functions.
 
 The link distance and the hull were chosen from what the light looks like, in line widths: a
 timestamp burnt in below a pattern lies 2-3 line widths from it on the suite's 320x240 clips
-(its characters a fraction of a width apart), so a link of 3 widths joined it to the pattern;
-and a pattern's bounding box grown by a quarter took in a timestamp along the frame's bottom
-edge whenever the pattern came near it (up to 20 % of the trace points, which pulled the fit
-hundreds of px off).
+(its characters a fraction of a width apart), so the former link of 3 widths joined it to the
+pattern; and the former rule, keeping groups whose centre lay in the largest group's bounding box
+grown by a quarter, took in a timestamp along the frame's bottom edge whenever the pattern came
+near it (up to 20 % of the trace points, which pulled the fit hundreds of px off).
+
+What it cannot do: when a pattern is seen only as arcs that do not touch (very short exposures
+at a frame rate commensurate with the pattern, filmed by a moving camera) and a timestamp is
+larger than every arc, the timestamp is taken for the pattern; the fit then fails its checks and
+says so.
 """
 
 from __future__ import annotations
@@ -26,16 +33,18 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 LINK_WIDTHS = 1.5  # points closer than this many line widths belong to one group
-HULL_MARGIN_WIDTHS = 3.0  # other groups count as pattern if they lie in its hull grown by this
+HULL_MARGIN_WIDTHS = 3.0  # a group inside the others' hull grown by this many widths is kept
+ON_CURVE_WIDTHS = 2.0  # ... or within this many line widths of the curve fitted to the rest
 
 
 @dataclass
 class Separation:
     """``keep``: mask of the points that belong to the pattern; ``left_out_share``: share of the
     points left out; ``groups``: how many groups were left out; ``rival``: the largest left-out
-    group's size (points x box diagonal) against the pattern's (1: as large)."""
+    group's size (points x box diagonal) against the largest kept group's (1: as large)."""
 
     keep: np.ndarray
     left_out_share: float
@@ -43,34 +52,79 @@ class Separation:
     rival: float = 0.0
 
 
-def separate_pattern(points: np.ndarray, line_width_px: float) -> Separation:
-    """Split ``points`` (N, 2) into the pattern and light away from it (see module docstring)."""
+def separate_pattern(points: np.ndarray, line_width_px: float, weights: np.ndarray | None = None,
+                     times: np.ndarray | None = None) -> Separation:
+    """Split ``points`` (N, 2) into the pattern and light away from it (see module docstring).
+    With ``weights`` (and the points' ``times``, for a drifting centre), groups left out are
+    then checked against the curve fitted to the groups kept (:func:`_on_the_curve`)."""
     n = len(points)
     if n == 0:
         return Separation(np.zeros(0, bool), 0.0, 0, 0.0)
-    link = max(2.0, LINK_WIDTHS * (line_width_px if math.isfinite(line_width_px) else 2.0))
-    label, count = _linked_groups(points, link)
+    width = max(2.0, line_width_px if math.isfinite(line_width_px) else 2.0)
+    label, count = _linked_groups(points, LINK_WIDTHS * width)
     if count <= 2:
         return Separation(np.ones(n, bool), 0.0, 0, 0.0)
-    groups = [np.flatnonzero(label == j) for j in range(1, count)]
-    groups = [g for g in groups if len(g)]
-
-    def size(g: np.ndarray) -> float:
-        span = points[g].max(axis=0) - points[g].min(axis=0)
-        return len(g) * float(np.hypot(*span))
-
-    main = max(groups, key=size)
-    inside = _inside_grown_hull(points, points[main], HULL_MARGIN_WIDTHS * max(line_width_px, 2.0)
-                                if math.isfinite(line_width_px) else 2 * HULL_MARGIN_WIDTHS)
+    groups = [g for g in (np.flatnonzero(label == j) for j in range(1, count)) if len(g)]
+    sizes = [_size(points[g]) for g in groups]
+    kept = _around_largest(points, groups, sizes, HULL_MARGIN_WIDTHS * width)
     keep = np.zeros(n, bool)
-    left, rival = 0, 0.0
-    for g in groups:
-        if g is main or float(np.mean(inside[g])) > 0.5:
-            keep[g] = True
-        else:
-            left += 1
-            rival = max(rival, size(g) / max(size(main), 1e-9))
-    return Separation(keep, float(1.0 - keep.mean()), left, rival)
+    for j in kept:
+        keep[groups[j]] = True
+    if weights is not None and not keep.all():
+        on = _on_the_curve(points, weights, times, keep, width)
+        for j, g in enumerate(groups):
+            if j not in kept and float(np.mean(on[g])) > 0.5:
+                keep[g] = True
+                kept.add(j)
+    out = [j for j in range(len(groups)) if j not in kept]
+    largest = max(sizes[j] for j in kept)
+    rival = max((sizes[j] / max(largest, 1e-9) for j in out), default=0.0)
+    return Separation(keep, float(1.0 - keep.mean()), len(out), rival)
+
+
+def _size(p: np.ndarray) -> float:
+    """Number of points x diagonal of their bounding box."""
+    return len(p) * float(np.hypot(*(p.max(axis=0) - p.min(axis=0))))
+
+
+def _around_largest(points: np.ndarray, groups: list[np.ndarray], sizes: list[float],
+                    margin_px: float) -> set[int]:
+    """Indices of the groups kept: the largest group, and every group most of whose points lie
+    inside its convex hull grown by ``margin_px``."""
+    main = int(np.argmax(sizes))
+    corners = _corners(points[groups[main]])
+    return {j for j, g in enumerate(groups)
+            if j == main or _share_inside(points[g], corners, margin_px) > 0.5}
+
+
+def _corners(p: np.ndarray) -> np.ndarray:
+    """The corners of the convex hull of ``p`` (all of ``p`` when they are too few or on a line)."""
+    if len(p) < 3:
+        return p
+    try:
+        return p[ConvexHull(p).vertices]
+    except QhullError:
+        return p
+
+
+def _share_inside(p: np.ndarray, hull_of: np.ndarray, margin_px: float) -> float:
+    """Share of the points ``p`` inside the convex hull of ``hull_of`` or within about
+    ``margin_px`` of it: the largest signed distance to the hull's edge lines (exact inside and
+    along the edges, a little short beyond its corners). Points on a line: the distance from
+    their segment."""
+    if len(hull_of) >= 3:
+        try:
+            hull = ConvexHull(hull_of)
+            # hull.equations: outward unit normal and offset per edge, n.x + offset <= 0 inside
+            distance = (p @ hull.equations[:, :2].T + hull.equations[:, 2]).max(axis=1)
+            return float(np.mean(distance <= margin_px))
+        except QhullError:
+            pass
+    centre = hull_of.mean(axis=0)
+    d = hull_of - centre
+    axis = np.linalg.svd(d, full_matrices=False)[2][0] if len(hull_of) > 1 else np.array([1.0, 0.0])
+    along = np.clip((p - centre) @ axis, (d @ axis).min(), (d @ axis).max())
+    return float(np.mean(np.hypot(*(p - centre - along[:, None] * axis).T) <= margin_px))
 
 
 def _linked_groups(points: np.ndarray, link_px: float) -> tuple[np.ndarray, int]:
@@ -89,17 +143,21 @@ def _linked_groups(points: np.ndarray, link_px: float) -> tuple[np.ndarray, int]
     return labels[idx[:, 1], idx[:, 0]], count
 
 
-def _inside_grown_hull(points: np.ndarray, hull_of: np.ndarray, margin_px: float) -> np.ndarray:
-    """Mask of ``points`` that lie inside the convex hull of ``hull_of`` or within ``margin_px``
-    of it (on a raster of about 1 px, or coarser for a very large extent)."""
-    lo = np.minimum(points.min(axis=0), hull_of.min(axis=0)) - margin_px - 2
-    hi = np.maximum(points.max(axis=0), hull_of.max(axis=0)) + margin_px + 2
-    step = max(1.0, float(max(hi - lo)) / 4000)
-    w, h = (np.ceil((hi - lo) / step).astype(int) + 1)
-    mask = np.zeros((h, w), np.uint8)
-    hull = cv2.convexHull(np.round((hull_of - lo) / step).astype(np.int32))
-    cv2.fillConvexPoly(mask, hull, 1)
-    r = max(1, int(round(margin_px / step)))
-    mask = cv2.dilate(mask, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1)))
-    idx = np.clip(np.round((points - lo) / step).astype(int), 0, [w - 1, h - 1])
-    return mask[idx[:, 1], idx[:, 0]].astype(bool)
+def _on_the_curve(points: np.ndarray, weights: np.ndarray, times: np.ndarray | None, keep: np.ndarray,
+                  width: float) -> np.ndarray:
+    """Mask of the points within ``ON_CURVE_WIDTHS`` line widths of the curve fitted to the points
+    ``keep`` (with its drift at each point's time): arcs of the pattern that the hull missed lie
+    on it, a timestamp or a reflection does not."""
+    from labkit.vision.fit import MIN_POINTS, classify
+    from labkit.vision.wander import dense_curve, xy
+
+    if keep.sum() < MIN_POINTS:
+        return np.zeros(len(points), bool)
+    cls = classify(points[keep], weights[keep], None if times is None else times[keep])
+    fit = cls.best
+    z = points[:, 0] + 1j * points[:, 1]
+    if times is not None:
+        z = z - fit.drift * (np.asarray(times, float) - cls.t_ref)
+    curve, _ = dense_curve(fit, 0.5)
+    d, _ = cKDTree(xy(curve)).query(xy(z))
+    return d <= ON_CURVE_WIDTHS * width

@@ -390,7 +390,9 @@ def _second_readings(pattern: dict, diag: dict, points: np.ndarray, weights: np.
         return VERDICTS.index(candidate[1]["verdict"]) < VERDICTS.index(diag["verdict"])
 
     *parts, left_out = without_stray_light(points, weights, times, band, width)
-    if 0 < left_out[0] < 0.5:  # the pattern is most of the light, or this is a fragment of it
+    # the pattern is most of the light, or what was left out is many small things (a timestamp's
+    # characters); otherwise this may be a fragment of it
+    if left_out[0] > 0 and (left_out[0] < 0.5 or left_out[1] < 0.5):
         points, weights, times, band = parts
         second = pattern_dict(points, weights, times if drift else None, band, None, middle, width, size,
                               left_out)

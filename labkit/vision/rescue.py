@@ -28,7 +28,7 @@ def without_stray_light(points: np.ndarray, weights: np.ndarray, times: np.ndarr
     """The trace without light away from the pattern: points, weights, times, band (its pixels
     near a kept point), and ``(share, rival)``: the share of points left out (0: nothing was) and
     the largest left-out group's size against the pattern's (:class:`labkit.vision.clusters.Separation`)."""
-    sep = separate_pattern(points, width)
+    sep = separate_pattern(points, width, weights, times)
     if sep.groups == 0:
         return points, weights, times, band, (0.0, 0.0)
     kept = points[sep.keep]
