@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
+import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -57,36 +58,89 @@ MIN_CHUNK_COVERAGE = 0.5  # a chunk that shows less of the pattern cannot tell a
 
 
 def chunk_offsets(fit: CurveFit, still: np.ndarray, chunk: np.ndarray, chunks: int,
-                  width: float) -> np.ndarray:
+                  width: float, search_px: float = 0.0) -> np.ndarray:
     """Per chunk (``chunk``: each point's chunk index), the translation (complex px) that best
     moves its points ``still`` (drift already taken out) onto the curve along the curve's
     normals. A chunk whose light covers less than ``MIN_CHUNK_COVERAGE`` of the curve's length
     (within ``width`` px) gets NaN: on a part of the pattern a shift and a change of shape look
     alike (symmetric copies do not help here: a shift moves opposite sides the same way, a change
-    of size opposite ways, and only seeing both tells them apart)."""
+    of size opposite ways, and only seeing both tells them apart).
+
+    The normals of the nearest curve points are right only for a chunk already within about a
+    line width of the curve. With ``search_px``, each chunk is first moved by the shift within
+    ``search_px`` that brings its light closest to the curve (:class:`CoarseShift`), so that a
+    chunk a camera moved by several line widths from where the drift puts it is registered too."""
     curve, share = dense_curve(fit, 0.5)
     tree = cKDTree(xy(curve))
-    _, idx = tree.query(xy(still))
-    residual = still - curve[idx]
-    normal = residual / np.maximum(np.abs(residual), 1e-9)
-    along = (np.conj(normal) * residual).real
+    coarse = CoarseShift(curve, width, search_px) if search_px > 0 else None
     offsets = np.full(chunks, np.nan + 0j)
     for j in range(chunks):
         sel = chunk == j
         if sel.sum() < MIN_CHUNK_POINTS:
             continue
+        shift = coarse.best(still[sel]) if coarse is not None else 0j
+        pts = still[sel] - shift
+        _, idx = tree.query(xy(pts))
+        residual = pts - curve[idx]
         lit = np.zeros(len(curve), bool)
-        for near in tree.query_ball_point(xy(still[sel]), width):
+        for near in tree.query_ball_point(xy(pts), width):
             lit[near] = True
         if float(np.sum(share[lit])) < MIN_CHUNK_COVERAGE:
             continue
-        nx, ny, d = normal[sel].real, normal[sel].imag, along[sel]
+        normal = residual / np.maximum(np.abs(residual), 1e-9)
+        nx, ny, d = normal.real, normal.imag, (np.conj(normal) * residual).real
+        if coarse is not None:  # after a coarse shift: only the light near the curve measures it
+            near = np.abs(residual) <= 2 * width
+            nx, ny, d = nx[near], ny[near], d[near]
         m = np.array([[nx @ nx, nx @ ny], [nx @ ny, ny @ ny]])
-        if np.linalg.cond(m) > 1e6:
+        if len(d) < MIN_CHUNK_POINTS or np.linalg.cond(m) > 1e6:
             continue
         sx, sy = np.linalg.solve(m, np.array([nx @ d, ny @ d]))
-        offsets[j] = complex(sx, sy)
+        offsets[j] = shift + complex(sx, sy)
     return offsets
+
+
+class CoarseShift:
+    """The shift within ``search_px`` (on a grid of half a line width) that brings a chunk's light
+    closest to the curve: least mean squared distance to the curve, each distance capped at two
+    line widths (light away from the curve, or curve the chunk does not show, then weighs the
+    same at every shift). The distances come from a distance transform of the curve drawn on a
+    raster of about 1 px."""
+
+    def __init__(self, curve: np.ndarray, width: float, search_px: float) -> None:
+        self.cap = 2.0 * width
+        self.step = max(1.0, 0.5 * width)
+        pad = search_px + self.cap + 2
+        self.cell = max(1.0, float(max(np.ptp(curve.real), np.ptp(curve.imag)) + 2 * pad) / 3000)
+        self.origin = complex(curve.real.min() - pad, curve.imag.min() - pad)
+        size = (np.array([np.ptp(curve.real), np.ptp(curve.imag)]) + 2 * pad) / self.cell + 2
+        mask = np.full((int(size[1]), int(size[0])), 255, np.uint8)
+        c = np.round((curve - self.origin) / self.cell)
+        mask[c.imag.astype(int), c.real.astype(int)] = 0
+        self.distance = cv2.distanceTransform(mask, cv2.DIST_L2, 5) * self.cell
+        n = int(search_px // self.step)
+        g = np.arange(-n, n + 1) * self.step
+        self.shifts = (g[:, None] + 1j * g[None, :]).ravel()
+
+    def best(self, points: np.ndarray, max_points: int = 300) -> complex:
+        """The best shift (complex px) of ``points`` (complex)."""
+        pts = points[:: max(1, len(points) // max_points)]
+        z = (pts[None, :] - self.shifts[:, None] - self.origin) / self.cell
+        h, w = self.distance.shape
+        x = np.clip(np.round(z.real).astype(int), 0, w - 1)
+        y = np.clip(np.round(z.imag).astype(int), 0, h - 1)
+        d = np.minimum(self.distance[y, x], self.cap)
+        return complex(self.shifts[int(np.argmin(np.mean(d * d, axis=1)))])
+
+
+SEARCH_SHARE = 0.1  # a chunk's coarse shift is searched within this share of the pattern's radius
+
+
+def search_px(fit: CurveFit, width: float) -> float:
+    """How far a chunk's coarse shift is searched: ``SEARCH_SHARE`` of the pattern's largest
+    radius (farther, a part of the pattern could be matched to a neighbouring branch), and at
+    least 3 line widths."""
+    return max(3.0 * width, SEARCH_SHARE * (abs(fit.a) + abs(fit.b)))
 
 
 def filled(offsets: np.ndarray, mid_times: np.ndarray) -> np.ndarray:
@@ -178,7 +232,7 @@ def follow_wander(cls: Classification, points: np.ndarray, weights: np.ndarray |
     checked = 0
     for _ in range(rounds):
         still = z - total[ch] - fit.drift * (t - t_ref)
-        raw = chunk_offsets(fit, still, ch, len(mid_times), width)
+        raw = chunk_offsets(fit, still, ch, len(mid_times), width, search_px(fit, width))
         checked = int(np.isfinite(raw).sum())
         if checked == 0:  # no chunk can be registered: keep the straight drift
             zeros = np.zeros(len(mid_times), complex)
