@@ -67,49 +67,59 @@ def chunk_offsets(fit: CurveFit, still: np.ndarray, chunk: np.ndarray, chunks: i
     of size opposite ways, and only seeing both tells them apart).
 
     The normals of the nearest curve points are right only for a chunk already within about a
-    line width of the curve. With ``search_px``, each chunk is first moved by the shift within
-    ``search_px`` that brings its light closest to the curve (:class:`CoarseShift`), so that a
-    chunk a camera moved by several line widths from where the drift puts it is registered too."""
+    line width of the curve. With ``search_px``, a chunk that cannot be registered where it is
+    is moved first by the shift within ``search_px`` that brings its light closest to the curve
+    (:class:`CoarseShift`), so that a chunk a camera moved by several line widths from where the
+    drift puts it is registered too. (Only then: a steady clip costs no search.)"""
     curve, share = dense_curve(fit, 0.5)
     tree = cKDTree(xy(curve))
-    coarse = CoarseShift(curve, width, search_px) if search_px > 0 else None
+    coarse: CoarseShift | None = None
     offsets = np.full(chunks, np.nan + 0j)
     for j in range(chunks):
         sel = chunk == j
         if sel.sum() < MIN_CHUNK_POINTS:
             continue
-        shift = coarse.best(still[sel]) if coarse is not None else 0j
-        pts = still[sel] - shift
-        _, idx = tree.query(xy(pts))
-        residual = pts - curve[idx]
-        lit = np.zeros(len(curve), bool)
-        for near in tree.query_ball_point(xy(pts), width):
-            lit[near] = True
-        if float(np.sum(share[lit])) < MIN_CHUNK_COVERAGE:
-            continue
-        normal = residual / np.maximum(np.abs(residual), 1e-9)
-        nx, ny, d = normal.real, normal.imag, (np.conj(normal) * residual).real
-        if coarse is not None:  # after a coarse shift: only the light near the curve measures it
-            near = np.abs(residual) <= 2 * width
-            nx, ny, d = nx[near], ny[near], d[near]
-        m = np.array([[nx @ nx, nx @ ny], [nx @ ny, ny @ ny]])
-        if len(d) < MIN_CHUNK_POINTS or np.linalg.cond(m) > 1e6:
-            continue
-        sx, sy = np.linalg.solve(m, np.array([nx @ d, ny @ d]))
-        offsets[j] = shift + complex(sx, sy)
+        offsets[j] = _registered(still[sel], curve, share, tree, width, 0j)
+        if np.isnan(offsets[j]) and search_px > 0:  # too far off for the normals: search first
+            coarse = coarse or CoarseShift(curve, width, search_px)
+            offsets[j] = _registered(still[sel], curve, share, tree, width, coarse.best(still[sel]))
     return offsets
 
 
+def _registered(points: np.ndarray, curve: np.ndarray, share: np.ndarray, tree: cKDTree, width: float,
+                shift: complex) -> complex:
+    """The translation of one chunk's ``points`` onto the curve along its normals, starting from
+    ``shift`` (only the light within 2 line widths of the curve then measures it); NaN when the
+    chunk's light covers too little of the curve or does not fix both directions."""
+    pts = points - shift
+    dist, idx = tree.query(xy(pts))
+    lit = np.zeros(len(curve), bool)
+    for near in tree.query_ball_point(xy(pts), width):
+        lit[near] = True
+    if float(np.sum(share[lit])) < MIN_CHUNK_COVERAGE:
+        return complex(np.nan, np.nan)
+    residual = pts - curve[idx]
+    if shift != 0:
+        residual = residual[dist <= 2 * width]
+    normal = residual / np.maximum(np.abs(residual), 1e-9)
+    nx, ny, d = normal.real, normal.imag, (np.conj(normal) * residual).real
+    m = np.array([[nx @ nx, nx @ ny], [nx @ ny, ny @ ny]])
+    if len(d) < MIN_CHUNK_POINTS or np.linalg.cond(m) > 1e6:
+        return complex(np.nan, np.nan)
+    sx, sy = np.linalg.solve(m, np.array([nx @ d, ny @ d]))
+    return shift + complex(sx, sy)
+
+
 class CoarseShift:
-    """The shift within ``search_px`` (on a grid of half a line width) that brings a chunk's light
-    closest to the curve: least mean squared distance to the curve, each distance capped at two
-    line widths (light away from the curve, or curve the chunk does not show, then weighs the
-    same at every shift). The distances come from a distance transform of the curve drawn on a
-    raster of about 1 px."""
+    """The shift within ``search_px`` (on a grid of half a line width, or a tenth of
+    ``search_px`` if coarser) that brings a chunk's light closest to the curve: least mean
+    squared distance to the curve, each distance capped at two line widths (light away from the
+    curve, or curve the chunk does not show, then weighs the same at every shift). The
+    distances come from a distance transform of the curve drawn on a raster of about 1 px."""
 
     def __init__(self, curve: np.ndarray, width: float, search_px: float) -> None:
         self.cap = 2.0 * width
-        self.step = max(1.0, 0.5 * width)
+        self.step = max(1.0, 0.5 * width, search_px / 10)  # at most 21 x 21 shifts
         pad = search_px + self.cap + 2
         self.cell = max(1.0, float(max(np.ptp(curve.real), np.ptp(curve.imag)) + 2 * pad) / 3000)
         self.origin = complex(curve.real.min() - pad, curve.imag.min() - pad)
