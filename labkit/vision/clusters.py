@@ -7,7 +7,7 @@ The trace points are grouped by closeness: points within one and a half line wid
 together (a pattern is one connected curve, or a few arcs broken by the screen's hole or by
 short exposures). The pattern is the group that is both long and wide (largest number of points
 x diagonal of its bounding box: text is long but small, a reflection small and short). Other
-groups most of whose points lie inside the pattern's convex hull, grown by a few line widths,
+groups most of whose points lie inside the pattern's convex hull, grown by 1.5 line widths,
 are kept as parts of it. With the points' weights given, groups left out are then checked
 against the curve fitted to the light kept, and those lying on it are taken back (an arc on the
 pattern's outer edge can stick out of the hull). The rest is left out and reported. Pure
@@ -36,8 +36,11 @@ import numpy as np
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 LINK_WIDTHS = 1.5  # points closer than this many line widths belong to one group
-HULL_MARGIN_WIDTHS = 3.0  # a group inside the others' hull grown by this many widths is kept
-ON_CURVE_WIDTHS = 2.0  # ... or within this many line widths of the curve fitted to the rest
+# a group inside the pattern's hull grown by this many line widths is kept, or within this many
+# of the curve fitted to the rest: as far as the link (a stray reflection 2.5 widths beside a
+# pattern was kept with 3 and read as the pattern's extent)
+HULL_MARGIN_WIDTHS = LINK_WIDTHS
+ON_CURVE_WIDTHS = LINK_WIDTHS
 
 
 @dataclass

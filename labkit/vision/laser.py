@@ -386,8 +386,10 @@ def _second_readings(pattern: dict, diag: dict, points: np.ndarray, weights: np.
                      size: tuple[int, int]) -> tuple[dict, dict]:
     """The first fit is not ok: try the readings of :mod:`labkit.vision.rescue` in turn and keep
     whichever gives the best verdict (the first fit on a tie)."""
-    def better(candidate: tuple[dict, dict]) -> bool:
-        return VERDICTS.index(candidate[1]["verdict"]) < VERDICTS.index(diag["verdict"])
+    def better(candidate: tuple[dict, dict]) -> bool:  # on the same verdict: fewer reasons to doubt
+        def rank(d: dict) -> tuple[int, int]:
+            return VERDICTS.index(d["verdict"]), len(d["reasons"])
+        return rank(candidate[1]) < rank(diag)
 
     *parts, left_out = without_stray_light(points, weights, times, band, width)
     # the pattern is most of the light, or what was left out is many small things (a timestamp's
