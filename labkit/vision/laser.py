@@ -19,8 +19,8 @@ from dataclasses import asdict, dataclass, replace
 import cv2
 import numpy as np
 
-from labkit.errors import VideoError
 from labkit.vision.curves import a_for_k
+from labkit.vision.exposure import check_exposure, grey_histogram
 from labkit.vision.fit import MIN_POINTS, Classification, classify, pattern_kind
 from labkit.vision.framepath import (
     AMPLE_LUMA_CNR,
@@ -205,38 +205,6 @@ def _touches(points: np.ndarray, inner: tuple[float, float, float, float], edge:
     x, y = points[:, 0], points[:, 1]
     return bool((edge[0] and x.min() < inner[0]) or (edge[1] and y.min() < inner[1])
                 or (edge[2] and x.max() > inner[2]) or (edge[3] and y.max() > inner[3]))
-
-
-def grey_histogram(image: np.ndarray) -> np.ndarray:
-    """256-bin histogram of about 200 000 evenly spaced samples of an accumulated chunk."""
-    return np.bincount(image.ravel()[:: max(1, image.size // 200000)], minlength=256)
-
-
-def _check_exposure(counts: np.ndarray, name: str, black_white: tuple[float, float] = (0.0, 255.0)) -> None:
-    """Refuse all-black or all-white footage from the chunks' summed :func:`grey_histogram`;
-    ``black_white``: the frames' black and white levels (16, 235 for a studio-range luma plane),
-    mapped to 0-255 first."""
-    black, white = black_white
-
-    def level(grey: float) -> float:
-        return (grey - black) * (255.0 / (white - black))
-
-    brightest = level(float(np.flatnonzero(counts)[-1]))
-    if brightest < 16:
-        raise VideoError(name, f"all frames are black (brightest grey level {int(brightest)})")
-    if level(_percentile_of_histogram(counts, 5.0)) > 245:
-        raise VideoError(name, "all frames are white (saturated); reduce exposure or gain")
-
-
-def _percentile_of_histogram(counts: np.ndarray, q: float) -> float:
-    """``np.percentile(values, q)`` (linear interpolation) of the integer values whose histogram
-    is ``counts``, without sorting them: the sorted values at the two neighbouring ranks are read
-    off the cumulative counts (a level map is affine, so it commutes with the interpolation)."""
-    cumulative = np.cumsum(counts)
-    rank = q / 100.0 * (int(cumulative[-1]) - 1)
-    lo = math.floor(rank)
-    v_lo, v_hi = np.searchsorted(cumulative, [lo, min(lo + 1, int(cumulative[-1]) - 1)], side="right")
-    return float(v_lo + (rank - lo) * (v_hi - v_lo))
 
 
 def _frame_path(chunks: list[Chunk], probe: FramePathProbe) -> dict:
@@ -454,7 +422,7 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
                                max(source.size))
         chunks = accumulate(source, quality, on_frame, on_chunk=extract, probe=probe)
         t_frames = time.perf_counter()
-        _check_exposure(sum(h.result() for h in histograms), source.path, source.levels)
+        check_exposure(sum(h.result() for h in histograms), source.path, source.levels)
         traces = [futures[id(c)].result() for c in chunks]
         preliminary = prior["fit"].result() if "fit" in prior else None
     points, weights, times, band, peak, noise = gather(chunks, traces, fps)
