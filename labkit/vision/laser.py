@@ -353,7 +353,8 @@ def _second_readings(pattern: dict, diag: dict, points: np.ndarray, weights: np.
                      drift: bool, band: tuple | None, middle: float | None, width: float,
                      size: tuple[int, int]) -> tuple[dict, dict]:
     """The first fit is not ok: try the readings of :mod:`labkit.vision.rescue` in turn and keep
-    whichever gives the best verdict (the first fit on a tie)."""
+    whichever gives the best verdict, on the same verdict the one with fewer reasons (the first
+    fit on a full tie)."""
     def better(candidate: tuple[dict, dict]) -> bool:  # on the same verdict: fewer reasons to doubt
         def rank(d: dict) -> tuple[int, int]:
             return VERDICTS.index(d["verdict"]), len(d["reasons"])
