@@ -24,6 +24,7 @@ from labkit.vision.curves import (
     k_for,
     trochoid_from_coefficients,
 )
+from labkit.vision.nearest import PointTree
 from labkit.vision.starts import b_starts_for, trochoid_starts
 
 CIRCLE_MAX_ELLIPTICITY = 0.02  # below this an ellipse is reported as a circle
@@ -104,10 +105,7 @@ def _closest_parameters(z: np.ndarray, rows: _Rows, samples: np.ndarray) -> np.n
     for i in range(len(z)):
         ts = np.linspace(0.0, 2 * math.pi, int(samples[i]), endpoint=False)
         curve = _curve(0j, rows.a[i], rows.b[i], int(rows.k[i]), ts)
-        from scipy.spatial import cKDTree  # loaded after the frames (labkit analyse laser starts sooner)
-
-        tree = cKDTree(np.column_stack([curve.real, curve.imag]))
-        _, idx = tree.query(np.column_stack([z[i].real, z[i].imag]))
+        _, idx = PointTree(curve).query(z[i])
         t[i] = ts[idx]
     return _newton_parameters(z, rows, t, 2)
 
@@ -424,10 +422,7 @@ def coverage_rms(fit: CurveFit, z: np.ndarray, tau: np.ndarray, samples_per_loop
     curve = fit.c + fit.a * e1 + fit.b * ek
     speed = np.abs(1j * fit.a * e1 + 1j * k * fit.b * ek)
     still = z - fit.drift * tau
-    from scipy.spatial import cKDTree  # loaded after the frames (see _closest_parameters)
-
-    distance, _ = cKDTree(np.column_stack([still.real, still.imag])).query(
-        np.column_stack([curve.real, curve.imag]))
+    distance, _ = PointTree(still).query(curve)
     return float(np.sqrt(np.sum(speed * distance**2) / np.sum(speed)))
 
 

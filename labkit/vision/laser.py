@@ -19,8 +19,8 @@ from dataclasses import asdict, dataclass, replace
 import cv2
 import numpy as np
 
-from labkit.errors import VideoError
 from labkit.vision.curves import a_for_k
+from labkit.vision.exposure import check_exposure, grey_histogram
 from labkit.vision.fit import MIN_POINTS, Classification, classify, pattern_kind
 from labkit.vision.framepath import (
     AMPLE_LUMA_CNR,
@@ -34,7 +34,7 @@ from labkit.vision.laser_checks import judged_width, laser_evidence, laser_verdi
 from labkit.vision.loops_seen import tips_in_light
 from labkit.vision.overlay import accumulated_trace
 from labkit.vision.quality import rank
-from labkit.vision.rescue import STRAY_LIGHT_GROWS, one_chunk_start, without_stray_light
+from labkit.vision.rescue import one_chunk_start, without_stray_light
 from labkit.vision.trace import TracePoints, trace_points
 from labkit.vision.wander import Wander, follow_wander
 
@@ -208,38 +208,6 @@ def _touches(points: np.ndarray, inner: tuple[float, float, float, float], edge:
                 or (edge[2] and x.max() > inner[2]) or (edge[3] and y.max() > inner[3]))
 
 
-def grey_histogram(image: np.ndarray) -> np.ndarray:
-    """256-bin histogram of about 200 000 evenly spaced samples of an accumulated chunk."""
-    return np.bincount(image.ravel()[:: max(1, image.size // 200000)], minlength=256)
-
-
-def _check_exposure(counts: np.ndarray, name: str, black_white: tuple[float, float] = (0.0, 255.0)) -> None:
-    """Refuse all-black or all-white footage from the chunks' summed :func:`grey_histogram`;
-    ``black_white``: the frames' black and white levels (16, 235 for a studio-range luma plane),
-    mapped to 0-255 first."""
-    black, white = black_white
-
-    def level(grey: float) -> float:
-        return (grey - black) * (255.0 / (white - black))
-
-    brightest = level(float(np.flatnonzero(counts)[-1]))
-    if brightest < 16:
-        raise VideoError(name, f"all frames are black (brightest grey level {int(brightest)})")
-    if level(_percentile_of_histogram(counts, 5.0)) > 245:
-        raise VideoError(name, "all frames are white (saturated); reduce exposure or gain")
-
-
-def _percentile_of_histogram(counts: np.ndarray, q: float) -> float:
-    """``np.percentile(values, q)`` (linear interpolation) of the integer values whose histogram
-    is ``counts``, without sorting them: the sorted values at the two neighbouring ranks are read
-    off the cumulative counts (a level map is affine, so it commutes with the interpolation)."""
-    cumulative = np.cumsum(counts)
-    rank = q / 100.0 * (int(cumulative[-1]) - 1)
-    lo = math.floor(rank)
-    v_lo, v_hi = np.searchsorted(cumulative, [lo, min(lo + 1, int(cumulative[-1]) - 1)], side="right")
-    return float(v_lo + (rank - lo) * (v_hi - v_lo))
-
-
 def _frame_path(chunks: list[Chunk], probe: FramePathProbe) -> dict:
     """``frame_path`` (what the last chunk was accumulated from) and the probe's CNRs (None when
     nothing was measured: forced path, photo, or a codec without a luma plane)."""
@@ -390,23 +358,22 @@ def _second_readings(pattern: dict, diag: dict, points: np.ndarray, weights: np.
                      drift: bool, band: tuple | None, middle: float | None, width: float,
                      size: tuple[int, int]) -> tuple[dict, dict]:
     """The first fit is not ok: try the readings of :mod:`labkit.vision.rescue` in turn and keep
-    whichever gives the best verdict (the first fit on a tie)."""
-    def better(candidate: tuple[dict, dict]) -> bool:
-        return rank(candidate[1])[0] < rank(diag)[0]
+    whichever gives the best verdict, on the same verdict the one with fewer reasons (the first
+    fit on a full tie)."""
+    def better(candidate: tuple[dict, dict]) -> bool:  # on the same verdict: fewer reasons to doubt
+        return rank(candidate[1]) < rank(diag)
 
-    original, left_out = (points, weights, times, band), (0.0, 0.0)
-    for grow in STRAY_LIGHT_GROWS:  # the pattern's box as grouped, then its own box only
-        if diag["verdict"] == "ok":
-            break
-        *parts, found = without_stray_light(*original, width, grow=grow)
-        if found[0] <= 0:
-            continue  # else tried even when the light left out outweighs the pattern (bold timestamp text)
-        second = pattern_dict(parts[0], parts[1], parts[2] if drift else None, parts[3], None, middle, width,
-                              size, found)
-        if took := better(second):
+    *parts, left_out = without_stray_light(points, weights, times, band, width)
+    # the pattern is most of the light, or what was left out is many small things (a timestamp's
+    # characters); otherwise this may be a fragment of it
+    if left_out[0] > 0 and (left_out[0] < 0.5 or left_out[1] < 0.5):
+        points, weights, times, band = parts
+        second = pattern_dict(points, weights, times if drift else None, band, None, middle, width, size,
+                              left_out)
+        if better(second):
             pattern, diag = second
-        if took or (left_out[0] == 0 and found[0] < 0.5):  # the pattern is most of the light
-            (points, weights, times, band), left_out = parts, found
+    else:
+        left_out = (0.0, 0.0)
     start = one_chunk_start(points, weights, times) if drift and diag["verdict"] != "ok" else None
     if start is not None:
         third = pattern_dict(points, weights, times, band, None, middle, width, size, left_out, start=start)
@@ -459,7 +426,7 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
                                max(source.size))
         chunks = accumulate(source, quality, on_frame, on_chunk=extract, probe=probe)
         t_frames = time.perf_counter()
-        _check_exposure(sum(h.result() for h in histograms), source.path, source.levels)
+        check_exposure(sum(h.result() for h in histograms), source.path, source.levels)
         traces = [futures[id(c)].result() for c in chunks]
         preliminary = prior["fit"].result() if "fit" in prior else None
     points, weights, times, band, peak, noise = gather(chunks, traces, fps)

@@ -45,18 +45,15 @@ width, fractions of the curve and of the light, the frame's size.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from labkit.vision.fit import Classification, CurveFit, coverage_rms, two_way_rms
 from labkit.vision.loops_seen import LOOP_SEEN_WIDTHS, TIPS_LIT_WIDTHS, loop_width, tip_gap
+from labkit.vision.nearest import PointTree
 from labkit.vision.quality import Finding, graded, verdict
 from labkit.vision.wander import Wander, chunk_offsets, dense_curve
 from labkit.vision.wander import xy as _xy
-
-if TYPE_CHECKING:
-    from scipy.spatial import cKDTree
 
 MIN_LINE_WIDTH_PX = 2.0  # a trace is never judged against less than this (sub-pixel lines)
 # a different pattern whose score is within this factor of the chosen one's is a real alternative
@@ -95,7 +92,6 @@ def laser_evidence(cls: Classification, points: np.ndarray, times: np.ndarray | 
                    line_width_px: float, frame_size: tuple[int, int], wander: Wander | None = None) -> dict:
     """The measures of the module docstring for the chosen fit ``cls.best`` (JSON-ready);
     ``wander``: the centre's wander as followed (:func:`labkit.vision.wander.follow_wander`)."""
-    from scipy.spatial import cKDTree  # loaded after the frames (see labkit.vision.fit)
     best = cls.best
     keep = np.random.default_rng(3).permutation(len(points))[:MAX_EVIDENCE_POINTS]
     pts = np.asarray(points, float)[keep]
@@ -104,8 +100,8 @@ def laser_evidence(cls: Classification, points: np.ndarray, times: np.ndarray | 
     still = pts[:, 0] + 1j * pts[:, 1] - best.drift * tau
     width = judged_width(line_width_px)
     curve, share = dense_curve(best)
-    light_to_curve, _ = cKDTree(_xy(curve)).query(_xy(still))
-    curve_to_light, _ = cKDTree(_xy(still)).query(_xy(curve))
+    light_to_curve, _ = PointTree(curve).query(still)
+    curve_to_light, _ = PointTree(still).query(curve)
     radius = np.abs(curve - best.c)
     near = light_to_curve <= EXTENT_NEAR_WIDTHS * width
     reach = np.abs(still[near] - best.c)
@@ -147,12 +143,11 @@ def _runner_up(cls: Classification, width: float, pts: np.ndarray, tau: np.ndarr
     with loops too small to see, against an ellipse) is the same answer and does not count; a
     'ratio' under 1 means a different pattern scored better but lost to the rule that prefers
     the simpler pattern."""
-    from scipy.spatial import cKDTree  # loaded after the frames (see labkit.vision.fit)
     best = cls.best
     z = pts[:, 0] + 1j * pts[:, 1]
     candidates = [cls.ellipse] + list(cls.fits.values())
     own_curve, _ = dense_curve(best, 1.0)
-    own_tree = cKDTree(_xy(own_curve))
+    own_tree = PointTree(own_curve)
     alternatives = []
     for f in candidates:
         if _name(f) == _name(best) or not math.isfinite(f.rms_residual):
@@ -176,20 +171,18 @@ def _runner_up(cls: Classification, width: float, pts: np.ndarray, tau: np.ndarr
             "chosen_residual_px": round(own_residual, 3)}
 
 
-def _departure(fit: CurveFit, other: np.ndarray, other_tree: cKDTree) -> float:
+def _departure(fit: CurveFit, other: np.ndarray, other_tree: PointTree) -> float:
     """How far two curves visibly differ: the larger of the 90th percentiles of the distances
     from each to the other (px)."""
-    from scipy.spatial import cKDTree  # loaded after the frames (see labkit.vision.fit)
     mine, _ = dense_curve(fit, 1.0)
     there, _ = other_tree.query(_xy(mine))
-    back, _ = cKDTree(_xy(mine)).query(_xy(other))
+    back, _ = PointTree(mine).query(other)
     return float(max(np.percentile(there, 90), np.percentile(back, 90)))
 
 
 def _residual(fit: CurveFit, z: np.ndarray, tau: np.ndarray) -> float:
-    from scipy.spatial import cKDTree  # loaded after the frames (see labkit.vision.fit)
     curve, _ = dense_curve(fit, 0.5)
-    d, _ = cKDTree(_xy(curve)).query(_xy(z - fit.drift * tau))
+    d, _ = PointTree(curve).query(z - fit.drift * tau)
     return float(np.sqrt(np.mean(d * d)))
 
 

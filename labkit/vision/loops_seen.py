@@ -38,7 +38,8 @@ from labkit.vision.fit import (
     _prepare,
     _Rows,
 )
-from labkit.vision.wander import Wander, dense_curve, xy
+from labkit.vision.nearest import PointTree
+from labkit.vision.wander import Wander, dense_curve
 
 
 def loop_width(k: int, b: float, scale: float, samples: int = 4000) -> float:
@@ -134,9 +135,7 @@ def tip_gap(fit: CurveFit, still: np.ndarray) -> float:
     overshoots the light does so at every tip."""
     if len(still) == 0:
         return math.inf
-    from scipy.spatial import cKDTree  # loaded after the frames (see labkit.vision.fit)
-
-    gaps, _ = cKDTree(xy(still)).query(xy(outer_tips(fit)))
+    gaps, _ = PointTree(still).query(outer_tips(fit))
     return float(np.median(gaps))
 
 

@@ -1,4 +1,4 @@
-"""Second readings of a laser trace whose first fit is not ``ok`` (docs/vision.md, steps 4 and 6).
+"""Second readings of a laser trace whose first fit is not ``ok`` (docs/vision.md, steps 4-5).
 
 The first fit takes all the light of the whole clip at once. Two things mislead it by design
 rather than by degree, and each has a second reading that the analysis tries only when the
@@ -18,27 +18,22 @@ from dataclasses import replace
 
 import numpy as np
 
-from labkit.vision.clusters import GROW, LINK_WIDTHS, separate_pattern
+from labkit.vision.clusters import LINK_WIDTHS, separate_pattern
 from labkit.vision.fit import MIN_POINTS, Classification, classify
-
-# light is set apart first as grouped (other groups with their centre in the pattern's box grown by
-# a quarter count as pattern: arcs broken by the screen's hole), then with the pattern's own box
-# only: a timestamp in the frame's corner can lie within the grown box of a large pattern
-STRAY_LIGHT_GROWS = (GROW, 0.0)
+from labkit.vision.nearest import PointTree
 
 
 def without_stray_light(points: np.ndarray, weights: np.ndarray, times: np.ndarray, band: tuple | None,
-                        width: float, grow: float = GROW) -> tuple:
+                        width: float) -> tuple:
     """The trace without light away from the pattern: points, weights, times, band (its pixels
     near a kept point), and ``(share, rival)``: the share of points left out (0: nothing was) and
     the largest left-out group's size against the pattern's (:class:`labkit.vision.clusters.Separation`)."""
-    from scipy.spatial import cKDTree  # loaded after the frames (see labkit.vision.fit)
-    sep = separate_pattern(points, width, grow)
+    sep = separate_pattern(points, width, weights, times)
     if sep.groups == 0:
         return points, weights, times, band, (0.0, 0.0)
     kept = points[sep.keep]
     if band is not None:
-        near, _ = cKDTree(kept).query(band[0], distance_upper_bound=LINK_WIDTHS * max(width, 2.0))
+        near, _ = PointTree(kept).query(band[0], distance_upper_bound=LINK_WIDTHS * max(width, 2.0))
         inside = np.isfinite(near)
         band = tuple(None if part is None else np.asarray(part)[inside] for part in band)
     return kept, weights[sep.keep], times[sep.keep], band, (sep.left_out_share, sep.rival)

@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
+import cv2
 import numpy as np
 
 from labkit.vision.fit import (
@@ -27,6 +28,7 @@ from labkit.vision.fit import (
     polish,
     without_outliers,
 )
+from labkit.vision.nearest import PointTree
 
 MIN_CHUNKS = 3
 MIN_CHUNK_POINTS = 10
@@ -56,37 +58,101 @@ MIN_CHUNK_COVERAGE = 0.5  # a chunk that shows less of the pattern cannot tell a
 
 
 def chunk_offsets(fit: CurveFit, still: np.ndarray, chunk: np.ndarray, chunks: int,
-                  width: float) -> np.ndarray:
+                  width: float, search_px: float = 0.0) -> np.ndarray:
     """Per chunk (``chunk``: each point's chunk index), the translation (complex px) that best
     moves its points ``still`` (drift already taken out) onto the curve along the curve's
     normals. A chunk whose light covers less than ``MIN_CHUNK_COVERAGE`` of the curve's length
     (within ``width`` px) gets NaN: on a part of the pattern a shift and a change of shape look
     alike (symmetric copies do not help here: a shift moves opposite sides the same way, a change
-    of size opposite ways, and only seeing both tells them apart)."""
-    from scipy.spatial import cKDTree  # loaded after the frames (see labkit.vision.fit)
+    of size opposite ways, and only seeing both tells them apart).
+
+    The normals of the nearest curve points are right only for a chunk already within about a
+    line width of the curve. With ``search_px``, a chunk that cannot be registered where it is
+    is moved first by the shift within ``search_px`` that brings its light closest to the curve
+    (:class:`CoarseShift`), so that a chunk a camera moved by several line widths from where the
+    drift puts it is registered too. (Only then: a steady clip costs no search.)"""
     curve, share = dense_curve(fit, 0.5)
-    tree = cKDTree(xy(curve))
-    _, idx = tree.query(xy(still))
-    residual = still - curve[idx]
-    normal = residual / np.maximum(np.abs(residual), 1e-9)
-    along = (np.conj(normal) * residual).real
+    tree = PointTree(curve)
+    coarse: CoarseShift | None = None
     offsets = np.full(chunks, np.nan + 0j)
     for j in range(chunks):
         sel = chunk == j
         if sel.sum() < MIN_CHUNK_POINTS:
             continue
-        lit = np.zeros(len(curve), bool)
-        for near in tree.query_ball_point(xy(still[sel]), width):
-            lit[near] = True
-        if float(np.sum(share[lit])) < MIN_CHUNK_COVERAGE:
-            continue
-        nx, ny, d = normal[sel].real, normal[sel].imag, along[sel]
-        m = np.array([[nx @ nx, nx @ ny], [nx @ ny, ny @ ny]])
-        if np.linalg.cond(m) > 1e6:
-            continue
-        sx, sy = np.linalg.solve(m, np.array([nx @ d, ny @ d]))
-        offsets[j] = complex(sx, sy)
+        offsets[j] = _registered(still[sel], curve, share, tree, width, 0j)
+        if np.isnan(offsets[j]) and search_px > 0:  # too far off for the normals: search first
+            coarse = coarse or CoarseShift(curve, width, search_px)
+            offsets[j] = _registered(still[sel], curve, share, tree, width, coarse.best(still[sel]))
     return offsets
+
+
+def _registered(points: np.ndarray, curve: np.ndarray, share: np.ndarray, tree: PointTree, width: float,
+                shift: complex) -> complex:
+    """The translation of one chunk's ``points`` onto the curve along its normals, starting from
+    ``shift`` (only the light within 2 line widths of the curve then measures it); NaN when the
+    chunk's light covers too little of the curve or does not fix both directions."""
+    pts = points - shift
+    dist, idx = tree.query(pts)
+    lit = PointTree(pts).query(curve)[0] <= width  # curve points with light within ``width``
+    if float(np.sum(share[lit])) < MIN_CHUNK_COVERAGE:
+        return complex(np.nan, np.nan)
+    residual = pts - curve[idx]
+    if shift != 0:
+        residual = residual[dist <= 2 * width]
+    normal = residual / np.maximum(np.abs(residual), 1e-9)
+    nx, ny, d = normal.real, normal.imag, (np.conj(normal) * residual).real
+    m = np.array([[nx @ nx, nx @ ny], [nx @ ny, ny @ ny]])
+    if len(d) < MIN_CHUNK_POINTS or np.linalg.cond(m) > 1e6:
+        return complex(np.nan, np.nan)
+    sx, sy = np.linalg.solve(m, np.array([nx @ d, ny @ d]))
+    return shift + complex(sx, sy)
+
+
+class CoarseShift:
+    """The shift within ``search_px`` (on a grid of half a line width, or a tenth of
+    ``search_px`` if coarser) that brings a chunk's light closest to the curve: least mean
+    squared distance to the curve, each distance capped at two line widths (light away from the
+    curve, or curve the chunk does not show, then weighs the same at every shift). The
+    distances come from a distance transform of the curve drawn on a raster of about 1 px."""
+
+    def __init__(self, curve: np.ndarray, width: float, search_px: float) -> None:
+        self.cap = 2.0 * width
+        self.step = max(1.0, 0.5 * width, search_px / 10)  # at most 21 x 21 shifts
+        pad = search_px + self.cap + 2
+        self.cell = max(1.0, float(max(np.ptp(curve.real), np.ptp(curve.imag)) + 2 * pad) / 3000)
+        self.origin = complex(curve.real.min() - pad, curve.imag.min() - pad)
+        size = (np.array([np.ptp(curve.real), np.ptp(curve.imag)]) + 2 * pad) / self.cell + 2
+        mask = np.full((int(size[1]), int(size[0])), 255, np.uint8)
+        c = np.round((curve - self.origin) / self.cell)
+        mask[c.imag.astype(int), c.real.astype(int)] = 0
+        self.distance = cv2.distanceTransform(mask, cv2.DIST_L2, 5) * self.cell
+        n = int(search_px // self.step)
+        g = np.arange(-n, n + 1) * self.step
+        self.shifts = (g[:, None] + 1j * g[None, :]).ravel()
+
+    def best(self, points: np.ndarray, max_points: int = 300) -> complex:
+        """The best shift (complex px) of ``points`` (complex)."""
+        pts = points[:: max(1, len(points) // max_points)]
+        z = (pts[None, :] - self.shifts[:, None] - self.origin) / self.cell
+        h, w = self.distance.shape
+        x = np.clip(np.round(z.real).astype(int), 0, w - 1)
+        y = np.clip(np.round(z.imag).astype(int), 0, h - 1)
+        d = np.minimum(self.distance[y, x], self.cap)
+        return complex(self.shifts[int(np.argmin(np.mean(d * d, axis=1)))])
+
+
+# after ``rounds``, more rounds while the chunks registered grow in number: a chunk next to a
+# registered one comes within reach once its neighbour's offset is known (a camera moving 52 px
+# across a 1280x720 clip: 4, 6, 7, then 8 of 8 chunks)
+MAX_ROUNDS = 8
+SEARCH_SHARE = 0.1  # a chunk's coarse shift is searched within this share of the pattern's radius
+
+
+def search_px(fit: CurveFit, width: float) -> float:
+    """How far a chunk's coarse shift is searched: ``SEARCH_SHARE`` of the pattern's largest
+    radius (farther, a part of the pattern could be matched to a neighbouring branch), and at
+    least 3 line widths."""
+    return max(3.0 * width, SEARCH_SHARE * (abs(fit.a) + abs(fit.b)))
 
 
 def filled(offsets: np.ndarray, mid_times: np.ndarray) -> np.ndarray:
@@ -101,9 +167,8 @@ def filled(offsets: np.ndarray, mid_times: np.ndarray) -> np.ndarray:
 def robust_rms(fit: CurveFit, still: np.ndarray) -> float:
     """Rms distance of points ``still`` (drift taken out) from the curve, leaving out points
     farther than 3 x the median distance (spurs of the centre line, specks)."""
-    from scipy.spatial import cKDTree  # loaded after the frames (see labkit.vision.fit)
     curve, _ = dense_curve(fit, 0.5)
-    d, _ = cKDTree(xy(curve)).query(xy(still))
+    d, _ = PointTree(curve).query(still)
     d = d[d <= 3 * max(float(np.median(d)), 1 / 3)]
     return float(np.sqrt(np.mean(d * d))) if len(d) else math.nan
 
@@ -177,10 +242,10 @@ def follow_wander(cls: Classification, points: np.ndarray, weights: np.ndarray |
     rms_straight = robust_rms(fit, z - fit.drift * (t - t_ref))
     total = np.zeros(len(mid_times), complex)
     checked = 0
-    for _ in range(rounds):
+    for done in range(1, MAX_ROUNDS + 1):
         still = z - total[ch] - fit.drift * (t - t_ref)
-        raw = chunk_offsets(fit, still, ch, len(mid_times), width)
-        checked = int(np.isfinite(raw).sum())
+        raw = chunk_offsets(fit, still, ch, len(mid_times), width, search_px(fit, width))
+        before, checked = checked, int(np.isfinite(raw).sum())
         if checked == 0:  # no chunk can be registered: keep the straight drift
             zeros = np.zeros(len(mid_times), complex)
             return Wander(fit, t_ref, mid_times, zeros, 0, rms_straight, rms_straight)
@@ -188,6 +253,8 @@ def follow_wander(cls: Classification, points: np.ndarray, weights: np.ndarray |
         total = _detrended(total + step, mid_times, counts)
         moved = z - total[ch]
         fit = polish(fit, xy(moved), w, t, iterations=8)
+        if done >= rounds and (checked == len(mid_times) or checked <= before):
+            break
     if fit.k != -1:
         fit = without_outliers(fit, xy(moved), w, t)
     result = Wander(fit, t_ref, mid_times, total, checked, rms_straight,

@@ -74,24 +74,25 @@ from labkit.vision.laser import analyse_laser
 seen = []
 def on_frame(index, t_s, bgr):
     if not seen:
-        seen.append(sorted(m for m in sys.modules if m.split(".")[0] == "scipy"))
+        seen.append(sorted(m for m in sys.modules if m.split(".")[0] in ("scipy", "pykdtree")))
 result = analyse_laser(sys.argv[1], on_frame=on_frame)
-after = sorted(m for m in sys.modules if m.split(".")[0] == "scipy")
+after = sorted(m for m in sys.modules if m.split(".")[0] in ("scipy", "pykdtree"))
 print(json.dumps({"at_first_frame": seen[0], "after": after, "pattern": result["pattern"]["type"]}))
 """
 
 
 def test_analyse_laser_reaches_its_first_frame_before_scipy():
-    """Issue 15: ``analyse laser`` starts decoding at once; scipy (cKDTree, about 0.3 s to import)
-    is loaded only for the fit, while later frames decode. The second assertion shows the probe
-    can see scipy."""
+    """Issue 15: ``analyse laser`` starts decoding at once and never imports scipy (about 0.3 s):
+    its nearest-point queries use pykdtree (labkit.vision.nearest), loaded only for the fit,
+    while later frames decode. The second assertion shows the probe can see that load."""
     clip = Path(__file__).resolve().parents[2] / "recordings" / "videos" / "laser-ellipse-medium.mp4"
     proc = subprocess.run([sys.executable, "-c", LASER_FIRST_FRAME, str(clip)], capture_output=True,
                           text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     seen = json.loads(proc.stdout.strip().splitlines()[-1])
     assert seen["at_first_frame"] == [], f"loaded before the first frame: {seen['at_first_frame']}"
-    assert "scipy.spatial" in seen["after"] and seen["pattern"] == "ellipse"
+    assert "pykdtree.kdtree" in seen["after"] and seen["pattern"] == "ellipse"
+    assert not [m for m in seen["after"] if m.startswith("scipy")], seen["after"]
 
 
 END_PROBE = """

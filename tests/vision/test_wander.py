@@ -1,0 +1,56 @@
+"""Following a wandering camera chunk by chunk (labkit.vision.wander), on point clouds with a
+known centre path: chunks the camera moved by several line widths off a straight drift are
+registered too."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from labkit.vision.curves import Pattern
+from labkit.vision.fit import classify
+from labkit.vision.wander import follow_wander
+
+WIDTH = 4.0
+MIDS = (np.arange(8) + 0.5) * 0.25  # eight chunks of a 2 s clip
+
+
+def centre_path(t: np.ndarray) -> np.ndarray:
+    """A tripod drifting 10 px/s and wandering 14 px at 0.35 Hz (3.5 line widths)."""
+    return (10 + 4j) * (t - 1.0) + 14 * (np.sin(2 * math.pi * 0.35 * t + 0.4)
+                                         + 1j * np.cos(2 * math.pi * 0.35 * t + 1.1))
+
+
+def wandering_trace(pattern: Pattern, seed: int = 5) -> tuple[np.ndarray, np.ndarray]:
+    """Points of ``pattern`` per chunk: 600 points on a random 70 % of the curve (the middle
+    chunk: all of it), moved by the centre path at the chunk's time, with 0.4 px noise; and each
+    point's chunk time."""
+    rng = np.random.default_rng(seed)
+    pts, times = [], []
+    for j, t in enumerate(MIDS):
+        start = rng.uniform(0, 2 * math.pi)
+        s = start + rng.uniform(0, (1.0 if j == 4 else 0.7) * 2 * math.pi, 600)
+        z = pattern.points(s) @ np.array([1, 1j]) + centre_path(np.array([t]))[0]
+        z = z + rng.normal(0, 0.4, len(z)) + 1j * rng.normal(0, 0.4, len(z))
+        pts.append(np.column_stack([z.real, z.imag]))
+        times.append(np.full(len(z), t))
+    return np.concatenate(pts), np.concatenate(times)
+
+
+def test_chunks_moved_several_line_widths_off_a_straight_drift_are_all_registered():
+    truth = Pattern("epitrochoid", (320.0, 240.0), 0.3, scale=110.0, b=0.35, loops=5)
+    points, times = wandering_trace(truth)
+    # start as the analysis does when the whole trace is a blur: the middle chunk alone
+    middle = times == MIDS[4]
+    start = replace(classify(points[middle], None, None), t_ref=float(MIDS[4]))
+    assert start.best.pattern.loops == 5
+    wander = follow_wander(start, points, None, times, WIDTH)
+    assert wander is not None and wander.needed
+    assert wander.chunks_checked == len(MIDS)
+    want = complex(*truth.center) + centre_path(MIDS)
+    got = np.array([wander.centre_at(t) for t in MIDS])
+    assert np.max(np.abs(got - want)) < 0.5 * WIDTH, np.abs(got - want)
+    assert abs(wander.centre_at(1.0) - (complex(*truth.center) + centre_path(np.array([1.0]))[0])) < 1.0
+    assert abs(wander.fit.pattern.scale / truth.scale - 1) < 0.01
