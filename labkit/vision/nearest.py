@@ -11,7 +11,33 @@ number of points), as scipy's.
 
 from __future__ import annotations
 
+import functools
+import os
+
 import numpy as np
+
+#: pykdtree parallelises each query with OpenMP over all cores. Its queries here are small and run
+#: while the video decoder keeps both cores busy, so the spinning OpenMP threads cost more than
+#: they save: a 720p clip's whole analysis took 3.1 CPU-s with them and 1.3 CPU-s with one thread.
+QUERY_THREADS = "1"
+
+
+@functools.cache
+def _kdtree_class():
+    """pykdtree's KDTree, its OpenMP runtime started with one thread. OpenMP reads
+    OMP_NUM_THREADS once, when the runtime (pykdtree's own bundled libgomp) loads, and applies it
+    to every thread; the variable is put back at once, so nothing else in the process (or a child)
+    sees the change."""
+    saved = os.environ.get("OMP_NUM_THREADS")
+    os.environ["OMP_NUM_THREADS"] = QUERY_THREADS
+    try:
+        from pykdtree.kdtree import KDTree
+    finally:
+        if saved is None:
+            del os.environ["OMP_NUM_THREADS"]
+        else:
+            os.environ["OMP_NUM_THREADS"] = saved
+    return KDTree
 
 
 def xy_points(points: np.ndarray) -> np.ndarray:
@@ -26,11 +52,9 @@ class PointTree:
     """Exact kd-tree over 2-D points (an (n, 2) array or complex points)."""
 
     def __init__(self, points: np.ndarray) -> None:
-        from pykdtree.kdtree import KDTree
-
         self._points = xy_points(points)
         self.n = len(self._points)
-        self._tree = KDTree(self._points) if self.n else None
+        self._tree = _kdtree_class()(self._points) if self.n else None
 
     def query(self, points: np.ndarray,
               distance_upper_bound: float = np.inf) -> tuple[np.ndarray, np.ndarray]:

@@ -35,3 +35,11 @@ def test_complex_points_and_empty_sets():
     dist, idx = PointTree(np.zeros((0, 2))).query(z)
     assert np.all(np.isinf(dist)) and np.all(idx == 0)
     assert PointTree(z).query(np.zeros((0, 2)))[0].shape == (0,)
+
+
+def test_the_tree_leaves_the_environment_as_it_was():
+    import os
+
+    before = os.environ.get("OMP_NUM_THREADS")
+    PointTree(np.zeros((3, 2))).query(np.ones((2, 2)))
+    assert os.environ.get("OMP_NUM_THREADS") == before
