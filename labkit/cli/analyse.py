@@ -14,9 +14,11 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from pathlib import Path
 
 from labkit.cli.output import add_json_argument, write_json
 from labkit.cli.parsers import command_parser
+from labkit.cli.progress import ProgressLines
 from labkit.errors import LabkitError, VideoError
 
 
@@ -181,6 +183,7 @@ def run_laser(args: argparse.Namespace) -> int:
                 quality,
                 on_frame=stream.frame if stream else None,
                 on_trace=traces.append if (stream or args.overlay) else None,
+                on_progress=ProgressLines(f"labkit analyse laser: {Path(args.path).name}", "frames"),
             )
         except ValueError as exc:
             raise VideoError(args.path, str(exc)) from None
@@ -295,10 +298,17 @@ def run_strobe(args: argparse.Namespace) -> int:
         raise LabkitError("labkit analyse strobe: --strobe-hz needs --rotor-hz (or give --apparent-hz)")
     speed_rpm = _strobe_speed_rpm(args.speed_rpm, args.rotor_hz)
     stream = open_stream(args.rerun, "strobe")
+    progress = ProgressLines(f"labkit analyse strobe: {Path(args.path).name}", "frames")
+
+    def on_frame(index: int, t_s: float, frame) -> None:
+        progress(index + 1)
+        if stream:
+            stream.frame(index, t_s, frame)
+
     try:
         result = analyse_strobe(
             args.path, args.rotor_hz, args.strobe_hz, args.apparent_hz, args.mm_per_px, args.point,
-            on_frame=stream.frame if stream else None, camera_fps=args.camera_fps,
+            on_frame=on_frame, camera_fps=args.camera_fps,
             exposure_s=args.exposure_s, keep_frame=bool(args.overlay or stream),
         )
         drawing = result.pop("_frame", None)

@@ -392,13 +392,15 @@ def _preliminary(chunks: list[Chunk], futures: list[Future], fps: float) -> Clas
 
 def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px: float | None = None,
                   quality: LaserQuality | None = None, on_frame: FrameHook | None = None,
-                  on_trace: Callable[[np.ndarray], None] | None = None) -> dict:
+                  on_trace: Callable[[np.ndarray], None] | None = None,
+                  on_progress: Callable[[int, int], None] | None = None) -> dict:
     """Analyse a laser-trace video or long-exposure photo; returns the ``labkit analyse laser`` JSON.
 
     ``on_frame(index, t_s, bgr)`` is called for every analysed frame (live streams hook in here;
-    the frame buffer is reused, copy it to keep it). ``on_trace(image)`` gets the accumulated
-    trace of the whole clip in a full frame (for :mod:`labkit.vision.overlay`). Raises
-    :class:`VideoError` for unusable input; a usable file without a trace gives
+    the frame buffer is reused, copy it to keep it). ``on_progress(frames_read, frame_count)``
+    after each time chunk (``frame_count`` as the file says; 0 if unknown). ``on_trace(image)``
+    gets the accumulated trace of the whole clip in a full frame (for :mod:`labkit.vision.overlay`).
+    Raises :class:`VideoError` for unusable input; a usable file without a trace gives
     ``pattern.type == "none"`` with a reason.
     """
     quality = quality or LaserQuality()
@@ -418,6 +420,8 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
             futures[id(c)] = pool.submit(tracker.extract, c)
             histograms.append(pool.submit(grey_histogram, c.image))
             done.append(c)
+            if on_progress is not None:
+                on_progress(c.last + 1, max(source.frame_count, 0))
             if expected >= 4 and len(done) == expected // 2:
                 # classify the first half while the second half decodes; the end only refines
                 prior["fit"] = pool.submit(_preliminary, list(done), [futures[id(d)] for d in done], fps)
