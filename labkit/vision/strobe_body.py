@@ -11,6 +11,8 @@ clip's static light instead, see :func:`refine_with_static_light`). The axis ang
 ways: from the second moments (2-fold, for elongated bodies) and four-fold (the sides of a cube's
 square silhouette: the fourth-order complex moment ``sum w (z - z_c)^4``, which is
 ``-|c| e^{4 i alpha}`` for a square at angle alpha), so a square body has an orientation too.
+Each pose also carries the same angles from moments linear in intensity
+(:func:`linear_moments`, blur-invariant), which a clip without a ghost uses instead.
 
 Over the clip (:func:`orient_clip`): the rest axis is the body's own mean orientation (circular
 mean of the n-fold angles, n = 2 or 4), so the tilt ``theta_k = alpha_k - alpha_rest`` (wrapped
