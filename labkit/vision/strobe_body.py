@@ -11,6 +11,8 @@ clip's static light instead, see :func:`refine_with_static_light`). The axis ang
 ways: from the second moments (2-fold, for elongated bodies) and four-fold (the sides of a cube's
 square silhouette: the fourth-order complex moment ``sum w (z - z_c)^4``, which is
 ``-|c| e^{4 i alpha}`` for a square at angle alpha), so a square body has an orientation too.
+Each pose also carries the same angles from moments linear in intensity
+(:func:`linear_moments`, blur-invariant), which a clip without a ghost uses instead.
 
 Over the clip (:func:`orient_clip`): the rest axis is the body's own mean orientation (circular
 mean of the n-fold angles, n = 2 or 4), so the tilt ``theta_k = alpha_k - alpha_rest`` (wrapped
@@ -21,7 +23,7 @@ rotor axis is vertical, horizontal (Fig. 5.19) or rolled in the image.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
@@ -32,6 +34,7 @@ RAMP = (0.4, 0.6)  # soft-mask ramp, fraction of the body's contrast
 FLAT_LEVEL = 200.0  # background of a dark-body frame after flattening
 DARK_FLAT_LEVEL = 20.0  # background of a bright-body frame after flattening
 SQUARE_ANISOTROPY = 0.25  # below it the silhouette is too square for a 2-fold moment axis
+LINEAR_WINDOW_PX = 3  # the linear moments' window: the half-coverage region grown by this much
 
 
 @dataclass
@@ -54,6 +57,14 @@ class BodyPose:
     contrast: float
     bend_px: float = 0.0
     crop: BodyCrop | None = field(default=None, repr=False, compare=False)
+    linear: tuple[float, float, float] | None = None  # angle2, angle4, anisotropy (see linear_moments)
+
+    def with_linear_angles(self) -> BodyPose:
+        """This pose with the axis angles of :func:`linear_moments` (for clips without a ghost)."""
+        if self.linear is None:
+            return self
+        angle2, angle4, anisotropy = self.linear
+        return replace(self, angle2_rad=angle2, angle4_rad=angle4, anisotropy=anisotropy, linear=None)
 
     def half_length_along(self, angle_rad: float) -> float:
         """Half length of the body along direction ``angle_rad`` (uniform bar: L^2/12 second moment)."""
@@ -116,17 +127,42 @@ def _pose_from_cover(cover: np.ndarray, near: np.ndarray, x0: int, y0: int, cont
     if m["m00"] <= 0:
         return None
     mu20, mu02, mu11 = m["mu20"] / m["m00"], m["mu02"] / m["m00"], m["mu11"] / m["m00"]
-    spread = math.hypot(0.5 * (mu20 - mu02), mu11)
-    anisotropy = 2 * spread / (mu20 + mu02) if mu20 + mu02 > 0 else 0.0
     cx, cy = m["m10"] / m["m00"], m["m01"] / m["m00"]
     yy, xx = np.mgrid[0:soft.shape[0], 0:soft.shape[1]]
-    z4 = np.sum(soft * ((xx - cx) + 1j * (yy - cy)) ** 4)  # a square's is -|c| e^{4i alpha}
-    angle2, angle4 = 0.5 * math.atan2(2 * mu11, mu20 - mu02), 0.25 * float(np.angle(-z4))
+    angle2, angle4, anisotropy = _axis_angles(soft, m, xx - cx, yy - cy)
     side = angle2 if anisotropy >= SQUARE_ANISOTROPY else angle4  # a square has no major axis
     pose = BodyPose(x0 + cx, y0 + cy, angle2, angle4, anisotropy, mu20, mu02, mu11, float(m["m00"]), contrast,
-                    bend_px=_bend(soft, xx - cx, yy - cy, side))
+                    bend_px=_bend(soft, xx - cx, yy - cy, side), linear=linear_moments(cover, near))
     pose.crop = crop
     return pose
+
+
+def _axis_angles(w: np.ndarray, m: dict, dx: np.ndarray, dy: np.ndarray) -> tuple[float, float, float]:
+    """2-fold axis angle, 4-fold side angle and anisotropy of the weights ``w`` with moments ``m``."""
+    mu20, mu02, mu11 = m["mu20"] / m["m00"], m["mu02"] / m["m00"], m["mu11"] / m["m00"]
+    spread = math.hypot(0.5 * (mu20 - mu02), mu11)
+    anisotropy = 2 * spread / (mu20 + mu02) if mu20 + mu02 > 0 else 0.0
+    z4 = np.sum(w * (dx + 1j * dy) ** 4)  # a square's is -|c| e^{4i alpha}
+    return 0.5 * math.atan2(2 * mu11, mu20 - mu02), 0.25 * float(np.angle(-z4)), anisotropy
+
+
+def linear_moments(cover: np.ndarray, near: np.ndarray) -> tuple[float, float, float] | None:
+    """Axis angles and anisotropy from moments linear in intensity: the coverage itself (the frame
+    less its background, over the body's contrast), unclipped, in a window around the
+    half-coverage region. A symmetric lens blur adds its variance to both principal second
+    moments and leaves their axes, and the fourth-order side angle, where they were; the blurred
+    image is smooth, so pixel sums sample it without the bias that a mask's steep edge (the soft
+    ramp) gets at a small body's rounded corners. A ghost or shadow inside the window pulls these
+    moments, so :func:`labkit.vision.strobe._read_poses` uses them only for clips without a
+    measurable ghost. None when the window holds no weight."""
+    half = ((cover > 0.5) & (near > 0)).astype(np.uint8)
+    size = 2 * LINEAR_WINDOW_PX + 1
+    w = (cover * cv2.dilate(half, np.ones((size, size), np.uint8))).astype(np.float32)
+    m = cv2.moments(w)
+    if m["m00"] <= 0:
+        return None
+    yy, xx = np.mgrid[0:w.shape[0], 0:w.shape[1]]
+    return _axis_angles(w, m, xx - m["m10"] / m["m00"], yy - m["m01"] / m["m00"])
 
 
 def _bend(soft: np.ndarray, dx: np.ndarray, dy: np.ndarray, angle: float) -> float:

@@ -18,12 +18,6 @@ from labkit.footage.suite import DIFFICULTIES, FAMILIES, suite_cases
 from labkit.footage.suite_build import build_shot
 from labkit.footage.suite_eval import evaluate_case, render_case, score_laser, score_strobe
 
-PLATE_WRAP = ("a plate magnet's long side lies across its dipole axis: the strobe analysis now measures "
-              "the tilt about the body's own axis and is within tolerance, but its verdict says doubtful "
-              "(issue 11 open)")
-#: within tolerance, but the strobe verdict's tilt-resolution check calls a 320x240 body doubtful
-SMALL_BODY = "right but doubtful: the body is small for the tilt tolerance at 320x240 (issue 11 open)"
-
 SUBSET = {
     "circle-00-easy": None,
     "circle-09-easy": None,  # the labkit.sim cone
@@ -34,9 +28,13 @@ SUBSET = {
     "epitrochoid-7-00-easy": None,
     "hypotrochoid-3-04-easy": None,
     "hypotrochoid-6-04-easy": None,
-    "strobe-cylinder-12-easy": SMALL_BODY,
-    "strobe-cuboid-21-easy": PLATE_WRAP,
+    # 320x240 bodies 19-21 px from centre to corner, lens-blurred: once right but called doubtful
+    # (tilt resolution), now measured by moments linear in intensity and ok
+    "strobe-cylinder-12-easy": None,
+    "strobe-cuboid-21-easy": None,  # a plate magnet: its long side lies across its dipole axis
 }
+#: small blurred bodies that were outside the tilt tolerance with the soft mask's axis (+6.7 %)
+SMALL_BLURRED = ["strobe-cylinder-36-easy"]
 
 
 def test_suite_has_at_least_200_cases_over_every_family_and_difficulty():
@@ -134,6 +132,16 @@ def test_a_camera_wandering_six_times_as_far_as_the_hard_preset_is_followed(tmp_
     failures, errors = score_laser(result, truth)
     assert failures == [], errors
     assert result["quality"]["verdict"] != "failed"
+
+
+@pytest.mark.parametrize("name", SMALL_BLURRED)
+def test_small_blurred_strobe_body_within_tolerance(name, tmp_path_factory):
+    """Right; the verdict may still say doubtful, but only because the body is small for its tilt
+    (19 px from centre to corner: a 0.1 px bias at its ends is 0.0052 rad against 0.005)."""
+    (case,) = [c for c in suite_cases(difficulty="easy") if c.name == name]
+    outcome = evaluate_case(case, tmp_path_factory.getbasetemp() / "footage-suite")
+    assert outcome.passed, (outcome.failures, outcome.errors, outcome.message)
+    assert outcome.verdict in ("ok", "doubtful")
 
 
 def test_render_case_writes_footage_and_truth_once(tmp_path):
