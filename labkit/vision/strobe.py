@@ -51,6 +51,9 @@ GHOST_CORRECT = GHOST_DOUBT
 # ghost fraction below which a clip counts as ghost-free: the measure's spread on clips without
 # room light (|ghost| <= 0.008 on the 30 such clips of the robustness suite, noise and blur alone)
 GHOST_FLOOR = 0.01
+# pixels this close to the part of the body covered in every frame are left out of the ghost
+# measure: the blurred edge of that part darkens them in every frame (lens blur: core 1-2 px)
+BLUR_FRINGE_PX = 3
 
 
 def ghost_fraction(found: list[BodyPose], static: np.ndarray, dark: bool) -> float:
@@ -61,15 +64,21 @@ def ghost_fraction(found: list[BodyPose], static: np.ndarray, dark: bool) -> flo
     exposure and a pixel covered a fraction h of the revolution."""
     h, w = static.shape
     union = np.zeros((h, w), np.uint8)
+    count = np.zeros((h, w), np.uint16)
     for p in found:
         c = p.crop
         rh, rw = c.region.shape
         union[c.y0:c.y0 + rh, c.x0:c.x0 + rw] |= c.region
+        count[c.y0:c.y0 + rh, c.x0:c.x0 + rw] += c.region > 0
     body = float(np.median([p.crop.body_level for p in found]))
     bg = float(np.median([p.crop.bg_level for p in found]))
     full = abs(bg - body)
     core = np.abs(static - body) < 0.5 * full
     swept = (union > 0) & ~core
+    # next to the part covered in every frame, the lens blur of its edge darkens the static light
+    # as a ghost would; a real ghost also darkens the swept pixels beyond that fringe, blur does not
+    always = (count >= len(found)).astype(np.uint8) | core.astype(np.uint8)
+    beyond = swept & ~(cv2.dilate(always, np.ones((2 * BLUR_FRINGE_PX + 1,) * 2, np.uint8)) > 0)
     far = (cv2.dilate(union, np.ones((31, 31), np.uint8))
            - cv2.dilate(union, np.ones((17, 17), np.uint8))) > 0
     if swept.sum() < 10 or far.sum() < 10 or full <= 0:
@@ -77,7 +86,12 @@ def ghost_fraction(found: list[BodyPose], static: np.ndarray, dark: bool) -> flo
     # the far ring's background side: a flash shadow darkens one side of it only
     far_level = np.percentile(static[far], 75 if dark else 25)
     sign = 1.0 if dark else -1.0
-    return float(sign * (far_level - np.median(static[swept])) / full)
+    ghost = float(sign * (far_level - np.median(static[swept])) / full)
+    if beyond.sum() >= 10:
+        ghost_beyond = float(sign * (far_level - np.median(static[beyond])) / full)
+        if ghost_beyond <= GHOST_FLOOR:  # only the blurred edge of the still part: no ghost
+            return min(ghost, ghost_beyond)
+    return ghost
 
 
 def _read_poses(path: str, on_frame, keep_frame: int | None = None):
