@@ -244,8 +244,8 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
                            "rc_offset_px": motion.delta_se,
                            "method": "1-sigma from the least-squares residuals (scatter only, see docs)"},
            "ghost_bracket": None if bracket is None else {
-               "method": "the two ways of measuring under a ghost (soft mask, static light); the result "
-                         "is their midpoint, the truth is expected between them",
+               "method": "the two ways of measuring under a ghost (soft mask, static light), which err in "
+                         "opposite senses; the result is the fit of the poses half-way between them",
                "tilt_amplitude_rad": [bracket[0].phi, bracket[1].phi],
                "lateral_amplitude_px": [bracket[0].beta, bracket[1].beta]},
            "phase_per_frame": phases,
