@@ -247,7 +247,10 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
                "method": "the two ways of measuring under a ghost (soft mask, static light), which err in "
                          "opposite senses; the result is the fit of the poses half-way between them",
                "tilt_amplitude_rad": [bracket[0].phi, bracket[1].phi],
-               "lateral_amplitude_px": [bracket[0].beta, bracket[1].beta]},
+               "lateral_amplitude_px": [bracket[0].beta, bracket[1].beta],
+               # a systematic uncertainty beside the scatter-only one in "uncertainty"
+               "half_range": {"tilt_amplitude_rad": 0.5 * abs(bracket[0].phi - bracket[1].phi),
+                              "lateral_amplitude_px": 0.5 * abs(bracket[0].beta - bracket[1].beta)}},
            "phase_per_frame": phases,
            # what the Eq. 5.97 fit was given, frame by frame (the report's phase figure draws it)
            "per_frame": {"index": idx.tolist(), "tilt_rad": [float(v) for v in tilt],

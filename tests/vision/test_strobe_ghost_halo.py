@@ -46,4 +46,8 @@ def test_the_two_ways_bracket_the_true_lateral_amplitude(ghost_and_halo):
     assert lo < truth["lateral_amplitude_px"] < hi
     # the fit of the poses half-way between the two ways: about the middle of their results
     assert result["lateral_amplitude_px"] == pytest.approx(0.5 * (lo + hi), rel=0.01)
+    assert bracket["half_range"]["lateral_amplitude_px"] == pytest.approx(0.5 * (hi - lo), rel=1e-9)
+    # the half range covers the error where the scatter-only uncertainty does not
+    error = abs(result["lateral_amplitude_px"] - truth["lateral_amplitude_px"])
+    assert error < bracket["half_range"]["lateral_amplitude_px"]
 
