@@ -27,6 +27,7 @@ from labkit.vision.strobe_body import (
     flatten_illumination,
     measure_body,
     measure_flat,
+    midway_pose,
     orient_clip,
     refine_with_static_light,
     static_light,
@@ -99,8 +100,11 @@ def _read_poses(path: str, on_frame, keep_frame: int | None = None):
     ``GHOST_CORRECT``), measure again against the clip's static light (see
     :func:`labkit.vision.strobe_body.refine_with_static_light`); a weaker ghost above
     ``GHOST_FLOOR`` keeps the soft-mask poses but returns the static-light ones too, for the
-    verdict's comparison; below it the axes come from the linear moments. Returns the source,
-    the poses, the kept frame, the ghost fraction and the static-light poses (or None)."""
+    verdict's comparison; below it the axes come from the linear moments. A ghost above
+    ``GHOST_CORRECT`` gives the poses half-way between the two ways
+    (:func:`labkit.vision.strobe_body.midway_pose`: they err in opposite senses). Returns the
+    source, the poses, the kept frame, the ghost fraction and the two ways' poses (soft mask,
+    static light; or None)."""
     source = open_frames(path)
     poses: list[BodyPose | None] = []
     lo, hi, kept = 255, 0, None
@@ -124,21 +128,23 @@ def _read_poses(path: str, on_frame, keep_frame: int | None = None):
     if lo > 245:
         raise VideoError(source.path, "all frames are white (saturated); reduce exposure or gain")
     found = [p for p in poses if p is not None]
-    ghost, against_static = 0.0, None
+    ghost, ways = 0.0, None
     if found:
         dark = sum(p.crop.dark for p in found) * 2 >= len(found)
         static = brightest if dark else darkest
         ghost = ghost_fraction(found, static, dark)
         if ghost > GHOST_FLOOR:
             against_static = [None if p is None else refine_with_static_light(p, static) for p in poses]
+            ways = (poses, against_static)
             if ghost > GHOST_CORRECT:
-                poses = against_static
+                poses = [None if a is None or b is None else midway_pose(a, b)
+                         for a, b in zip(poses, against_static, strict=True)]
         else:  # no ghost: the axis from moments linear in intensity (blur-invariant)
             poses = [None if p is None else p.with_linear_angles() for p in poses]
-        for p in poses + (against_static or []):
+        for p in poses + [q for way in ways or () for q in way]:
             if p is not None:
                 p.crop = None
-    return source, poses, kept, ghost, against_static
+    return source, poses, kept, ghost, ways
 
 
 def _phase_spread(psi: np.ndarray) -> float:
@@ -210,7 +216,7 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
     ``keep_frame``: return the first frame with a body as ``result["_frame"]`` (index, BGR) for
     an overlay; the caller removes it before writing JSON.
     """
-    source, poses, kept, ghost, against_static = _read_poses(path, on_frame, 0 if keep_frame else None)
+    source, poses, kept, ghost, ways = _read_poses(path, on_frame, 0 if keep_frame else None)
     fps = camera_fps or source.fps or (strobe_hz or 0.0)
     try:
         model = choose_phase_model(rotor_hz, strobe_hz, apparent_hz, camera_fps, exposure_s, source.fps)
@@ -228,7 +234,10 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
     orient = _magnet_axis(orient, psi)
     tilt, lateral = orient.tilt_rad, orient.lateral_px
     motion = fit_motion(psi, tilt, lateral, model.blur_factor)
-    static_phi = _static_light_tilt(against_static, orient, psi, model) if ghost <= GHOST_CORRECT else None
+    bracket = None if ways is None else [_fit_about(way, orient, psi, model) for way in ways]
+    static_phi = bracket[1].phi if bracket and ghost <= GHOST_CORRECT else None
+    if ghost <= GHOST_CORRECT:
+        bracket = None
     phases = [float((2 * math.pi * model.cycles_per_frame * k + motion.phase_offset) % (2 * math.pi))
               for k in range(len(poses))]
     half = float(np.median([p.half_length_along(orient.rest_angle_rad + t)
@@ -248,6 +257,14 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
            "uncertainty": {"tilt_amplitude_rad": motion.phi_se, "lateral_amplitude_px": motion.beta_se,
                            "rc_offset_px": motion.delta_se,
                            "method": "1-sigma from the least-squares residuals (scatter only, see docs)"},
+           "ghost_bracket": None if bracket is None else {
+               "method": "the two ways of measuring under a ghost (soft mask, static light), which err in "
+                         "opposite senses; the result is the fit of the poses half-way between them",
+               "tilt_amplitude_rad": [bracket[0].phi, bracket[1].phi],
+               "lateral_amplitude_px": [bracket[0].beta, bracket[1].beta],
+               # a systematic uncertainty beside the scatter-only one in "uncertainty"
+               "half_range": {"tilt_amplitude_rad": 0.5 * abs(bracket[0].phi - bracket[1].phi),
+                              "lateral_amplitude_px": 0.5 * abs(bracket[0].beta - bracket[1].beta)}},
            "phase_per_frame": phases,
            # what the Eq. 5.97 fit was given, frame by frame (the report's phase figure draws it)
            "per_frame": {"index": idx.tolist(), "tilt_rad": [float(v) for v in tilt],
@@ -259,7 +276,7 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
                     "half_length_px": half},
            "quality": strobe_quality(_evidence(source, poses, found, orient, model, motion, phase_ev, psi,
                                                half, point, _flash_spread(model, rotor_hz, strobe_hz),
-                                               ghost, static_phi))}
+                                               ghost, static_phi, bracket))}
     if mm_per_px:
         out["lateral_amplitude_mm"] = motion.beta * mm_per_px
         out["rc_offset_mm"] = None if motion.delta is None else motion.delta * mm_per_px
@@ -275,17 +292,15 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
     return out
 
 
-def _static_light_tilt(against_static: list[BodyPose | None] | None, orient: ClipOrientation,
-                       psi: np.ndarray, model: PhaseModel) -> float | None:
-    """The tilt amplitude from the bodies measured against the clip's static light (a second way
-    of handling a weak ghost), about the same magnet axis; None without them."""
-    if against_static is None:
-        return None
-    found = [p for p in against_static if p is not None]
+def _fit_about(way: list[BodyPose | None], orient: ClipOrientation, psi: np.ndarray,
+               model: PhaseModel) -> MotionFit:
+    """The Eq. 5.97 fit of one way of measuring the bodies (soft mask or static light) about the
+    same magnet axis as ``orient``, on the frames where the result has a body."""
+    found = [p for p in way if p is not None]
     other = orient_clip(found)
     if abs(math.remainder(other.rest_angle_rad - orient.rest_angle_rad, math.pi)) > math.pi / 4:
         other = other.swapped()
-    return fit_motion(psi, other.tilt_rad, other.lateral_px, model.blur_factor).phi
+    return fit_motion(psi, other.tilt_rad, other.lateral_px, model.blur_factor)
 
 
 def _magnet_axis(orient: ClipOrientation, psi: np.ndarray) -> ClipOrientation:
@@ -310,12 +325,14 @@ def _axis_at(orient: ClipOrientation, tilt: np.ndarray) -> np.ndarray:
 
 def _evidence(source, poses, found, orient: ClipOrientation, model: PhaseModel, motion: MotionFit,
               phase_ev: dict, psi: np.ndarray, half: float, point: str, flash_spread, ghost: float,
-              static_phi: float | None) -> dict:
+              static_phi: float | None, bracket: list[MotionFit] | None) -> dict:
     areas = np.array([p.area_px for p in found])
     noise = _neighbour_noise(psi, orient.tilt_rad)
     w, h = source.size
     return {"frames": len(poses), "frames_with_body": len(found), "ghost_fraction": ghost,
             "tilt_amplitude_static_light_rad": static_phi,
+            "ghost_bracket_tilt_rad": None if bracket is None else [f.phi for f in bracket],
+            "ghost_bracket_lateral_px": None if bracket is None else [f.beta for f in bracket],
             "axis_method": "linear moments" if ghost <= GHOST_FLOOR else "soft mask",
             "body_half_length_px": half, "body_size_fraction": half / min(w, h),
             "body_area_spread": float(np.std(areas) / np.mean(areas)),

@@ -266,6 +266,21 @@ def refine_with_static_light(pose: BodyPose, static: np.ndarray) -> BodyPose:
     return _pose_from_cover(cover, near, crop.x0, crop.y0, pose.contrast, crop) or pose
 
 
+def midway_pose(plain: BodyPose, against_static: BodyPose) -> BodyPose:
+    """The pose half-way between the soft-mask pose and the static-light one (angles by the
+    circular mean of their period). Under a ghost the two err in opposite senses: the soft mask
+    takes in ghost that does not move, which shrinks the swing; the static light (the brightest
+    of all frames) still holds the body's own halo from its farthest excursion, so measuring
+    against it drops body that does not move either, which enlarges the swing."""
+    def mid(a: float, b: float, period: float) -> float:
+        return a + 0.5 * float(_wrap(np.array(b - a), period))
+    p, q = plain, against_static
+    return BodyPose(0.5 * (p.x + q.x), 0.5 * (p.y + q.y), mid(p.angle2_rad, q.angle2_rad, math.pi),
+                    mid(p.angle4_rad, q.angle4_rad, math.pi / 2), 0.5 * (p.anisotropy + q.anisotropy),
+                    0.5 * (p.mu20 + q.mu20), 0.5 * (p.mu02 + q.mu02), 0.5 * (p.mu11 + q.mu11),
+                    0.5 * (p.area_px + q.area_px), p.contrast, 0.5 * (p.bend_px + q.bend_px))
+
+
 def _wrap(a: np.ndarray, period: float) -> np.ndarray:
     return (a + period / 2) % period - period / 2
 

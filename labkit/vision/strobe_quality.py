@@ -136,9 +136,15 @@ def _body_checks(v: Verdict, e: dict) -> None:
                     f"{static_phi:.4f} rad against the clip's static light, further apart than the "
                     f"tolerance of {tol:.4f} rad; film with less ambient light")
     if e["ghost_fraction"] > GHOST_DOUBT:
+        tilts, laterals = e.get("ghost_bracket_tilt_rad"), e.get("ghost_bracket_lateral_px")
+        bracket = "" if not tilts or not laterals else (
+            f" (tilt {min(tilts):.4f}-{max(tilts):.4f} rad, "
+            f"lateral {min(laterals):.2f}-{max(laterals):.2f} px)")
         v.doubt(f"ambient-light ghost where the body sweeps ({e['ghost_fraction']:.0%} of its contrast): "
-                "measured against the clip's static light, but a flash shadow or other light moving with "
-                "the body would bias that; film with less ambient light")
+                "the result is the midpoint of the body measured with its half-coverage edges (which "
+                "takes in ghost and shrinks the swing) and against the clip's static light (which drops "
+                f"the body's own halo and enlarges it){bracket}; a flash shadow or other light moving "
+                "with the body biases both; film with less ambient light")
     if e.get("truncated"):
         v.doubt(str(e["truncated"]))
 
