@@ -134,17 +134,18 @@ def break_up(p) -> BreakUp:
         return weakest_hold(p, w, *search_heights(p, w), near)
 
     lo, hi = OMEGA_RANGE_RAD_S
-    if hold(hi)[0] >= 0:
+    held = hold(hi)
+    if held[0] >= 0:
         raise NoBreakUp(f"Fig. 6.18 model plant: the floator is not held beneath the rotator even at "
                         f"{hi * 60 / (2 * math.pi):.0f} RPM (static attraction too weak: rotator tilt "
                         f"{math.degrees(p.tilt_rad):.2f} deg); "
                         "set [geometry] break_phi_rad to fix C instead")
     w_held, w = hi, hi / 1.5
     while w >= lo and (last := hold(w))[0] < 0:        # down to the first speed that drops it
-        w_held, w = w, w / 1.5
+        w_held, held, w = w, last, w / 1.5
     if w < lo:
         raise NoBreakUp(f"the floator is held down to {lo:.0f} rad/s: no break-up speed in range")
-    near = math.sqrt(last[1] * hold(w_held)[1])
+    near = math.sqrt(last[1] * held[1])
     omega0 = brentq(lambda x: hold(x, near)[0], w, w_held, xtol=1e-7 * w)
     r_lo, r_hi = search_heights(p, omega0)
     _, r0 = hold(omega0)

@@ -124,8 +124,7 @@ class SimulatedSwing:
     def delta_px(self) -> float:
         """The RC offset beta / tan(phi) of Eq. 5.97, signed as the kinematic Swing's: the lateral
         motion is ``-delta tan(theta)`` when it runs in phase with ``-theta``."""
-        theta_c, x_c = first_harmonic(self._period()[0]), first_harmonic(self._period()[1])
-        in_phase = (x_c * theta_c.conjugate()).real > 0
+        in_phase = abs(self.lag_rad) < math.pi / 2
         return (-1.0 if in_phase else 1.0) * self.beta_px / math.tan(self.phi_rad)
 
     @property

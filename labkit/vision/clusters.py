@@ -96,15 +96,25 @@ def _around_largest(points: np.ndarray, groups: list[np.ndarray], sizes: list[fl
     """Indices of the groups kept: the largest group, and every group most of whose points lie
     inside its convex hull grown by ``margin_px``."""
     main = int(np.argmax(sizes))
-    corners = _corners(points[groups[main]])
+    distance = _distance_outside(points[groups[main]])
     return {j for j, g in enumerate(groups)
-            if j == main or _share_inside(points[g], corners, margin_px) > 0.5}
+            if j == main or float(np.mean(distance(points[g]) <= margin_px)) > 0.5}
 
 
-def _corners(p: np.ndarray) -> np.ndarray:
-    """The corners of the convex hull of ``p`` (all of ``p`` when they are too few or on a line)."""
-    corners = _hull(p)
-    return p if corners is None else corners
+def _distance_outside(hull_of: np.ndarray):
+    """A function giving, for points ``p``, about how far each lies outside the convex hull of
+    ``hull_of``: the largest signed distance to the hull's edge lines (<= 0 inside; exact along
+    the edges, a little short beyond its corners). Points on a line: the distance from their
+    segment."""
+    corners = _hull(hull_of)
+    if corners is not None:
+        normal, offset = _edge_lines(corners)
+        return lambda p: (p @ normal.T + offset).max(axis=1)
+    centre = hull_of.mean(axis=0)
+    d = hull_of - centre
+    axis = np.linalg.svd(d, full_matrices=False)[2][0] if len(hull_of) > 1 else np.array([1.0, 0.0])
+    lo, hi = (d @ axis).min(), (d @ axis).max()
+    return lambda p: np.hypot(*(p - centre - np.clip((p - centre) @ axis, lo, hi)[:, None] * axis).T)
 
 
 def _hull(p: np.ndarray) -> np.ndarray | None:
@@ -131,23 +141,6 @@ def _edge_lines(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     inward = np.sum(normal * (corners.mean(axis=0) - corners), axis=1) > 0
     normal[inward] *= -1.0
     return normal, -np.sum(normal * corners, axis=1)
-
-
-def _share_inside(p: np.ndarray, hull_of: np.ndarray, margin_px: float) -> float:
-    """Share of the points ``p`` inside the convex hull of ``hull_of`` or within about
-    ``margin_px`` of it: the largest signed distance to the hull's edge lines (exact inside and
-    along the edges, a little short beyond its corners). Points on a line: the distance from
-    their segment."""
-    corners = _hull(hull_of)
-    if corners is not None:
-        normal, offset = _edge_lines(corners)
-        distance = (p @ normal.T + offset).max(axis=1)
-        return float(np.mean(distance <= margin_px))
-    centre = hull_of.mean(axis=0)
-    d = hull_of - centre
-    axis = np.linalg.svd(d, full_matrices=False)[2][0] if len(hull_of) > 1 else np.array([1.0, 0.0])
-    along = np.clip((p - centre) @ axis, (d @ axis).min(), (d @ axis).max())
-    return float(np.mean(np.hypot(*(p - centre - along[:, None] * axis).T) <= margin_px))
 
 
 def _linked_groups(points: np.ndarray, link_px: float) -> tuple[np.ndarray, int]:

@@ -53,7 +53,6 @@ from labkit.vision.loops_seen import LOOP_SEEN_WIDTHS, TIPS_LIT_WIDTHS, loop_wid
 from labkit.vision.nearest import PointTree
 from labkit.vision.quality import Finding, graded, verdict
 from labkit.vision.wander import Wander, chunk_offsets, dense_curve
-from labkit.vision.wander import xy as _xy
 
 MIN_LINE_WIDTH_PX = 2.0  # a trace is never judged against less than this (sub-pixel lines)
 # a different pattern whose score is within this factor of the chosen one's is a real alternative
@@ -175,7 +174,7 @@ def _departure(fit: CurveFit, other: np.ndarray, other_tree: PointTree) -> float
     """How far two curves visibly differ: the larger of the 90th percentiles of the distances
     from each to the other (px)."""
     mine, _ = dense_curve(fit, 1.0)
-    there, _ = other_tree.query(_xy(mine))
+    there, _ = other_tree.query(mine)
     back, _ = PointTree(mine).query(other)
     return float(max(np.percentile(there, 90), np.percentile(back, 90)))
 

@@ -234,10 +234,11 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
     orient = _magnet_axis(orient, psi)
     tilt, lateral = orient.tilt_rad, orient.lateral_px
     motion = fit_motion(psi, tilt, lateral, model.blur_factor)
-    bracket = None if ways is None else [_fit_about(way, orient, psi, model) for way in ways]
-    static_phi = bracket[1].phi if bracket and ghost <= GHOST_CORRECT else None
-    if ghost <= GHOST_CORRECT:
-        bracket = None
+    # under a ghost: the static-light way's fit (a faint ghost: the verdict compares its tilt;
+    # a strong one: both ways bracket the midpoint result)
+    static_fit = None if ways is None else _fit_about(ways[1], orient, psi, model)
+    bracket = [_fit_about(ways[0], orient, psi, model), static_fit] if ghost > GHOST_CORRECT else None
+    static_phi = static_fit.phi if static_fit is not None and bracket is None else None
     phases = [float((2 * math.pi * model.cycles_per_frame * k + motion.phase_offset) % (2 * math.pi))
               for k in range(len(poses))]
     half = float(np.median([p.half_length_along(orient.rest_angle_rad + t)

@@ -35,6 +35,11 @@ GHOST_DOUBT = 0.08  # ghost fraction (strobe.ghost_fraction)
 MAX_BEND_PX = 0.4  # midline of a straight body: measured <= 0.27 px with noise, blur and compression
 
 
+def tilt_tolerance(phi: float) -> float:
+    """The tilt amplitude's tolerance (rad): 5 % of it, at least 0.005 rad (the acceptance's)."""
+    return max(TILT_TOL_REL * phi, TILT_TOL_ABS)
+
+
 def _sinc(u: float) -> float:
     return math.sin(math.pi * u) / (math.pi * u) if u else 1.0
 
@@ -56,7 +61,7 @@ class Verdict:
 
 def _amplitude_checks(v: Verdict, e: dict) -> None:
     phi, phi_se = e["tilt_amplitude_rad"], e["tilt_amplitude_se_rad"]
-    tol = max(TILT_TOL_REL * phi, TILT_TOL_ABS)
+    tol = tilt_tolerance(phi)
     if phi_se > 10 * tol:
         v.fail(f"no tilt above the noise: {phi:.4f} +- {phi_se:.4f} rad")
     elif (bias := SUBPIXEL_BIAS_PX[e.get("axis_method", "soft mask")]) / e["body_radius_px"] > tol:
@@ -129,7 +134,7 @@ def _body_checks(v: Verdict, e: dict) -> None:
     static_phi = e.get("tilt_amplitude_static_light_rad")
     if static_phi is not None:
         phi = e["tilt_amplitude_rad"]
-        tol = max(TILT_TOL_REL * phi, TILT_TOL_ABS)
+        tol = tilt_tolerance(phi)
         if abs(static_phi - phi) > tol:
             v.doubt(f"a faint ambient-light ghost ({e['ghost_fraction']:.1%} of the contrast) makes the tilt "
                     f"depend on how it is handled: {phi:.4f} rad from the body's half-coverage edges, "

@@ -28,7 +28,7 @@ from labkit.vision.fit import (
     polish,
     without_outliers,
 )
-from labkit.vision.nearest import PointTree
+from labkit.vision.nearest import PointTree, xy_points
 
 MIN_CHUNKS = 3
 MIN_CHUNK_POINTS = 10
@@ -48,10 +48,6 @@ def dense_curve(fit: CurveFit, spacing_px: float = 0.3) -> tuple[np.ndarray, np.
     e1, ek = np.exp(1j * t), np.exp(1j * k * t)
     speed = np.abs(1j * fit.a * e1 + 1j * k * fit.b * ek)
     return fit.c + fit.a * e1 + fit.b * ek, speed / np.sum(speed)
-
-
-def xy(z: np.ndarray) -> np.ndarray:
-    return np.column_stack([z.real, z.imag])
 
 
 MIN_CHUNK_COVERAGE = 0.5  # a chunk that shows less of the pattern cannot tell a shift from a shape
@@ -252,14 +248,14 @@ def follow_wander(cls: Classification, points: np.ndarray, weights: np.ndarray |
         step = filled(raw, mid_times)
         total = _detrended(total + step, mid_times, counts)
         moved = z - total[ch]
-        fit = polish(fit, xy(moved), w, t, iterations=8)
+        fit = polish(fit, xy_points(moved), w, t, iterations=8)
         if done >= rounds and (checked == len(mid_times) or checked <= before):
             break
     if fit.k != -1:
-        fit = without_outliers(fit, xy(moved), w, t)
+        fit = without_outliers(fit, xy_points(moved), w, t)
     result = Wander(fit, t_ref, mid_times, total, checked, rms_straight,
                     robust_rms(fit, z - total[ch] - fit.drift * (t - t_ref)))
     if fit.k == -1 and band is not None and band[2] is not None and len(band[0]) >= MIN_CHUNK_POINTS:
         moved_band = (result.moved(np.asarray(band[0], float), np.asarray(band[2], float)), band[1], band[2])
-        result.fit = _polished_on_band(fit, moved_band, (xy(moved), w, t), 2 * max_points)
+        result.fit = _polished_on_band(fit, moved_band, (xy_points(moved), w, t), 2 * max_points)
     return result
