@@ -17,8 +17,9 @@ from labkit.session.writer import utc_now, write_json_atomic
 KILLED = "killed"
 
 
-def running_sessions_of(root: str | Path, pid: int) -> list[Path]:
-    """Session folders under ``root`` whose run.json says ``running`` with process ``pid``."""
+def running_sessions_of(root: str | Path, pid: int) -> list[tuple[Path, dict]]:
+    """``(folder, run.json contents)`` of the sessions under ``root`` whose run.json says
+    ``running`` with process ``pid``."""
     found = []
     for meta_path in sorted(Path(root).glob("*/run.json")):
         try:
@@ -26,7 +27,7 @@ def running_sessions_of(root: str | Path, pid: int) -> list[Path]:
         except (OSError, ValueError):
             continue  # not a session this process wrote, or unreadable: leave it alone
         if isinstance(meta, dict) and meta.get("status") == "running" and meta.get("pid") == pid:
-            found.append(meta_path.parent)
+            found.append((meta_path.parent, meta))
     return found
 
 
@@ -36,13 +37,11 @@ def close_killed_sessions(root: str | Path, pid: int, reason: str) -> list[Path]
     A session whose run.json cannot be rewritten (full disk) keeps ``running``: the reason is
     then only on the terminal, and the session is resumable either way."""
     closed = []
-    for session in running_sessions_of(root, pid):
-        meta_path = session / "run.json"
+    for session, meta in running_sessions_of(root, pid):
+        meta.update(status=KILLED, reason=reason, ended=utc_now())
         try:
-            meta = json.loads(meta_path.read_text(encoding="utf-8"))
-            meta.update(status=KILLED, reason=reason, ended=utc_now())
-            write_json_atomic(meta_path, meta)
-        except (OSError, ValueError):
+            write_json_atomic(session / "run.json", meta)
+        except OSError:
             continue
         closed.append(session)
     return closed
