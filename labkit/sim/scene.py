@@ -399,6 +399,8 @@ def _initial(body: SceneBody, t: _Table, scene: Scene) -> None:
         equilibrium.apply_conical(body, scene, spin_k=spin_k)
     except ValueError as exc:
         raise t.error("equilibrium", str(exc)) from None
+    except ArithmeticError as exc:  # e.g. omega**2 past the float range: no state to start from
+        raise t.error("equilibrium", f"cannot be computed from these values ({exc})") from None
 
 
 def scene_from_dict(data: dict, source: str = "<dict>") -> Scene:
