@@ -193,7 +193,8 @@ def render_strobe(shot: StrobeShot) -> Iterator[np.ndarray]:
         # lens blur of the body's edges (core and halo; the wide glow matters for bright spots only)
         image[y0:y0 + rh, x0:x0 + rw] += apply_psf(body_energy, replace(cam, glow_fraction=0.0))
         if shot.ambient > 0:
-            ghost = _ghost(shot, roi, k / cam.fps + cam.exposure_s / 2)
+            # the room light's image of the revolution passes through the same lens as the flashes'
+            ghost = apply_psf(_ghost(shot, roi, k / cam.fps + cam.exposure_s / 2), replace(cam, glow_fraction=0.0))
             amb = np.full((h, w), shot.ambient * bg_level, np.float32)
             amb[y0:y0 + rh, x0:x0 + rw] += shot.ambient * (body_level - bg_level) * ghost
             image += amb * flicker_rows(lighting, cam, k)[:, None]

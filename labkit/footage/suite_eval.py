@@ -25,6 +25,8 @@ from labkit.footage.suite import CaseSpec
 from labkit.footage.suite_build import build_shot
 
 RENDER_VERSION = 3  # bump when the renderer's output changes: the cache key includes it
+# the stroboscope renderer's own version: 4 sends the room light's ghost through the lens (PSF)
+STROBE_RENDER_VERSION = 4
 CONICS = ("circle", "ellipse")
 
 
@@ -35,7 +37,8 @@ def default_cache() -> Path:
 
 
 def case_path(case: CaseSpec, cache: Path) -> Path:
-    key = hashlib.sha1(json.dumps([RENDER_VERSION, asdict(case)], sort_keys=True).encode()).hexdigest()[:10]
+    version = STROBE_RENDER_VERSION if case.family == "strobe" else RENDER_VERSION
+    key = hashlib.sha1(json.dumps([version, asdict(case)], sort_keys=True).encode()).hexdigest()[:10]
     suffix = ".jpg" if case.photo else ".mp4"
     return cache / f"{case.name}-{key}{suffix}"
 

@@ -13,6 +13,7 @@ lateral position is taken across that rest axis.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
@@ -27,12 +28,11 @@ from labkit.vision.strobe_body import (
     flatten_illumination,
     measure_body,
     measure_flat,
-    midway_pose,
     orient_clip,
-    refine_with_static_light,
     static_light,
 )
 from labkit.vision.strobe_fit import MotionFit, fit_motion, sine_fit
+from labkit.vision.strobe_ghost import ClipLight, ghost_free_poses, read_clip_light, swing_of
 from labkit.vision.strobe_phase import (
     PhaseModel,
     apparent_cycles_per_frame,
@@ -41,14 +41,13 @@ from labkit.vision.strobe_phase import (
     explained_fraction,
     fold,
 )
-from labkit.vision.strobe_quality import GHOST_DOUBT, strobe_quality
+from labkit.vision.strobe_quality import strobe_quality
 
 __all__ = ["analyse_strobe", "apparent_cycles_per_frame", "measure_body", "phase_pattern"]
 
 MIN_FRAMES = 6
-# ghost fraction above which bodies are re-measured against the static light; the verdict then
-# says doubtful too, because a flash shadow moving with the body also looks like a ghost
-GHOST_CORRECT = GHOST_DOUBT
+ROOM_LIGHT_ROUNDS = 4  # at most this many rounds of ghost removal and measurement
+ROOM_LIGHT_SETTLED = 0.005  # the tilt amplitude has settled when a round changes it by less than this
 # ghost fraction below which a clip counts as ghost-free: the measure's spread on clips without
 # room light (|ghost| <= 0.008 on the 30 such clips of the robustness suite, noise and blur alone)
 GHOST_FLOOR = 0.01
@@ -96,15 +95,11 @@ def ghost_fraction(found: list[BodyPose], static: np.ndarray, dark: bool) -> flo
 
 
 def _read_poses(path: str, on_frame, keep_frame: int | None = None):
-    """Measure the body in every frame; where an ambient ghost shows (:func:`ghost_fraction` above
-    ``GHOST_CORRECT``), measure again against the clip's static light (see
-    :func:`labkit.vision.strobe_body.refine_with_static_light`); a weaker ghost above
-    ``GHOST_FLOOR`` keeps the soft-mask poses but returns the static-light ones too, for the
-    verdict's comparison; below it the axes come from the linear moments. A ghost above
-    ``GHOST_CORRECT`` gives the poses half-way between the two ways
-    (:func:`labkit.vision.strobe_body.midway_pose`: they err in opposite senses). Returns the
-    source, the poses, the kept frame, the ghost fraction and the two ways' poses (soft mask,
-    static light; or None)."""
+    """Measure the body in every frame. Where room light leaves a ghost of the revolution
+    (:func:`ghost_fraction` above ``GHOST_FLOOR``), the clip's linear light around the body is
+    read too, for :func:`_without_room_light`; without one the axes come from the linear moments.
+    Returns the source, the poses, the kept frame, the ghost fraction and the clip's light (or
+    None)."""
     source = open_frames(path)
     poses: list[BodyPose | None] = []
     lo, hi, kept = 255, 0, None
@@ -128,23 +123,65 @@ def _read_poses(path: str, on_frame, keep_frame: int | None = None):
     if lo > 245:
         raise VideoError(source.path, "all frames are white (saturated); reduce exposure or gain")
     found = [p for p in poses if p is not None]
-    ghost, ways = 0.0, None
+    ghost, light = 0.0, None
     if found:
         dark = sum(p.crop.dark for p in found) * 2 >= len(found)
-        static = brightest if dark else darkest
-        ghost = ghost_fraction(found, static, dark)
+        ghost = ghost_fraction(found, brightest if dark else darkest, dark)
         if ghost > GHOST_FLOOR:
-            against_static = [None if p is None else refine_with_static_light(p, static) for p in poses]
-            ways = (poses, against_static)
-            if ghost > GHOST_CORRECT:
-                poses = [None if a is None or b is None else midway_pose(a, b)
-                         for a, b in zip(poses, against_static, strict=True)]
+            light = read_clip_light(path, poses, dark, source.size)
         else:  # no ghost: the axis from moments linear in intensity (blur-invariant)
             poses = [None if p is None else p.with_linear_angles() for p in poses]
-        for p in poses + [q for way in ways or () for q in way]:
+        for p in poses:
             if p is not None:
                 p.crop = None
-    return source, poses, kept, ghost, ways
+    return source, poses, kept, ghost, light
+
+
+@dataclass
+class _Measured:
+    """One measurement of the clip: the poses, the frames with a body and their phases, the
+    orientation about the magnet axis and the Eq. 5.97 fit."""
+
+    poses: list[BodyPose | None]
+    idx: np.ndarray
+    psi: np.ndarray
+    orient: ClipOrientation
+    motion: MotionFit
+
+    @property
+    def found(self) -> list[BodyPose]:
+        return [p for p in self.poses if p is not None]
+
+
+def _measure(poses: list[BodyPose | None], model: PhaseModel) -> _Measured:
+    idx = np.array([i for i, p in enumerate(poses) if p is not None])
+    psi = model.phases(idx)
+    orient = _magnet_axis(orient_clip([p for p in poses if p is not None]), psi)
+    motion = fit_motion(psi, orient.tilt_rad, orient.lateral_px, model.blur_factor)
+    return _Measured(poses, idx, psi, orient, motion)
+
+
+def _without_room_light(light: ClipLight, first: _Measured, model: PhaseModel) -> tuple[_Measured, dict]:
+    """Take the room light's ghost out (:mod:`labkit.vision.strobe_ghost`) with the swing of the
+    previous measurement, measure again, and repeat until the tilt amplitude settles (changes by
+    less than ``ROOM_LIGHT_SETTLED`` of itself) or ``ROOM_LIGHT_ROUNDS`` have run."""
+    now, covers, alpha, change, rounds = first, None, 0.0, math.inf, 0
+    while rounds < ROOM_LIGHT_ROUNDS and change > ROOM_LIGHT_SETTLED:
+        t = now.motion.tilt
+        fitted = t.coef[0] + t.coef[1] * np.sin(now.psi) + t.coef[2] * np.cos(now.psi)
+        swing = swing_of(now.found, now.orient.axis, now.orient.tilt_rad, now.orient.lateral_px, fitted,
+                         t.amplitude)
+        poses, alpha, covers = ghost_free_poses(light, now.poses, swing, covers)
+        if sum(p is not None for p in poses) < MIN_FRAMES:
+            break
+        before, now = now.motion.phi, _measure(poses, model)
+        change = abs(now.motion.phi - before) / max(now.motion.phi, 1e-12)
+        rounds += 1
+    return now, {"method": "ghost of the revolution taken out in linear light (docs/vision.md, Room light)",
+                 "fraction_of_light": alpha, "rounds": rounds, "settled": change <= ROOM_LIGHT_SETTLED,
+                 "last_change": change if math.isfinite(change) else None,
+                 "tilt_amplitude_uncorrected_rad": first.motion.phi,
+                 "lateral_amplitude_uncorrected_px": first.motion.beta}
 
 
 def _phase_spread(psi: np.ndarray) -> float:
@@ -216,7 +253,7 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
     ``keep_frame``: return the first frame with a body as ``result["_frame"]`` (index, BGR) for
     an overlay; the caller removes it before writing JSON.
     """
-    source, poses, kept, ghost, ways = _read_poses(path, on_frame, 0 if keep_frame else None)
+    source, poses, kept, ghost, light = _read_poses(path, on_frame, 0 if keep_frame else None)
     fps = camera_fps or source.fps or (strobe_hz or 0.0)
     try:
         model = choose_phase_model(rotor_hz, strobe_hz, apparent_hz, camera_fps, exposure_s, source.fps)
@@ -226,19 +263,16 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
     if len(idx) < MIN_FRAMES:
         raise VideoError(source.path, f"no body found: a contrasting body was segmented in {len(idx)} of "
                                       f"{len(poses)} frames (need {MIN_FRAMES}); check lighting and framing")
-    found = [p for p in poses if p is not None]
-    orient = orient_clip(found)
+    first = orient_clip([p for p in poses if p is not None])
+    model, phase_ev = _pick_phase(model, idx, [first.lateral_px, first.lateral_other_px, first.tilt_rad], fps,
+                                  source.path)
+    measured, room = _measure(poses, model), None
+    if light is not None:
+        measured, room = _without_room_light(light, measured, model)
+    poses, idx, psi = measured.poses, measured.idx, measured.psi
+    orient, motion = measured.orient, measured.motion
+    found = measured.found
     tilt, lateral = orient.tilt_rad, orient.lateral_px
-    model, phase_ev = _pick_phase(model, idx, [lateral, orient.lateral_other_px, tilt], fps, source.path)
-    psi = model.phases(idx)
-    orient = _magnet_axis(orient, psi)
-    tilt, lateral = orient.tilt_rad, orient.lateral_px
-    motion = fit_motion(psi, tilt, lateral, model.blur_factor)
-    # under a ghost: the static-light way's fit (a faint ghost: the verdict compares its tilt;
-    # a strong one: both ways bracket the midpoint result)
-    static_fit = None if ways is None else _fit_about(ways[1], orient, psi, model)
-    bracket = [_fit_about(ways[0], orient, psi, model), static_fit] if ghost > GHOST_CORRECT else None
-    static_phi = static_fit.phi if static_fit is not None and bracket is None else None
     phases = [float((2 * math.pi * model.cycles_per_frame * k + motion.phase_offset) % (2 * math.pi))
               for k in range(len(poses))]
     half = float(np.median([p.half_length_along(orient.rest_angle_rad + t)
@@ -258,14 +292,7 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
            "uncertainty": {"tilt_amplitude_rad": motion.phi_se, "lateral_amplitude_px": motion.beta_se,
                            "rc_offset_px": motion.delta_se,
                            "method": "1-sigma from the least-squares residuals (scatter only, see docs)"},
-           "ghost_bracket": None if bracket is None else {
-               "method": "the two ways of measuring under a ghost (soft mask, static light), which err in "
-                         "opposite senses; the result is the fit of the poses half-way between them",
-               "tilt_amplitude_rad": [bracket[0].phi, bracket[1].phi],
-               "lateral_amplitude_px": [bracket[0].beta, bracket[1].beta],
-               # a systematic uncertainty beside the scatter-only one in "uncertainty"
-               "half_range": {"tilt_amplitude_rad": 0.5 * abs(bracket[0].phi - bracket[1].phi),
-                              "lateral_amplitude_px": 0.5 * abs(bracket[0].beta - bracket[1].beta)}},
+           "room_light": room,
            "phase_per_frame": phases,
            # what the Eq. 5.97 fit was given, frame by frame (the report's phase figure draws it)
            "per_frame": {"index": idx.tolist(), "tilt_rad": [float(v) for v in tilt],
@@ -277,7 +304,7 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
                     "half_length_px": half},
            "quality": strobe_quality(_evidence(source, poses, found, orient, model, motion, phase_ev, psi,
                                                half, point, _flash_spread(model, rotor_hz, strobe_hz),
-                                               ghost, static_phi, bracket))}
+                                               ghost, room))}
     if mm_per_px:
         out["lateral_amplitude_mm"] = motion.beta * mm_per_px
         out["rc_offset_mm"] = None if motion.delta is None else motion.delta * mm_per_px
@@ -291,17 +318,6 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
                          "half_length_px": half, "point": points[j].tolist(), "track": points.tolist(),
                          "radius_px": math.sqrt(3 * (found[j].mu20 + found[j].mu02))}
     return out
-
-
-def _fit_about(way: list[BodyPose | None], orient: ClipOrientation, psi: np.ndarray,
-               model: PhaseModel) -> MotionFit:
-    """The Eq. 5.97 fit of one way of measuring the bodies (soft mask or static light) about the
-    same magnet axis as ``orient``, on the frames where the result has a body."""
-    found = [p for p in way if p is not None]
-    other = orient_clip(found)
-    if abs(math.remainder(other.rest_angle_rad - orient.rest_angle_rad, math.pi)) > math.pi / 4:
-        other = other.swapped()
-    return fit_motion(psi, other.tilt_rad, other.lateral_px, model.blur_factor)
 
 
 def _magnet_axis(orient: ClipOrientation, psi: np.ndarray) -> ClipOrientation:
@@ -326,15 +342,15 @@ def _axis_at(orient: ClipOrientation, tilt: np.ndarray) -> np.ndarray:
 
 def _evidence(source, poses, found, orient: ClipOrientation, model: PhaseModel, motion: MotionFit,
               phase_ev: dict, psi: np.ndarray, half: float, point: str, flash_spread, ghost: float,
-              static_phi: float | None, bracket: list[MotionFit] | None) -> dict:
+              room: dict | None) -> dict:
     areas = np.array([p.area_px for p in found])
     noise = _neighbour_noise(psi, orient.tilt_rad)
     w, h = source.size
     return {"frames": len(poses), "frames_with_body": len(found), "ghost_fraction": ghost,
-            "tilt_amplitude_static_light_rad": static_phi,
-            "ghost_bracket_tilt_rad": None if bracket is None else [f.phi for f in bracket],
-            "ghost_bracket_lateral_px": None if bracket is None else [f.beta for f in bracket],
-            "axis_method": "linear moments" if ghost <= GHOST_FLOOR else "soft mask",
+            "room_light_fraction": (room or {}).get("fraction_of_light"),
+            "room_light_settled": (room or {}).get("settled"),
+            "tilt_amplitude_uncorrected_rad": (room or {}).get("tilt_amplitude_uncorrected_rad"),
+            "axis_method": "linear moments" if room is None else "linear moments, room light taken out",
             "body_half_length_px": half, "body_size_fraction": half / min(w, h),
             "body_area_spread": float(np.std(areas) / np.mean(areas)),
             "body_anisotropy": orient.anisotropy, "body_symmetry": orient.symmetry,

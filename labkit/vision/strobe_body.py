@@ -5,9 +5,9 @@ Per frame (:func:`measure_body`): the lamp's banding and gradients are evened ou
 column medians; the body is the largest blob of Otsu's dark or bright class that does not touch
 the border; it is measured by moments of a soft mask whose ramp runs from 40 % to 60 % of the
 body's contrast against a ring around it. That ramp keeps edges unbiased (a symmetric edge profile
-keeps its centre) while a faint ambient ghost of the whole revolution or a flash shadow, both
-under 40 % of the contrast, do not pull the moments (a strong ghost is measured against the
-clip's static light instead, see :func:`refine_with_static_light`). The axis angle comes two
+keeps its centre) while a flash shadow under 40 % of the contrast does not pull the moments (room
+light's ghost of the revolution is taken out in linear light before the body is measured again,
+see :mod:`labkit.vision.strobe_ghost`). The axis angle comes two
 ways: from the second moments (2-fold, for elongated bodies) and four-fold (the sides of a cube's
 square silhouette: the fourth-order complex moment ``sum w (z - z_c)^4``, which is
 ``-|c| e^{4 i alpha}`` for a square at angle alpha), so a square body has an orientation too.
@@ -109,11 +109,11 @@ def _largest_blob(blur: np.ndarray, t: float):
 
 @dataclass
 class BodyCrop:
-    """What :func:`refine_with_static_light` needs of a frame: the flattened pixels around the body."""
+    """Where the body is in a frame and its levels, for the clip's ghost measures
+    (:func:`labkit.vision.strobe.ghost_fraction`, :func:`labkit.vision.strobe_ghost.read_clip_light`)."""
 
     x0: int
     y0: int
-    values: np.ndarray
     region: np.ndarray  # uint8 blob mask
     dark: bool
     body_level: float
@@ -229,56 +229,14 @@ def measure_flat(flat: np.ndarray) -> BodyPose | None:
     half = ((cover > 0.5) & (near > 0)).astype(np.uint8)
     if half.sum() >= MIN_BODY_AREA_PX:
         reg, near = half, cv2.dilate(half, np.ones((3, 3), np.uint8))
-    crop = BodyCrop(x0, y0, g.copy(), reg, dark, body_level, bg_level)
+    crop = BodyCrop(x0, y0, reg, dark, body_level, bg_level)
     return _pose_from_cover(cover, near, x0, y0, contrast, crop)
 
 
 def static_light(flat: np.ndarray) -> np.ndarray:
-    """The frame as :func:`refine_with_static_light` accumulates it (3x3 mean: less noise in the max)."""
+    """The frame as the clip's static light accumulates it (3x3 mean: less noise in the max; see
+    :func:`labkit.vision.strobe.ghost_fraction`)."""
     return cv2.blur(flat, (3, 3))
-
-
-def refine_with_static_light(pose: BodyPose, static: np.ndarray) -> BodyPose:
-    """Re-measure a body against the clip's static light ``static`` (per pixel, the brightest of
-    all frames for a dark body, the darkest for a bright one): the background plus whatever does
-    not change from frame to frame, such as the ambient-light ghost of the whole revolution. The
-    body's coverage is then ``(S - g) / F`` with F the flash contrast, measured on pixels the body
-    covers now but not in every frame; pixels covered in every frame count as covered. Without
-    such pixels (a body that does not move) the pose is returned unchanged."""
-    crop = pose.crop
-    if crop is None:
-        return pose
-    h, w = crop.values.shape
-    s = static[crop.y0:crop.y0 + h, crop.x0:crop.x0 + w]
-    sign = 1.0 if crop.dark else -1.0
-    d = sign * (s - crop.values)
-    full = abs(crop.bg_level - crop.body_level)
-    core = np.abs(s - crop.body_level) < 0.5 * full
-    inner = cv2.erode(crop.region, np.ones((3, 3), np.uint8)) > 0
-    swept = inner & ~core
-    if swept.sum() < 5:
-        return pose
-    flash = float(np.median(d[swept]))
-    if flash < 0.3 * full:
-        return pose
-    cover = np.where(core, 1.0, d / flash)
-    near = cv2.dilate(((cover > 0.5) | (crop.region > 0)).astype(np.uint8), np.ones((3, 3), np.uint8))
-    return _pose_from_cover(cover, near, crop.x0, crop.y0, pose.contrast, crop) or pose
-
-
-def midway_pose(plain: BodyPose, against_static: BodyPose) -> BodyPose:
-    """The pose half-way between the soft-mask pose and the static-light one (angles by the
-    circular mean of their period). Under a ghost the two err in opposite senses: the soft mask
-    takes in ghost that does not move, which shrinks the swing; the static light (the brightest
-    of all frames) still holds the body's own halo from its farthest excursion, so measuring
-    against it drops body that does not move either, which enlarges the swing."""
-    def mid(a: float, b: float, period: float) -> float:
-        return a + 0.5 * float(_wrap(np.array(b - a), period))
-    p, q = plain, against_static
-    return BodyPose(0.5 * (p.x + q.x), 0.5 * (p.y + q.y), mid(p.angle2_rad, q.angle2_rad, math.pi),
-                    mid(p.angle4_rad, q.angle4_rad, math.pi / 2), 0.5 * (p.anisotropy + q.anisotropy),
-                    0.5 * (p.mu20 + q.mu20), 0.5 * (p.mu02 + q.mu02), 0.5 * (p.mu11 + q.mu11),
-                    0.5 * (p.area_px + q.area_px), p.contrast, 0.5 * (p.bend_px + q.bend_px))
 
 
 def _wrap(a: np.ndarray, period: float) -> np.ndarray:

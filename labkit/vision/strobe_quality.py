@@ -21,7 +21,7 @@ MIN_BODY_RADIUS_PX = 6.0  # half diagonal of the silhouette
 # measured: the soft mask's steep edge (pixels, lens blur, compression), and the moments linear in
 # intensity of a clip without a ghost (blur-invariant; analysis/strobe_subpixel_bias.py measures
 # 0.07 px at most for the tilt amplitude of 60 random blurred clips, rounded up for compression)
-SUBPIXEL_BIAS_PX = {"soft mask": 0.2, "linear moments": 0.1}
+SUBPIXEL_BIAS_PX = {"soft mask": 0.2, "linear moments": 0.1, "linear moments, room light taken out": 0.1}
 MAX_BODY_FRACTION = 0.45  # half length against the frame's shorter side
 MAX_AREA_SPREAD = 0.2  # relative standard deviation of the body's area
 AMBIGUOUS_ANISOTROPY = (0.12, 0.35)  # between square (4-fold) and elongated (2-fold)
@@ -31,7 +31,7 @@ RUNNER_UP_CLOSE = 0.9  # runner-up frequency explains this much of what the best
 MAX_FLASH_SPREAD_CYCLES = 0.125  # flashes spread over u cycles shrink amplitudes by 1 - sinc(u): 2.5 %, half
 # the tolerance
 LOCKED_WEAK, LOCKED_STRONG = 0.5, 0.8  # explained variance of tilt vs lateral (they move together)
-GHOST_DOUBT = 0.08  # ghost fraction (strobe.ghost_fraction)
+MAX_ROOM_LIGHT = 0.5  # room light's share of the light (strobe_ghost): above it the ghost outweighs the body
 MAX_BEND_PX = 0.4  # midline of a straight body: measured <= 0.27 px with noise, blur and compression
 
 
@@ -131,27 +131,23 @@ def _body_checks(v: Verdict, e: dict) -> None:
     if lo < e["body_anisotropy"] < hi:
         v.doubt(f"silhouette neither square nor elongated (anisotropy {e['body_anisotropy']:.2f}): its axis "
                 f"was taken {e['body_symmetry']}-fold")
-    static_phi = e.get("tilt_amplitude_static_light_rad")
-    if static_phi is not None:
-        phi = e["tilt_amplitude_rad"]
-        tol = tilt_tolerance(phi)
-        if abs(static_phi - phi) > tol:
-            v.doubt(f"a faint ambient-light ghost ({e['ghost_fraction']:.1%} of the contrast) makes the tilt "
-                    f"depend on how it is handled: {phi:.4f} rad from the body's half-coverage edges, "
-                    f"{static_phi:.4f} rad against the clip's static light, further apart than the "
-                    f"tolerance of {tol:.4f} rad; film with less ambient light")
-    if e["ghost_fraction"] > GHOST_DOUBT:
-        tilts, laterals = e.get("ghost_bracket_tilt_rad"), e.get("ghost_bracket_lateral_px")
-        bracket = "" if not tilts or not laterals else (
-            f" (tilt {min(tilts):.4f}-{max(tilts):.4f} rad, "
-            f"lateral {min(laterals):.2f}-{max(laterals):.2f} px)")
-        v.doubt(f"ambient-light ghost where the body sweeps ({e['ghost_fraction']:.0%} of its contrast): "
-                "the result is the midpoint of the body measured with its half-coverage edges (which "
-                "takes in ghost and shrinks the swing) and against the clip's static light (which drops "
-                f"the body's own halo and enlarges it){bracket}; a flash shadow or other light moving "
-                "with the body biases both; film with less ambient light")
+    _room_light_checks(v, e)
     if e.get("truncated"):
         v.doubt(str(e["truncated"]))
+
+
+def _room_light_checks(v: Verdict, e: dict) -> None:
+    share = e.get("room_light_fraction")
+    if share is None:
+        return
+    if not e.get("room_light_settled", True):
+        v.doubt(f"the room-light correction did not settle (room light {share:.0%} of the light): the tilt "
+                f"still moved between its last two rounds; uncorrected it is "
+                f"{e['tilt_amplitude_uncorrected_rad']:.4f} rad; film with less ambient light")
+    if share > MAX_ROOM_LIGHT:
+        v.doubt(f"room light is {share:.0%} of the light: the ghost of the revolution outweighs the body's "
+                "own image in the flashes, and the correction rests on the model of that ghost; "
+                "film with less ambient light")
 
 
 def strobe_quality(evidence: dict) -> dict:
