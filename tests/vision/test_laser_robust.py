@@ -30,6 +30,10 @@ def suite_cache(tmp_path_factory):
     "ellipse-05-medium",
     # a camera drifting at 7 px/s and wandering on its tripod (short clip): an ellipse 26 px off
     "circle-08-hard",
+    # a 12 px saturated line filling a 6-loop epitrochoid on 320x240: the pattern's glow raised the
+    # background inside it, the inner loops fell under the noise floor and only the outer rim was
+    # found (read as an ellipse, doubtful); found since the trace continues a line (hysteresis)
+    "epitrochoid-6-04-hard",
 ])
 def test_independent_footage_within_tolerance_and_ok(suite_cache, name):
     path, truth = render_case(SUITE[name], suite_cache)
