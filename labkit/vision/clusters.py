@@ -65,7 +65,7 @@ def separate_pattern(points: np.ndarray, line_width_px: float, weights: np.ndarr
     if n == 0:
         return Separation(np.zeros(0, bool), 0.0, 0, 0.0)
     width = max(2.0, line_width_px if math.isfinite(line_width_px) else 2.0)
-    label, count = _linked_groups(points, LINK_WIDTHS * width)
+    label, count = linked_groups(points, LINK_WIDTHS * width)
     if count <= 2:
         return Separation(np.ones(n, bool), 0.0, 0, 0.0)
     groups = [g for g in (np.flatnonzero(label == j) for j in range(1, count)) if len(g)]
@@ -143,7 +143,7 @@ def _edge_lines(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return normal, -np.sum(normal * corners, axis=1)
 
 
-def _linked_groups(points: np.ndarray, link_px: float) -> tuple[np.ndarray, int]:
+def linked_groups(points: np.ndarray, link_px: float) -> tuple[np.ndarray, int]:
     """Label per point (1..) and the number of labels + 1: points closer than about ``link_px``
     share a label (each point's disc of radius ``link_px / 2`` is drawn on a raster of about
     1 px, coarser for a very large extent, and touching discs connect)."""

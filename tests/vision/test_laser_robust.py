@@ -43,6 +43,20 @@ def test_independent_footage_within_tolerance_and_ok(suite_cache, name):
     assert result["quality"]["verdict"] == "ok", result["quality"]["reasons"]
 
 
+def test_arcs_beside_a_larger_timestamp_read_right_and_say_what_was_left_out(suite_cache):
+    """8 separate arcs of 0.1 cycle (80 % of the curve never lit), a camera drifting 22 px, and a
+    timestamp larger than every arc: the timestamp was taken for the pattern (an ellipse 472 px
+    off). The timestamp stays at the same pixels while the pattern moves, so it is not on the
+    screen. The result stays doubtful (most of the curve extrapolated, drift assumed straight)."""
+    path, truth = render_case(SUITE["hypotrochoid-4-06-medium"], suite_cache)
+    result = analyse_laser(str(path))
+    failures, errors = score_laser(result, truth)
+    assert failures == [], errors
+    q = result["quality"]
+    assert q["light_fixed_in_frame"] > 0.3
+    assert q["verdict"] == "doubtful" and any("extrapolated" in r for r in q["reasons"])
+
+
 def _synth(tmp_path, size, level, seed, kind, loops, b, arc, cycle_hz=9.0, **extra):
     spec = laser_preset(level, size, seed=seed)
     spec = replace(spec, pattern=laser_pattern(kind, size, loops=loops, b=b, rotation_deg=17), frames=45,
