@@ -57,9 +57,10 @@ def background(gray: np.ndarray, frame_px: int | None = None) -> np.ndarray:
     return cv2.resize(opened, (4 * sw, 4 * sh), interpolation=cv2.INTER_LINEAR)[:h, :w].astype(np.float32)
 
 
-def robust_noise(residual: np.ndarray) -> float:
-    """Noise level from the median absolute deviation of a pixel sample (1.4826 MAD)."""
-    sample = residual.ravel()[:: max(1, residual.size // 50000)]
+def robust_noise(residual: np.ndarray, samples: int = 50000) -> float:
+    """Noise level from the median absolute deviation of a sample of about ``samples`` pixels
+    (1.4826 MAD)."""
+    sample = residual.ravel()[:: max(1, residual.size // samples)]
     med = float(np.median(sample))
     return max(0.5, 1.4826 * float(np.median(np.abs(sample - med))))
 
@@ -100,7 +101,10 @@ def trace_points(image: np.ndarray, offset: tuple[int, int] = (0, 0), subpixel: 
         return empty
     h, w = gray.shape
     r = max(5, int(round(0.01 * (frame_px or max(h, w)))))
-    weak_floor = max(snr * robust_noise(smooth), relative_floor * peak)
+    # light the noise floor misses may continue the trace: tested against the noise of the
+    # smoothed image (only when the noise, not the peak, sets the floor)
+    weak_floor = floor if floor <= relative_floor * peak else max(snr * robust_noise(smooth, 10000),
+                                                                    relative_floor * peak)
     _, bright = cv2.threshold(smooth, min(floor, weak_floor), 255, cv2.THRESH_BINARY)
     bx, by, bw, bh = cv2.boundingRect(bright.astype(np.uint8))
     if bw == 0 or bh == 0:
@@ -119,20 +123,26 @@ def trace_points(image: np.ndarray, offset: tuple[int, int] = (0, 0), subpixel: 
 
 def _continued(strong: np.ndarray, weak: np.ndarray, local: np.ndarray) -> np.ndarray:
     """``strong`` light and the ``weak`` light that continues it (hysteresis). A continuation
-    of a line looks like the line: the weak light is opened by a disc half as wide as the strong
-    band (thinner strokes, such as a timestamp's characters, fall away), and of what is left, the
-    light connected (8-neighbours) to strong light and at least half as bright (``local``: the
-    local maximum) as the brightest strong light it is connected to is kept, the half-maximum
-    rule of the band itself (the faint skirt of a bright line's glow is not its continuation)."""
-    if not strong.any() or not (weak & ~strong).any():
+    of a line looks like the line: weak light connected (8-neighbours) to strong light and at
+    least half as bright (``local``: the local maximum) as the brightest strong light it is
+    connected to, the half-maximum rule of the band itself (the faint skirt of a bright line's
+    glow is not its continuation), and as wide: opened by a disc half as wide as the strong band
+    (thinner strokes, such as a timestamp's characters, fall away)."""
+    extra = np.flatnonzero(weak & ~strong)
+    if len(extra) == 0:
         return strong
-    wide = cv2.morphologyEx(weak.view(np.uint8), cv2.MORPH_OPEN, _disc(0.5 * _band_width(strong)))
-    count, labels = cv2.connectedComponents(wide | strong.view(np.uint8), connectivity=8)
-    brightest = np.zeros(count, np.float32)
+    count, labels = cv2.connectedComponents(weak.view(np.uint8), connectivity=8)
+    brightest = np.full(count, np.inf, np.float32)  # inf: a component without strong light
+    np.minimum.at(brightest, labels[strong], -np.inf)
     np.maximum.at(brightest, labels[strong], local[strong])
-    brightest[0] = np.inf
-    level = (labels > 0) & (local >= 0.5 * brightest[labels])
-    count, labels = cv2.connectedComponents((strong | level).view(np.uint8), connectivity=8)
+    extra = extra[local.ravel()[extra] >= 0.5 * brightest[labels.ravel()[extra]]]
+    if len(extra) == 0:
+        return strong
+    fainter = np.zeros_like(strong)
+    fainter.ravel()[extra] = True
+    wide = cv2.morphologyEx((strong | fainter).view(np.uint8), cv2.MORPH_OPEN,
+                            _disc(0.5 * _band_width(strong)))
+    count, labels = cv2.connectedComponents(wide | strong.view(np.uint8), connectivity=8)
     seeded = np.zeros(count, bool)
     seeded[np.unique(labels[strong])] = True
     seeded[0] = False
