@@ -21,9 +21,10 @@ grown by a quarter, took in a timestamp along the frame's bottom edge whenever t
 near it (up to 20 % of the trace points, which pulled the fit hundreds of px off).
 
 What it cannot do: when a pattern is seen only as arcs that do not touch (very short exposures
-at a frame rate commensurate with the pattern, filmed by a moving camera) and a timestamp is
-larger than every arc, the timestamp is taken for the pattern; the fit then fails its checks and
-says so.
+at a frame rate commensurate with the pattern) and a timestamp is larger than every arc, the
+timestamp is taken for the pattern. If the camera moved, the timestamp is the light that stayed
+at the same pixels, and :func:`labkit.vision.rescue.without_fixed_light` leaves it out; with a
+still camera the fit fails its checks and says so.
 """
 
 from __future__ import annotations
