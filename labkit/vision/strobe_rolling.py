@@ -39,8 +39,6 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
-from scipy.optimize import least_squares
-from scipy.sparse import lil_matrix
 
 from labkit.vision.frames import open_frames
 from labkit.vision.strobe_body import BodyPose, flatten_illumination
@@ -54,7 +52,8 @@ GRID_STEPS = 90  # line times tried by the linear start, from 0 to one frame of 
 # finite-difference step, relative to max(1, |x|): the model renders in float32, whose resolution
 # on image coordinates of ~1000 px is ~1e-4 px, so the default (~1e-8) differences round-off
 DIFF_STEP = 1e-4
-MAX_NFEV = 40  # area over which residuals are correlated (blur core, compression blocks)
+MAX_ITERATIONS = 25
+COST_TOL = 1e-5  # area over which residuals are correlated (blur core, compression blocks)
 GLOBAL = ("phi", "delta", "eps", "psi0", "omega", "alpha0", "sigma_core", "sigma_halo", "halo_fraction",
           "cx", "cy", "x1", "x2", "y1", "y2")  # centre and its drift over the clip (quadratic)
 PER_FRAME = ("half_length", "half_width")  # a square plate turning about its axis breathes
@@ -205,7 +204,12 @@ def collect_crops(path: str, poses: list[BodyPose | None], max_frames: int = MAX
         if index >= pick[-1]:
             break
     values = np.array(crops[:len(pick)], np.float32)
-    return Crops(np.array(pick[:len(values)]), x0, y0, values, _bands(values), k)
+    return make_crops(np.array(pick[:len(values)]), x0, y0, values, k)
+
+
+def make_crops(frames: np.ndarray, x0: int, y0: int, values: np.ndarray, k: int = 1) -> Crops:
+    """:class:`Crops` of flattened grey crops (binned ``k``), with the pixels the fit reads."""
+    return Crops(frames, x0, y0, values, _bands(values), k)
 
 
 def _bands(values: np.ndarray) -> np.ndarray:
@@ -387,24 +391,75 @@ def fit_rolling(crops: Crops, f: FitInput, start: Start) -> tuple[dict, np.ndarr
     lo = np.array([bounds.get(k, (-np.inf, np.inf))[0] for k in free] + list(0.5 * a0) + list(0.5 * b0))
     hi = np.array([bounds.get(k, (-np.inf, np.inf))[1] for k in free] + list(1.5 * a0) + list(1.5 * b0))
     x0 = np.clip(x0, lo + 1e-6, np.where(np.isfinite(hi), hi - 1e-6, np.inf))
-    sparsity = lil_matrix((int(counts.sum()), len(x0)), dtype=int)
-    sparsity[:, :len(free)] = 1
-    for i in range(n):
-        sparsity[edges[i]:edges[i + 1], len(free) + i] = 1
-        sparsity[edges[i]:edges[i + 1], len(free) + n + i] = 1
-    res = least_squares(residual, x0, bounds=(lo, hi), jac_sparsity=sparsity, x_scale="jac",
-                        max_nfev=MAX_NFEV, method="trf", ftol=1e-6, xtol=1e-6, diff_step=DIFF_STEP)
-    g, a, b = unpack(res.x)
+
+    def jacobian(x: np.ndarray, r0: np.ndarray) -> np.ndarray:
+        return grouped_jacobian(residual, x, r0, hi, len(free), edges)
+
+    x, fun, jac, iterations, converged = levenberg_marquardt(residual, jacobian, x0, lo, hi)
+    g, a, b = unpack(x)
     resid = np.zeros(crops.values.shape, np.float64)
-    resid[crops.band] = res.fun
+    resid[crops.band] = fun
     inflation = correlation_area(resid, crops.band)
-    jac = res.jac.toarray() if hasattr(res.jac, "toarray") else np.asarray(res.jac)
-    s2 = float(np.sum(res.fun * res.fun)) / max(1, len(values) - jac.shape[1]) * inflation
+    s2 = float(np.sum(fun * fun)) / max(1, len(values) - jac.shape[1]) * inflation
     cov = np.linalg.pinv(jac.T @ jac) * s2
     se = {k: float(math.sqrt(max(cov[i, i], 0.0))) for i, k in enumerate(free)}
     return g, a, b, {"se": se, "cov": cov[:len(free), :len(free)], "free": free, "inflation": inflation,
-                     "rms": float(np.sqrt(np.mean(res.fun ** 2))), "evaluations": int(res.nfev),
-                     "pixels": len(values), "converged": bool(res.status > 0), "residual": resid}
+                     "rms": float(np.sqrt(np.mean(fun ** 2))), "iterations": iterations,
+                     "pixels": len(values), "converged": converged}
+
+
+def levenberg_marquardt(residual, jacobian, x0: np.ndarray, lo: np.ndarray, hi: np.ndarray):
+    """Bounded Levenberg-Marquardt (Marquardt's diagonal scaling, steps clipped to the bounds) on
+    the normal equations, which are small (parameters x parameters). Returns x, the residuals
+    and Jacobian there, the iterations used and whether the cost settled (relative decrease
+    below ``COST_TOL``) within ``MAX_ITERATIONS``."""
+    x = x0.copy()
+    fun = residual(x)
+    cost = float(np.sum(fun * fun))
+    damping = 1e-3
+    jac = jacobian(x, fun)
+    for iteration in range(1, MAX_ITERATIONS + 1):
+        normal, grad = jac.T @ jac, jac.T @ fun
+        scale = np.maximum(np.diag(normal), 1e-12)
+        while damping < 1e10:
+            step = np.linalg.solve(normal + damping * np.diag(scale), -grad)
+            trial = np.clip(x + step, lo, hi)
+            trial_fun = residual(trial)
+            trial_cost = float(np.sum(trial_fun * trial_fun))
+            if trial_cost < cost:
+                break
+            damping *= 4.0
+        else:
+            return x, fun, jac, iteration, True  # no step lowers the cost: a minimum
+        settled = (cost - trial_cost) < COST_TOL * cost
+        x, fun, cost, damping = trial, trial_fun, trial_cost, max(damping / 3.0, 1e-9)
+        jac = jacobian(x, fun)
+        if settled:
+            return x, fun, jac, iteration, True
+    return x, fun, jac, MAX_ITERATIONS, False
+
+
+def grouped_jacobian(residual, x: np.ndarray, r0: np.ndarray, hi: np.ndarray, n_global: int,
+                     edges: np.ndarray) -> np.ndarray:
+    """Forward differences of ``residual`` at ``x`` (dense, residuals x parameters): one
+    evaluation per global parameter, and one per kind of per-frame parameter for all frames at
+    once (frame i's parameter moves frame i's pixels only, ``edges[i]:edges[i + 1]``). Steps are
+    ``DIFF_STEP`` times max(1, |x|), taken downwards at an upper bound; ``r0`` = residual(x)."""
+    jac = np.zeros((len(r0), len(x)))
+    step = DIFF_STEP * np.maximum(1.0, np.abs(x))
+    step = np.where(x + step > hi, -step, step)
+    for j in range(n_global):
+        moved = x.copy()
+        moved[j] += step[j]
+        jac[:, j] = (residual(moved) - r0) / step[j]
+    n = len(edges) - 1
+    for first in range(n_global, len(x), n):
+        moved = x.copy()
+        moved[first:first + n] += step[first:first + n]
+        diff = residual(moved) - r0
+        for i in range(n):
+            jac[edges[i]:edges[i + 1], first + i] = diff[edges[i]:edges[i + 1]] / step[first + i]
+    return jac
 
 
 def correlation_area(resid: np.ndarray, mask: np.ndarray, reach: int = 3) -> float:

@@ -148,7 +148,7 @@ def rolling_analysis(path: str, poses: list[BodyPose | None], orient: ClipOrient
         "rms_residual": stats["rms"], "noise": noise,
         "residual_noise_ratio": stats["rms"] / max(noise, NOISE_FLOOR),
         "correlation_area_px": stats["inflation"], "frames_fitted": len(crops.frames), "bin": crops.bin,
-        "pixels_fitted": stats["pixels"], "evaluations": stats["evaluations"],
+        "pixels_fitted": stats["pixels"], "iterations": stats["iterations"],
         "converged": stats["converged"],
         "lens_blur_px": {"core": float(g["sigma_core"]), "halo": float(g["sigma_halo"]),
                          "halo_fraction": float(g["halo_fraction"])},
