@@ -127,8 +127,12 @@ def _body_checks(v: Verdict, e: dict, per_frame: bool = True) -> None:
     if not per_frame:
         return
     if e["body_area_spread"] > MAX_AREA_SPREAD:
+        camera = e.get("phase_source") == "camera"  # no lamp: a rolling shutter smears the body
         v.doubt(f"body area varies by {e['body_area_spread']:.0%} between frames: segmentation unstable "
-                "(shadow, ghost, or several images per frame)")
+                "(shadow, ghost, or several images per frame" + (
+                    "; or, with the camera as the strobe, a rolling shutter reading rows at different "
+                    "rotor phases: if the shutter rolls, give --readout-ms for the per-row model)" if camera
+                    else ")"))
     if e["body_bend_px"] > MAX_BEND_PX:
         v.doubt(f"the body's silhouette is bent (its midline strays {e['body_bend_px']:.2f} px rms from a "
                 "straight line): a rolling shutter shows different rows at different rotor phases, which "
