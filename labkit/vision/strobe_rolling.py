@@ -203,7 +203,7 @@ def collect_crops(path: str, poses: list[BodyPose | None], max_frames: int = MAX
             crops.append(crop.reshape(crop.shape[0] // k, k, crop.shape[1] // k, k).mean(axis=(1, 3)))
         if index >= pick[-1]:
             break
-    values = np.array(crops[:len(pick)], np.float32)
+    values = np.array(crops[:len(pick)], np.float32).reshape(-1, (y1 - y0) // k, (x1 - x0) // k)
     return make_crops(np.array(pick[:len(values)]), x0, y0, values, k)
 
 
@@ -267,6 +267,8 @@ def row_centres(crops: Crops) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.nd
         ys.append(rows[keep])
         xs.append(centre[keep])
         ends.append((k, rows[keep][0], rows[keep][-1]))
+    if not ks:
+        return np.zeros(0), np.zeros(0), np.zeros(0), np.zeros((0, 3))
     return np.concatenate(ks), np.concatenate(ys).astype(float), np.concatenate(xs), np.array(ends, float)
 
 

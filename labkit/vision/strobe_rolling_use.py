@@ -25,10 +25,13 @@ from labkit.vision.strobe_rolling import (
     collect_crops,
     fit_rolling,
     initial_guess,
+    row_centres,
 )
 
 MAX_BEND_PX = 0.4  # as strobe_quality: a straight body's midline strays less
 MIN_ENDS_COS = 0.7  # see ends_separation: below it the ends hold under half the information
+MIN_FIT_FRAMES = 6
+MIN_ROWS = 20  # rows that cut the body fully, over all frames, for the linear start
 MAX_RESIDUAL_NOISE = 3.0  # fit residual rms against the pixel noise of the background
 NOISE_FLOOR = 1.0  # grey levels: compression flattens a quiet background below its true noise
 
@@ -108,10 +111,14 @@ def _towards_top(g: dict, on_u: bool, angle: float) -> bool | None:
 
 
 def rolling_analysis(path: str, poses: list[BodyPose | None], orient: ClipOrientation, model: PhaseModel,
-                     rotor_hz: float, fps: float, height: int, readout_s: float | None) -> dict:
-    """Fit the per-row model; returns the ``rolling_shutter`` object of the result JSON."""
+                     rotor_hz: float, fps: float, height: int, readout_s: float | None) -> dict | None:
+    """Fit the per-row model; returns the ``rolling_shutter`` object of the result JSON, or None
+    when the footage gives too little to fit (too few frames read again, or too few rows cutting
+    the body: the per-frame result stands, and its bend check names the rolling shutter)."""
     found = [p for p in poses if p is not None]
     crops = collect_crops(path, poses)
+    if len(crops.frames) < MIN_FIT_FRAMES or len(row_centres(crops)[0]) < MIN_ROWS:
+        return None
     angle = orient.rest_angle_rad if orient.symmetry == 2 else float(
         np.median([p.angle2_rad for p in found]))
     half = (float(np.median([p.half_length_along(angle) for p in found])),
