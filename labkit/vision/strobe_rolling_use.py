@@ -177,8 +177,10 @@ def rolling_checks(v, e: dict) -> None:
         v.doubt(f"rolling shutter with the camera as the strobe: the readout came out at the end of its "
                 f"range ({r['readout_s'] * 1e3:.2f} ms); give --readout-ms if you know it")
     ends = r.get("ends_separation")
-    if ends is not None and ends < MIN_ENDS_COS:
-        v.doubt(f"rolling shutter with the camera as the strobe: the centre swings along the side the rows "
-                f"cut lengthwise, so only the body's two ends show it, and they are read about half a rotor "
-                f"cycle apart (|cos| {ends:.2f}): the swing cannot be told from a change of the body's size; "
-                "the lateral amplitude is doubtful (turn the camera so the rows cross that side)")
+    if ends is not None:
+        half_cycle = (f", and they are read about half a rotor cycle apart (|cos| {ends:.2f}), so the swing "
+                      "cannot be told from a change of the body's size") if ends < MIN_ENDS_COS else ""
+        v.doubt("rolling shutter with the camera as the strobe: the centre swings along the side the rows "
+                f"cut lengthwise, so only the body's two ends show it{half_cycle}; a body whose size changes "
+                "during the readout (a square plate turning about its axis) biases it, and labkit cannot "
+                "tell: the lateral amplitude is doubtful (turn the camera so that the rows cross that side)")
