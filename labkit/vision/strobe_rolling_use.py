@@ -30,6 +30,7 @@ from labkit.vision.strobe_rolling import (
 
 MAX_BEND_PX = 0.4  # as strobe_quality: a straight body's midline strays less
 MIN_ENDS_COS = 0.7  # see ends_separation: below it the ends hold under half the information
+MIN_ROW_CROSSING_DEG = 30.0  # the body's long side at least this steep, or rows run along it
 MIN_FIT_FRAMES = 6
 MIN_ROWS = 20  # rows that cut the body fully, over all frames, for the linear start
 MAX_RESIDUAL_NOISE = 3.0  # fit residual rms against the pixel noise of the background
@@ -110,6 +111,12 @@ def _towards_top(g: dict, on_u: bool, angle: float) -> bool | None:
     return None if dot == 0 else dot > 0
 
 
+def _long_side_from_rows(alpha0: float, half_u: float, half_n: float) -> float:
+    """Angle (deg, 0-90) between the silhouette's longer side and the image rows."""
+    angle = alpha0 if half_u >= half_n else alpha0 + math.pi / 2
+    return abs(math.degrees(math.atan(math.tan(angle))))
+
+
 def rolling_analysis(path: str, poses: list[BodyPose | None], orient: ClipOrientation, model: PhaseModel,
                      rotor_hz: float, fps: float, height: int, readout_s: float | None) -> dict | None:
     """Fit the per-row model; returns the ``rolling_shutter`` object of the result JSON, or None
@@ -152,6 +159,8 @@ def rolling_analysis(path: str, poses: list[BodyPose | None], orient: ClipOrient
         "readout_at_bound": bool(readout_s is None and not 0.02 * omega_max < g["omega"] < 0.99 * omega_max),
         "rows_explained": start.explained, "rows_explained_one_phase_per_frame": start.explained_global,
         "ends_separation": ends_separation(g["omega"], swing, half_swing, other, half_other),
+        "long_side_from_rows_deg": _long_side_from_rows(g["alpha0"], float(np.median(a)),
+                                                        float(np.median(b))),
         "rms_residual": stats["rms"], "noise": noise,
         "residual_noise_ratio": stats["rms"] / max(noise, NOISE_FLOOR),
         "correlation_area_px": stats["inflation"], "frames_fitted": len(crops.frames), "bin": crops.bin,
@@ -176,6 +185,12 @@ def rolling_checks(v, e: dict) -> None:
     if r["readout_at_bound"]:
         v.doubt(f"rolling shutter with the camera as the strobe: the readout came out at the end of its "
                 f"range ({r['readout_s'] * 1e3:.2f} ms); give --readout-ms if you know it")
+    crossing = r["long_side_from_rows_deg"]
+    if crossing < MIN_ROW_CROSSING_DEG:
+        v.doubt(f"rolling shutter with the camera as the strobe: the rows run along the body (its long side "
+                f"{crossing:.0f} deg from them), so few rows cut across it and the per-row model is poorly "
+                "conditioned: tilt and lateral amplitude are doubtful (turn the camera so that the rows "
+                "cross the body, or use a global shutter or a lamp)")
     ends = r.get("ends_separation")
     if ends is not None:
         half_cycle = (f", and they are read about half a rotor cycle apart (|cos| {ends:.2f}), so the swing "

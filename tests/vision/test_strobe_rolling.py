@@ -136,3 +136,28 @@ def test_ends_read_half_a_cycle_apart_cannot_show_a_swing_along_the_rows():
     assert ends_separation(2 * math.pi / 100, up, 50.0, right, 10.0) == pytest.approx(1.0)
     # swing across a vertical long side: every row shows it
     assert ends_separation(math.pi / 100, right, 10.0, up, 50.0) is None
+
+
+@pytest.fixture(scope="module")
+def rows_along_the_body(tmp_path_factory):
+    """The same clip with the rotor axis horizontal (Fig. 5.19): the cylinder lies along the rows."""
+    (case,) = [c for c in suite_cases(only="strobe", difficulty="medium") if c.name == CASE]
+    shot = replace(build_shot(case), frames=24, rest_deg=90.0)
+    truth = strobe_truth(shot)
+    path = write_footage(tmp_path_factory.mktemp("rolling-along") / "clip.mp4", render_strobe(shot),
+                         shot.camera.fps, truth, jpeg_quality=shot.camera.jpeg_quality)
+    return truth, str(path)
+
+
+def test_rows_along_the_body_are_doubtful_and_name_the_rolling_shutter(rows_along_the_body):
+    truth, path = rows_along_the_body
+    given = analysis_inputs(truth)
+    # a horizontal body hardly bends: the per-frame analysis runs, and its verdict names the cause
+    plain = analyse_strobe(path, **given)
+    assert plain["quality"]["verdict"] != "ok"
+    assert any("rolling shutter" in r for r in plain["quality"]["reasons"])
+    # given the readout, the per-row model runs and says it is poorly conditioned
+    per_row = analyse_strobe(path, **given, readout_s=truth["readout_s"])
+    assert per_row["rolling_shutter"]["long_side_from_rows_deg"] < 30
+    assert per_row["quality"]["verdict"] != "ok"
+    assert any("rows run along the body" in r for r in per_row["quality"]["reasons"])
