@@ -257,11 +257,8 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
     direction = None if motion.towards_top is None else (
         "towards body top" if motion.towards_top else "towards body bottom")
     apparent = model.apparent_hz if model.apparent_hz is not None else model.cycles_per_frame * fps
-    rolling = None
-    given = choose_phase_model(rotor_hz, strobe_hz, apparent_hz, camera_fps, exposure_s, source.fps)
-    if rolling_applies(given, rotor_hz, readout_s, float(np.median([p.bend_px for p in found]))):
-        rolling = rolling_analysis(source.path, poses, orient, given, rotor_hz, fps, source.size[1],
-                                   readout_s)
+    rolling = _per_row(source, poses, found, orient, fps, readout_s,
+                       (rotor_hz, strobe_hz, apparent_hz, camera_fps, exposure_s))
     out = {"source": source.path, "frames": len(poses), "fps": fps, "apparent_hz": abs(apparent),
            "tilt_amplitude_rad": motion.phi, "lateral_amplitude_px": motion.beta,
            "rc_offset_px": motion.delta,
@@ -303,6 +300,18 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
                          "half_length_px": half, "point": points[j].tolist(), "track": points.tolist(),
                          "radius_px": math.sqrt(3 * (found[j].mu20 + found[j].mu02))}
     return out
+
+
+def _per_row(source, poses, found, orient: ClipOrientation, fps: float, readout_s: float | None,
+             given: tuple) -> dict | None:
+    """The per-row model's result when the camera is the strobe and the shutter rolls, else None.
+    ``given``: rotor, strobe and apparent frequencies, camera fps and exposure as the user gave
+    them (the phase model is built afresh: the per-frame path may have replaced its frequency)."""
+    rotor_hz = given[0]
+    model = choose_phase_model(*given, source.fps)
+    if not rolling_applies(model, rotor_hz, readout_s, float(np.median([p.bend_px for p in found]))):
+        return None
+    return rolling_analysis(source.path, poses, orient, model, rotor_hz, fps, source.size[1], readout_s)
 
 
 def _use_rolling(out: dict, rolling: dict) -> None:

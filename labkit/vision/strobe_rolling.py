@@ -20,11 +20,11 @@ silhouette the centre swings across). Row r of the image is that rectangle's sli
 a halo, whose fraction and widths are fitted: the blur mixes neighbouring rows and so shrinks the
 row-to-row swing, which the fit must know), and a cubic tone curve (gamma, contrast, polarity;
 solved linearly at every step) maps coverage to grey levels. ``phi``, ``delta``, ``eps``,
-``psi_0``, ``omega`` (unless the user gives the readout), the rest axis, the body's size and
-per-frame offset and width (a tripod that wanders, a square plate that turns about its axis) are
-fitted to the pixels near the body's edges in up to ``MAX_FIT_FRAMES`` frames
-(:func:`fit_rolling`); a linear model of the row centres over a grid of line times starts it
-(:func:`initial_guess`).
+``psi_0``, ``omega`` (unless the user gives the readout), the rest axis, the lens blur, the centre
+with a slow drift (a tripod that wanders) and per frame the body's two half sizes (a square plate
+that turns about its axis breathes) are fitted to the pixels near the body's edges in up to
+``MAX_FIT_FRAMES`` frames (:func:`fit_rolling`, a bounded Levenberg-Marquardt); a linear model of
+the row centres over a grid of line times starts it (:func:`initial_guess`).
 
 The standard errors come from the fit's Jacobian, with the residual variance scaled up by
 the area over which residuals are correlated (:func:`correlation_area`: lens blur, 8x8
@@ -50,10 +50,10 @@ MARGIN_PX = 10  # crop margin beyond the body's reach
 BAND_OUT, BAND_IN = 6, 2  # residual pixels (binned): this far outside / inside the half-coverage edge
 GRID_STEPS = 90  # line times tried by the linear start, from 0 to one frame of readout
 # finite-difference step, relative to max(1, |x|): the model renders in float32, whose resolution
-# on image coordinates of ~1000 px is ~1e-4 px, so the default (~1e-8) differences round-off
+# on image coordinates of ~1000 px is ~1e-4 px, so steps of ~1e-8 would difference round-off
 DIFF_STEP = 1e-4
 MAX_ITERATIONS = 25
-COST_TOL = 1e-5  # area over which residuals are correlated (blur core, compression blocks)
+COST_TOL = 1e-5  # relative decrease of the cost below which the fit has settled
 GLOBAL = ("phi", "delta", "eps", "psi0", "omega", "alpha0", "sigma_core", "sigma_halo", "halo_fraction",
           "cx", "cy", "x1", "x2", "y1", "y2")  # centre and its drift over the clip (quadratic)
 PER_FRAME = ("half_length", "half_width")  # a square plate turning about its axis breathes
