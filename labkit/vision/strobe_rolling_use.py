@@ -196,6 +196,7 @@ def rolling_checks(v, e: dict) -> None:
         half_cycle = (f", and they are read about half a rotor cycle apart (|cos| {ends:.2f}), so the swing "
                       "cannot be told from a change of the body's size") if ends < MIN_ENDS_COS else ""
         v.doubt("rolling shutter with the camera as the strobe: the centre swings along the side the rows "
-                f"cut lengthwise, so only the body's two ends show it{half_cycle}; a body whose size changes "
-                "during the readout (a square plate turning about its axis) biases it, and labkit cannot "
-                "tell: the lateral amplitude is doubtful (turn the camera so that the rows cross that side)")
+                f"cut lengthwise, so only the body's two ends show it{half_cycle}; anything else that moves "
+                "the ends (a square plate turning about its axis during the readout) biases it by more "
+                "than its error, and labkit cannot tell: the lateral amplitude is doubtful (turn the camera "
+                "so that the rows cross that side)")
