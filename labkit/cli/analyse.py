@@ -37,6 +37,13 @@ def _positive(text: str) -> float:
     return v
 
 
+def _nonnegative(text: str) -> float:
+    v = _finite(text)
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"must be 0 or more, got {text}")
+    return v
+
+
 def _finite(text: str) -> float:
     try:
         v = float(text)
@@ -102,6 +109,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     strobe.add_argument("--exposure-s", type=_positive,
                         help="exposure time per frame: counts flashes per frame and corrects the "
                              "amplitudes for the motion within one exposure")
+    strobe.add_argument("--readout-ms", type=_nonnegative,
+                        help="rolling-shutter readout, first to last row (0: global shutter); with the "
+                             "camera as the strobe it fixes the per-row phase model's line time, which "
+                             "is otherwise estimated from the footage")
     strobe.add_argument("--mm-per-px", type=_positive, help="scale for mm outputs")
     strobe.add_argument(
         "--point",
@@ -310,6 +321,7 @@ def run_strobe(args: argparse.Namespace) -> int:
             args.path, args.rotor_hz, args.strobe_hz, args.apparent_hz, args.mm_per_px, args.point,
             on_frame=on_frame, camera_fps=args.camera_fps,
             exposure_s=args.exposure_s, keep_frame=bool(args.overlay or stream),
+            readout_s=None if args.readout_ms is None else args.readout_ms / 1000,
         )
         drawing = result.pop("_frame", None)
         record_speeds(result, speed_rpm, args.spin_rad_s)
@@ -359,6 +371,11 @@ def _print_strobe(r: dict) -> None:
           f"({math.degrees(r['tilt_amplitude_rad']):.2f} deg)  lateral amplitude "
           f"{_pm(r['lateral_amplitude_px'], u['lateral_amplitude_px'], 2)} px  RC offset (Eq. 5.97) "
           f"{_pm(r['rc_offset_px'], u['rc_offset_px'], 2)} px {r['rc_offset_direction'] or ''}".rstrip())
+    rolling = r.get("rolling_shutter")
+    if rolling:
+        given = "given" if rolling["readout_given"] else "from the footage"
+        print(f"rolling shutter, camera as the strobe: per-row phase model, readout "
+              f"{rolling['readout_s'] * 1e3:.2f} ms ({given})")
     print(f"{q['point']} trajectory: {r['point_pattern']['type']}")
     if _speed_line(r):
         print(_speed_line(r))

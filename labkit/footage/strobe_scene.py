@@ -167,6 +167,7 @@ def render_strobe(shot: StrobeShot) -> Iterator[np.ndarray]:
     x0, y0, rw, rh = roi
     rows = np.arange(h, dtype=float)
     sx, sy = shot.lamp.shadow_px
+    lens = replace(cam, glow_fraction=0.0)  # core and halo (the wide glow matters for bright spots only)
     for k in range(shot.frames):
         starts = cam.row_start_s(k, rows)
         flash = np.zeros(h, np.float32)  # lamp light per row
@@ -191,10 +192,10 @@ def render_strobe(shot: StrobeShot) -> Iterator[np.ndarray]:
             flash[:] = 1.0
         image = np.repeat(bg_level * flash[:, None], w, axis=1)
         # lens blur of the body's edges (core and halo; the wide glow matters for bright spots only)
-        image[y0:y0 + rh, x0:x0 + rw] += apply_psf(body_energy, replace(cam, glow_fraction=0.0))
+        image[y0:y0 + rh, x0:x0 + rw] += apply_psf(body_energy, lens)
         if shot.ambient > 0:
             # the room light's image of the revolution passes through the same lens as the flashes'
-            ghost = apply_psf(_ghost(shot, roi, k / cam.fps + cam.exposure_s / 2), replace(cam, glow_fraction=0.0))
+            ghost = apply_psf(_ghost(shot, roi, k / cam.fps + cam.exposure_s / 2), lens)
             amb = np.full((h, w), shot.ambient * bg_level, np.float32)
             amb[y0:y0 + rh, x0:x0 + rw] += shot.ambient * (body_level - bg_level) * ghost
             image += amb * flicker_rows(lighting, cam, k)[:, None]

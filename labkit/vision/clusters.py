@@ -21,9 +21,10 @@ grown by a quarter, took in a timestamp along the frame's bottom edge whenever t
 near it (up to 20 % of the trace points, which pulled the fit hundreds of px off).
 
 What it cannot do: when a pattern is seen only as arcs that do not touch (very short exposures
-at a frame rate commensurate with the pattern, filmed by a moving camera) and a timestamp is
-larger than every arc, the timestamp is taken for the pattern; the fit then fails its checks and
-says so.
+at a frame rate commensurate with the pattern) and a timestamp is larger than every arc, the
+timestamp is taken for the pattern. If the camera moved, the timestamp is the light that stayed
+at the same pixels, and :func:`labkit.vision.rescue.without_fixed_light` leaves it out; with a
+still camera the fit fails its checks and says so.
 """
 
 from __future__ import annotations
@@ -65,7 +66,7 @@ def separate_pattern(points: np.ndarray, line_width_px: float, weights: np.ndarr
     if n == 0:
         return Separation(np.zeros(0, bool), 0.0, 0, 0.0)
     width = max(2.0, line_width_px if math.isfinite(line_width_px) else 2.0)
-    label, count = _linked_groups(points, LINK_WIDTHS * width)
+    label, count = linked_groups(points, LINK_WIDTHS * width)
     if count <= 2:
         return Separation(np.ones(n, bool), 0.0, 0, 0.0)
     groups = [g for g in (np.flatnonzero(label == j) for j in range(1, count)) if len(g)]
@@ -143,7 +144,7 @@ def _edge_lines(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return normal, -np.sum(normal * corners, axis=1)
 
 
-def _linked_groups(points: np.ndarray, link_px: float) -> tuple[np.ndarray, int]:
+def linked_groups(points: np.ndarray, link_px: float) -> tuple[np.ndarray, int]:
     """Label per point (1..) and the number of labels + 1: points closer than about ``link_px``
     share a label (each point's disc of radius ``link_px / 2`` is drawn on a raster of about
     1 px, coarser for a very large extent, and touching discs connect)."""

@@ -34,7 +34,12 @@ from labkit.vision.laser_checks import judged_width, laser_evidence, laser_verdi
 from labkit.vision.loops_seen import tips_in_light
 from labkit.vision.overlay import accumulated_trace
 from labkit.vision.quality import rank
-from labkit.vision.rescue import one_chunk_start, without_stray_light
+from labkit.vision.rescue import (
+    one_chunk_start,
+    pattern_moved_px,
+    without_fixed_light,
+    without_stray_light,
+)
 from labkit.vision.trace import TracePoints, trace_points
 from labkit.vision.wander import Wander, follow_wander
 
@@ -363,6 +368,7 @@ def _second_readings(pattern: dict, diag: dict, points: np.ndarray, weights: np.
     def better(candidate: tuple[dict, dict]) -> bool:  # on the same verdict: fewer reasons to doubt
         return rank(candidate[1]) < rank(diag)
 
+    everything = (points, weights, times, band)
     *parts, left_out = without_stray_light(points, weights, times, band, width)
     # the pattern is most of the light, or what was left out is many small things (a timestamp's
     # characters); otherwise this may be a fragment of it
@@ -374,11 +380,21 @@ def _second_readings(pattern: dict, diag: dict, points: np.ndarray, weights: np.
             pattern, diag = second
     else:
         left_out = (0.0, 0.0)
+    fixed_share = None
+    moved = without_fixed_light(*everything, width) if drift and diag["verdict"] != "ok" else None
+    if moved is not None:  # light fixed in the frame, if the pattern moved, is not on the screen
+        *kept, share = moved
+        fixed = pattern_dict(*kept, None, middle, width, size, (share, 0.0))
+        if pattern_moved_px(fixed[1], kept[2]) > width and better(fixed):
+            pattern, diag = fixed
+            (points, weights, times, band), left_out, fixed_share = kept, (share, 0.0), share
     start = one_chunk_start(points, weights, times) if drift and diag["verdict"] != "ok" else None
     if start is not None:
         third = pattern_dict(points, weights, times, band, None, middle, width, size, left_out, start=start)
         if better(third):
             pattern, diag = third
+    if fixed_share is not None:
+        diag = {**diag, "light_fixed_in_frame": round(fixed_share, 4)}
     return pattern, diag
 
 

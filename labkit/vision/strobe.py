@@ -42,6 +42,7 @@ from labkit.vision.strobe_phase import (
     fold,
 )
 from labkit.vision.strobe_quality import strobe_quality
+from labkit.vision.strobe_rolling_use import rolling_analysis, rolling_applies
 
 __all__ = ["analyse_strobe", "apparent_cycles_per_frame", "measure_body", "phase_pattern"]
 
@@ -241,7 +242,8 @@ def _flash_spread(model: PhaseModel, rotor_hz: float | None, strobe_hz: float | 
 def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | None = None,
                    apparent_hz: float | None = None, mm_per_px: float | None = None,
                    point: str = "tip", on_frame=None, camera_fps: float | None = None,
-                   exposure_s: float | None = None, keep_frame: bool = False) -> dict:
+                   exposure_s: float | None = None, keep_frame: bool = False,
+                   readout_s: float | None = None) -> dict:
     """Analyse a stroboscope video; returns the ``labkit analyse strobe`` JSON.
 
     Phase (see :mod:`labkit.vision.strobe_phase`): ``rotor_hz`` with ``strobe_hz`` (a lamp,
@@ -251,7 +253,10 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
     trajectory is classified, ``tip`` (top end of the body axis), ``bottom`` or ``centroid``.
     ``on_frame(index, t_s, bgr)`` is called for every frame (live streams hook in here).
     ``keep_frame``: return the first frame with a body as ``result["_frame"]`` (index, BGR) for
-    an overlay; the caller removes it before writing JSON.
+    an overlay; the caller removes it before writing JSON. ``readout_s``: the rolling shutter's
+    readout (first to last row) when known, 0 for a global shutter; with the camera as the strobe
+    and a rolling shutter the amplitudes come from the per-row model
+    (:mod:`labkit.vision.strobe_rolling_use`), the readout estimated from the footage unless given.
     """
     source, poses, kept, ghost, light = _read_poses(path, on_frame, 0 if keep_frame else None)
     fps = camera_fps or source.fps or (strobe_hz or 0.0)
@@ -286,6 +291,8 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
     direction = None if motion.towards_top is None else (
         "towards body top" if motion.towards_top else "towards body bottom")
     apparent = model.apparent_hz if model.apparent_hz is not None else model.cycles_per_frame * fps
+    rolling = _per_row(source, poses, found, orient, fps, readout_s,
+                       (rotor_hz, strobe_hz, apparent_hz, camera_fps, exposure_s))
     out = {"source": source.path, "frames": len(poses), "fps": fps, "apparent_hz": abs(apparent),
            "tilt_amplitude_rad": motion.phi, "lateral_amplitude_px": motion.beta,
            "rc_offset_px": motion.delta,
@@ -304,7 +311,9 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
                     "half_length_px": half},
            "quality": strobe_quality(_evidence(source, poses, found, orient, model, motion, phase_ev, psi,
                                                half, point, _flash_spread(model, rotor_hz, strobe_hz),
-                                               ghost, room))}
+                                               ghost, room, rolling))}
+    if rolling is not None:
+        _use_rolling(out, rolling)
     if mm_per_px:
         out["lateral_amplitude_mm"] = motion.beta * mm_per_px
         out["rc_offset_mm"] = None if motion.delta is None else motion.delta * mm_per_px
@@ -318,6 +327,36 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
                          "half_length_px": half, "point": points[j].tolist(), "track": points.tolist(),
                          "radius_px": math.sqrt(3 * (found[j].mu20 + found[j].mu02))}
     return out
+
+
+def _per_row(source, poses, found, orient: ClipOrientation, fps: float, readout_s: float | None,
+             given: tuple) -> dict | None:
+    """The per-row model's result when the camera is the strobe and the shutter rolls, else None.
+    ``given``: rotor, strobe and apparent frequencies, camera fps and exposure as the user gave
+    them (the phase model is built afresh: the per-frame path may have replaced its frequency)."""
+    rotor_hz = given[0]
+    model = choose_phase_model(*given, source.fps)
+    if not rolling_applies(model, rotor_hz, readout_s, float(np.median([p.bend_px for p in found]))):
+        return None
+    return rolling_analysis(source.path, poses, orient, model, rotor_hz, fps, source.size[1], readout_s)
+
+
+def _use_rolling(out: dict, rolling: dict) -> None:
+    """The per-row model's amplitudes replace the per-frame fit's (which a rolling shutter with the
+    camera as the strobe distorts); ``per_frame`` keeps what each whole frame showed."""
+    out["tilt_amplitude_rad"] = rolling["tilt_amplitude_rad"]
+    out["lateral_amplitude_px"] = rolling["lateral_amplitude_px"]
+    out["rc_offset_px"] = rolling["rc_offset_px"]
+    out["uncertainty"].update({"tilt_amplitude_rad": rolling["tilt_amplitude_se_rad"],
+                               "lateral_amplitude_px": rolling["lateral_amplitude_se_px"],
+                               "rc_offset_px": rolling["rc_offset_se_px"],
+                               "method": "1-sigma from the per-row fit's Jacobian, residuals' correlation "
+                                         "area included (scatter only, see docs)"})
+    top = rolling["towards_top"]
+    out["rc_offset_direction"] = None if top is None else (
+        "towards body top" if top else "towards body bottom")
+    out["body"]["rest_axis_deg"] = rolling["magnet_axis_deg"]
+    out["rolling_shutter"] = rolling
 
 
 def _magnet_axis(orient: ClipOrientation, psi: np.ndarray) -> ClipOrientation:
@@ -342,10 +381,15 @@ def _axis_at(orient: ClipOrientation, tilt: np.ndarray) -> np.ndarray:
 
 def _evidence(source, poses, found, orient: ClipOrientation, model: PhaseModel, motion: MotionFit,
               phase_ev: dict, psi: np.ndarray, half: float, point: str, flash_spread, ghost: float,
-              room: dict | None) -> dict:
+              room: dict | None, rolling: dict | None = None) -> dict:
     areas = np.array([p.area_px for p in found])
     noise = _neighbour_noise(psi, orient.tilt_rad)
     w, h = source.size
+    per_row = {} if rolling is None else {
+        "rolling_shutter": rolling, "tilt_amplitude_rad": rolling["tilt_amplitude_rad"],
+        "tilt_amplitude_se_rad": rolling["tilt_amplitude_se_rad"],
+        "lateral_amplitude_px": rolling["lateral_amplitude_px"],
+        "lateral_amplitude_se_px": rolling["lateral_amplitude_se_px"]}
     return {"frames": len(poses), "frames_with_body": len(found), "ghost_fraction": ghost,
             "room_light_fraction": (room or {}).get("fraction_of_light"),
             "room_light_settled": (room or {}).get("settled"),
@@ -364,7 +408,7 @@ def _evidence(source, poses, found, orient: ClipOrientation, model: PhaseModel, 
             "rms_residual_x_px": motion.lateral.rms, "rms_residual_tilt_rad": motion.tilt.rms,
             "tilt_noise_rad": noise, "tilt_residual_ratio": motion.tilt.rms / noise if noise > 0 else 1.0,
             "flash_spread_cycles": flash_spread, **phase_ev,
-            "point": point, "truncated": source.truncated}
+            "point": point, "truncated": source.truncated, **per_row}
 
 
 def phase_pattern(points: np.ndarray, phases: np.ndarray) -> dict:

@@ -111,7 +111,9 @@ def _phase_checks(v: Verdict, e: dict) -> None:
                 f"{1 - _sinc(spread_cycles):.1%} (give --exposure-s to know)")
 
 
-def _body_checks(v: Verdict, e: dict) -> None:
+def _body_checks(v: Verdict, e: dict, per_frame: bool = True) -> None:
+    """``per_frame``: False when the per-row model of a rolling shutter replaced the per-frame
+    poses (a smeared silhouette's area, bend, axis and apparent ghost are then what it models)."""
     seen, frames = e["frames_with_body"], e["frames"]
     if seen < MIN_DETECTED * frames:
         v.doubt(f"body found in only {seen} of {frames} frames")
@@ -120,9 +122,17 @@ def _body_checks(v: Verdict, e: dict) -> None:
         v.doubt(f"body small: {radius:.1f} px from its centre to a corner; tilt is poorly resolved")
     if e["body_size_fraction"] > MAX_BODY_FRACTION:
         v.doubt(f"body large against the frame ({e['body_size_fraction']:.0%} of its shorter side)")
+    if e.get("truncated"):
+        v.doubt(str(e["truncated"]))
+    if not per_frame:
+        return
     if e["body_area_spread"] > MAX_AREA_SPREAD:
+        camera = e.get("phase_source") == "camera"  # no lamp: a rolling shutter smears the body
         v.doubt(f"body area varies by {e['body_area_spread']:.0%} between frames: segmentation unstable "
-                "(shadow, ghost, or several images per frame)")
+                "(shadow, ghost, or several images per frame" + (
+                    "; or, with the camera as the strobe, a rolling shutter reading rows at different "
+                    "rotor phases: if the shutter rolls, give --readout-ms for the per-row model)" if camera
+                    else ")"))
     if e["body_bend_px"] > MAX_BEND_PX:
         v.doubt(f"the body's silhouette is bent (its midline strays {e['body_bend_px']:.2f} px rms from a "
                 "straight line): a rolling shutter shows different rows at different rotor phases, which "
@@ -132,8 +142,6 @@ def _body_checks(v: Verdict, e: dict) -> None:
         v.doubt(f"silhouette neither square nor elongated (anisotropy {e['body_anisotropy']:.2f}): its axis "
                 f"was taken {e['body_symmetry']}-fold")
     _room_light_checks(v, e)
-    if e.get("truncated"):
-        v.doubt(str(e["truncated"]))
 
 
 def _room_light_checks(v: Verdict, e: dict) -> None:
@@ -153,8 +161,13 @@ def _room_light_checks(v: Verdict, e: dict) -> None:
 def strobe_quality(evidence: dict) -> dict:
     """The ``quality`` object: verdict, reasons, then the evidence as given."""
     v = Verdict()
-    _body_checks(v, evidence)
-    _phase_checks(v, evidence)
+    rolling = evidence.get("rolling_shutter") is not None
+    _body_checks(v, evidence, per_frame=not rolling)
+    if rolling:  # the per-row model of a rolling shutter with the camera as the strobe
+        from labkit.vision.strobe_rolling_use import rolling_checks
+        rolling_checks(v, evidence)
+    else:
+        _phase_checks(v, evidence)
     _amplitude_checks(v, evidence)
     return {"verdict": v.verdict, "reasons": v.reasons, **evidence}
 

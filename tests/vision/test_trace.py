@@ -60,3 +60,38 @@ def test_no_trace_on_pure_noise():
 @pytest.mark.parametrize("level", [0, 255])
 def test_no_trace_on_flat_images(level):
     assert len(trace_points(np.full((50, 60, 3), level, np.uint8)).points) == 0
+
+
+def _ring_with_a_faint_half(noise_sigma: float = 7.0, seed: int = 2):
+    """A 320x240 frame: a ring of radius 70 px and about 8 px line, its right half 80 grey levels
+    above the screen and its left half 45 (over half the bright half, under 8 raw noise sigmas,
+    56, but far above the noise of the smoothed image); beside it a faint disc and a faint 1 px
+    stroke leaving the bright half, both as faint as the faint half."""
+    import cv2
+
+    light = np.zeros((240, 320), np.float32)
+    cv2.ellipse(light, (160, 120), (70, 70), 0, -90, 90, 80.0, 8, cv2.LINE_AA)
+    cv2.ellipse(light, (160, 120), (70, 70), 0, 90, 270, 45.0, 8, cv2.LINE_AA)
+    cv2.circle(light, (35, 40), 6, 45.0, -1, cv2.LINE_AA)
+    cv2.line(light, (235, 150), (300, 215), 45.0, 1, cv2.LINE_AA)
+    light = cv2.GaussianBlur(light, (0, 0), 1.0)
+    rng = np.random.default_rng(seed)
+    frame = np.clip(60.0 + light + rng.normal(0.0, noise_sigma, light.shape), 0, 255).astype(np.uint8)
+    return frame
+
+
+def test_faint_light_is_kept_where_it_continues_the_line_and_only_there():
+    """Hysteresis (docs/vision.md, trace): the faint half of the ring continues the bright half
+    and is found; a faint disc apart from it and a stroke much thinner than the line are not."""
+    tp = trace_points(_ring_with_a_faint_half())
+    x, y = tp.points[:, 0], tp.points[:, 1]
+    r = np.hypot(x - 160, y - 120)
+    on_ring = np.abs(r - 70) < 4
+    left = on_ring & (x < 150)
+    # the faint half is traced along most of its length (angles from 100 to 260 degrees)
+    angles = np.degrees(np.arctan2(y[left] - 120, x[left] - 160)) % 360
+    assert np.histogram(angles, bins=16, range=(100, 260))[0].min() > 0
+    assert np.median(np.abs(r[left] - 70)) < 0.7
+    assert not np.any(np.hypot(x - 35, y - 40) < 10), "a faint blob apart from the line is not trace"
+    stroke = (np.abs((x - 235) - (y - 150)) < 3) & (x > 245) & (x < 300)
+    assert not np.any(stroke), "a faint stroke thinner than the line is not its continuation"
