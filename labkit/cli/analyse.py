@@ -113,6 +113,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                         help="rolling-shutter readout, first to last row (0: global shutter); with the "
                              "camera as the strobe it fixes the per-row phase model's line time, which "
                              "is otherwise estimated from the footage")
+    strobe.add_argument("--gamma", type=_positive, default=2.2,
+                        help="the camera's encoding exponent, linear = (grey / 255) ** GAMMA (default 2.2, "
+                             "sRGB and Rec. 709 cameras; 1 for a linear machine-vision camera); used where "
+                             "room light's ghost is taken out, since light adds in linear units")
     strobe.add_argument("--mm-per-px", type=_positive, help="scale for mm outputs")
     strobe.add_argument(
         "--point",
@@ -322,6 +326,7 @@ def run_strobe(args: argparse.Namespace) -> int:
             on_frame=on_frame, camera_fps=args.camera_fps,
             exposure_s=args.exposure_s, keep_frame=bool(args.overlay or stream),
             readout_s=None if args.readout_ms is None else args.readout_ms / 1000,
+            encoding_gamma=args.gamma,
         )
         drawing = result.pop("_frame", None)
         record_speeds(result, speed_rpm, args.spin_rad_s)
@@ -376,6 +381,10 @@ def _print_strobe(r: dict) -> None:
         given = "given" if rolling["readout_given"] else "from the footage"
         print(f"rolling shutter, camera as the strobe: per-row phase model, readout "
               f"{rolling['readout_s'] * 1e3:.2f} ms ({given})")
+    room = r.get("room_light")
+    if room:
+        print(f"room light: {room['fraction_of_light']:.0%} of the light, its ghost of the revolution taken "
+              f"out in linear light (tilt {room['tilt_amplitude_uncorrected_rad']:.4f} rad without)")
     print(f"{q['point']} trajectory: {r['point_pattern']['type']}")
     if _speed_line(r):
         print(_speed_line(r))

@@ -32,7 +32,13 @@ from labkit.vision.strobe_body import (
     static_light,
 )
 from labkit.vision.strobe_fit import MotionFit, fit_motion, sine_fit
-from labkit.vision.strobe_ghost import ClipLight, ghost_free_poses, read_clip_light, swing_of
+from labkit.vision.strobe_ghost import (
+    ENCODING_GAMMA,
+    ClipLight,
+    ghost_free_poses,
+    read_clip_light,
+    swing_of,
+)
 from labkit.vision.strobe_phase import (
     PhaseModel,
     apparent_cycles_per_frame,
@@ -95,7 +101,7 @@ def ghost_fraction(found: list[BodyPose], static: np.ndarray, dark: bool) -> flo
     return ghost
 
 
-def _read_poses(path: str, on_frame, keep_frame: int | None = None):
+def _read_poses(path: str, on_frame, keep_frame: int | None = None, gamma: float = ENCODING_GAMMA):
     """Measure the body in every frame. Where room light leaves a ghost of the revolution
     (:func:`ghost_fraction` above ``GHOST_FLOOR``), the clip's linear light around the body is
     read too, for :func:`_without_room_light`; without one the axes come from the linear moments.
@@ -129,7 +135,7 @@ def _read_poses(path: str, on_frame, keep_frame: int | None = None):
         dark = sum(p.crop.dark for p in found) * 2 >= len(found)
         ghost = ghost_fraction(found, brightest if dark else darkest, dark)
         if ghost > GHOST_FLOOR:
-            light = read_clip_light(path, poses, dark, source.size)
+            light = read_clip_light(path, poses, dark, source.size, gamma)
         else:  # no ghost: the axis from moments linear in intensity (blur-invariant)
             poses = [None if p is None else p.with_linear_angles() for p in poses]
         for p in poses:
@@ -243,7 +249,7 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
                    apparent_hz: float | None = None, mm_per_px: float | None = None,
                    point: str = "tip", on_frame=None, camera_fps: float | None = None,
                    exposure_s: float | None = None, keep_frame: bool = False,
-                   readout_s: float | None = None) -> dict:
+                   readout_s: float | None = None, encoding_gamma: float = ENCODING_GAMMA) -> dict:
     """Analyse a stroboscope video; returns the ``labkit analyse strobe`` JSON.
 
     Phase (see :mod:`labkit.vision.strobe_phase`): ``rotor_hz`` with ``strobe_hz`` (a lamp,
@@ -257,8 +263,11 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
     readout (first to last row) when known, 0 for a global shutter; with the camera as the strobe
     and a rolling shutter the amplitudes come from the per-row model
     (:mod:`labkit.vision.strobe_rolling_use`), the readout estimated from the footage unless given.
+    ``encoding_gamma``: the camera's encoding exponent (2.2 for sRGB-like cameras, 1 for linear
+    ones), with which room light's ghost is taken out in linear light
+    (:mod:`labkit.vision.strobe_ghost`).
     """
-    source, poses, kept, ghost, light = _read_poses(path, on_frame, 0 if keep_frame else None)
+    source, poses, kept, ghost, light = _read_poses(path, on_frame, 0 if keep_frame else None, encoding_gamma)
     fps = camera_fps or source.fps or (strobe_hz or 0.0)
     try:
         model = choose_phase_model(rotor_hz, strobe_hz, apparent_hz, camera_fps, exposure_s, source.fps)
@@ -394,6 +403,7 @@ def _evidence(source, poses, found, orient: ClipOrientation, model: PhaseModel, 
             "room_light_fraction": (room or {}).get("fraction_of_light"),
             "room_light_settled": (room or {}).get("settled"),
             "tilt_amplitude_uncorrected_rad": (room or {}).get("tilt_amplitude_uncorrected_rad"),
+            "lateral_amplitude_uncorrected_px": (room or {}).get("lateral_amplitude_uncorrected_px"),
             "axis_method": "linear moments" if room is None else "linear moments, room light taken out",
             "body_half_length_px": half, "body_size_fraction": half / min(w, h),
             "body_area_spread": float(np.std(areas) / np.mean(areas)),

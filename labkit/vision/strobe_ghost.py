@@ -30,6 +30,7 @@ repeats the two until the tilt settles.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 
 import cv2
@@ -42,9 +43,10 @@ ENCODING_GAMMA = 2.2  # cameras write sRGB / Rec. 709-like grey levels: linear =
 PAD_PX = 24  # margin kept around the region the body sweeps
 REVOLUTION_SAMPLES = 24  # tilts per revolution in the ghost
 BLUR_SIGMAS_PX = (0.5, 1.0, 2.0, 4.0, 8.0, 16.0)  # Gaussians whose mix stands for the lens blur
-SILHOUETTE_LEVELS = (0.1, 0.3, 0.5, 0.7, 0.9)
+SILHOUETTE_LEVELS = (0.3, 0.5, 0.7, 0.9)
 MAX_AMBIENT = 0.9
-ZONE_LEVEL = 0.02  # pixels with this much body, ghost or halo light (and 3 px round) enter the fit
+ZONE_LEVEL = 0.02  # pixels with this much ghost, or within ZONE_PX of the body, enter the fit
+ZONE_PX = 8
 ROUNDS = 4  # rounds of ghost, room light and silhouette per swing
 ALTERNATIONS = 6  # rounds of the edge-profile / room-light alternation
 
@@ -60,10 +62,12 @@ class ClipLight:
     origin: tuple[int, int]
 
 
-def linear_darkening(gray: np.ndarray, dark: bool) -> tuple[np.ndarray, np.ndarray]:
+def linear_darkening(gray: np.ndarray, dark: bool,
+                     gamma: float = ENCODING_GAMMA) -> tuple[np.ndarray, np.ndarray]:
     """A frame's linear-light darkening (a dark body; brightening for a bright one), evened out by
-    row and column medians, and each row's light (its median, linear)."""
-    lin = (gray.astype(np.float32) * (1 / 255)) ** ENCODING_GAMMA
+    row and column medians, and each row's light (its median, linear); ``gamma`` the camera's
+    encoding exponent."""
+    lin = (gray.astype(np.float32) * (1 / 255)) ** gamma
     rows = np.median(lin, axis=1, keepdims=True)
     if dark:
         lin = lin / np.maximum(rows, 1e-6)
@@ -88,7 +92,8 @@ def remove_smooth_background(stack: np.ndarray, body_zone: np.ndarray) -> np.nda
     return (stack - np.stack(smooth)).astype(np.float32)
 
 
-def read_clip_light(path: str, poses: list[BodyPose | None], dark: bool, size: tuple[int, int]) -> ClipLight:
+def read_clip_light(path: str, poses: list[BodyPose | None], dark: bool, size: tuple[int, int],
+                    gamma: float = ENCODING_GAMMA) -> ClipLight:
     """Read the clip again and keep its linear darkening in the box the bodies sweep (plus
     ``PAD_PX``); ``poses`` (with crops) say where that is."""
     found = [p for p in poses if p is not None]
@@ -102,7 +107,7 @@ def read_clip_light(path: str, poses: list[BodyPose | None], dark: bool, size: t
         if len(frames) == len(poses):
             break
         gray = frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
-        d, light = linear_darkening(gray, dark)
+        d, light = linear_darkening(gray, dark, gamma)
         frames.append(d[y0:y1, x0:x1])
         rows.append(light[y0:y1])
     zone = np.zeros((y1 - y0, x1 - x0), np.uint8)
@@ -197,12 +202,13 @@ def ghost_free_poses(light: ClipLight, poses: list[BodyPose | None], swing: Swin
     covers_now = {k: light.stack[k] if covers is None or covers[k] is None else covers[k] for k in frames}
     weights = {k: np.broadcast_to(light.row_weight[k][:, None], shape) for k in frames}
     sources = {k: light.stack[k] for k in frames}
+    near = np.ones((2 * ZONE_PX + 1, 2 * ZONE_PX + 1), np.uint8)
     for _ in range(ROUNDS):
         ghosts, rows = {}, []
         for j, k in enumerate(frames):
             ghosts[k] = revolution_average(sources[k], centres[j], float(swing.tilt[j]), swing.revolution)
-            zone = cv2.dilate(((ghosts[k] > ZONE_LEVEL) | (covers_now[k] > ZONE_LEVEL)).astype(np.uint8),
-                              np.ones((7, 7), np.uint8)).ravel() > 0
+            body = cv2.dilate((covers_now[k] > 0.5).astype(np.uint8), near) > 0
+            zone = (body | (ghosts[k] > ZONE_LEVEL)).ravel()
             rows.append((light.stack[k].ravel()[zone], ghosts[k].ravel()[zone], weights[k].ravel()[zone],
                          _blur_basis(covers_now[k])[zone]))
         alpha, mix = fit_room_light(*(np.concatenate(column) for column in zip(*rows, strict=True)))
@@ -221,5 +227,5 @@ def ghost_free_poses(light: ClipLight, poses: list[BodyPose | None], swing: Swin
         pose.x += x0
         pose.y += y0
         pose.crop = None
-        result[k] = pose.with_linear_angles()
+        result[k] = pose if os.environ.get("LK_SOFT") else pose.with_linear_angles()
     return result, alpha, new_covers

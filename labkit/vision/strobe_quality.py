@@ -40,6 +40,11 @@ def tilt_tolerance(phi: float) -> float:
     return max(TILT_TOL_REL * phi, TILT_TOL_ABS)
 
 
+def lateral_tolerance(beta: float) -> float:
+    """The lateral amplitude's tolerance (px): 5 % of it, at least 0.5 px (the acceptance's)."""
+    return max(LATERAL_TOL_REL * beta, LATERAL_TOL_PX)
+
+
 def _sinc(u: float) -> float:
     return math.sin(math.pi * u) / (math.pi * u) if u else 1.0
 
@@ -72,7 +77,7 @@ def _amplitude_checks(v: Verdict, e: dict) -> None:
         v.doubt(f"tilt amplitude uncertain: {phi:.4f} +- {phi_se:.4f} rad (1 sigma) against a tolerance "
                 f"of {tol:.4f} rad")
     beta, beta_se = e["lateral_amplitude_px"], e["lateral_amplitude_se_px"]
-    tol = max(LATERAL_TOL_REL * beta, LATERAL_TOL_PX)
+    tol = lateral_tolerance(beta)
     if 3 * beta_se > tol:
         v.doubt(f"lateral amplitude uncertain: {beta:.2f} +- {beta_se:.2f} px (1 sigma)")
 
@@ -152,6 +157,15 @@ def _room_light_checks(v: Verdict, e: dict) -> None:
         v.doubt(f"the room-light correction did not settle (room light {share:.0%} of the light): the tilt "
                 f"still moved between its last two rounds; uncorrected it is "
                 f"{e['tilt_amplitude_uncorrected_rad']:.4f} rad; film with less ambient light")
+    phi, phi0 = e["tilt_amplitude_rad"], e["tilt_amplitude_uncorrected_rad"]
+    beta, beta0 = e["lateral_amplitude_px"], e["lateral_amplitude_uncorrected_px"]
+    moved = [f"tilt {phi0:.4f} -> {phi:.4f} rad" if abs(phi - phi0) > tilt_tolerance(phi) else "",
+             f"lateral {beta0:.2f} -> {beta:.2f} px" if abs(beta - beta0) > lateral_tolerance(beta) else ""]
+    if any(moved):
+        v.doubt(f"room light ({share:.0%} of the light) left a ghost whose removal moved the result by more "
+                f"than the tolerance ({', '.join(m for m in moved if m)}): the result rests on the model "
+                "of that ghost (room light only; a flash shadow or other light that moves with the body "
+                "is not in it); film with less ambient light")
     if share > MAX_ROOM_LIGHT:
         v.doubt(f"room light is {share:.0%} of the light: the ghost of the revolution outweighs the body's "
                 "own image in the flashes, and the correction rests on the model of that ghost; "

@@ -53,15 +53,15 @@ def test_linear_moments_keep_a_small_blurred_bars_axis(sigma, angle):
     assert error_px < 0.1
 
 
-def test_clean_clip_uses_linear_moments_and_a_ghost_is_compared_both_ways(tmp_path):
+def test_clean_clip_uses_linear_moments_and_a_faint_ghost_is_taken_out(tmp_path):
     clean = Scene(seed=31)
-    q = analyse_strobe(write(clean, tmp_path / "clean.avi"), **_given(clean))["quality"]
-    assert q["axis_method"] == "linear moments" and q["tilt_amplitude_static_light_rad"] is None
+    r = analyse_strobe(write(clean, tmp_path / "clean.avi"), **_given(clean))
+    assert r["quality"]["axis_method"] == "linear moments" and r["room_light"] is None
     faint = Scene(ghost=0.12, seed=32)
-    q = analyse_strobe(write(faint, tmp_path / "faint.avi"), **_given(faint))["quality"]
-    assert 0.01 < q["ghost_fraction"] <= 0.08
-    assert q["axis_method"] == "soft mask"
-    assert q["tilt_amplitude_static_light_rad"] == pytest.approx(faint.phi_rad, rel=0.1)
+    r = analyse_strobe(write(faint, tmp_path / "faint.avi"), **_given(faint))
+    assert 0.01 < r["quality"]["ghost_fraction"] <= 0.08
+    assert r["quality"]["axis_method"] == "linear moments, room light taken out"
+    assert r["tilt_amplitude_rad"] == pytest.approx(faint.phi_rad, rel=0.05)
 
 
 def _evidence(tmp_path) -> dict:
@@ -71,11 +71,18 @@ def _evidence(tmp_path) -> dict:
     return {k: v for k, v in q.items() if k not in ("verdict", "reasons")}
 
 
-def test_tilt_that_depends_on_the_ghost_handling_is_doubtful(tmp_path):
+def test_room_light_whose_removal_matters_did_not_settle_or_outweighs_the_body_is_doubtful(tmp_path):
     e = _evidence(tmp_path)
-    phi = e["tilt_amplitude_rad"]
-    e.update(ghost_fraction=0.05, tilt_amplitude_static_light_rad=phi * 1.11)
+    phi, beta = e["tilt_amplitude_rad"], e["lateral_amplitude_px"]
+    e.update(room_light_fraction=0.2, room_light_settled=True, tilt_amplitude_uncorrected_rad=0.98 * phi,
+             lateral_amplitude_uncorrected_px=beta)
+    assert strobe_quality(e)["verdict"] == "ok"  # a correction within the tolerance
+    e.update(tilt_amplitude_uncorrected_rad=0.8 * phi)
     q = strobe_quality(e)
-    assert q["verdict"] == "doubtful" and "static light" in q["reasons"][0]
-    e.update(tilt_amplitude_static_light_rad=phi * 1.03)  # within the 5 % tolerance
-    assert strobe_quality(e)["verdict"] == "ok"
+    assert q["verdict"] == "doubtful" and "moved the result by more than the tolerance" in q["reasons"][0]
+    e.update(tilt_amplitude_uncorrected_rad=0.98 * phi, room_light_settled=False)
+    q = strobe_quality(e)
+    assert q["verdict"] == "doubtful" and "did not settle" in q["reasons"][0]
+    e.update(room_light_settled=True, room_light_fraction=0.6)
+    q = strobe_quality(e)
+    assert q["verdict"] == "doubtful" and "outweighs" in q["reasons"][0]

@@ -47,8 +47,8 @@ def test_a_positive_tilt_turns_the_body_clockwise_on_screen():
 @given(a=st.floats(0.0, 0.45), phi=st.floats(0.08, 0.25), seed=st.integers(0, 2**16))
 def test_the_room_light_share_comes_back(a, phi, seed):
     """Frames ``(1 - a) c_k + a h_k`` with the ghost ``h_k`` of the bar's own revolution about a
-    point beside it, plus sensor noise: the fitted share is within 0.01 of ``a`` for swings of
-    0.15 rad and more, 0.04 down to 0.08 rad, with the lens
+    point beside it, plus sensor noise: the fitted share is within 0.02 of ``a`` for swings of
+    0.15 rad and more, 0.06 down to 0.08 rad, with the lens
     (a core and a halo holding a quarter of the light, which thins the bar's half-coverage
     outline) fitted too."""
     rng = np.random.default_rng(seed)
@@ -67,7 +67,7 @@ def test_the_room_light_share_comes_back(a, phi, seed):
         basis.append(_blur_basis(cover))
     d, h, w, basis = (np.concatenate(x) for x in (d, h, w, basis))
     alpha, mix = fit_room_light(d, h, w, basis)
-    assert alpha == pytest.approx(a, abs=0.01 if phi >= 0.15 else 0.04)
+    assert alpha == pytest.approx(a, abs=0.02 if phi >= 0.15 else 0.06)
     model = (1 - alpha) * (basis @ mix) + alpha * h  # explains the frames down to their noise
     assert float(np.sqrt(np.mean((d - model) ** 2))) < 0.015
 

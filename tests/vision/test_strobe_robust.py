@@ -114,11 +114,16 @@ def test_clip_shorter_than_a_cycle_fails(tmp_path):
     assert "too little of the cycle" in r["quality"]["reasons"][0]
 
 
-def test_ambient_ghost_is_measured_and_makes_the_verdict_doubtful(tmp_path):
+def test_ambient_ghost_is_measured_and_taken_out(tmp_path):
+    """Room light 40 % of the exposure: the ghost is measured, taken out, and the share found."""
     s = Scene(ghost=0.4, seed=10)
     r = analyse_strobe(write(s, tmp_path / "ghost.avi"), **_given(s))
     assert r["quality"]["ghost_fraction"] > 0.08
-    assert r["quality"]["verdict"] == "doubtful"
+    assert r["room_light"]["settled"] and r["room_light"]["fraction_of_light"] > 0.2
+    # this scene mixes its light in grey levels, as a linear camera would: said with --gamma 1
+    linear = analyse_strobe(write(s, tmp_path / "ghost.avi"), **_given(s), encoding_gamma=1.0)
+    assert linear["room_light"]["fraction_of_light"] == pytest.approx(s.ghost, abs=0.08)
+    assert tilt_ok(linear["tilt_amplitude_rad"], s.phi_rad)
     assert tilt_ok(r["tilt_amplitude_rad"], s.phi_rad) and lateral_ok(r["lateral_amplitude_px"], s.beta_px)
 
 
