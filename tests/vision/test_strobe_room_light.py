@@ -13,7 +13,7 @@ from labkit.footage.suite_build import build_shot
 from labkit.footage.suite_eval import analysis_inputs, score_strobe
 from labkit.vision.strobe import analyse_strobe
 
-CASE = "strobe-cylinder-50-hard"  # 640x480, one flash per exposure, room light 0.3 of the lamp's
+CASE = "strobe-cuboid-23-hard"  # 320x240, a spinning plate, one flash per exposure, room light 0.3
 
 
 @pytest.fixture(scope="module")
