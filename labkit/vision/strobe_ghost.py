@@ -30,7 +30,6 @@ repeats the two until the tilt settles.
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass
 
 import cv2
@@ -227,5 +226,5 @@ def ghost_free_poses(light: ClipLight, poses: list[BodyPose | None], swing: Swin
         pose.x += x0
         pose.y += y0
         pose.crop = None
-        result[k] = pose if os.environ.get("LK_SOFT") else pose.with_linear_angles()
+        result[k] = pose.with_linear_angles()
     return result, alpha, new_covers
