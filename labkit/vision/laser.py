@@ -11,9 +11,9 @@ screen at distance ``L`` is a tilt of ``atan(r / L) / 2`` (Sec. 5.2.3, Fig. 5.19
 from __future__ import annotations
 
 import math
+import threading
 import time
 from collections.abc import Callable
-from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING
 
@@ -33,6 +33,8 @@ from labkit.vision.laser_gather import MAX_POINTS_PER_CHUNK, GatheredTrace, gath
 from labkit.vision.trace import TracePoints, trace_points
 
 if TYPE_CHECKING:
+    from concurrent.futures import Future
+
     from labkit.vision.fit import Classification
 
 # The fit side (labkit.vision.laser_pattern: the fit, wander, checks, second readings) loads in
@@ -233,6 +235,30 @@ def line_width(traces: list[TracePoints]) -> float:
     return float(np.median(widths)) if widths else math.nan
 
 
+class _Worker:
+    """One worker thread running tasks in order (trace extraction, the first half's
+    classification) while the main thread accumulates frames: a ``ThreadPoolExecutor`` with one
+    worker, created at the first task, after the first chunk, so that ``concurrent.futures`` and
+    the ``logging`` it imports (6 ms) load while frames decode, not before the first frame."""
+
+    def __init__(self) -> None:
+        self._pool = None
+
+    def submit(self, fn: Callable, *args) -> Future:
+        if self._pool is None:
+            from concurrent.futures import ThreadPoolExecutor
+
+            self._pool = ThreadPoolExecutor(max_workers=1)
+        return self._pool.submit(fn, *args)
+
+    def __enter__(self) -> _Worker:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=True)
+
+
 def _load_fit_side():
     """The fit side's module (imported on first use; see ``_FIT_SIDE``)."""
     from labkit.vision import laser_pattern
@@ -264,7 +290,9 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
     fps = source.fps or 0.0
     per_chunk = chunk_length(source, quality)
     expected = math.ceil(source.frame_count / per_chunk) if source.frame_count > 0 else 0
-    with ThreadPoolExecutor(max_workers=1) as pool:  # trace extraction overlaps decoding
+    # the fit side loads while the first chunk decodes
+    threading.Thread(target=_load_fit_side, name="labkit-fit-import", daemon=True).start()
+    with _Worker() as pool:  # trace extraction overlaps decoding
         futures: dict[int, Future] = {}
         histograms: list[Future] = []
         tracker = TraceTracker(max(source.size), quality.subpixel)  # one worker: chunks in order
@@ -276,8 +304,6 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
             trace = tracker.extract(c)
             gathered.add(c, trace)
             return trace
-
-        pool.submit(_load_fit_side)  # while the first chunk decodes
 
         def extract(c: Chunk) -> None:
             futures[id(c)] = pool.submit(extracted, c)
