@@ -89,7 +89,9 @@ def _registered(points: np.ndarray, curve: np.ndarray, share: np.ndarray, tree: 
     chunk's light covers too little of the curve or does not fix both directions."""
     pts = points - shift
     dist, idx = tree.query(pts)
-    lit = PointTree(pts).query(curve)[0] <= width  # curve points with light within ``width``
+    # curve points with light within ``width``; the search bound (twice that) only prunes the
+    # tree search: every distance up to the bound comes back exactly as without it
+    lit = PointTree(pts).query(curve, distance_upper_bound=2 * width)[0] <= width
     if float(np.sum(share[lit])) < MIN_CHUNK_COVERAGE:
         return complex(np.nan, np.nan)
     residual = pts - curve[idx]
