@@ -266,6 +266,15 @@ def _load_fit_side():
     return laser_pattern
 
 
+def _preload_fit_side() -> None:
+    """:func:`_load_fit_side` in a background thread; a failure is left to the main thread's own
+    import to report (a thread's traceback would reach the user)."""
+    try:
+        _load_fit_side()
+    except Exception:  # noqa: BLE001 - reported by the import that needs the module
+        pass
+
+
 def _preliminary(gathered: GatheredTrace, chunks: int, fps: float) -> Classification | None:
     """:func:`labkit.vision.laser_pattern.preliminary` (in the worker, while later frames decode)."""
     return _load_fit_side().preliminary(gathered, chunks, fps)
@@ -291,7 +300,7 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
     per_chunk = chunk_length(source, quality)
     expected = math.ceil(source.frame_count / per_chunk) if source.frame_count > 0 else 0
     # the fit side loads while the first chunk decodes
-    threading.Thread(target=_load_fit_side, name="labkit-fit-import", daemon=True).start()
+    threading.Thread(target=_preload_fit_side, name="labkit-fit-import", daemon=True).start()
     with _Worker() as pool:  # trace extraction overlaps decoding
         futures: dict[int, Future] = {}
         histograms: list[Future] = []
