@@ -11,17 +11,16 @@ screen at distance ``L`` is a tilt of ``atan(r / L) / 2`` (Sec. 5.2.3, Fig. 5.19
 from __future__ import annotations
 
 import math
+import threading
 import time
 from collections.abc import Callable
-from concurrent.futures import Future, ThreadPoolExecutor
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
 
-from labkit.vision.curves import a_for_k
 from labkit.vision.exposure import check_exposure, grey_histogram
-from labkit.vision.fit import MIN_POINTS, Classification, classify, pattern_kind
 from labkit.vision.framepath import (
     AMPLE_LUMA_CNR,
     PROBE_FRAMES,
@@ -30,21 +29,29 @@ from labkit.vision.framepath import (
     measure_frame_path,
 )
 from labkit.vision.frames import FrameSource, open_frames
-from labkit.vision.laser_checks import judged_width, laser_evidence, laser_verdict, no_pattern_verdict
-from labkit.vision.loops_seen import tips_in_light
-from labkit.vision.overlay import accumulated_trace
-from labkit.vision.quality import rank
-from labkit.vision.rescue import (
-    one_chunk_start,
-    pattern_moved_px,
-    without_fixed_light,
-    without_stray_light,
-)
+from labkit.vision.laser_gather import MAX_POINTS_PER_CHUNK, GatheredTrace, gather  # noqa: F401 (API)
 from labkit.vision.trace import TracePoints, trace_points
-from labkit.vision.wander import Wander, follow_wander
+
+if TYPE_CHECKING:
+    from concurrent.futures import Future
+
+    from labkit.vision.fit import Classification
+
+# The fit side (labkit.vision.laser_pattern: the fit, wander, checks, second readings) loads in
+# the worker thread while the first frames decode, not before the first frame; its public
+# functions stay importable from here.
+_FIT_SIDE = ("pattern_dict", "symmetry_of", "read_pattern")
+
+
+def __getattr__(name: str):
+    if name in _FIT_SIDE:
+        from labkit.vision import laser_pattern
+
+        return getattr(laser_pattern, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 FrameHook = Callable[[int, float, np.ndarray], None]
-MAX_POINTS_PER_CHUNK = 4000
 MIN_FRAMES_PER_CHUNK = 4
 # a short clip is cut into at least this many chunks (when each keeps MIN_FRAMES_PER_CHUNK): a
 # centre that wanders on a shaking tripod curves within a second, and 3 chunks of a 1.5 s clip
@@ -222,188 +229,55 @@ def _frame_path(chunks: list[Chunk], probe: FramePathProbe) -> dict:
     return {**probe.choice.to_quality(), "frame_path": path}
 
 
-def _none(reason: str) -> dict:
-    return {"type": "none", "reason": reason, "center_px": None, "semi_axes_px": None,
-            "rotation_deg": None, "ellipticity": None, "loops": None, "symmetry": None, "trochoid": None,
-            "rms_residual_px": None}
-
-
-def symmetry_of(kind: str, k: int) -> int | None:
-    """n-fold rotational symmetry of a pattern: round(1/|a|) = |k - 1| of Eq. 6.38 (a trochoid
-    with ``loops`` n: n - 1 for an epitrochoid, n for a hypotrochoid), 2 for an ellipse, None for
-    a circle (every rotation maps it onto itself)."""
-    if kind == "circle":
-        return None
-    return round(1.0 / abs(a_for_k(k)))
-
-
-def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | None,
-                 band: tuple | None = None, prior: Classification | None = None,
-                 centre_time: float | None = None, line_width_px: float = math.nan,
-                 frame_size: tuple[int, int] | None = None, left_out: tuple[float, float] = (0.0, 0.0),
-                 start: Classification | None = None) -> tuple[dict, dict]:
-    """Classify and fit a trace; returns the JSON ``pattern`` object and fit diagnostics, which
-    include the quality verdict (:mod:`labkit.vision.laser_checks`) when ``frame_size`` is given.
-    With ``times``, the fitted centre drifts; it is reported at ``centre_time`` (s, e.g. the
-    middle of the recording), or at the mean time of the points fitted.
-
-    A result refined from ``prior`` (the first part's classification) that the checks do not
-    call ``ok`` is done again from scratch, and the fresh result kept unless it ranks worse
-    (:func:`labkit.vision.quality.rank`: a worse verdict, or the same with more checks not ``ok``):
-    the first part may have shown too little of the pattern."""
-    args = (centre_time, line_width_px, frame_size, left_out)
-    pattern, diag = _pattern_dict(points, weights, times, band, prior, *args, start)
-    if prior is not None and diag.get("verdict", "ok") != "ok":
-        fresh = _pattern_dict(points, weights, times, band, None, *args, None)
-        if rank(fresh[1]) <= rank(diag):
-            return fresh
-    return pattern, diag
-
-
-def _pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | None, band: tuple | None,
-                  prior: Classification | None, centre_time: float | None, line_width_px: float,
-                  frame_size: tuple[int, int] | None, left_out: tuple[float, float],
-                  start: Classification | None) -> tuple[dict, dict]:
-    cls = start if start is not None else classify(points, weights, times, band=band, prior=prior)
-    cls, wander, points = _steadied(cls, points, weights, times, band, line_width_px)
-    before = cls.best
-    cls, wander = tips_in_light(cls, wander, points, weights, times, judged_width(line_width_px))
-    best, ell = cls.best, cls.ellipse.pattern
-    centre = best.c
-    if times is not None and centre_time is not None:
-        centre = wander.centre_at(centre_time) if wander else centre + best.drift * (centre_time - cls.t_ref)
-    major, minor = ell.semi_axes
-    kind = pattern_kind(cls.best)
-    p = best.pattern
-    trochoid = None
-    if p.kind in ("epitrochoid", "hypotrochoid"):
-        # extent of a trochoid: |z - c| runs between scale (1 - b) and scale (1 + b)
-        axes, ellipticity = [p.scale * (1 + p.b), p.scale * abs(1 - p.b)], None
-        rotation = math.degrees(p.rotation_rad)
-        trochoid = {"a": a_for_k(best.k), "b": p.b, "scale_px": p.scale, "rotation_deg": rotation}
-        loops = p.loops
-    else:
-        axes, ellipticity = [major, minor], (1 - minor / major if major > 0 else 0.0)
-        rotation, loops = math.degrees(ell.rotation_rad), 1
-    pattern = {"type": kind, "center_px": [float(centre.real), float(centre.imag)], "semi_axes_px": axes,
-               "rotation_deg": rotation, "ellipticity": ellipticity,
-               "loops": loops, "symmetry": symmetry_of(kind, best.k), "trochoid": trochoid,
-               "rms_residual_px": best.rms_residual}
-    residuals = {k: (v if math.isfinite(v) else None) for k, v in cls.residuals.items()}
-    coverage = {k: (v if math.isfinite(v) else None) for k, v in cls.coverage.items()}
-    diag = {"drift_px_s": [float(best.drift.real), float(best.drift.imag)],
-            "wander_px": None if wander is None else {"rms": round(wander.rms_px, 3), "chunk_offsets": [
-                [round(float(o.real), 3), round(float(o.imag), 3)] for o in wander.offsets]},
-            "candidate_residuals_px": residuals, "candidate_coverage_px": coverage,
-            "b_from_tips": None if best is before else {"fitted_b": before.pattern.b, "b": best.pattern.b}}
-    if frame_size is not None:
-        evidence = {**laser_evidence(cls, points, times, line_width_px, frame_size, wander),
-                    "light_left_out": round(left_out[0], 4), "left_out_rival": round(left_out[1], 4)}
-        diag = {**laser_verdict(evidence, frame_size), **diag}
-    return pattern, diag
-
-
-def _steadied(cls: Classification, points: np.ndarray, weights: np.ndarray, times: np.ndarray | None,
-              band: tuple | None, line_width_px: float) -> tuple[Classification, Wander | None, np.ndarray]:
-    """The classification with the centre's wander followed (:mod:`labkit.vision.wander`), the
-    wander, and the points with it taken out; unchanged (and the wander's offsets zero) when
-    following it does not explain the trace clearly better (:attr:`Wander.needed`). A wander over
-    half a line width (rms) blurs the accumulated trace enough to mislead the classification:
-    the steadied points are then classified again and the wander followed anew."""
-    width = judged_width(line_width_px)
-    wander = follow_wander(cls, points, weights, times, width, band) if times is not None else None
-    if wander is None:
-        return cls, None, points
-    if wander.rms_px > 0.5 * width:
-        again = classify(wander.moved(points, times), weights, times)
-        followed = follow_wander(again, points, weights, times, width, band)
-        if followed is not None and followed.needed:
-            wander, cls = followed, again
-    if not wander.needed:
-        straight = replace(wander, offsets=np.zeros_like(wander.offsets), fit=cls.best, t_ref=cls.t_ref)
-        return cls, straight, points
-    chosen = wander.fit
-    ellipse = chosen if chosen.k == -1 else replace(cls.ellipse, c=cls.ellipse.c + cls.ellipse.drift
-                                                     * (wander.t_ref - cls.t_ref))
-    return replace(cls, best=chosen, ellipse=ellipse, t_ref=wander.t_ref), wander, wander.moved(points, times)
-
-
-def gather(chunks: list[Chunk], traces: list[TracePoints], fps: float):
-    """Trace points of all chunks, stamped with their chunk's mid time: ``(points, weights,
-    times, band, peak, noise)``; ``band`` is ``(pixels, weights, times)`` or None. Seeded
-    subsampling keeps at most ``MAX_POINTS_PER_CHUNK`` centre-line points per chunk."""
-    pts, wts, tms, bands = [], [], [], []
-    peak = noise = 0.0
-    rng = np.random.default_rng(0)
-    for c, tp in zip(chunks, traces, strict=True):
-        peak, noise = max(peak, tp.peak), max(noise, tp.noise)
-        points, weights = tp.points, tp.weights
-        if len(points) > MAX_POINTS_PER_CHUNK:
-            keep = rng.choice(len(points), MAX_POINTS_PER_CHUNK, replace=False)
-            points, weights = points[keep], weights[keep]
-        t_mid = 0.5 * (c.first + c.last) / fps if fps else 0.0
-        pts.append(points)
-        wts.append(weights)
-        tms.append(np.full(len(points), t_mid))
-        if tp.band is not None and len(tp.band):
-            keep = rng.choice(len(tp.band), min(len(tp.band), 2 * MAX_POINTS_PER_CHUNK), replace=False)
-            bands.append((tp.band[keep], tp.band_weights[keep], np.full(len(keep), t_mid)))
-    points = np.concatenate(pts) if pts else np.zeros((0, 2))
-    band = tuple(np.concatenate(parts) for parts in zip(*bands, strict=True)) if bands else None
-    return points, np.concatenate(wts), np.concatenate(tms), band, peak, noise
-
-
 def line_width(traces: list[TracePoints]) -> float:
     """Median line width of the chunks' traces (NaN without any)."""
     widths = [t.line_width_px for t in traces if len(t.points)]
     return float(np.median(widths)) if widths else math.nan
 
 
-def _second_readings(pattern: dict, diag: dict, points: np.ndarray, weights: np.ndarray, times: np.ndarray,
-                     drift: bool, band: tuple | None, middle: float | None, width: float,
-                     size: tuple[int, int]) -> tuple[dict, dict]:
-    """The first fit is not ok: try the readings of :mod:`labkit.vision.rescue` in turn and keep
-    whichever gives the best verdict, on the same verdict the one with fewer reasons (the first
-    fit on a full tie)."""
-    def better(candidate: tuple[dict, dict]) -> bool:  # on the same verdict: fewer reasons to doubt
-        return rank(candidate[1]) < rank(diag)
+class _Worker:
+    """One worker thread running tasks in order (trace extraction, the first half's
+    classification) while the main thread accumulates frames: a ``ThreadPoolExecutor`` with one
+    worker, created at the first task, after the first chunk, so that ``concurrent.futures`` and
+    the ``logging`` it imports (6 ms) load while frames decode, not before the first frame."""
 
-    everything = (points, weights, times, band)
-    *parts, left_out = without_stray_light(points, weights, times, band, width)
-    # the pattern is most of the light, or what was left out is many small things (a timestamp's
-    # characters); otherwise this may be a fragment of it
-    if left_out[0] > 0 and (left_out[0] < 0.5 or left_out[1] < 0.5):
-        points, weights, times, band = parts
-        second = pattern_dict(points, weights, times if drift else None, band, None, middle, width, size,
-                              left_out)
-        if better(second):
-            pattern, diag = second
-    else:
-        left_out = (0.0, 0.0)
-    fixed_share = None
-    moved = without_fixed_light(*everything, width) if drift and diag["verdict"] != "ok" else None
-    if moved is not None:  # light fixed in the frame, if the pattern moved, is not on the screen
-        *kept, share = moved
-        fixed = pattern_dict(*kept, None, middle, width, size, (share, 0.0))
-        if pattern_moved_px(fixed[1], kept[2]) > width and better(fixed):
-            pattern, diag = fixed
-            (points, weights, times, band), left_out, fixed_share = kept, (share, 0.0), share
-    start = one_chunk_start(points, weights, times) if drift and diag["verdict"] != "ok" else None
-    if start is not None:
-        third = pattern_dict(points, weights, times, band, None, middle, width, size, left_out, start=start)
-        if better(third):
-            pattern, diag = third
-    if fixed_share is not None:
-        diag = {**diag, "light_fixed_in_frame": round(fixed_share, 4)}
-    return pattern, diag
+    def __init__(self) -> None:
+        self._pool = None
+
+    def submit(self, fn: Callable, *args) -> Future:
+        if self._pool is None:
+            from concurrent.futures import ThreadPoolExecutor
+
+            self._pool = ThreadPoolExecutor(max_workers=1)
+        return self._pool.submit(fn, *args)
+
+    def __enter__(self) -> _Worker:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=True)
 
 
-def _preliminary(chunks: list[Chunk], futures: list[Future], fps: float) -> Classification | None:
-    """Classification of the first chunks (runs in the worker while later frames decode)."""
-    points, weights, times, _, _, _ = gather(chunks, [f.result() for f in futures], fps)
-    if len(points) < 10 * MIN_POINTS or not fps:
-        return None
-    return classify(points, weights, times)
+def _load_fit_side():
+    """The fit side's module (imported on first use; see ``_FIT_SIDE``)."""
+    from labkit.vision import laser_pattern
+
+    return laser_pattern
+
+
+def _preload_fit_side() -> None:
+    """:func:`_load_fit_side` in a background thread; a failure is left to the main thread's own
+    import to report (a thread's traceback would reach the user)."""
+    try:
+        _load_fit_side()
+    except Exception:  # noqa: BLE001 - reported by the import that needs the module
+        pass
+
+
+def _preliminary(gathered: GatheredTrace, chunks: int, fps: float) -> Classification | None:
+    """:func:`labkit.vision.laser_pattern.preliminary` (in the worker, while later frames decode)."""
+    return _load_fit_side().preliminary(gathered, chunks, fps)
 
 
 def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px: float | None = None,
@@ -425,22 +299,30 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
     fps = source.fps or 0.0
     per_chunk = chunk_length(source, quality)
     expected = math.ceil(source.frame_count / per_chunk) if source.frame_count > 0 else 0
-    with ThreadPoolExecutor(max_workers=1) as pool:  # trace extraction overlaps decoding
+    # the fit side loads while the first chunk decodes
+    threading.Thread(target=_preload_fit_side, name="labkit-fit-import", daemon=True).start()
+    with _Worker() as pool:  # trace extraction overlaps decoding
         futures: dict[int, Future] = {}
         histograms: list[Future] = []
         tracker = TraceTracker(max(source.size), quality.subpixel)  # one worker: chunks in order
         done: list[Chunk] = []
         prior: dict[str, Future] = {}
+        gathered = GatheredTrace(fps)  # filled by the worker, chunk after chunk
+
+        def extracted(c: Chunk) -> TracePoints:
+            trace = tracker.extract(c)
+            gathered.add(c, trace)
+            return trace
 
         def extract(c: Chunk) -> None:
-            futures[id(c)] = pool.submit(tracker.extract, c)
+            futures[id(c)] = pool.submit(extracted, c)
             histograms.append(pool.submit(grey_histogram, c.image))
             done.append(c)
             if on_progress is not None:
                 on_progress(c.last + 1, max(source.frame_count, 0))
             if expected >= 4 and len(done) == expected // 2:
                 # classify the first half while the second half decodes; the end only refines
-                prior["fit"] = pool.submit(_preliminary, list(done), [futures[id(d)] for d in done], fps)
+                prior["fit"] = pool.submit(_preliminary, gathered, len(done), fps)
 
         probe = FramePathProbe(_clip_roi(quality.roi, source.size) if quality.roi is not None else None,
                                max(source.size))
@@ -449,8 +331,10 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
         check_exposure(sum(h.result() for h in histograms), source.path, source.levels)
         traces = [futures[id(c)].result() for c in chunks]
         preliminary = prior["fit"].result() if "fit" in prior else None
-    points, weights, times, band, peak, noise = gather(chunks, traces, fps)
+    points, weights, times, band, peak, noise = gathered.result()
     if on_trace is not None:
+        from labkit.vision.overlay import accumulated_trace
+
         on_trace(accumulated_trace(chunks, source.size))
     qual = {"frames_analysed": len(range(0, source.frames_read, quality.stride)),
             "stride": quality.stride, "roi": list(chunks[-1].offset) + list(chunks[-1].image.shape[1::-1]),
@@ -458,22 +342,19 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
             "peak_level": peak, "noise_level": noise, "truncated": source.truncated,
             "chunks_searched_near_previous_trace": tracker.cropped,
             **_frame_path(chunks, probe)}
-    if len(points) < MIN_POINTS:
-        reason = ("no light above the background noise" if len(points) == 0
-                  else f"only {len(points)} trace pixels found")
-        pattern, tilt = _none(reason), None
-        qual = {**no_pattern_verdict(reason), **qual}
+    fit_side = _load_fit_side()
+    no_trace = fit_side.unreadable(points)
+    if no_trace is not None:
+        pattern, verdict = no_trace
+        tilt = None
+        qual = {**verdict, **qual}
     else:
-        drift = len(chunks) > 1 and fps
+        drift = bool(len(chunks) > 1 and fps)
         if band is not None and not drift:
             band = (band[0], band[1], None)
         middle = (source.frames_read - 1) / (2 * fps) if fps else None
-        width = line_width(traces)
-        pattern, diag = pattern_dict(points, weights, times if drift else None, band, preliminary, middle,
-                                     width, tuple(source.size))
-        if diag["verdict"] != "ok":
-            pattern, diag = _second_readings(pattern, diag, points, weights, times, bool(drift), band,
-                                             middle, width, tuple(source.size))
+        pattern, diag = fit_side.read_pattern(points, weights, times, drift, band, preliminary, middle,
+                                              line_width(traces), tuple(source.size))
         qual = {**{k: diag[k] for k in ("verdict", "reasons", "checks")}, **qual, **diag}
         tilt = None
         if screen_distance_mm and mm_per_px:

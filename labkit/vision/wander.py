@@ -89,7 +89,9 @@ def _registered(points: np.ndarray, curve: np.ndarray, share: np.ndarray, tree: 
     chunk's light covers too little of the curve or does not fix both directions."""
     pts = points - shift
     dist, idx = tree.query(pts)
-    lit = PointTree(pts).query(curve)[0] <= width  # curve points with light within ``width``
+    # curve points with light within ``width``; the search bound (twice that) only prunes the
+    # tree search: every distance up to the bound comes back exactly as without it
+    lit = PointTree(pts).query(curve, distance_upper_bound=2 * width)[0] <= width
     if float(np.sum(share[lit])) < MIN_CHUNK_COVERAGE:
         return complex(np.nan, np.nan)
     residual = pts - curve[idx]
@@ -222,9 +224,13 @@ def follow_wander(cls: Classification, points: np.ndarray, weights: np.ndarray |
                   width: float, band: tuple | None = None, rounds: int = 3,
                   max_points: int = 3000) -> Wander | None:
     """Alternate chunk offsets and a refit of ``cls.best`` (see the module docstring); None for
-    fewer than ``MIN_CHUNKS`` chunks. An ellipse is polished at the end on every trace pixel
-    ``band`` (points, weights, times), moved by the offsets, as :func:`labkit.vision.fit.classify`
-    does (a thinned centre line ends short of a flat ellipse's tips)."""
+    fewer than ``MIN_CHUNKS`` chunks. An ellipse whose wander is :attr:`Wander.needed` is polished
+    at the end on every trace pixel ``band`` (points, weights, times), moved by the offsets, as
+    :func:`labkit.vision.fit.classify` does (a thinned centre line ends short of a flat ellipse's
+    tips). A wander that is not needed keeps the straight-drift fit in the analysis
+    (:func:`labkit.vision.laser._steadied`), so its fit is not polished: that polish is a third of
+    the work after the last frame of a steady clip and would be thrown away (the decision,
+    :attr:`Wander.needed`, and the offsets do not depend on it)."""
     mid_times, chunk = np.unique(np.asarray(times, float), return_inverse=True)
     if len(mid_times) < MIN_CHUNKS:
         return None
@@ -255,7 +261,8 @@ def follow_wander(cls: Classification, points: np.ndarray, weights: np.ndarray |
         fit = without_outliers(fit, xy_points(moved), w, t)
     result = Wander(fit, t_ref, mid_times, total, checked, rms_straight,
                     robust_rms(fit, z - total[ch] - fit.drift * (t - t_ref)))
-    if fit.k == -1 and band is not None and band[2] is not None and len(band[0]) >= MIN_CHUNK_POINTS:
+    if (result.needed and fit.k == -1 and band is not None and band[2] is not None
+            and len(band[0]) >= MIN_CHUNK_POINTS):
         moved_band = (result.moved(np.asarray(band[0], float), np.asarray(band[2], float)), band[1], band[2])
         result.fit = _polished_on_band(fit, moved_band, (xy_points(moved), w, t), 2 * max_points)
     return result

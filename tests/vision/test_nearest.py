@@ -43,3 +43,17 @@ def test_the_tree_leaves_the_environment_as_it_was():
     before = os.environ.get("OMP_NUM_THREADS")
     PointTree(np.zeros((3, 2))).query(np.ones((2, 2)))
     assert os.environ.get("OMP_NUM_THREADS") == before
+
+
+@settings(max_examples=80, deadline=None)
+@given(clouds, clouds, st.floats(0.1, 500))
+def test_a_search_bound_leaves_every_distance_within_it_exactly_as_it_was(points, queries, bound):
+    """labkit.vision.wander prunes its coverage test (distance <= width) with a bound of twice
+    the width; that gives the same answer only if the bound changes no distance within it, not
+    even in the last bit."""
+    free_dist, free_idx = PointTree(points).query(queries)
+    dist, idx = PointTree(points).query(queries, distance_upper_bound=bound)
+    found = np.isfinite(dist)
+    assert np.array_equal(dist[found], free_dist[found]) and np.array_equal(idx[found], free_idx[found])
+    inside = free_dist < bound
+    assert np.all(found[inside]) and np.array_equal((dist <= 0.5 * bound), (free_dist <= 0.5 * bound))

@@ -54,3 +54,31 @@ def test_chunks_moved_several_line_widths_off_a_straight_drift_are_all_registere
     assert np.max(np.abs(got - want)) < 0.5 * WIDTH, np.abs(got - want)
     assert abs(wander.centre_at(1.0) - (complex(*truth.center) + centre_path(np.array([1.0]))[0])) < 1.0
     assert abs(wander.fit.pattern.scale / truth.scale - 1) < 0.01
+
+
+def ellipse_band(points: np.ndarray, times: np.ndarray, seed: int = 9) -> tuple:
+    """A trace band around centre-line points: each point spread across a 4 px wide line."""
+    rng = np.random.default_rng(seed)
+    band = points + rng.uniform(-WIDTH / 2, WIDTH / 2, points.shape)
+    return band, np.ones(len(band)), times
+
+
+def test_an_ellipse_is_polished_on_the_band_only_when_its_wander_is_needed():
+    """The band polish changes the fit of a wandering ellipse; a steady one's fit is the same with
+    and without the band (its straight-drift fit is kept by the analysis, so the polish is not
+    done), and the decision and offsets never depend on the band."""
+    truth = Pattern("ellipse", (400.0, 300.0), 0.4, semi_axes=(150.0, 60.0))
+    wandering, times = wandering_trace(truth)
+    steady_rng = np.random.default_rng(2)
+    z = truth.points(steady_rng.uniform(0, 2 * math.pi, len(times))) @ np.array([1, 1j])
+    noise = steady_rng.normal(0, 0.4, len(z)) + 1j * steady_rng.normal(0, 0.4, len(z))
+    z = z + (3 + 1j) * (times - 1.0) + noise
+    steady = np.column_stack([z.real, z.imag])
+    outcomes = {}
+    for name, points in (("wandering", wandering), ("steady", steady)):
+        start = classify(points, None, times)
+        plain = follow_wander(start, points, None, times, WIDTH)
+        banded = follow_wander(start, points, None, times, WIDTH, ellipse_band(points, times))
+        assert plain.needed == banded.needed and np.array_equal(plain.offsets, banded.offsets)
+        outcomes[name] = (banded.needed, banded.fit == plain.fit)
+    assert outcomes == {"wandering": (True, False), "steady": (False, True)}
