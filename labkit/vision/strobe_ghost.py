@@ -17,10 +17,10 @@ turned about the rotation centre to the tilts of one revolution and averaged
 from frame to frame, which a mean over frames would miss). The room light is the same from
 frame to frame while the flash light of a row is not (a rolling shutter sees n or n + 1 flashes
 per row), so ``a`` of row r in frame k is ``alpha / L_kr`` with ``L_kr`` the row's light.
-``alpha`` is fitted together with the body's edge profile ``g(s)`` (its lens blur, as a function
-of the signed distance s from the half-coverage edge): the blur is the same at a given distance
-all round the edge, the ghost is not (large beside the part that stays covered, small beside
-the tips), which is what tells the two apart. Then ``c_k = (D_k - a h_k) / (1 - a)`` is the body
+``alpha`` is fitted together with the lens blur of the body (a mix of its silhouettes at several
+coverage levels, each blurred by Gaussians of several widths, :func:`_blur_basis`): the blur is
+the same all round the edge, the ghost is not (large beside the part that stays covered, small
+beside the tips), which is what tells the two apart. Then ``c_k = (D_k - a h_k) / (1 - a)`` is the body
 alone; its coverage is linear in intensity, so :func:`labkit.vision.strobe_body.linear_moments`
 measures it without the bias a ghost gives any threshold or mask. The swing the ghost is made
 with comes from the previous measurement, so :func:`labkit.vision.strobe.analyse_strobe`
@@ -43,11 +43,11 @@ PAD_PX = 24  # margin kept around the region the body sweeps
 REVOLUTION_SAMPLES = 24  # tilts per revolution in the ghost
 BLUR_SIGMAS_PX = (0.5, 1.0, 2.0, 4.0, 8.0, 16.0)  # Gaussians whose mix stands for the lens blur
 SILHOUETTE_LEVELS = (0.3, 0.5, 0.7, 0.9)
-MAX_AMBIENT = 0.9
+MAX_AMBIENT = 0.9  # a row's room-light share is clipped here (1 would leave no flash light to measure)
 ZONE_LEVEL = 0.02  # pixels with this much ghost, or within ZONE_PX of the body, enter the fit
 ZONE_PX = 8
 ROUNDS = 4  # rounds of ghost, room light and silhouette per swing
-ALTERNATIONS = 6  # rounds of the edge-profile / room-light alternation
+ALTERNATIONS = 6  # rounds of the lens-blur / room-light alternation
 
 
 @dataclass
@@ -195,7 +195,8 @@ def ghost_free_poses(light: ClipLight, poses: list[BodyPose | None], swing: Swin
     is made first from the frames themselves, then from the fitted blurred silhouettes (noise in
     a frame would otherwise be in its ghost too and pull ``alpha`` up)."""
     x0, y0 = light.origin
-    frames = [k for k, p in enumerate(poses) if p is not None]
+    slot = {k: j for j, k in enumerate(k for k, p in enumerate(poses) if p is not None)}  # swing's index
+    frames = [k for k in slot if k < len(light.stack)]  # a second read that ends early has fewer
     centres = [(float(cx - x0), float(cy - y0)) for cx, cy in swing.centre]
     shape = light.stack.shape[1:]
     covers_now = {k: light.stack[k] if covers is None or covers[k] is None else covers[k] for k in frames}
@@ -204,7 +205,8 @@ def ghost_free_poses(light: ClipLight, poses: list[BodyPose | None], swing: Swin
     near = np.ones((2 * ZONE_PX + 1, 2 * ZONE_PX + 1), np.uint8)
     for _ in range(ROUNDS):
         ghosts, rows = {}, []
-        for j, k in enumerate(frames):
+        for k in frames:
+            j = slot[k]
             ghosts[k] = revolution_average(sources[k], centres[j], float(swing.tilt[j]), swing.revolution)
             body = cv2.dilate((covers_now[k] > 0.5).astype(np.uint8), near) > 0
             zone = (body | (ghosts[k] > ZONE_LEVEL)).ravel()
