@@ -201,22 +201,23 @@ def ghost_free_poses(light: ClipLight, poses: list[BodyPose | None], swing: Swin
     shape = light.stack.shape[1:]
     covers_now = {k: light.stack[k] if covers is None or covers[k] is None else covers[k] for k in frames}
     weights = {k: np.broadcast_to(light.row_weight[k][:, None], shape) for k in frames}
-    sources = {k: light.stack[k] for k in frames}
     near = np.ones((2 * ZONE_PX + 1, 2 * ZONE_PX + 1), np.uint8)
+    mix = None
     for _ in range(ROUNDS):
         ghosts, rows = {}, []
         for k in frames:
             j = slot[k]
-            ghosts[k] = revolution_average(sources[k], centres[j], float(swing.tilt[j]), swing.revolution)
+            basis = _blur_basis(covers_now[k])  # this round's fit, and the last round's fitted body
+            source = light.stack[k] if mix is None else (basis @ mix).reshape(shape).astype(np.float32)
+            ghosts[k] = revolution_average(source, centres[j], float(swing.tilt[j]), swing.revolution)
             body = cv2.dilate((covers_now[k] > 0.5).astype(np.uint8), near) > 0
             zone = (body | (ghosts[k] > ZONE_LEVEL)).ravel()
             rows.append((light.stack[k].ravel()[zone], ghosts[k].ravel()[zone], weights[k].ravel()[zone],
-                         _blur_basis(covers_now[k])[zone]))
+                         basis[zone]))
         alpha, mix = fit_room_light(*(np.concatenate(column) for column in zip(*rows, strict=True)))
         for k in frames:
             a = np.clip(alpha * light.row_weight[k], 0.0, MAX_AMBIENT)[:, None]
             covers_now[k] = (light.stack[k] - a * ghosts[k]) / (1.0 - a)
-            sources[k] = (_blur_basis(covers_now[k]) @ mix).reshape(shape).astype(np.float32)
     result: list[BodyPose | None] = [None] * len(poses)
     new_covers: list[np.ndarray | None] = [None] * len(poses)
     for k in frames:
