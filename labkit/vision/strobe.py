@@ -174,10 +174,9 @@ def _without_room_light(light: ClipLight, first: _Measured, model: PhaseModel) -
     less than ``ROOM_LIGHT_SETTLED`` of itself) or ``ROOM_LIGHT_ROUNDS`` have run."""
     now, covers, alpha, change, rounds = first, None, 0.0, math.inf, 0
     while rounds < ROOM_LIGHT_ROUNDS and change > ROOM_LIGHT_SETTLED:
-        t = now.motion.tilt
-        fitted = t.coef[0] + t.coef[1] * np.sin(now.psi) + t.coef[2] * np.cos(now.psi)
-        swing = swing_of(now.found, now.orient.axis, now.orient.tilt_rad, now.orient.lateral_px, fitted,
-                         t.amplitude)
+        tilt = now.motion.tilt
+        swing = swing_of(now.found, now.orient.axis, now.orient.tilt_rad, now.orient.lateral_px,
+                         tilt.at(now.psi), tilt.amplitude)
         poses, alpha, covers = ghost_free_poses(light, now.poses, swing, covers)
         if sum(p is not None for p in poses) < MIN_FRAMES:
             break

@@ -50,6 +50,10 @@ class SineFit:
         g = np.array([self.coef[1], self.coef[2]]) / a
         return float(math.sqrt(max(g @ self.cov[1:, 1:] @ g, 0.0)))
 
+    def at(self, psi: np.ndarray) -> np.ndarray:
+        """The fitted sinusoid at phases ``psi``."""
+        return self.coef[0] + self.coef[1] * np.sin(psi) + self.coef[2] * np.cos(psi)
+
     def projection(self, unit: np.ndarray) -> tuple[float, float]:
         """Component of (sin, cos) coefficients along ``unit`` and its standard error."""
         return float(self.coef[1:] @ unit), float(math.sqrt(max(unit @ self.cov[1:, 1:] @ unit, 0.0)))

@@ -159,11 +159,14 @@ def _room_light_checks(v: Verdict, e: dict) -> None:
                 f"{e['tilt_amplitude_uncorrected_rad']:.4f} rad; film with less ambient light")
     phi, phi0 = e["tilt_amplitude_rad"], e["tilt_amplitude_uncorrected_rad"]
     beta, beta0 = e["lateral_amplitude_px"], e["lateral_amplitude_uncorrected_px"]
-    moved = [f"tilt {phi0:.4f} -> {phi:.4f} rad" if abs(phi - phi0) > tilt_tolerance(phi) else "",
-             f"lateral {beta0:.2f} -> {beta:.2f} px" if abs(beta - beta0) > lateral_tolerance(beta) else ""]
-    if any(moved):
+    moved = []
+    if abs(phi - phi0) > tilt_tolerance(phi):
+        moved.append(f"tilt {phi0:.4f} -> {phi:.4f} rad")
+    if abs(beta - beta0) > lateral_tolerance(beta):
+        moved.append(f"lateral {beta0:.2f} -> {beta:.2f} px")
+    if moved:
         v.doubt(f"room light ({share:.0%} of the light) left a ghost whose removal moved the result by more "
-                f"than the tolerance ({', '.join(m for m in moved if m)}): the result rests on the model "
+                f"than the tolerance ({', '.join(moved)}): the result rests on the model "
                 "of that ghost (room light only; a flash shadow or other light that moves with the body "
                 "is not in it); film with less ambient light")
     if share > MAX_ROOM_LIGHT:

@@ -18,6 +18,7 @@ import numpy as np
 
 from labkit.vision.strobe_body import BodyPose, ClipOrientation
 from labkit.vision.strobe_phase import PhaseModel
+from labkit.vision.strobe_quality import MAX_BEND_PX
 from labkit.vision.strobe_rolling import (
     GRID_STEPS,
     Crops,
@@ -28,7 +29,6 @@ from labkit.vision.strobe_rolling import (
     row_centres,
 )
 
-MAX_BEND_PX = 0.4  # as strobe_quality: a straight body's midline strays less
 MIN_ENDS_COS = 0.7  # see ends_separation: below it the ends hold under half the information
 MIN_ROW_CROSSING_DEG = 30.0  # the body's long side at least this steep, or rows run along it
 MIN_FIT_FRAMES = 6

@@ -228,7 +228,7 @@ def follow_wander(cls: Classification, points: np.ndarray, weights: np.ndarray |
     at the end on every trace pixel ``band`` (points, weights, times), moved by the offsets, as
     :func:`labkit.vision.fit.classify` does (a thinned centre line ends short of a flat ellipse's
     tips). A wander that is not needed keeps the straight-drift fit in the analysis
-    (:func:`labkit.vision.laser._steadied`), so its fit is not polished: that polish is a third of
+    (:func:`labkit.vision.laser_pattern._steadied`), so its fit is not polished: that polish is a third of
     the work after the last frame of a steady clip and would be thrown away (the decision,
     :attr:`Wander.needed`, and the offsets do not depend on it)."""
     mid_times, chunk = np.unique(np.asarray(times, float), return_inverse=True)
