@@ -183,8 +183,9 @@ def fit_room_light(d: np.ndarray, h: np.ndarray, weight: np.ndarray, blurred: np
     so the normal equations of every alternation are a quadratic in ``alpha`` whose coefficient
     matrices are formed once (one pass over the pixels instead of one per alternation)."""
     d, h, w, b = (np.asarray(v, np.float64) for v in (d, h, weight, blurred))
-    gram = [b.T @ b, (b * w[:, None]).T @ b, (b * (w * w)[:, None]).T @ b]
-    rhs = [b.T @ d, b.T @ (w * (d + h)), b.T @ (w * w * h)]
+    bw = b * w[:, None]
+    gram = [b.T @ b, bw.T @ b, bw.T @ bw]
+    rhs = [b.T @ d, bw.T @ (d + h), bw.T @ (w * h)]
     w_max = float(w.max(initial=0.0))
 
     def normal_equations(alpha: float) -> tuple[np.ndarray, np.ndarray]:
