@@ -13,11 +13,19 @@ from __future__ import annotations
 import threading
 from collections import deque
 from collections.abc import Callable
+from typing import Protocol
 
 import serial
 
 from labkit.errors import DeviceDisconnected
 from labkit.io.clock import Clock, PeriodicJob
+
+
+class Framer(Protocol):
+    """Turns the bytes read so far into whole frames (:class:`LineFramer`, the Lutron and VESC
+    framers)."""
+
+    def feed(self, data: bytes) -> list[bytes]: ...
 
 
 class LineFramer:
@@ -58,7 +66,7 @@ class StreamReader:
         self,
         port: serial.SerialBase,
         clock: Clock,
-        framer: LineFramer | object,
+        framer: Framer,
         on_frame: Callable[[float, bytes], None],
         device: str = "",
         period: float = 0.005,
@@ -70,7 +78,7 @@ class StreamReader:
         self.on_frame = on_frame
         self.device = device
         self.period = period
-        self.tail = deque(maxlen=history)  # recent raw bytes, for error messages
+        self.tail: deque[int] = deque(maxlen=history)  # recent raw bytes, for error messages
         self.error: BaseException | None = None
         self._lock = threading.Lock()
         self._job: PeriodicJob | None = None

@@ -24,9 +24,10 @@ def laser_case(name: str) -> dict:
 
     r = analyse_laser(str(VIDEOS / name), screen_distance_mm=SCREEN_MM, mm_per_px=MM_PER_PX)
     p = r["pattern"]
+    numbers = {"tilt_major_rad": r["tilt_rad"]["major"], "centre_x_px": p["center_px"][0],
+               "centre_y_px": p["center_px"][1]}
     return {"verdict": r["quality"]["verdict"], "reasons": r["quality"]["reasons"], "type": p["type"],
-            "loops": p["loops"], "numbers": {"tilt_major_rad": r["tilt_rad"]["major"],
-                                             "centre_x_px": p["center_px"][0], "centre_y_px": p["center_px"][1]}}
+            "loops": p["loops"], "numbers": numbers}
 
 
 def strobe_case(path: str, rotor_hz: float, strobe_hz: float) -> dict:

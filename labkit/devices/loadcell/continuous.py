@@ -16,7 +16,7 @@ from contextlib import contextmanager
 import serial
 
 from labkit.devices.base import Reading
-from labkit.devices.link import FrameError, ReadingBuffer
+from labkit.devices.link import FrameError, LineLink, ReadingBuffer
 from labkit.devices.stream import LineFramer, StreamReader
 from labkit.errors import DeviceError, DeviceTimeout
 from labkit.io.clock import Clock
@@ -86,7 +86,7 @@ class ContinuousMixin:
     ``_end_stream`` (e.g. ``@`` or ``C``) and ``_stream_reading(t, line)``."""
 
     stream: ContinuousReadings | None = None
-    link: object  # the driver's LineLink
+    link: LineLink
     read_eol: bytes = b"\n"
 
     def _begin_stream(self) -> None:  # pragma: no cover - per protocol

@@ -7,18 +7,18 @@ same statuses.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import serial
 
-from labkit.devices.base import driver_class
+from labkit.devices.base import MotorController, driver_class
 from labkit.io.clock import Clock
 
 
 def run_motor_script(port: serial.SerialBase, clock: Clock, protocol: str, duty: float = 0.3,
                      run_s: float = 1.0, **options: Any) -> dict[str, Any]:
     """Returns ``{"identify": {...}, "statuses": [MotorStatus.as_json(), ...]}``."""
-    cls = driver_class("motor", protocol)
+    cls = cast("type[MotorController]", driver_class("motor", protocol))
     statuses = []
     with cls(port, clock, name=f"motor {protocol}", **options) as motor:
         info = motor.identify()

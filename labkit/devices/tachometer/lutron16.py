@@ -87,9 +87,8 @@ def parse_lutron16(frame: bytes) -> Lutron16Frame:
         raise ValueError(f"decimal point byte {point!r} is not '0'..'3'")
     digits = frame[7:15]
     if digits.isdigit() and digits.isascii():
-        value: float | None = int(digits) / 10 ** int(point)
-        if polarity == b"1":
-            value = -value
+        magnitude = int(digits) / 10 ** int(point)
+        value: float | None = -magnitude if polarity == b"1" else magnitude
     elif all(b in OVER_RANGE_CHARS for b in digits):
         value = None
     else:

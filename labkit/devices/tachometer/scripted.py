@@ -7,11 +7,11 @@ Running the same script on a ``record://`` port (emulator or real device) and la
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import serial
 
-from labkit.devices.base import Reading, driver_class
+from labkit.devices.base import Reading, Tachometer, driver_class
 from labkit.io.clock import Clock
 
 
@@ -28,7 +28,7 @@ def run_tach_script(port: serial.SerialBase, clock: Clock, protocol: str,
 
     Returns ``{"identify": {...}, "readings": [reading_record, ...]}``.
     """
-    cls = driver_class("tach", protocol)
+    cls = cast("type[Tachometer]", driver_class("tach", protocol))
     with cls(port, clock, name=f"tach {protocol}", **options) as tach:
         info = tach.identify()
         start = clock.now()
