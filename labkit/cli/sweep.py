@@ -45,7 +45,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--cycles", type=int, default=100, help="drive periods per point (default 100)")
     p.add_argument("--steps", type=int, default=64, help="steps per drive period (default 64)")
     p.add_argument("--out", metavar="RESULTS.jsonl", help="partial results on disk (resumable)")
-    p.add_argument("--chunk", type=int, default=16, help="points per task (default 16)")
+    p.add_argument("--chunk", type=int, default=None,
+                   help="points per task (default: about 4 tasks per worker slot, at least 4 points)")
     p.add_argument("--workers", type=int, default=1, help="local worker processes (default 1: in process)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler, e.g. tcp://10.0.0.5:8786")
     p.add_argument("--timeout", type=float, default=10.0, help="seconds to wait for the scheduler")
@@ -70,12 +71,12 @@ def run(args: argparse.Namespace) -> int:
     from labkit.model.stability import min_static_ratio
     from labkit.numerics import stability_map
     from labkit.numerics.checks import check_steps
-    from labkit.numerics.sweep import run_sweep
+    from labkit.numerics.sweep import MIN_CHUNK, run_sweep
 
     if args.cycles <= 0:
         raise NumericsError(f"--cycles {args.cycles}: must be positive")
     check_steps(args.steps, 1.0, 1.0, 4)
-    stability_map.check_chunk(max(1, args.chunk), args.cycles)
+    stability_map.check_chunk(max(1, args.chunk or MIN_CHUNK), args.cycles)
     if args.problem == "fig5.12":
         points = stability_map.fig5_12_points(
             parse_ratios(args.k, "--k"), parse_ratios(args.ratios or FIG_5_12_RATIOS), bias_y=args.bias
@@ -93,6 +94,7 @@ def run(args: argparse.Namespace) -> int:
             stability_map.Evaluator(args.cycles, args.steps),
             store=args.out,
             chunk=args.chunk,
+            max_chunk=stability_map.max_chunk(args.cycles),
             workers=args.workers,
             scheduler=args.scheduler,
             timeout_s=args.timeout,

@@ -131,6 +131,12 @@ def sample_bytes(points: int, cycles: int) -> int:
     return 2 * 8 * points * (cycles * SAMPLES_PER_PERIOD + 1)
 
 
+def max_chunk(cycles: int, limit_bytes: int = DEFAULT_MEMORY_BYTES) -> int:
+    """The most points whose samples fit in ``limit_bytes`` (at least 1: one point too large
+    is refused by :func:`check_chunk`)."""
+    return max(1, limit_bytes // sample_bytes(1, cycles))
+
+
 def check_chunk(points: int, cycles: int, limit_bytes: int = DEFAULT_MEMORY_BYTES) -> None:
     """Refuse a chunk whose samples do not fit in ``limit_bytes``."""
     size = sample_bytes(points, cycles)
