@@ -1,6 +1,7 @@
 """The fits the live view redraws at every point (pure functions, no rerun).
 
-They are the fits ``labkit fit`` makes, in the same residual space (docs/fitting.md):
+They are the fits ``labkit fit`` makes, in the same residual space (docs/fitting.md), found
+by the model name a protocol's hints give (:data:`LIVE_FITS`):
 
 * :func:`power_law_fit`: Fig. 5.25, ``F = a x^b`` fitted as a straight line in ln F against
   ln x (``labkit fit --model power-law``), with the 95 % confidence band of the fitted curve.
@@ -15,6 +16,7 @@ least-squares problem; docs/fitting.md says why the digits differ.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -90,10 +92,8 @@ def eq637_fit(rotor_rad_s: list[float], spin_rad_s: list[float], w_c: float = 30
                    ((var_c,),), _t95(dof))
 
 
-#: Fig. 5.25 of the paper: y = 224e6 x^-1.9 (x in RPM, y in grams)
-PAPER_FIG525 = (224e6, -1.9)
-
-
-def paper_fig525(x_rpm: np.ndarray) -> np.ndarray:
-    a, b = PAPER_FIG525
-    return a * np.asarray(x_rpm, float) ** b
+#: ``labkit fit`` model name (a protocol's ``hints.fit``) -> the live fit redrawn at every point
+LIVE_FITS: dict[str, Callable[[list[float], list[float]], LiveFit | None]] = {
+    "power-law": power_law_fit,
+    "spin-critical": eq637_fit,
+}
