@@ -15,7 +15,8 @@ The run's start document (:class:`labkit.documents.RunStart`) carries all three 
 live fit and a report figure without a line of labkit changed. Sessions recorded before the
 start document carried hints get them from :mod:`labkit.protocols.legacy_hints`.
 
-Pure data: this module imports only :mod:`labkit.units` (and the caps of :mod:`labkit.rig`).
+Pure data: this module imports only :mod:`labkit.units`, :mod:`labkit.errors` (and the caps of
+:mod:`labkit.rig`).
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ import re
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
+from labkit.errors import LabkitError
 from labkit.units import RAD_S_PER_RPM
 
 #: parameter-name suffix -> the unit it is given in (``--set speeds_rpm=...``)
@@ -39,7 +41,7 @@ CURVE_MODELS = ("power-law",)
 TARGET_UNITS: dict[str, float] = {"rad/s": 1.0, "RPM": 1.0 / RAD_S_PER_RPM}
 
 
-class HintsError(ValueError):
+class HintsError(LabkitError, ValueError):
     """A declaration that cannot be drawn (an unknown residual style, a curve model...)."""
 
 
