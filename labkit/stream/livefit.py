@@ -60,21 +60,17 @@ def _t95(dof: int) -> float:
 
 
 def power_law_fit(x: list[float], y: list[float]) -> LiveFit | None:
-    """``y = a x^b`` by least squares in ln y (None below three positive points)."""
-    xa, ya = np.asarray(x, float), np.asarray(y, float)
-    keep = (xa > 0) & (ya > 0)
-    xa, ya = xa[keep], ya[keep]
-    if len(xa) < MIN_POINTS_POWER_LAW or np.ptp(xa) == 0:
+    """``y = a x^b`` by least squares in ln y (None below three positive points or for a
+    single x): :func:`labkit.fit.models.power_law.least_squares_power_law`, the quick fit's too."""
+    from labkit.fit.models.power_law import least_squares_power_law
+
+    try:
+        fit = least_squares_power_law(x, y, residuals="log")
+    except ValueError:
         return None
-    design = np.column_stack([np.ones_like(xa), np.log(xa)])
-    coef, *_ = np.linalg.lstsq(design, np.log(ya), rcond=None)
-    dof = len(xa) - 2
-    s2 = float(np.sum((np.log(ya) - design @ coef) ** 2)) / dof
-    cov = s2 * np.linalg.inv(design.T @ design)
-    a = math.exp(coef[0])
-    params = {"a": (a, a * math.sqrt(cov[0, 0])), "b": (float(coef[1]), math.sqrt(cov[1, 1]))}
-    return LiveFit("power-law", params, len(xa), tuple(map(float, coef)),
-                   tuple(map(tuple, cov.tolist())), _t95(dof))
+    assert fit.ln_coef is not None and fit.ln_cov is not None
+    params = {"a": (fit.a, fit.stderr_a), "b": (fit.b, fit.stderr_b)}
+    return LiveFit("power-law", params, fit.n, fit.ln_coef, fit.ln_cov, _t95(fit.n - 2))
 
 
 def eq637_fit(rotor_rad_s: list[float], spin_rad_s: list[float], w_c: float = 3000.0) -> LiveFit | None:
