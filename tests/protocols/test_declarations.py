@@ -100,3 +100,17 @@ def test_a_plugin_without_report_fits_gets_its_live_fit_in_the_report():
     assert hints.entity_root == "/torque_mn_m_vs_gap_mm"
     assert hints.point_xy({"gap_mm": 2, "torque_mn_m": None}) is None
     assert Column("gap_mm", "mm").unit == "mm"
+
+
+def test_a_fresh_speed_sweep_produces_exactly_its_declared_row(tmp_path, capsys):
+    """The declaration follows the code: a run today, not only the recordings, has the row."""
+    from labkit.cli import main
+
+    assert main(["demo", "--sessions", str(tmp_path), "--no-progress", "--set", "speeds_rpm=8000,10000",
+                 "--set", "record_s=0.5"]) == 0, capsys.readouterr().err
+    session = next(tmp_path.iterdir())
+    points = json.loads((session / "results.json").read_text())["points"]
+    declared = {c.name for c in SpeedSweep.row}
+    assert len(points) == 2 and all(set(p) == declared for p in points)
+    start = json.loads((session / "events.jsonl").read_text().splitlines()[0])
+    assert Hints.from_json(start["hints"]) == SpeedSweep.hints
