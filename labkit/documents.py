@@ -80,11 +80,11 @@ class RunStart(RunDocument):
     session: str | None = None
     resumed_from: str | None = None
     dry_run: bool = False
-    #: every parameter with its unit and bounds (:func:`labkit.protocols.hints.param_specs`)
+    #: every parameter with its unit and bounds (:func:`labkit.protocols.declaration.param_specs`)
     param_specs: list[dict[str, Any]] | None = None
-    #: the columns of a result row with their units (:class:`labkit.protocols.hints.Column`)
+    #: the columns of a result row with their units (:class:`labkit.hints.Column`)
     row: list[dict[str, Any]] | None = None
-    #: how the rows are drawn and fitted (:class:`labkit.protocols.hints.Hints` as JSON); None
+    #: how the rows are drawn and fitted (:class:`labkit.hints.Hints` as JSON); None
     #: in sessions recorded before 0021: :mod:`labkit.protocols.legacy_hints` derives them
     hints: dict[str, Any] | None = None
 

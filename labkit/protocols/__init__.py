@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 from labkit.errors import LabkitError
+from labkit.hints import Column, Curve, Hints, ReportFit
 from labkit.protocols.events import EventBus, ListSink, ProgressSink, Sink
-from labkit.protocols.hints import Column, Curve, Hints, ReportFit
 from labkit.protocols.runner import ProtocolDef, RunContext, Runner, RunOutcome, Step, StopRequested
 from labkit.protocols.speed_sweep import SpeedSweep
 from labkit.protocols.spin_critical import SpinCritical

@@ -2,8 +2,9 @@
 its step, its quick fit and what it declares about its data) and the :class:`Step` s it plans.
 
 The runner (:mod:`labkit.protocols.runner`) runs one; its declarations (``bounds``, ``row``,
-``hints``: :mod:`labkit.protocols.hints`) go into the run's start document, where the live
-view and the report read them (docs/protocols.md, docs/plugins.md, ADR 0021).
+``hints``: :mod:`labkit.hints`, :mod:`labkit.protocols.declaration`) go into the run's start
+document, where the live view and the report read them (docs/protocols.md, docs/plugins.md,
+ADR 0021).
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from labkit.protocols.hints import Column, Hints
+from labkit.hints import Column, Hints
 
 if TYPE_CHECKING:
     from labkit.protocols.runner import RunContext

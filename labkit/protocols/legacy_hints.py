@@ -2,8 +2,10 @@
 before the start document carried them (ADR 0021), the table below keyed by protocol name,
 then by the columns of a table with no protocol (a CSV or results.json with speed and force).
 
-The rerun sink (:mod:`labkit.stream.run`) and the report (:mod:`labkit.report.plans`) call
-:func:`hints_for` and never look at a protocol's name themselves.
+The report (:mod:`labkit.report.build`) calls :func:`hints_for` and never looks at a
+protocol's name itself. The rerun sink needs no table: it sees only start documents of runs
+(``labkit run``, ``labkit replay``, which re-runs the protocol), and the runner writes every
+protocol's hints into them.
 """
 
 from __future__ import annotations
@@ -11,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from typing import Any
 
-from labkit.protocols.hints import Hints
+from labkit.hints import Hints
 from labkit.protocols.paper_figures import FIG_5_25, FIG_6_18
 
 #: protocol name -> the hints its sessions had before they were written into the start document

@@ -2,14 +2,14 @@
 the paper's figure it is drawn as (Fig. 5.25 for ``speed-sweep``, Fig. 6.18 for
 ``spin-critical``), with the fits the live view and the report make (ADR 0021).
 
-The types are :mod:`labkit.protocols.hints`'; the protocols point at these declarations
+The types are :mod:`labkit.hints`'; the protocols point at these declarations
 (``SpeedSweep.hints = FIG_5_25``), and :mod:`labkit.protocols.legacy_hints` gives them to
 sessions recorded before the start document carried hints.
 """
 
 from __future__ import annotations
 
-from labkit.protocols.hints import Column, Curve, Hints, ReportFit
+from labkit.hints import Column, Curve, Hints, ReportFit
 
 #: the paper's Fig. 5.25: y [g] = 224e6 x [RPM]^-1.9
 PAPER_FIG525 = Curve("paper", "y = 224e6 x^-1.9", "power-law", {"a": 224e6, "b": -1.9}, figure="Fig. 5.25")

@@ -137,7 +137,7 @@ def resolve_params(defaults: dict[str, Any], overrides: dict[str, Any] | list[st
 
 def check_bounds(key: str, value: Any, low: float | None, high: float | None) -> None:
     """Refuse a number (or any number of a list) outside ``[low, high]`` (None: no bound)."""
-    from labkit.protocols.hints import unit_of
+    from labkit.protocols.declaration import unit_of
 
     for v in value if isinstance(value, list) else [value]:
         if not _is_number(v):

@@ -29,10 +29,10 @@ from typing import Any
 from labkit import documents as doc
 from labkit.control.loop import SpeedControl, build_speed_control
 from labkit.errors import LabkitError, SafetyError
+from labkit.protocols.declaration import declaration_of
 from labkit.protocols.definition import ProtocolDef, Step
 from labkit.protocols.events import EventBus, Sink
 from labkit.protocols.exit_paths import STOP_SIGNALS, SessionGuard, signal_name, stop_failed_text
-from labkit.protocols.hints import declaration_of
 from labkit.protocols.operator import Operator, default_operator
 from labkit.rig import Rig, open_rig
 from labkit.units import rad_s_to_rpm

@@ -17,7 +17,7 @@ from labkit.errors import DataFileError, LabkitError
 from labkit.fit.data import Table, load_table, read_json
 from labkit.fit.overlay import Overlay
 from labkit.fit.table_fit import FitReport, fit_table
-from labkit.protocols.hints import HintsError
+from labkit.hints import HintsError
 from labkit.protocols.legacy_hints import hints_for
 from labkit.report import markdown as md
 from labkit.report.figures import contact_sheet, fit_figure

@@ -1,6 +1,6 @@
 """Which fits a report runs for a given data set, and the reference curves drawn with them.
 
-A protocol's run gets the fits its hints declare (:class:`labkit.protocols.hints.Hints`,
+A protocol's run gets the fits its hints declare (:class:`labkit.hints.Hints`,
 ``report_fits``; ADR 0021): a speed sweep (Fig. 5.25) is compared against a free power law,
 Eq. 5.81 with tau_S = 0 (pure omega^-2) and Eq. 5.81 with tau_S free; spin-critical pairs
 (Fig. 6.18) against Eq. 6.37 with omega_c = 3000, with omega_c fitted, and Eq. 5.69 (no
@@ -19,7 +19,7 @@ import numpy as np
 from labkit.fit.data import Table
 from labkit.fit.overlay import Overlay
 from labkit.fit.table_fit import FitOptions
-from labkit.protocols.hints import Hints, ReportFit
+from labkit.hints import Hints, ReportFit
 
 
 @dataclass(frozen=True)

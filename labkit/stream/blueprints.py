@@ -5,7 +5,7 @@ that choice is global (one timeline for every view: rerun issues #6828, #8050). 
 is therefore a time-series view on a timeline whose values are the x quantity, named by the
 protocol's hints (``rotor speed [RPM]`` for Fig. 5.25, ``rotor speed [rad/s]`` for Fig. 6.18,
 integer sequences at 1 RPM or 1 rad/s resolution). Everything about the figure comes from the
-run's hints (:class:`labkit.protocols.hints.Hints`, ADR 0021); no protocol is named here.
+run's hints (:class:`labkit.hints.Hints`, ADR 0021); no protocol is named here.
 The blueprint opens on that timeline, in a tab with the figure, its residuals and the events;
 the rig's speed, duty and readings over the ``time`` timeline are a second tab (select the
 ``time`` timeline to see them). No spatial view draws results: a 2-D spatial view has image
@@ -32,7 +32,7 @@ class FigureSpec:
 
 
 def figure_of(hints: Any) -> FigureSpec | None:
-    """The figure a run's hints (:class:`labkit.protocols.hints.Hints`) describe; None without."""
+    """The figure a run's hints (:class:`labkit.hints.Hints`) describe; None without."""
     if hints is None:
         return None
     return FigureSpec(hints.figure_title, hints.x_label, hints.entity_root, hints.y_label,

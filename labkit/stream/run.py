@@ -11,8 +11,9 @@ the figure's x timeline (:mod:`labkit.stream.blueprints`: ``rotor speed [RPM]`` 
 speed sweep, ``rotor speed [rad/s]`` for spin-critical), whose values are the x quantity.
 
 The figure, its fit, its reference curve and its residuals are what the start document's
-hints declare (:class:`labkit.protocols.hints.Hints`; sessions recorded before hints get them
-from :mod:`labkit.protocols.legacy_hints`): this sink names no protocol (ADR 0021).
+hints declare (:class:`labkit.hints.Hints`; the runner writes them, a replay re-runs the
+protocol and so writes them too): this sink names no protocol (ADR 0021), and a run whose
+protocol declares no hints gets the rig over time only.
 
 =====================================  ======================================================
 entity                                  content
@@ -47,7 +48,7 @@ import numpy as np
 
 from labkit import documents as doc
 from labkit.devices.base import READING_FLAGS
-from labkit.protocols.legacy_hints import hints_for
+from labkit.hints import Hints
 from labkit.stream.blueprints import FigureSpec, figure_of, run_blueprint
 from labkit.stream.core import RerunSpec, open_stream
 from labkit.stream.livefit import LIVE_FITS, LiveFit
@@ -77,7 +78,7 @@ class RerunRunSink:
         self.step: int = -1
         self.step_x: float | None = None
         self.protocol = ""
-        self.hints: Any = None   # labkit.protocols.hints.Hints of the run, None: no figure
+        self.hints: Hints | None = None   # the run's, None: no figure
         self.figure: FigureSpec | None = None
         self.points: list[tuple[float, float]] = []
         self.fits: list[LiveFit] = []
@@ -123,7 +124,7 @@ class RerunRunSink:
 
     def _on_start(self, e: doc.RunStart) -> None:
         self.protocol = e.protocol
-        self.hints = hints_for(e.protocol, e.hints)
+        self.hints = Hints.from_json(e.hints) if e.hints else None
         self.figure = figure_of(self.hints)
         self.rec.send_blueprint(run_blueprint(self.figure, self.loops, self.devices))
         self._text(f"start {self.protocol} on {e.rig} ({e.n_steps} steps)")
@@ -196,10 +197,10 @@ class RerunRunSink:
         self._log_fit()
 
     def _log_fit(self) -> None:
-        fig = self.figure
-        assert fig is not None
+        fig, hints = self.figure, self.hints
+        assert fig is not None and hints is not None
         xs, ys = [p[0] for p in self.points], [p[1] for p in self.points]
-        live_fit = LIVE_FITS.get(self.hints.fit)
+        live_fit = LIVE_FITS.get(hints.fit)
         fit = live_fit(xs, ys) if live_fit is not None else None
         if fit is None:
             return
@@ -219,7 +220,7 @@ class RerunRunSink:
         timeline = [self.rr.TimeColumn(fig.timeline, sequence=grid)]
         self.rec.send_columns(f"{fig.root}/plot/fit/{name}", indexes=timeline,
                               columns=self.rr.Scalars.columns(scalars=np.column_stack([y, lo, hi])))
-        reference = self.hints.reference
+        reference = hints.reference
         if reference is not None:
             self._style(f"{fig.root}/plot/paper", self.rr.SeriesLines(
                 names=reference.live_label, colors=[120, 120, 120], widths=1.5))
@@ -227,7 +228,7 @@ class RerunRunSink:
                 scalars=reference.at(grid.astype(float))))
         x_pts = np.asarray(xs)
         fitted = fit.curve(x_pts)[0]
-        residual = (100.0 * (np.asarray(ys) / fitted - 1.0) if self.hints.residual == "ratio"
+        residual = (100.0 * (np.asarray(ys) / fitted - 1.0) if hints.residual == "ratio"
                     else np.asarray(ys) - fitted)
         self.rec.log(f"{fig.root}/residual/{name}", self.rr.SeriesPoints(
             names="residual", colors=[30, 110, 220], markers="circle", marker_sizes=4), static=True)

@@ -48,6 +48,26 @@ def test_no_sink_compares_a_protocol_name():
     assert not found, f"protocol names used in sinks (read the run's hints instead): {sorted(found)}"
 
 
+def labkit_imports(source: str) -> set[str]:
+    """The ``labkit...`` modules a source imports (at module level or inside functions)."""
+    out: set[str] = set()
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Import):
+            out |= {a.name for a in node.names}
+        elif isinstance(node, ast.ImportFrom) and node.module and not node.level:
+            out.add(node.module)
+    return {m for m in out if m.startswith("labkit.")}
+
+
+def test_the_live_view_reads_hints_without_importing_the_protocols():
+    """``labkit.stream`` sits below ``labkit.protocols`` (docs: layer order io < devices <
+    documents < session|stream < control < protocols < cli): it knows ``labkit.hints`` only."""
+    found = {f"{path.relative_to(LABKIT.parent)}: {m}" for path in sorted((LABKIT / "stream").rglob("*.py"))
+             for m in labkit_imports(path.read_text(encoding="utf-8")) if m.startswith("labkit.protocols")}
+    assert not found, sorted(found)
+    assert "labkit.hints" in labkit_imports((LABKIT / "stream" / "run.py").read_text(encoding="utf-8"))
+
+
 def test_the_checker_sees_the_comparisons_it_forbids():
     assert protocol_name_uses('if protocol == "speed-sweep":\n    pass\n') == [1]
     assert protocol_name_uses('FIGURES.get(e.protocol)\n') == [1]

@@ -10,8 +10,9 @@ from pathlib import Path
 import pytest
 
 from labkit import documents as doc
+from labkit.hints import Column, Curve, Hints, HintsError, ReportFit
 from labkit.protocols import PROTOCOLS, ListSink, SpeedSweep, SpinCritical
-from labkit.protocols.hints import Column, Curve, Hints, HintsError, ReportFit, param_specs
+from labkit.protocols.declaration import param_specs
 from labkit.protocols.launch import replay_session
 from labkit.protocols.legacy_hints import LEGACY_HINTS, hints_for
 from labkit.protocols.params import ParamError, resolve_params

@@ -1,22 +1,17 @@
-"""What a protocol declares about its data: parameters, the row a point produces, and how
-the rows are drawn and fitted (bluesky's start-document ``hints``; ADR 0021).
+"""What a run declares about its data, as the sinks read it: the columns of a result row
+(:class:`Column`) and how rows are drawn and fitted (:class:`Hints`, bluesky's start-document
+``hints``; ADR 0021).
 
-A :class:`~labkit.protocols.definition.ProtocolDef` declares
+A protocol declares them (:class:`labkit.protocols.ProtocolDef` ``row`` and ``hints``; the
+built-ins in :mod:`labkit.protocols.paper_figures`), the run's start document
+(:class:`labkit.documents.RunStart`) carries them as JSON, and the rerun sink
+(:mod:`labkit.stream.run`) and the report (:mod:`labkit.report.plans`) read only that: a
+protocol from a plugin gets a live figure, a live fit and a report figure without a line of
+labkit changed. Sessions recorded before the start document carried hints get them from
+:mod:`labkit.protocols.legacy_hints`, the one place protocols are known by name.
 
-* ``bounds``: limits of its parameters beyond the caps of their unit suffix
-  (:func:`param_specs` gives every parameter with its unit, default and bounds);
-* ``row``: the :class:`Column` s of the result row each step produces, with units;
-* ``hints``: a :class:`Hints`, the x and y columns of its figure with names and units, the
-  fit the live view redraws and the fits the report makes, and a reference curve.
-
-The run's start document (:class:`labkit.documents.RunStart`) carries all three as JSON
-(:func:`declaration_of`), and the rerun sink (:mod:`labkit.stream.run`) and the report
-(:mod:`labkit.report.plans`) read only that: a protocol from a plugin gets a live figure, a
-live fit and a report figure without a line of labkit changed. Sessions recorded before the
-start document carried hints get them from :mod:`labkit.protocols.legacy_hints`.
-
-Pure data: this module imports only :mod:`labkit.units`, :mod:`labkit.errors` (and the caps of
-:mod:`labkit.rig`).
+Pure data below the sinks and the protocols: this module imports only :mod:`labkit.units` and
+:mod:`labkit.errors`.
 """
 
 from __future__ import annotations
@@ -29,9 +24,6 @@ from typing import Any
 from labkit.errors import LabkitError
 from labkit.units import RAD_S_PER_RPM
 
-#: parameter-name suffix -> the unit it is given in (``--set speeds_rpm=...``)
-PARAM_UNITS: dict[str, str] = {"rad_s": "rad/s", "rpm": "RPM", "pct": "%", "s": "s", "g": "g",
-                               "mm": "mm", "hz": "Hz", "n": "N"}
 #: residual styles of a figure: label template (``{y_unit}``) and the name used in docs
 RESIDUALS: dict[str, str] = {"ratio": "residual [%] (data / fit - 1)",
                              "difference": "residual [{y_unit}] (data - fit)"}
@@ -43,17 +35,6 @@ TARGET_UNITS: dict[str, float] = {"rad/s": 1.0, "RPM": 1.0 / RAD_S_PER_RPM}
 
 class HintsError(LabkitError, ValueError):
     """A declaration that cannot be drawn (an unknown residual style, a curve model...)."""
-
-
-@dataclass(frozen=True)
-class Param:
-    """One parameter: its default, the unit of its suffix and its bounds (None: no bound)."""
-
-    name: str
-    default: Any
-    unit: str = ""
-    low: float | None = None
-    high: float | None = None
 
 
 @dataclass(frozen=True)
@@ -210,55 +191,3 @@ class Hints:
             return cls(**data)
         except (TypeError, KeyError) as exc:
             raise HintsError(f"start document hints cannot be read: {exc}") from None
-
-
-#: the key the runner adds to every row
-STEP_COLUMN = Column("step", "", "index of the step in the plan (added by the runner)")
-
-
-def unit_of(name: str) -> str:
-    """The unit of a parameter from its suffix (``record_s`` -> ``s``), "" for none."""
-    for suffix in sorted(PARAM_UNITS, key=len, reverse=True):
-        if name.endswith("_" + suffix):
-            return PARAM_UNITS[suffix]
-    return ""
-
-
-def suffix_caps(name: str) -> tuple[float | None, float | None]:
-    """The bounds every parameter with this suffix obeys (:mod:`labkit.protocols.params`)."""
-    from labkit.rig import MAX_DURATION_S, MAX_SPEED_RPM
-
-    if name.endswith("_rad_s"):
-        cap = MAX_SPEED_RPM * RAD_S_PER_RPM
-        return -cap, cap
-    if name.endswith("_rpm"):
-        return -MAX_SPEED_RPM, MAX_SPEED_RPM
-    if name.endswith("_s"):
-        return 0.0, MAX_DURATION_S
-    return None, None
-
-
-def param_specs(defaults: dict[str, Any], bounds: dict[str, tuple[float | None, float | None]]
-                ) -> tuple[Param, ...]:
-    """Every parameter with its unit and bounds: the declared ``bounds`` within the caps of
-    its suffix (a declared bound never widens a cap)."""
-    out = []
-    for name, default in defaults.items():
-        low, high = suffix_caps(name)
-        d_low, d_high = bounds.get(name, (None, None))
-        low = d_low if low is None else (low if d_low is None else max(low, d_low))
-        high = d_high if high is None else (high if d_high is None else min(high, d_high))
-        out.append(Param(name, default, unit_of(name), low, high))
-    return tuple(out)
-
-
-def declaration_of(protocol: Any) -> dict[str, Any]:
-    """The start document's ``param_specs``, ``row`` and ``hints`` for a protocol object (a
-    protocol that declares no hints gets None, the legacy table's for old names)."""
-    hints = getattr(protocol, "hints", None)
-    row = tuple(getattr(protocol, "row", ()))
-    if row and STEP_COLUMN.name not in {c.name for c in row}:
-        row = (STEP_COLUMN, *row)
-    params = param_specs(protocol.defaults, getattr(protocol, "bounds", {}))
-    return {"param_specs": [asdict(p) for p in params],
-            "row": [asdict(c) for c in row], "hints": hints.to_json() if hints is not None else None}
