@@ -128,6 +128,9 @@ class RerunRunSink:
         self.figure = figure_of(self.hints)
         self.rec.send_blueprint(run_blueprint(self.figure, self.loops, self.devices))
         self._text(f"start {self.protocol} on {e.rig} ({e.n_steps} steps)")
+        if self.hints is not None and self.hints.fit and self.hints.fit not in LIVE_FITS:
+            self._text(f"{self.protocol}: no live fit for model {self.hints.fit!r} (known: "
+                       f"{', '.join(sorted(LIVE_FITS))}); points are drawn without a fit", "WARN")
 
     def _on_step(self, e: doc.StepStart) -> None:
         for loop, rad_s in e.targets_rad_s.items():
