@@ -8,7 +8,8 @@ Every document has ``t`` (clock seconds) and a class-level ``type`` (its name in
 type           class             fields (SI values)
 =============  ================  ====================================================================
 start          RunStart          protocol, params, rig, n_steps, session (path or None),
-                                 resumed_from, dry_run
+                                 resumed_from, dry_run; what the protocol declares (ADR 0021):
+                                 param_specs (unit, bounds), row (columns, units), hints
 step           StepStart         index, n_steps, label, targets_rad_s {loop: rad/s}, eta_s
 setpoint       Setpoint          loop, target_rad_s
 settled        Settled           index, settle_time_s, speeds_rad_s {loop: rad/s}
@@ -79,6 +80,13 @@ class RunStart(RunDocument):
     session: str | None = None
     resumed_from: str | None = None
     dry_run: bool = False
+    #: every parameter with its unit and bounds (:func:`labkit.protocols.declaration.param_specs`)
+    param_specs: list[dict[str, Any]] | None = None
+    #: the columns of a result row with their units (:class:`labkit.hints.Column`)
+    row: list[dict[str, Any]] | None = None
+    #: how the rows are drawn and fitted (:class:`labkit.hints.Hints` as JSON); None
+    #: in sessions recorded before 0021: :mod:`labkit.protocols.legacy_hints` derives them
+    hints: dict[str, Any] | None = None
 
 
 @dataclass(frozen=True, kw_only=True)

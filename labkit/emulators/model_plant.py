@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 from labkit.emulators.break_up import break_up
 from labkit.emulators.plant import FloatorPlant, MotorPlant, RigPlant, SpinCriticalLaw
 from labkit.emulators.twin_model import TwinParams, balance_force_table, default_params
+from labkit.units import G0
 
 
 @dataclass
@@ -87,7 +88,7 @@ class ModelPlant(RigPlant):
             base = super().force(t)
             w = self.speed(t)
             imp = self.imperfections
-            shake = imp.vibration_g * 1e-3 * 9.80665 * (w / imp.w_vib_ref_rad_s) ** 2
+            shake = imp.vibration_g * 1e-3 * G0 * (w / imp.w_vib_ref_rad_s) ** 2
             return base + shake * math.sin(w * t + self.vib_phase)
 
     def tach_reading(self, t: float, source: str = "rotor") -> float:

@@ -26,8 +26,8 @@ from scipy.optimize import brentq, minimize_scalar
 from labkit.model.floator_equilibrium import FloatorSetup, FloatorState, steady_state
 from labkit.predict.axial import AxialBoundState, axial_bound_state
 from labkit.predict.magnets import Magnet
+from labkit.units import G0
 
-G0 = 9.80665
 K_M = 1e-7  # mu0 / 4 pi
 MAX_RESIDUAL = 1e-9
 MAX_CONE_RAD = math.pi / 4  # beyond this the "steady state" is not the small-cone branch

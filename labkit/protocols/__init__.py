@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from labkit.errors import LabkitError
+from labkit.hints import Column, Curve, Hints, ReportFit
 from labkit.protocols.events import EventBus, ListSink, ProgressSink, Sink
 from labkit.protocols.runner import ProtocolDef, RunContext, Runner, RunOutcome, Step, StopRequested
 from labkit.protocols.speed_sweep import SpeedSweep
@@ -32,9 +33,10 @@ def get_protocol(name: str) -> ProtocolDef:
 _LAUNCH = ("execute", "prepare_run", "replay_session")
 
 __all__ = [
-    "PROTOCOLS", "EventBus", "ListSink", "ProgressSink", "ProtocolDef", "RunContext", "RunOutcome",
-    "Runner", "Sink", "SpeedSweep", "SpinCritical", "Step", "StopRequested", "execute", "get_protocol",
-    "prepare_run", "replay_session",
+    "PROTOCOLS", "Column", "Curve", "EventBus", "Hints", "ListSink", "ProgressSink", "ProtocolDef",
+    "ReportFit",
+    "RunContext", "RunOutcome", "Runner", "Sink", "SpeedSweep", "SpinCritical", "Step", "StopRequested",
+    "execute", "get_protocol", "prepare_run", "replay_session",
 ]
 
 

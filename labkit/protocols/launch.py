@@ -126,7 +126,7 @@ def _prepare(rig_path: str | Path | None, protocol_name: str | None, sets: list[
         if protocol_name and protocol_name != record.protocol:
             raise LabkitError(f"--resume {resume}: that session ran {record.protocol}, not {protocol_name}")
         protocol = get_protocol(record.protocol)
-        params = resolve_params(protocol.defaults, record.params, protocol.name)
+        params = resolve_params(protocol.defaults, record.params, protocol.name, protocol.bounds)
         if sets:
             raise LabkitError("--resume continues with the session's own parameters; drop --set")
     else:
@@ -134,7 +134,7 @@ def _prepare(rig_path: str | Path | None, protocol_name: str | None, sets: list[
             raise LabkitError("give RIG and PROTOCOL (or --resume SESSION)")
         rig = load_rig(rig_path)
         protocol = get_protocol(protocol_name)
-        params = resolve_params(protocol.defaults, sets, protocol.name)
+        params = resolve_params(protocol.defaults, sets, protocol.name, protocol.bounds)
     the_clock = make_clock(clock, rig)
     points: list[dict[str, Any]] = []
     if record is not None:
@@ -282,7 +282,7 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None) -> ReplayO
         raise LabkitError(f"{record.path}: no cassettes to replay")
     rig = load_rig(record.rig_path())
     protocol = get_protocol(record.protocol)
-    params = resolve_params(protocol.defaults, record.params, protocol.name)
+    params = resolve_params(protocol.defaults, record.params, protocol.name, protocol.bounds)
     carried = [(where, p) for where, p in recorded_points(record) if "carried_points" in where]
     points, dropped = check_carried_points(carried, protocol.plan(rig, params))
     done = {int(p["step"]) for p in points}

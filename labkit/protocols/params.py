@@ -103,8 +103,10 @@ def coerce(key: str, text: str, default: Any) -> Any:
 
 
 def resolve_params(defaults: dict[str, Any], overrides: dict[str, Any] | list[str] | None,
-                   protocol: str = "") -> dict[str, Any]:
-    """Defaults updated by overrides (``["k=v", ...]`` or a dict). Unknown keys are errors."""
+                   protocol: str = "", bounds: dict[str, tuple[float | None, float | None]] | None = None
+                   ) -> dict[str, Any]:
+    """Defaults updated by overrides (``["k=v", ...]`` or a dict). Unknown keys are errors, and
+    so is a value outside the protocol's declared ``bounds`` (``ProtocolDef.bounds``)."""
     params = {k: (list(v) if isinstance(v, list) else v) for k, v in defaults.items()}
     if overrides is None:
         return params
@@ -128,7 +130,23 @@ def resolve_params(defaults: dict[str, Any], overrides: dict[str, Any] | list[st
         default = defaults[key]
         typed = isinstance(value, str)
         params[key] = coerce(key, value, default) if typed else check_typed(key, value, default)
+        if key in (bounds or {}):
+            check_bounds(key, params[key], *(bounds or {})[key])
     return params
+
+
+def check_bounds(key: str, value: Any, low: float | None, high: float | None) -> None:
+    """Refuse a number (or any number of a list) outside ``[low, high]`` (None: no bound)."""
+    from labkit.protocols.declaration import unit_of
+
+    for v in value if isinstance(value, list) else [value]:
+        if not _is_number(v):
+            continue
+        if (low is not None and v < low) or (high is not None and v > high):
+            unit = f" {unit_of(key)}" if unit_of(key) else ""
+            lo = "-inf" if low is None else f"{low:g}"
+            hi = "inf" if high is None else f"{high:g}"
+            raise ParamError(f"--set {key}: {v:g}{unit} is outside the protocol's bounds [{lo}, {hi}]{unit}")
 
 
 def _is_number(value: Any) -> bool:

@@ -36,32 +36,14 @@ def _param(value: float, stderr: float) -> dict[str, float]:
 
 
 def quick_fit_power_law(x: list[float], y: list[float], sigma: list[float] | None = None) -> dict:
-    """Weighted least squares of ``y = a x^b``; started from a log-log line. Needs y > 0."""
-    import numpy as np  # imported here: the CLI starts fast when no fit runs
-    from scipy.optimize import curve_fit
-    xa, ya = np.asarray(x, float), np.asarray(y, float)
-    keep = (xa > 0) & (ya > 0)
-    if keep.sum() < 3:
-        raise ValueError(f"power-law fit needs >= 3 positive points, got {int(keep.sum())}")
-    xa, ya = xa[keep], ya[keep]
-    sig = None
-    if sigma is not None:
-        sig = np.asarray(sigma, float)[keep]
-        sig = np.where(sig > 0, sig, np.nan)
-        sig = None if np.isnan(sig).all() else np.where(np.isnan(sig), np.nanmax(sig), sig)
-    b0, log_a0 = np.polyfit(np.log(xa), np.log(ya), 1)
-    # fit around a reference x so a and b are not strongly correlated, then convert
-    x_ref = float(np.exp(np.mean(np.log(xa))))
-    (c, b), cov = curve_fit(lambda xx, c, b: c * (xx / x_ref) ** b, xa, ya,
-                            p0=(math.exp(log_a0) * x_ref**b0, b0), sigma=sig, maxfev=10000)
-    a = c / x_ref**b
-    # error propagation for a = c * x_ref^-b
-    ja = np.array([x_ref**-b, -a * math.log(x_ref)])
-    var_a = float(ja @ cov @ ja)
+    """Weighted least squares of ``y = a x^b`` in y, started from a log-log line (Needs y > 0):
+    :func:`labkit.fit.models.power_law.least_squares_power_law`, the live view's fit too."""
+    from labkit.fit.models.power_law import least_squares_power_law  # the CLI starts fast without a fit
+
+    fit = least_squares_power_law(x, y, sigma, residuals="linear")
     return {"model": "power-law", "formula": "y = a * x^b", "x": "speed_rpm", "y": "force_g",
-            "params": {"a": _param(a, math.sqrt(max(var_a, 0.0))),
-                       "b": _param(b, math.sqrt(max(cov[1, 1], 0.0)))},
-            "n": int(len(xa))}
+            "params": {"a": _param(fit.a, fit.stderr_a), "b": _param(fit.b, fit.stderr_b)},
+            "n": fit.n}
 
 
 def fit_spin_critical_c(rotor_rad_s: list[float], spin_rad_s: list[float], w_ref: float = 3000.0) -> dict:

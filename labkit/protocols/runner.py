@@ -29,6 +29,8 @@ from typing import Any
 from labkit import documents as doc
 from labkit.control.loop import SpeedControl, build_speed_control
 from labkit.errors import LabkitError, SafetyError
+from labkit.protocols.declaration import declaration_of
+from labkit.protocols.definition import ProtocolDef, Step
 from labkit.protocols.events import EventBus, Sink
 from labkit.protocols.exit_paths import STOP_SIGNALS, SessionGuard, signal_name, stop_failed_text
 from labkit.protocols.operator import Operator, default_operator
@@ -52,38 +54,6 @@ def normalise(value: Any) -> Any:
 class StopRequested(LabkitError):
     """The operator asked to stop (Ctrl-C or a stop signal); the run ended at a checkpoint,
     motors at zero."""
-
-
-@dataclass
-class Step:
-    """One planned step: targets per speed loop (rad/s) and protocol data."""
-
-    index: int
-    label: str
-    targets_rad_s: dict[str, float]
-    data: dict[str, Any] = field(default_factory=dict)
-    est_duration_s: float = 0.0
-
-
-class ProtocolDef:
-    """Base of a protocol: ``defaults`` (keys with unit suffixes), ``needs`` ((role, kind), ...)."""
-
-    name: str = ""
-    summary: str = ""
-    defaults: dict[str, Any] = {}
-    needs: tuple[tuple[str, str], ...] = ()
-
-    def plan(self, rig: Rig, params: dict[str, Any]) -> list[Step]:  # pragma: no cover - interface
-        raise NotImplementedError
-
-    def run_step(self, ctx: RunContext, step: Step) -> dict[str, Any]:  # pragma: no cover
-        raise NotImplementedError
-
-    def setup(self, ctx: RunContext) -> None:
-        """Once, after the rig is open and before the first step (e.g. tare the balance)."""
-
-    def fit(self, points: list[dict[str, Any]]) -> dict[str, Any]:
-        return {"model": "none", "params": {}}
 
 
 def check_plan(protocol: ProtocolDef, rig: Rig, steps: list[Step]) -> None:
@@ -405,7 +375,8 @@ class Runner:
         self.bus.emit(doc.RunStart(
             t=self.clock.now(), protocol=self.protocol.name, params=self.params, rig=self.rig.name,
             n_steps=len(self.steps), session=str(self.session.path) if self.session is not None else None,
-            resumed_from=(self.session.meta.get("resumed_from") if self.session else None)))
+            resumed_from=(self.session.meta.get("resumed_from") if self.session else None),
+            **declaration_of(self.protocol)))
         try:
             opened = open_rig(self.rig, self.clock, record_to=cassettes, port_override=self.port_override)
             self._recording_ports = [dev.port for dev in opened.drivers.values()

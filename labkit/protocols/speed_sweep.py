@@ -20,6 +20,7 @@ from typing import Any
 
 from labkit import documents as doc
 from labkit.errors import LabkitError
+from labkit.protocols.paper_figures import FIG_5_25, SPEED_SWEEP_ROW
 from labkit.protocols.params import ParamError
 from labkit.protocols.quickfit import quick_fit_power_law
 from labkit.protocols.runner import ProtocolDef, RunContext, Step
@@ -84,6 +85,8 @@ class SpeedSweep(ProtocolDef):
         "settle_timeout_s": 0.0,  # 0: the rig's control.settle_timeout
     }
     needs = (("rotor_motor", "motor"), ("rotor_tach", "tach"), ("balance", "balance"))
+    row = SPEED_SWEEP_ROW
+    hints = FIG_5_25   # the paper's figure and fits (labkit/protocols/paper_figures.py)
 
     def plan(self, rig: Rig, params: dict[str, Any]) -> list[Step]:
         speeds = list(params["speeds_rpm"])

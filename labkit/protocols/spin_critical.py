@@ -23,6 +23,7 @@ from typing import Any
 from labkit import documents as doc
 from labkit.errors import LabkitError
 from labkit.protocols.drop_spin import drop_instant, fresh_samples, line_spacing, spin_at
+from labkit.protocols.paper_figures import FIG_6_18, SPIN_CRITICAL_ROW
 from labkit.protocols.params import MAX_PLAN_STEPS, ParamError, check_count
 from labkit.protocols.quickfit import fit_spin_critical_c
 from labkit.protocols.runner import ProtocolDef, RunContext, Step
@@ -51,6 +52,8 @@ class SpinCritical(ProtocolDef):
     }
     needs = (("rotor_motor", "motor"), ("rotor_tach", "tach"), ("floator_tach", "tach"),
              ("balance", "balance"))
+    row = SPIN_CRITICAL_ROW
+    hints = FIG_6_18   # the paper's figure and fits (labkit/protocols/paper_figures.py)
     w_ref = 3000.0
 
     def plan(self, rig: Rig, params: dict[str, Any]) -> list[Step]:

@@ -17,6 +17,8 @@ from labkit.errors import DataFileError, LabkitError
 from labkit.fit.data import Table, load_table, read_json
 from labkit.fit.overlay import Overlay
 from labkit.fit.table_fit import FitReport, fit_table
+from labkit.hints import HintsError
+from labkit.protocols.legacy_hints import hints_for
 from labkit.report import markdown as md
 from labkit.report.figures import contact_sheet, fit_figure
 from labkit.report.flags import flags_section
@@ -74,7 +76,11 @@ def build_report(source: str | Path, out: str | Path | None = None, *, model: st
     protocol = table.meta.get("protocol") or run.get("protocol")
     if inertia is None and source.is_dir():
         inertia = floator_inertia(source)
-    plan = plan_for(table, protocol, inertia, model, x=x, y=y)
+    try:
+        hints = hints_for(protocol, _start_hints(source), table.numeric)
+    except HintsError as exc:
+        raise DataFileError(str(source / "events.jsonl"), "hints", str(exc)) from None
+    plan = plan_for(table, hints, inertia, model, x=x, y=y)
     out.mkdir(parents=True, exist_ok=True)
     lines = [f"# labkit report: {source.name}", "",
              f"Source: `{source}`  ", f"Generated: {_now()} by labkit {__version__}", ""]
@@ -86,6 +92,26 @@ def build_report(source: str | Path, out: str | Path | None = None, *, model: st
     lines += _fit_sections(table, plan, out, overlays)
     (out / "report.md").write_text("\n".join(lines) + "\n")
     return out / "report.md"
+
+
+#: the longest first line of events.jsonl read for the start document's hints
+MAX_START_LINE = 1_000_000
+
+
+def _start_hints(source: Path) -> dict | None:
+    """The hints of a session's start document (first line of events.jsonl), None when the
+    source is no session, the line is no start document or was written before ADR 0021."""
+    path = source / "events.jsonl"
+    if not (source.is_dir() and path.is_file()):
+        return None
+    with open(path, encoding="utf-8", errors="replace") as f:
+        line = f.readline(MAX_START_LINE)
+    try:
+        start = json.loads(line)
+    except ValueError:
+        return None
+    hints = start.get("hints") if isinstance(start, dict) and start.get("type") == "start" else None
+    return hints if isinstance(hints, dict) else None
 
 
 def _now() -> str:

@@ -2,12 +2,14 @@
 
 Rerun's time-series view plots scalars against the timeline selected in the time panel, and
 that choice is global (one timeline for every view: rerun issues #6828, #8050). An x-y plot
-is therefore a time-series view on a timeline whose values are the x quantity
-(``rotor speed [RPM]`` for Fig. 5.25, ``rotor speed [rad/s]`` for Fig. 6.18, integer
-sequences at 1 RPM or 1 rad/s resolution). The blueprint opens on that timeline, in a tab
-with the figure, its residuals and the events; the rig's speed, duty and readings over the
-``time`` timeline are a second tab (select the ``time`` timeline to see them). No spatial
-view draws results: a 2-D spatial view has image coordinates, y down, and no axes.
+is therefore a time-series view on a timeline whose values are the x quantity, named by the
+protocol's hints (``rotor speed [RPM]`` for Fig. 5.25, ``rotor speed [rad/s]`` for Fig. 6.18,
+integer sequences at 1 RPM or 1 rad/s resolution). Everything about the figure comes from the
+run's hints (:class:`labkit.hints.Hints`, ADR 0021); no protocol is named here.
+The blueprint opens on that timeline, in a tab with the figure, its residuals and the events;
+the rig's speed, duty and readings over the ``time`` timeline are a second tab (select the
+``time`` timeline to see them). No spatial view draws results: a 2-D spatial view has image
+coordinates, y down, and no axes.
 """
 
 from __future__ import annotations
@@ -26,15 +28,15 @@ class FigureSpec:
     y_label: str
     residual_label: str
     legend_corner: str = "RightTop"
+    tab: str = ""
 
 
-FIGURES: dict[str, FigureSpec] = {
-    "speed-sweep": FigureSpec("Fig. 5.25: force [g] against rotor speed [RPM]", "rotor speed [RPM]",
-                              "/fig5_25", "force [g]", "residual [%] (data / fit - 1)"),
-    "spin-critical": FigureSpec("Fig. 6.18: spin [rad/s] against rotor speed [rad/s] at the drop",
-                                "rotor speed [rad/s]", "/fig6_18", "spin [rad/s]",
-                                "residual [rad/s] (data - fit)", "LeftTop"),
-}
+def figure_of(hints: Any) -> FigureSpec | None:
+    """The figure a run's hints (:class:`labkit.hints.Hints`) describe; None without."""
+    if hints is None:
+        return None
+    return FigureSpec(hints.figure_title, hints.x_label, hints.entity_root, hints.y_label,
+                      hints.residual_label, hints.legend_corner, hints.figure or hints.figure_title)
 
 
 def _whole_x_axis() -> Any:
@@ -75,18 +77,18 @@ def rig_views(loops: list[str], devices: list[str]) -> list[Any]:
     return views
 
 
-def run_blueprint(protocol: str, loops: list[str], devices: list[str]) -> Any:
-    """The blueprint of a run of ``protocol``: its figure tab first, the rig over time next."""
+def run_blueprint(figure: FigureSpec | None, loops: list[str], devices: list[str]) -> Any:
+    """The blueprint of a run: its figure's tab first (when the run has a figure), the rig over
+    time next."""
     import rerun.blueprint as rrb
 
-    figure = FIGURES.get(protocol)
     events = rrb.TextLogView(origin="/events", name="events")
     rig = rrb.Vertical(*rig_views(loops, devices), name="rig over time (timeline: time)")
     if figure is None:
         return rrb.Blueprint(rrb.Vertical(rig, events, row_shares=[3, 1]), rrb.TimePanel(timeline="time"),
                              collapse_panels=True)
     plot, residual = figure_views(figure)
-    tab = rrb.Vertical(plot, residual, events, row_shares=[5, 2, 2], name=figure.title.split(":")[0])
+    tab = rrb.Vertical(plot, residual, events, row_shares=[5, 2, 2], name=figure.tab or figure.title)
     return rrb.Blueprint(rrb.Tabs(tab, rig, active_tab=0),
                          rrb.TimePanel(timeline=figure.timeline, play_state="paused"),
                          collapse_panels=True)

@@ -1,6 +1,7 @@
 """The fits the live view redraws at every point (pure functions, no rerun).
 
-They are the fits ``labkit fit`` makes, in the same residual space (docs/fitting.md):
+They are the fits ``labkit fit`` makes, in the same residual space (docs/fitting.md), found
+by the model name a protocol's hints give (:data:`LIVE_FITS`):
 
 * :func:`power_law_fit`: Fig. 5.25, ``F = a x^b`` fitted as a straight line in ln F against
   ln x (``labkit fit --model power-law``), with the 95 % confidence band of the fitted curve.
@@ -15,6 +16,7 @@ least-squares problem; docs/fitting.md says why the digits differ.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -58,21 +60,17 @@ def _t95(dof: int) -> float:
 
 
 def power_law_fit(x: list[float], y: list[float]) -> LiveFit | None:
-    """``y = a x^b`` by least squares in ln y (None below three positive points)."""
-    xa, ya = np.asarray(x, float), np.asarray(y, float)
-    keep = (xa > 0) & (ya > 0)
-    xa, ya = xa[keep], ya[keep]
-    if len(xa) < MIN_POINTS_POWER_LAW or np.ptp(xa) == 0:
+    """``y = a x^b`` by least squares in ln y (None below three positive points or for a
+    single x): :func:`labkit.fit.models.power_law.least_squares_power_law`, the quick fit's too."""
+    from labkit.fit.models.power_law import least_squares_power_law
+
+    try:
+        fit = least_squares_power_law(x, y, residuals="log")
+    except ValueError:
         return None
-    design = np.column_stack([np.ones_like(xa), np.log(xa)])
-    coef, *_ = np.linalg.lstsq(design, np.log(ya), rcond=None)
-    dof = len(xa) - 2
-    s2 = float(np.sum((np.log(ya) - design @ coef) ** 2)) / dof
-    cov = s2 * np.linalg.inv(design.T @ design)
-    a = math.exp(coef[0])
-    params = {"a": (a, a * math.sqrt(cov[0, 0])), "b": (float(coef[1]), math.sqrt(cov[1, 1]))}
-    return LiveFit("power-law", params, len(xa), tuple(map(float, coef)),
-                   tuple(map(tuple, cov.tolist())), _t95(dof))
+    assert fit.ln_coef is not None and fit.ln_cov is not None
+    params = {"a": (fit.a, fit.stderr_a), "b": (fit.b, fit.stderr_b)}
+    return LiveFit("power-law", params, fit.n, fit.ln_coef, fit.ln_cov, _t95(fit.n - 2))
 
 
 def eq637_fit(rotor_rad_s: list[float], spin_rad_s: list[float], w_c: float = 3000.0) -> LiveFit | None:
@@ -90,10 +88,8 @@ def eq637_fit(rotor_rad_s: list[float], spin_rad_s: list[float], w_c: float = 30
                    ((var_c,),), _t95(dof))
 
 
-#: Fig. 5.25 of the paper: y = 224e6 x^-1.9 (x in RPM, y in grams)
-PAPER_FIG525 = (224e6, -1.9)
-
-
-def paper_fig525(x_rpm: np.ndarray) -> np.ndarray:
-    a, b = PAPER_FIG525
-    return a * np.asarray(x_rpm, float) ** b
+#: ``labkit fit`` model name (a protocol's ``hints.fit``) -> the live fit redrawn at every point
+LIVE_FITS: dict[str, Callable[[list[float], list[float]], LiveFit | None]] = {
+    "power-law": power_law_fit,
+    "spin-critical": eq637_fit,
+}

@@ -10,6 +10,11 @@ Timelines: ``time`` (clock seconds since the start, a duration), ``step`` (proto
 the figure's x timeline (:mod:`labkit.stream.blueprints`: ``rotor speed [RPM]`` for the
 speed sweep, ``rotor speed [rad/s]`` for spin-critical), whose values are the x quantity.
 
+The figure, its fit, its reference curve and its residuals are what the start document's
+hints declare (:class:`labkit.hints.Hints`; the runner writes them, a replay re-runs the
+protocol and so writes them too): this sink names no protocol (ADR 0021), and a run whose
+protocol declares no hints gets the rig over time only.
+
 =====================================  ======================================================
 entity                                  content
 =====================================  ======================================================
@@ -21,16 +26,17 @@ entity                                  content
                                        force N / g0 x 1000)
 ``/rig/<tach>/spin_rad_s``             a tachometer that is no loop's (the floator's spin)
 ``/rig/<device>/frame``                each reading's raw bytes (``raw``) and ``flags``
-``<fig>/plot/data``                    one point per finished step on the x timeline
-``<fig>/plot/paper``                   the paper's curve (Fig. 5.25: y = 224e6 x^-1.9)
+``<fig>/plot/data``                    one point per finished step on the x timeline (hints x, y)
+``<fig>/plot/paper``                   the hints' reference curve (Fig. 5.25: y = 224e6 x^-1.9)
 ``<fig>/plot/fit/after_NN``            the fit after NN points with its 95 % band, logged at
                                        every point; earlier fits are cleared (static Clear)
 ``<fig>/residual/after_NN``            data minus fit of that fit, beneath the figure
 ``/events``                            text log: start, steps, settle, drops, interlocks, stop
 =====================================  ======================================================
 
-``<fig>`` is ``/fig5_25`` (speed sweep) or ``/fig6_18`` (spin-critical). The fits are
-:mod:`labkit.stream.livefit`'s, i.e. ``labkit fit``'s (ln F for the power law, v for Eq. 6.37).
+``<fig>`` is the hints' root: ``/fig5_25`` (speed sweep) or ``/fig6_18`` (spin-critical). The
+fits are :mod:`labkit.stream.livefit`'s for the hints' ``fit`` model, i.e. ``labkit fit``'s (ln F
+for the power law, v for Eq. 6.37); residuals are ``ratio`` (%) or ``difference`` as hinted.
 """
 
 from __future__ import annotations
@@ -42,13 +48,12 @@ import numpy as np
 
 from labkit import documents as doc
 from labkit.devices.base import READING_FLAGS
-from labkit.stream.blueprints import FIGURES, FigureSpec, run_blueprint
+from labkit.hints import Hints
+from labkit.stream.blueprints import FigureSpec, figure_of, run_blueprint
 from labkit.stream.core import RerunSpec, open_stream
-from labkit.stream.livefit import LiveFit, eq637_fit, paper_fig525, power_law_fit
-from labkit.units import RAD_S_PER_RPM
+from labkit.stream.livefit import LIVE_FITS, LiveFit
+from labkit.units import G0, RAD_S_PER_RPM
 
-#: standard gravity (m/s^2): a force in N as grams-force
-G0 = 9.80665
 FIT_COLOURS = [[220, 40, 40], [240, 150, 150], [240, 150, 150]]
 CURVE_SAMPLES = 120
 
@@ -73,6 +78,7 @@ class RerunRunSink:
         self.step: int = -1
         self.step_x: float | None = None
         self.protocol = ""
+        self.hints: Hints | None = None   # the run's, None: no figure
         self.figure: FigureSpec | None = None
         self.points: list[tuple[float, float]] = []
         self.fits: list[LiveFit] = []
@@ -118,16 +124,20 @@ class RerunRunSink:
 
     def _on_start(self, e: doc.RunStart) -> None:
         self.protocol = e.protocol
-        self.figure = FIGURES.get(e.protocol)
-        self.rec.send_blueprint(run_blueprint(e.protocol, self.loops, self.devices))
+        self.hints = Hints.from_json(e.hints) if e.hints else None
+        self.figure = figure_of(self.hints)
+        self.rec.send_blueprint(run_blueprint(self.figure, self.loops, self.devices))
         self._text(f"start {self.protocol} on {e.rig} ({e.n_steps} steps)")
+        if self.hints is not None and self.hints.fit and self.hints.fit not in LIVE_FITS:
+            self._text(f"{self.protocol}: no live fit for model {self.hints.fit!r} (known: "
+                       f"{', '.join(sorted(LIVE_FITS))}); points are drawn without a fit", "WARN")
 
     def _on_step(self, e: doc.StepStart) -> None:
         for loop, rad_s in e.targets_rad_s.items():
             self._scalar(f"/rig/{loop}/target_rpm", rad_s / RAD_S_PER_RPM, "target [RPM]")
         rotor = e.targets_rad_s.get(self.loops[0]) if self.loops else None
-        if rotor is not None:
-            self.step_x = rotor / RAD_S_PER_RPM if self.protocol == "speed-sweep" else rotor
+        if rotor is not None and self.hints is not None:
+            self.step_x = self.hints.step_x(rotor)
         self._text(f"step {e.index}/{e.n_steps} {e.label}")
 
     def _on_control(self, e: doc.ControlSnapshot) -> None:
@@ -147,7 +157,7 @@ class RerunRunSink:
             self._scalar(*plotted)
             if e.device not in self.devices:   # a device the caller did not list (replay)
                 self.devices.append(e.device)
-                self.rec.send_blueprint(run_blueprint(self.protocol, self.loops, self.devices))
+                self.rec.send_blueprint(run_blueprint(self.figure, self.loops, self.devices))
         flags = ";".join(sorted(r.flags))
         self.rec.log(f"/rig/{e.device}/frame",
                      self.rr.AnyValues(raw=r.raw.decode("latin-1"), flags=flags))
@@ -177,7 +187,7 @@ class RerunRunSink:
 
     def _on_point(self, e: doc.PointDone) -> None:
         """The point on the figure, then the fit of every point so far with its band."""
-        xy = point_xy(self.protocol, e.point)
+        xy = self.hints.point_xy(e.point) if self.hints is not None else None
         if xy is None or self.figure is None:
             return
         self.points.append(xy)
@@ -190,10 +200,11 @@ class RerunRunSink:
         self._log_fit()
 
     def _log_fit(self) -> None:
-        fig = self.figure
-        assert fig is not None
+        fig, hints = self.figure, self.hints
+        assert fig is not None and hints is not None
         xs, ys = [p[0] for p in self.points], [p[1] for p in self.points]
-        fit = power_law_fit(xs, ys) if self.protocol == "speed-sweep" else eq637_fit(xs, ys)
+        live_fit = LIVE_FITS.get(hints.fit)
+        fit = live_fit(xs, ys) if live_fit is not None else None
         if fit is None:
             return
         grid = np.unique(np.round(np.linspace(min(xs), max(xs), CURVE_SAMPLES)).astype(np.int64))
@@ -212,14 +223,15 @@ class RerunRunSink:
         timeline = [self.rr.TimeColumn(fig.timeline, sequence=grid)]
         self.rec.send_columns(f"{fig.root}/plot/fit/{name}", indexes=timeline,
                               columns=self.rr.Scalars.columns(scalars=np.column_stack([y, lo, hi])))
-        if self.protocol == "speed-sweep":
+        reference = hints.reference
+        if reference is not None:
             self._style(f"{fig.root}/plot/paper", self.rr.SeriesLines(
-                names="paper: y = 224e6 x^-1.9", colors=[120, 120, 120], widths=1.5))
-            self.rec.send_columns(f"{fig.root}/plot/paper", indexes=timeline,
-                                  columns=self.rr.Scalars.columns(scalars=paper_fig525(grid)))
+                names=reference.live_label, colors=[120, 120, 120], widths=1.5))
+            self.rec.send_columns(f"{fig.root}/plot/paper", indexes=timeline, columns=self.rr.Scalars.columns(
+                scalars=reference.at(grid.astype(float))))
         x_pts = np.asarray(xs)
         fitted = fit.curve(x_pts)[0]
-        residual = (100.0 * (np.asarray(ys) / fitted - 1.0) if self.protocol == "speed-sweep"
+        residual = (100.0 * (np.asarray(ys) / fitted - 1.0) if hints.residual == "ratio"
                     else np.asarray(ys) - fitted)
         self.rec.log(f"{fig.root}/residual/{name}", self.rr.SeriesPoints(
             names="residual", colors=[30, 110, 220], markers="circle", marker_sizes=4), static=True)
@@ -264,25 +276,14 @@ def reading_series(device: str, quantity: str, unit: str, value: float,
     return f"/rig/{device}/{quantity}", value, f"{quantity} [{unit}]"
 
 
-def point_xy(protocol: str, point: dict[str, Any]) -> tuple[float, float] | None:
-    """The (x, y) a result row is drawn at: (RPM, g) for the sweep, (rad/s, rad/s) for
-    spin-critical, in the paper's units."""
-    if protocol == "speed-sweep" and point.get("force_g") is not None and point.get("speed_rpm"):
-        return float(point["speed_rpm"]), float(point["force_g"])
-    if protocol == "spin-critical" and point.get("rotor_rad_s") is not None \
-            and point.get("spin_rad_s") is not None:
-        return float(point["rotor_rad_s"]), float(point["spin_rad_s"])
-    return None
-
-
 def run_sink(spec: RerunSpec | str, session_path: str | Path | None,
              loops: list[str] | None = None, devices: list[str] | None = None,
              loop_tachs: set[str] | None = None) -> RerunRunSink:
     """Open a rerun stream for a run (``spawn`` without a display saves SESSION/run.rrd).
-    The protocol's blueprint is sent when the run starts (it names the protocol)."""
+    The run's blueprint is sent when the run starts (its start document has the hints)."""
     fallback = Path(session_path or ".") / "run.rrd"
     loops, devices = loops or ["rotor"], devices or []
     rec = open_stream(spec, "labkit-run",
                       recording_id=Path(session_path).name if session_path else None,
-                      blueprint=run_blueprint("", loops, devices), fallback_file=fallback)
+                      blueprint=run_blueprint(None, loops, devices), fallback_file=fallback)
     return RerunRunSink(rec, loops, devices, loop_tachs)

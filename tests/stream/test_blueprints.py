@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from labkit.cli import main
-from labkit.stream.blueprints import FIGURES, run_blueprint, view_kinds
+from labkit.protocols.legacy_hints import hints_for
+from labkit.stream.blueprints import figure_of, run_blueprint, view_kinds
 from labkit.stream.fit import x_timeline
 from labkit.stream.livefit import eq637_fit, power_law_fit
 
@@ -18,9 +19,10 @@ SPATIAL = {"2D", "3D", "Spatial2D", "Spatial3D"}
 
 @pytest.mark.parametrize("protocol", ["speed-sweep", "spin-critical"])
 def test_the_figure_is_a_time_series_view_on_the_x_timeline_and_no_view_is_spatial(protocol):
-    blueprint = run_blueprint(protocol, ["rotor"], ["balance", "floator_tach"])
+    figure = figure_of(hints_for(protocol))
+    blueprint = run_blueprint(figure, ["rotor"], ["balance", "floator_tach"])
     kinds = view_kinds(blueprint)
-    root = FIGURES[protocol].root
+    root = figure.root
     assert not [k for k in kinds if k[0] in SPATIAL], kinds
     assert ("TimeSeries", f"{root}/plot") in kinds
     assert ("TimeSeries", f"{root}/residual") in kinds
@@ -31,7 +33,7 @@ def test_the_figure_is_a_time_series_view_on_the_x_timeline_and_no_view_is_spati
 
 
 def test_the_speed_sweep_blueprint_has_no_spatial_view_for_the_results():
-    kinds = view_kinds(run_blueprint("speed-sweep", ["rotor"], ["balance"]))
+    kinds = view_kinds(run_blueprint(figure_of(hints_for("speed-sweep")), ["rotor"], ["balance"]))
     assert not [k for k in kinds if k[1].startswith(("/results", "/fig")) and k[0] != "TimeSeries"]
     assert {k[0] for k in kinds} <= {"TimeSeries", "TextLog"}
 

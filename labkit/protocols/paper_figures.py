@@ -1,0 +1,74 @@
+"""What the built-in protocols declare about their data: the row each step produces, and
+the paper's figure it is drawn as (Fig. 5.25 for ``speed-sweep``, Fig. 6.18 for
+``spin-critical``), with the fits the live view and the report make (ADR 0021).
+
+The types are :mod:`labkit.hints`'; the protocols point at these declarations
+(``SpeedSweep.hints = FIG_5_25``), and :mod:`labkit.protocols.legacy_hints` gives them to
+sessions recorded before the start document carried hints.
+"""
+
+from __future__ import annotations
+
+from labkit.hints import Column, Curve, Hints, ReportFit
+
+#: the paper's Fig. 5.25: y [g] = 224e6 x [RPM]^-1.9
+PAPER_FIG525 = Curve("paper", "y = 224e6 x^-1.9", "power-law", {"a": 224e6, "b": -1.9}, figure="Fig. 5.25")
+
+_NO_INERTIA = " (no floator inertia in the rig file: K/I and tau_S/I are reported)"
+
+FIG_5_25 = Hints(
+    x="speed_rpm", y="force_g", x_name="rotor speed", x_unit="RPM", y_name="force", y_unit="g",
+    figure="Fig. 5.25", root="/fig5_25", fit="power-law", residual="ratio", reference=PAPER_FIG525,
+    report_title="PFR force vs rotor speed (cf. paper Fig. 5.25)",
+    report_fits=(
+        ReportFit("power-law", "Power law y = a x^b (Fig. 5.25)", "power-law",
+                  "PFR force vs rotor speed (cf. paper Fig. 5.25)", reference=True),
+        ReportFit("pfr-omega2", "Eq. 5.81 with tau_S = 0: F = K / (I omega^2)", "pfr-force",
+                  fixed={"tau_S": 0.0}, inertia=True),
+        ReportFit("pfr-force", "Eq. 5.81: F = K / (I omega^2 - tau_S)", "pfr-force", inertia=True),
+    ))
+
+FIG_6_18 = Hints(
+    x="rotor_rad_s", y="spin_rad_s", x_name="rotor speed", x_unit="rad/s", y_name="spin", y_unit="rad/s",
+    figure="Fig. 6.18", title="spin [rad/s] against rotor speed [rad/s] at the drop", root="/fig6_18",
+    fit="spin-critical", residual="difference", legend_corner="LeftTop",
+    report_title="Spin-critical pairs (cf. paper Fig. 6.18)",
+    report_fits=(
+        ReportFit("eq637", "Eq. 6.37 with omega_c = 3000 rad/s (paper)", "spin-critical",
+                  "Spin-critical pairs (cf. paper Fig. 6.18)", omega_c=3000.0),
+        ReportFit("eq637-fit", "Eq. 6.37 with omega_c fitted", "spin-critical", omega_c="fit"),
+        ReportFit("eq569", "Eq. 5.69 (no omega_c term)", "spin-critical", omega_c="inf"),
+    ),
+    notes=("The paper's caption fits give C = 4.7e5 (series 1) and 6.63e5 (series 2) with "
+           "omega_c = 3000 rad/s.",))
+
+SPEED_SWEEP_ROW = (
+    Column("step", "", "index of the step in the plan"),
+    Column("direction", "", "up or down (a hysteresis sweep's second leg)"),
+    Column("repeat", "", "repeat number, from 0"),
+    Column("target_rpm", "RPM", "the step's target speed"),
+    Column("speed_rad_s", "rad/s", "mean measured rotor speed while recording"),
+    Column("speed_rpm", "RPM", "the same in RPM"),
+    Column("speed_std_rpm", "RPM", "standard deviation of the measured speed"),
+    Column("force_n", "N", "mean force at speed minus the drift-corrected rest reading"),
+    Column("force_g", "g", "the same in grams-force"),
+    Column("force_stderr_n", "N", "standard error of the mean force"),
+    Column("force_stderr_g", "g", "the same in grams-force"),
+    Column("n", "", "number of balance readings averaged"),
+    Column("settle_time_s", "s", "time the speed loop took to settle"),
+    Column("drift_n", "N", "rest reading interpolated to the middle of the recording"),
+    Column("unstable", "", "readings the balance flagged as not stable"),
+)
+
+SPIN_CRITICAL_ROW = (
+    Column("step", "", "index of the step in the plan"),
+    Column("target_rpm", "RPM", "the step's rotor target"),
+    Column("rotor_rad_s", "rad/s", "rotor speed at the drop (mean of the trials used)"),
+    Column("rotor_rpm", "RPM", "the same in RPM"),
+    Column("spin_rad_s", "rad/s", "floator spin just before the drop (median of the trials used)"),
+    Column("spin_rpm", "RPM", "the same in RPM"),
+    Column("k", "", "v/w - 1 (Eq. 6.37)"),
+    Column("consistent", "", "the last consistent_n spins agreed within consistency_pct"),
+    Column("trials", "", "each trial: rotor_rad_s, spin_rad_s, cause, hold_s"),
+    Column("no_drop", "", "no trial dropped the floator"),
+)

@@ -1,0 +1,57 @@
+"""The live view draws whatever figure the start document's hints declare, and says so when it
+has no live fit for the hinted model instead of silently drawing points alone (ADR 0021)."""
+
+from __future__ import annotations
+
+import rerun as rr
+
+import labkit.stream.run as stream_run
+from labkit import documents as doc
+from labkit.hints import Hints
+from labkit.stream.readback import column, entity_paths
+
+
+def event_texts(path) -> list[str]:
+    """Every text logged to ``/events`` (chunks differ in their timelines, so read each)."""
+    from rerun.chunk import RrdReader
+
+    out = []
+    for chunk in RrdReader(str(path)).stream().filter(content="/events", is_static=False):
+        batch = chunk.to_record_batch()
+        if "TextLog:text" in batch.schema.names:
+            out += [t[0] for t in batch.column("TextLog:text").to_pylist()]
+    return out
+
+
+def stream_points(path, hints: Hints, points: list[dict]) -> None:
+    rec = rr.RecordingStream("labkit-test-hints")
+    rec.save(str(path))
+    sink = stream_run.RerunRunSink(rec)
+    sink.on_event(doc.RunStart(t=0.0, protocol="my-protocol", params={}, rig="r", n_steps=len(points),
+                               hints=hints.to_json()))
+    for i, point in enumerate(points):
+        sink.on_event(doc.StepStart(t=i + 0.5, index=i, n_steps=len(points), label=f"{i}",
+                                    targets_rad_s={"rotor": 100.0 * (i + 1)}))
+        sink.on_event(doc.PointDone(t=i + 1.0, index=i, point=point))
+    sink.close()
+
+
+def test_a_hinted_model_without_a_live_fit_is_named_in_the_events(tmp_path):
+    hints = Hints("w_rad_s", "gap_um", "rotor speed", "rad/s", "gap", "um", figure="Gap", fit="powerlaw")
+    points = [{"w_rad_s": 100.0 * k, "gap_um": 50.0 / k} for k in range(1, 5)]
+    stream_points(tmp_path / "r.rrd", hints, points)
+    entities = entity_paths(tmp_path / "r.rrd")
+    assert "/gap/plot/data" in entities and not any(e.startswith("/gap/plot/fit") for e in entities)
+    warned = [t for t in event_texts(tmp_path / "r.rrd") if "no live fit" in t]
+    assert warned == ["my-protocol: no live fit for model 'powerlaw' (known: power-law, spin-critical); "
+                      "points are drawn without a fit"]
+
+
+def test_the_same_points_with_a_known_model_get_their_fit(tmp_path):
+    hints = Hints("w_rad_s", "gap_um", "rotor speed", "rad/s", "gap", "um", figure="Gap", fit="power-law")
+    points = [{"w_rad_s": 100.0 * k, "gap_um": 50.0 / k} for k in range(1, 5)]
+    stream_points(tmp_path / "r.rrd", hints, points)
+    entities = entity_paths(tmp_path / "r.rrd")
+    assert {"/gap/plot/fit/after_03", "/gap/plot/fit/after_04", "/gap/residual/after_04"} <= entities
+    x, y = column(tmp_path / "r.rrd", "/gap/plot/data", "Scalars:scalars", "rotor speed [rad/s]")
+    assert x == [100, 200, 300, 400] and [v[0] for v in y] == [50.0, 25.0, 50.0 / 3, 12.5]
