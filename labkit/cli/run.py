@@ -160,7 +160,7 @@ def report(outcome: Any) -> int:
     print(f"labkit run: {outcome.status}: {outcome.reason}{where}", file=sys.stderr)
     if getattr(outcome, "stop_failed", None):
         return EXIT_STOP_FAILED  # no resume hint: the rotor may still be turning
-    if outcome.session:
+    if outcome.session and outcome.session.is_dir():  # a deleted session has nothing to resume
         print(f"resume with: labkit run --resume {outcome.session}", file=sys.stderr)
     return 130 if outcome.status == "interrupted" else 2
 
