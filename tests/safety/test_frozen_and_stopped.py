@@ -63,15 +63,19 @@ def test_supervisor_stopped_and_continued_the_run_goes_on(tmp_path, pause_s):
         worker = run.worker()
         pause_process(run.proc.pid, pause_s)
         stderr = run.finish()
-        assert wait_for(lambda: run.proc.returncode is not None, 5, "run ended")
-    assert_clean_or_empty(stderr)
-    assert run.proc.returncode == 0, stderr
-    meta = run.run_json()
-    assert meta["status"] == "completed" and meta["pid"] == worker, meta
-
-
-def assert_clean_or_empty(stderr: str) -> None:
     assert "Traceback" not in stderr and "Errno" not in stderr, stderr
+    meta = run.run_json()
+    assert meta["pid"] == worker
+    # the supervisor's pause neither stops the run (no signal nobody sent) nor ends the worker
+    # (its silence is not the worker's): the run completes; on a loaded machine a device may
+    # still time out, which is the run's own interlock, never the supervisor's doing
+    assert "heartbeat" not in stderr and "stopped by" not in stderr, stderr
+    assert not [e for e in run.events() if e["type"] == "stop_request"]
+    if run.proc.returncode != 0:
+        assert run.proc.returncode == 2 and "interlock: " in stderr, stderr
+        assert meta["status"] == "failed", meta
+    else:
+        assert meta["status"] == "completed", meta
 
 
 def test_ctrl_z_typed_on_the_terminal_stops_the_run(tmp_path):
