@@ -10,7 +10,8 @@ counter in memory shared across the fork (``mmap`` of one anonymous page):
   that stopped ticking while it should tick stops the beat;
 * while no tick is due (before the first setpoint, after an interlock, a stop or the first
   Ctrl-C) a small **pulse thread** beats instead every :data:`PULSE_S`, so a slow but healthy
-  step (a balance settling, the final writes) never looks frozen;
+  step (a balance settling, the final writes) never looks frozen; it also beats between ticks,
+  until a due tick is :data:`TICK_STALE_S` overdue (a tick stuck in a device call);
 * the beat only counts while **armed**: from the start of the protocol until its motors are
   stopped and its ports closed (docs/decisions/0018-heartbeat-and-drift.md).
 
@@ -29,6 +30,9 @@ from typing import Any
 
 #: no beat for this long (s, supervisor awake) = the worker is frozen
 HEARTBEAT_TIMEOUT_S = 1.0
+#: a control tick this overdue (s) stops the pulse thread's beats: a tick stuck in a device
+#: call for longer (a reply timeout is at most 1 s) is a control loop that controls nothing
+TICK_STALE_S = 1.0
 #: the pulse thread's period (s) while no control tick is due
 PULSE_S = 0.1
 #: the supervisor's polling period (s)
@@ -72,7 +76,7 @@ class WorkerPulse:
         self.heartbeat = heartbeat
         self.control = control
         self.last_tick: float | None = None
-        self.stale_s = max(0.5, 4.0 * float(getattr(control, "period_s", 0.05)))
+        self.stale_s = max(TICK_STALE_S, 4.0 * float(getattr(control, "period_s", 0.05)))
         self._done = threading.Event()
         self._thread = threading.Thread(target=self._pulse, name="labkit-heartbeat", daemon=True)
 

@@ -113,3 +113,37 @@ def test_heartbeat_is_shared_across_fork():
     os.waitpid(child, 0)
     count, armed = heartbeat.read()
     assert armed and count == 6
+
+
+def test_worker_pulse_beats_between_ticks_and_stops_when_a_due_tick_is_overdue():
+    from labkit.control.heartbeat import TICK_STALE_S, WorkerPulse
+    from labkit.control.loop import build_speed_control
+    from labkit.rig import open_rig
+    from labkit.units import rpm_to_rad_s
+
+    clock = VirtualClock()
+    heartbeat = Heartbeat()
+    with use_clock(clock):
+        opened = open_rig(load_rig(RIG), clock)
+        try:
+            control = build_speed_control(opened, clock)
+            pulse = WorkerPulse(heartbeat, control).start()
+            assert heartbeat.read()[1]                       # armed
+            count = heartbeat.read()[0]
+            time.sleep(0.35)                                 # no tick due yet: the thread beats
+            assert heartbeat.read()[0] > count
+            control.set_targets({"rotor": rpm_to_rad_s(3000.0)})
+            clock.sleep(0.5)                                 # ticks run (virtual clock), each beats
+            assert pulse.last_tick is not None and not pulse.tick_overdue()
+            time.sleep(TICK_STALE_S + 0.2)                   # the virtual clock stands: ticks overdue
+            assert pulse.tick_overdue()
+            count = heartbeat.read()[0]
+            time.sleep(0.35)
+            assert heartbeat.read()[0] == count              # ... so nothing beats
+            control.stop()                                   # stopped: no tick due, the thread beats
+            time.sleep(0.35)
+            assert heartbeat.read()[0] > count
+            pulse.stop()
+            assert not heartbeat.read()[1]                   # disarmed
+        finally:
+            opened.close()
