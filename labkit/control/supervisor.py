@@ -44,6 +44,11 @@ CLEAN_EXITS = frozenset({0, 2, 3, 130})
 FORWARDED = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT, signal.SIGTSTP)
 #: signals typed on the terminal reach the whole foreground group: never passed on twice
 TYPED = (signal.SIGINT, signal.SIGTSTP)
+PR_SET_PDEATHSIG = 1
+SI_KERNEL = 0x80  # si_code of a signal the kernel (a terminal's Ctrl-C) sent, not kill()
+#: si_code values a real signal of ours carries: kill(), the kernel, sigqueue, tgkill, and
+#: SIGCHLD's CLD_EXITED..CLD_CONTINUED (anything else is not a signal: see _next_signal)
+SI_CODES = frozenset({0, SI_KERNEL, -1, -6, 1, 2, 3, 4, 5, 6})
 #: how long the supervisor waits for a SIGKILLed frozen worker to be reaped before it sends STOP
 REAP_S = 0.5
 #: the worker's heartbeat (set in the worker after the fork; None in a one-process run)
@@ -60,11 +65,7 @@ class Frozen:
 def worker_heartbeat() -> Heartbeat | None:
     """The heartbeat this process must beat (it is a supervised worker), else None."""
     return _worker_heartbeat
-PR_SET_PDEATHSIG = 1
-SI_KERNEL = 0x80  # si_code of a signal the kernel (a terminal's Ctrl-C) sent, not kill()
-#: si_code values a real signal of ours carries: kill(), the kernel, sigqueue, tgkill, and
-#: SIGCHLD's CLD_EXITED..CLD_CONTINUED (anything else is not a signal: see _next_signal)
-SI_CODES = frozenset({0, SI_KERNEL, -1, -6, 1, 2, 3, 4, 5, 6})
+
 
 
 def needs_supervisor(rig: Any) -> bool:
