@@ -143,8 +143,16 @@ def outcome_json(outcome: Any) -> dict[str, Any]:
             "results": outcome.results}
 
 
+def warn_points(results: dict[str, Any] | None) -> None:
+    """One line on stderr per warning a point carries (``warnings``: e.g. the balance's drift)."""
+    for point in (results or {}).get("points", []):
+        for warning in point.get("warnings") or []:
+            print(f"labkit run: warning: step {int(point.get('step', -1)) + 1}: {warning}", file=sys.stderr)
+
+
 def report(outcome: Any) -> int:
     where = f" (session {outcome.session})" if outcome.session else ""
+    warn_points(outcome.results)
     fit = (outcome.results or {}).get("fit") or {}
     params = ", ".join(
         f"{k} = {v['value']:.4g} +/- {v['stderr']:.2g}"
@@ -160,7 +168,7 @@ def report(outcome: Any) -> int:
     print(f"labkit run: {outcome.status}: {outcome.reason}{where}", file=sys.stderr)
     if getattr(outcome, "stop_failed", None):
         return EXIT_STOP_FAILED  # no resume hint: the rotor may still be turning
-    if outcome.session:
+    if outcome.session and outcome.session.is_dir():  # a deleted session has nothing to resume
         print(f"resume with: labkit run --resume {outcome.session}", file=sys.stderr)
     return 130 if outcome.status == "interrupted" else 2
 

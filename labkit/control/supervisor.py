@@ -11,6 +11,13 @@ on a rig with a real motor port forks (docs/decisions/0012-safe-exit-supervisor-
   the terminal reaches both and is not passed twice: a second one would force the safe
   state at once), and when the worker ends abnormally
   (killed by a signal, a crash) it re-opens every motor port of the rig and sends STOP;
+* a worker that stops working without dying (SIGSTOP, a freeze) stops its **heartbeat**
+  (:mod:`labkit.control.heartbeat`); after :data:`HEARTBEAT_TIMEOUT_S` of silence the
+  supervisor ends it with SIGKILL (a stopped process cannot run a SIGTERM handler, and only
+  its end releases the port locks and keeps a continued worker from re-sending its last
+  duty), then re-opens the motor ports and sends STOP, and records the session as killed;
+* the supervisor itself survives being stopped and continued, and treats Ctrl-Z (SIGTSTP)
+  as a stop request, which it passes on like SIGTERM;
 * below both, the controller's own command timeout (``options.command_timeout_ms`` /
   ``timeout_ms``, required for real hardware by the rig file) stops the motor if the whole
   machine goes (docs/safety.md).
@@ -20,19 +27,45 @@ from __future__ import annotations
 
 import ctypes
 import ctypes.util
+import errno
 import os
 import signal
 import sys
 import threading
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from labkit.control.heartbeat import HEARTBEAT_TIMEOUT_S, WATCH_S, Heartbeat, HeartbeatWatch
+
 #: the worker's exit statuses that mean "the worker itself stopped the motors"
 CLEAN_EXITS = frozenset({0, 2, 3, 130})
-FORWARDED = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT)
+FORWARDED = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT, signal.SIGTSTP)
+#: signals typed on the terminal reach the whole foreground group: never passed on twice
+TYPED = (signal.SIGINT, signal.SIGTSTP)
 PR_SET_PDEATHSIG = 1
 SI_KERNEL = 0x80  # si_code of a signal the kernel (a terminal's Ctrl-C) sent, not kill()
+#: si_code values a real signal of ours carries: kill(), the kernel, sigqueue, tgkill, and
+#: SIGCHLD's CLD_EXITED..CLD_CONTINUED (anything else is not a signal: see _next_signal)
+SI_CODES = frozenset({0, SI_KERNEL, -1, -6, 1, 2, 3, 4, 5, 6})
+#: how long the supervisor waits for a SIGKILLed frozen worker to be reaped before it sends STOP
+REAP_S = 0.5
+#: the worker's heartbeat (set in the worker after the fork; None in a one-process run)
+_worker_heartbeat: Heartbeat | None = None
+
+
+class Frozen:
+    """What :func:`_watch` returns for a worker that stopped beating: silence (s) and its status."""
+
+    def __init__(self, silent_s: float, status: int | None) -> None:
+        self.silent_s, self.status = silent_s, status
+
+
+def worker_heartbeat() -> Heartbeat | None:
+    """The heartbeat this process must beat (it is a supervised worker), else None."""
+    return _worker_heartbeat
+
 
 
 def needs_supervisor(rig: Any) -> bool:
@@ -80,28 +113,35 @@ def supervised(rig: Any, work: Callable[[], int], err: Any = None,
     parent = os.getpid()
     sys.stdout.flush()
     sys.stderr.flush()
+    heartbeat = Heartbeat()
     worker = os.fork()
     if worker == 0:
+        global _worker_heartbeat
+        _worker_heartbeat = heartbeat
+        signal.signal(signal.SIGTSTP, signal.SIG_IGN)  # the run's handler makes Ctrl-Z a stop
         signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)
         _die_with_parent(parent)
         return work()
     try:
-        status = _watch(worker, sigset)
+        status = _watch(worker, sigset, HeartbeatWatch(heartbeat))
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)
+    if isinstance(status, Frozen):
+        return _after_frozen_worker(rig, worker, status, err, sessions)
     return _after_worker(rig, worker, status, err, sessions)
 
 
-def _watch(worker: int, sigset: set[int]) -> int:
-    """Pass ``kill``-sent stop signals on to the worker until it ends; its wait status."""
+def _watch(worker: int, sigset: set[int], heartbeat: HeartbeatWatch | None = None) -> int | Frozen:
+    """Pass ``kill``-sent stop signals on to the worker until it ends (its wait status) or its
+    heartbeat stops (:class:`Frozen`: the worker was ended with SIGKILL)."""
     while True:
-        info = signal.sigtimedwait(sigset, 0.5)
+        info = _next_signal(sigset, WATCH_S)
         if info is not None and info.si_signo != signal.SIGCHLD:
-            # Ctrl-C typed on the terminal reached the worker (same process group) already, and a
-            # second one would mean "safe state now"; the others are idempotent in the worker, and
-            # a hang-up may reach only the session's leader: always pass those on
-            typed_ctrl_c = info.si_signo == signal.SIGINT and info.si_code == SI_KERNEL
-            if not typed_ctrl_c and info.si_pid != worker:
+            # Ctrl-C or Ctrl-Z typed on the terminal reached the worker (same process group)
+            # already, and a second Ctrl-C would mean "safe state now"; the others are idempotent
+            # in the worker, and a hang-up may reach only the session's leader: always pass those on
+            typed = info.si_signo in TYPED and info.si_code == SI_KERNEL
+            if not typed and info.si_pid != worker:
                 try:
                     os.kill(worker, info.si_signo)
                 except ProcessLookupError:
@@ -109,6 +149,71 @@ def _watch(worker: int, sigset: set[int]) -> int:
         pid, status = os.waitpid(worker, os.WNOHANG)
         if pid == worker:
             return status
+        silent = heartbeat.frozen_for() if heartbeat is not None else None
+        if silent is not None:
+            return Frozen(silent, _kill_and_reap(worker))
+
+
+def _next_signal(sigset: set[int], timeout_s: float) -> Any:
+    """The next of ``sigset`` (blocked) sent to this process, waiting up to ``timeout_s``; or None.
+
+    Never blocks inside ``sigtimedwait``: CPython 3.11 retries one interrupted by SIGSTOP and
+    SIGCONT with the remaining time and, once that is negative, either raises ``OSError:
+    [Errno 22]`` or returns a ``struct_siginfo`` of uninitialised memory (seen: ``si_signo=2``,
+    a SIGINT nobody sent). So: sleep with the signals blocked, then take one that
+    ``sigpending`` shows is there, without waiting, and check that it is one.
+    """
+    pending = signal.sigpending() & sigset
+    if not pending:
+        time.sleep(timeout_s)
+        pending = signal.sigpending() & sigset
+    if not pending:
+        return None
+    try:
+        info = signal.sigtimedwait(pending, 0)
+    except InterruptedError:
+        return None
+    except OSError as exc:
+        if exc.errno == errno.EINVAL:
+            return None
+        raise
+    genuine = info is not None and info.si_signo in pending and info.si_code in SI_CODES
+    return info if genuine else None
+
+
+def _kill_and_reap(worker: int) -> int | None:
+    """SIGKILL (works on a stopped process too) and its wait status; None if not reaped in time."""
+    try:
+        os.kill(worker, signal.SIGKILL)
+    except ProcessLookupError:
+        pass
+    deadline = time.monotonic() + REAP_S
+    while True:
+        pid, status = os.waitpid(worker, os.WNOHANG)
+        if pid == worker:
+            return status
+        if time.monotonic() > deadline:
+            return None  # uninterruptible sleep (a hung USB driver): STOP anyway, it may fail
+        time.sleep(0.01)
+
+
+def _after_frozen_worker(rig: Any, worker: int, frozen: Frozen, err: Any,
+                         sessions: str | Path | None = None) -> int:
+    """Motors to zero after the frozen worker was ended; report and close its session."""
+    failed = stop_motors(rig)
+    if frozen.status is None:  # still not reaped: wait for it now that the STOP went out
+        _, frozen.status = os.waitpid(worker, 0)
+    stopped = [role for role in rig.devices if rig.devices[role].kind == "motor" and role not in failed]
+    how = (f"stopped responding (no heartbeat for {frozen.silent_s:.1f} s, limit "
+           f"{HEARTBEAT_TIMEOUT_S:.1f} s: stopped with SIGSTOP, frozen or starved) and was ended "
+           "with SIGKILL")
+    print(f"labkit run: the run process (PID {worker}) {how}; the supervisor commanded "
+          f"{', '.join(stopped) or 'no motor'} to zero", file=err)
+    for role, why in failed.items():
+        print(f"labkit run: could not stop {role}: {why}; cut the motor's power", file=err)
+    if sessions is not None:
+        _close_sessions(sessions, worker, how, failed, err)
+    return 3 if failed else 128 + signal.SIGKILL
 
 
 def _after_worker(rig: Any, worker: int, status: int, err: Any, sessions: str | Path | None = None) -> int:

@@ -236,6 +236,9 @@ class ReplayOutcome:
 REPLAY_FIT_RTOL = 1e-6
 REPLAY_FIT_ATOL = 1e-12
 DERIVED_KEYS = frozenset({"fit"})
+#: keys a newer labkit adds to a point (docs/decisions/0018-heartbeat-and-drift.md): a recording
+#: made before them lacks them, which is not a difference; every key it has is still compared
+ADDED_KEYS = frozenset({"drift_g", "warnings"})
 
 
 def _close(a: float, b: float) -> bool:
@@ -260,6 +263,8 @@ def diff_results(a: Any, b: Any, path: str = "results", derived: bool = False) -
     if isinstance(a, dict):
         out = []
         for k in sorted(set(a) | set(b)):
+            if k not in b and k in ADDED_KEYS:
+                continue
             if k not in a or k not in b:
                 out.append(f"{path}.{k}: only in {'replay' if k in a else 'recording'}")
             else:

@@ -57,7 +57,10 @@ SPEED_SWEEP_ROW = (
     Column("n", "", "number of balance readings averaged"),
     Column("settle_time_s", "s", "time the speed loop took to settle"),
     Column("drift_n", "N", "rest reading interpolated to the middle of the recording"),
+    Column("drift_g", "g", "how far the zero moved between the rest readings before and after the "
+                           "step (null when zero=start did not measure it)"),
     Column("unstable", "", "readings the balance flagged as not stable"),
+    Column("warnings", "", "what makes the point doubtful (the zero's drift against drift_warn)"),
 )
 
 SPIN_CRITICAL_ROW = (

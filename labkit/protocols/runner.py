@@ -8,7 +8,8 @@ parameters, then runs each with plain Python using the :class:`RunContext` verbs
   against the rig's speed limit, the session directory (``--dry-run`` stops here and
   prints the plan);
 * opens the rig (every port recorded into the session's cassettes), starts the speed loops;
-* on the first Ctrl-C - or SIGTERM (``kill``), SIGHUP (terminal closed), SIGQUIT (Ctrl-\\) -
+* on the first Ctrl-C - or SIGTERM (``kill``), SIGHUP (terminal closed), SIGQUIT (Ctrl-\\),
+  SIGTSTP (Ctrl-Z: a run with a turning rotor does not pause) -
   commands every motor to zero at the next control tick and stops at the next checkpoint;
   on a second Ctrl-C trips the interlock at once (docs/design/architecture.md#two-ctrl-c); ``run.json``
   names the
@@ -29,6 +30,7 @@ from typing import Any
 from labkit import documents as doc
 from labkit.control.loop import SpeedControl, build_speed_control
 from labkit.errors import LabkitError, SafetyError
+from labkit.protocols import exit_paths
 from labkit.protocols.declaration import declaration_of
 from labkit.protocols.definition import ProtocolDef, Step
 from labkit.protocols.events import EventBus, Sink
@@ -293,7 +295,7 @@ class Runner:
     # ---- Ctrl-C and stop signals --------------------------------------------------------
     @property
     def stop_cause(self) -> str:
-        return "Ctrl-C" if self.stop_signal in (None, "SIGINT") else self.stop_signal
+        return exit_paths.stop_cause_of(self.stop_signal)
 
     def request_stop(self, signum: int = signal.SIGINT) -> None:
         """What Ctrl-C does: 1st - motors to zero at the next tick, stop at next checkpoint;
@@ -368,6 +370,7 @@ class Runner:
         status, reason, error = "completed", None, None
         new_points: list[dict[str, Any]] = []
         opened = None
+        pulse = None
         ctx: RunContext | None = None
         previous_handlers = self._install_signal_handlers()
         self._guard_session()
@@ -383,6 +386,7 @@ class Runner:
                                      if hasattr(getattr(dev, "port", None), "record_error")]
             self.control = build_speed_control(opened, self.clock, emit=self.bus.emit)
             self.control.guards.append(self.health)
+            pulse = exit_paths.watch_run(self.control, self.session)  # session folder, supervisor's heartbeat
             ctx = RunContext(self, opened.drivers, self.control)
             self.protocol.setup(ctx)
             for step in self.steps:
@@ -414,6 +418,8 @@ class Runner:
                 self.control.stop()
             if opened is not None:
                 opened.close()
+            if pulse is not None:
+                pulse.stop()  # motors stopped, ports closed: a supervisor need not watch any more
         stop_failed = dict(opened.stop_failures) if opened is not None else {}
         if stop_failed:
             self.bus.emit(doc.StopFailed(t=self.clock.now(), devices=dict(stop_failed)))

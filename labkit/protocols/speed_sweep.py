@@ -5,11 +5,15 @@ the step: reads the balance at rest (rotor stopped), ramps to the speed, settles
 the balance for ``record_s``, stops the rotor and reads the balance at rest again. The
 force is the mean at speed minus the rest reading interpolated linearly in time between
 the two rest readings (drift correction), with its standard error. With
-``zero=start`` the rest readings are skipped and the balance is only zeroed once.
+``zero=start`` the rest readings are skipped and the balance is only zeroed once: the drift
+is then not measured (``drift_g`` null) and every point says so in its ``warnings``.
 
 Result rows (``points`` of results.json): step, direction, repeat, target_rpm,
 speed_rad_s, speed_rpm, speed_std_rpm, force_n, force_g, force_stderr_n, force_stderr_g, n,
-settle_time_s, drift_n, unstable. Quick fit: y = a x^b (x in RPM, y in grams force).
+settle_time_s, drift_n (the zero subtracted, N; 0 with ``zero=start``), drift_g (the same in
+grams, null when not measured), unstable, and ``warnings`` (empty when none): the zero drifted
+by more than ``drift_warn`` of the force, or was not measured. Quick fit: y = a x^b (x in RPM,
+y in grams force).
 """
 
 from __future__ import annotations
@@ -71,6 +75,22 @@ def check_overload(ctx: RunContext, role: str, readings: list[Any], speed_rad_s:
                       "readings): lower the speeds or use a balance with a larger range; motors at zero")
 
 
+def drift_warnings(force_g: float, drift_g: float, rests_g: tuple[float, float] | None,
+                   fraction: float) -> list[str]:
+    """What a point says about its balance zero: drifted by more than ``fraction`` of the force
+    (subtracted, but the force rests on the drift being linear in time between the two rest
+    readings), or not measured at all (``rests_g`` None: ``zero=start``)."""
+    if rests_g is None:
+        return ["balance drift not measured (zero=start: zeroed once at the start, no rest readings); "
+                "the force includes any drift of the zero since then; zero=each measures it"]
+    if not (math.isfinite(force_g) and abs(drift_g) > fraction * abs(force_g)):
+        return []
+    share = abs(drift_g) / abs(force_g) if force_g else math.inf
+    return [f"balance zero drifted {drift_g:+.3f} g by this point ({share:.0%} of the force {force_g:.3f} g, "
+            f"above drift_warn {fraction:.0%}); subtracted as the rest readings before ({rests_g[0]:+.3f} g) "
+            f"and after ({rests_g[1]:+.3f} g) the step, linear in time"]
+
+
 class SpeedSweep(ProtocolDef):
     name = "speed-sweep"
     summary = "PFR force vs rotor speed on a balance (Fig. 5.25)"
@@ -82,6 +102,7 @@ class SpeedSweep(ProtocolDef):
         "record_s": 3.0,         # averaging time at each speed
         "min_samples": 5,
         "zero": "each",          # "each": rest readings before/after every step; "start": zero once
+        "drift_warn": 0.05,      # a point warns when the zero drifted by more than this fraction of its force
         "settle_timeout_s": 0.0,  # 0: the rig's control.settle_timeout
     }
     needs = (("rotor_motor", "motor"), ("rotor_tach", "tach"), ("balance", "balance"))
@@ -94,6 +115,9 @@ class SpeedSweep(ProtocolDef):
             raise ParamError("speed-sweep: speeds_rpm is empty")
         if params["zero"] not in ("each", "start"):
             raise ParamError(f"--set zero: must be each or start, got {params['zero']!r}")
+        if not 0 < float(params["drift_warn"]) < 10:
+            raise ParamError("--set drift_warn: a fraction of the force (0.05 = 5 %), "
+                             f"got {params['drift_warn']!r}")
         if params["repeats"] < 1:
             raise ParamError("--set repeats: must be >= 1")
         legs = [("up", speeds)]
@@ -152,6 +176,8 @@ class SpeedSweep(ProtocolDef):
         force, stderr = mean_stderr([f - drift for f in forces])
         speed = statistics.fmean(finite_speeds) if finite_speeds else math.nan
         speed_std = finite_std(speeds)
+        rests_g = (rest0[1] / G0 * 1e3, rest1[1] / G0 * 1e3) if rest0 and rest1 else None
+        warnings = drift_warnings(force / G0 * 1e3, drift / G0 * 1e3, rests_g, float(p["drift_warn"]))
         return {
             "direction": step.data["direction"], "repeat": step.data["repeat"],
             "target_rpm": step.data["target_rpm"],
@@ -159,7 +185,9 @@ class SpeedSweep(ProtocolDef):
             "force_n": force, "force_g": force / G0 * 1e3,
             "force_stderr_n": stderr, "force_stderr_g": stderr / G0 * 1e3,
             "n": len(forces), "settle_time_s": settle_time, "drift_n": drift,
+            "drift_g": drift / G0 * 1e3 if rests_g else None,
             "unstable": sum(1 for r in readings if not r.stable),
+            "warnings": warnings,
         }
 
     def fit(self, points: list[dict[str, Any]]) -> dict[str, Any]:

@@ -291,3 +291,26 @@ class LabkitRun:
         session = self.session()
         assert session is not None
         return json.loads((session / "run.json").read_text())
+
+
+# ---- frozen worker, stopped supervisor, vanished session (issue 29) ----------------------------
+def pause_process(pid: int, seconds: float) -> None:
+    """SIGSTOP ``pid``, wait ``seconds``, SIGCONT it (Ctrl-Z then ``fg``, a debugger's pause)."""
+    os.kill(pid, signal.SIGSTOP)
+    try:
+        time.sleep(seconds)
+    finally:
+        os.kill(pid, signal.SIGCONT)
+
+
+def delete_session_when_holding(run: LabkitRun) -> float:
+    """``rm -rf`` the run's session folder once the rotor holds its speed; when it was done."""
+    import shutil
+
+    run.wait_holding()
+    run.worker()
+    session = run.session()
+    assert session is not None
+    sent = time.monotonic()
+    shutil.rmtree(session)
+    return sent

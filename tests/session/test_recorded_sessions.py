@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from labkit.protocols.launch import REPLAY_FIT_RTOL, replay_session
+from labkit.protocols.launch import ADDED_KEYS, REPLAY_FIT_RTOL, replay_session
 
 SESSIONS = sorted((Path(__file__).resolve().parents[2] / "recordings" / "sessions").glob("*/run.json"))
 
@@ -23,7 +23,11 @@ def test_replay_reproduces_the_results_exactly(run_json):
     recorded = json.loads((session / "results.json").read_text())
     result = replay_session(session)
     assert result.identical, result.differences[:5]
-    assert result.outcome.results["points"] == recorded["points"]
+    replayed = result.outcome.results["points"]
+    # every recorded key exactly; a key newer than the recording (docs/decisions/0018) only added
+    assert [{k: p[k] for k in rec if k in p} for p, rec in zip(replayed, recorded["points"], strict=True)] \
+        == recorded["points"]
+    assert all(set(p) - set(rec) <= ADDED_KEYS for p, rec in zip(replayed, recorded["points"], strict=True))
     assert result.outcome.status == json.loads(run_json.read_text())["status"]
 
 
