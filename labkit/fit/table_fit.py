@@ -82,6 +82,7 @@ def fit_table(table: Table, model: str, options: FitOptions | None = None) -> Fi
         columns["sigma"] = sigma_col
     columns.update({k: v for k, v in extras.items() if v})
     table, skipped = _drop_empty_rows(table, [x_col, y_col])
+    table, inconsistent = _drop_inconsistent_rows(table)
     results: dict[str, FitResult] = {}
     for name, part in _split(table, series_col):
         if model == "mbs-force" and extras.get("repulsive") and extras.get("attractive"):
@@ -97,7 +98,29 @@ def fit_table(table: Table, model: str, options: FitOptions | None = None) -> Fi
         note = (f"{skipped} row(s) without any {x_col} or {y_col} value skipped "
                 "(steps that produced no measurement)")
         results = {k: replace(r, warnings=(*r.warnings, note)) for k, r in results.items()}
+    if inconsistent:
+        note = (f"left out of the fit: {inconsistent}, whose trials did not agree within the protocol's "
+                "consistency_pct (column 'consistent' false)")
+        results = {k: replace(r, warnings=(*r.warnings, note)) for k, r in results.items()}
     return FitReport(model, table.source, results, columns)
+
+
+def _drop_inconsistent_rows(table: Table) -> tuple[Table, str]:
+    """Rows a protocol marked ``consistent: false`` (a spin-critical step whose repeated trials
+    did not agree) are left out of the fit; returns the table and the steps left out, in words
+    ("" when none). Kept in, one such step carried the largest residual of a whole series."""
+    flags = table.text.get("consistent")
+    if flags is None and "consistent" in table.numeric:
+        flags = ["False" if v == 0 else "True" for v in table.numeric["consistent"]]
+    if flags is None:
+        return table, ""
+    bad = np.array([f.strip().lower() in ("false", "0") for f in flags])
+    if not bad.any() or bad.all():
+        return table, ""  # every step inconsistent: fitted, each point says so in the table
+    steps = table.numeric.get("step")
+    names = [f"step {int(s)}" if steps is not None and np.isfinite(s) else f"row {i + 1}"
+             for i, s in enumerate(steps if steps is not None else [math.nan] * len(bad)) if bad[i]]
+    return table.subset(~bad), ", ".join(names)
 
 
 def _drop_empty_rows(table: Table, cols: list[str]) -> tuple[Table, int]:

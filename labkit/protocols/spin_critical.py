@@ -185,6 +185,14 @@ class SpinCritical(ProtocolDef):
         return row
 
     def fit(self, points: list[dict[str, Any]]) -> dict[str, Any]:
-        pairs = [(pt["rotor_rad_s"], pt["spin_rad_s"]) for pt in points
-                 if pt.get("rotor_rad_s") is not None and math.isfinite(pt["rotor_rad_s"])]
-        return fit_spin_critical_c([w for w, _ in pairs], [v for _, v in pairs], self.w_ref)
+        """Eq. 6.37's C from the steps with a drop; a step whose trials did not agree
+        (``consistent`` false) is left out while consistent ones remain, and named in
+        ``left_out`` (``labkit fit`` and the live view leave it out too)."""
+        measured = [pt for pt in points
+                    if pt.get("rotor_rad_s") is not None and math.isfinite(pt["rotor_rad_s"])]
+        agreed = [pt for pt in measured if pt.get("consistent") is not False]
+        use = agreed or measured
+        fit = fit_spin_critical_c([pt["rotor_rad_s"] for pt in use], [pt["spin_rad_s"] for pt in use],
+                                  self.w_ref)
+        left_out = [pt.get("step") for pt in measured if pt not in use]
+        return {**fit, "left_out_steps": left_out} if left_out else fit

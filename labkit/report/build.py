@@ -8,6 +8,7 @@ from __future__ import annotations
 import csv
 import datetime as _dt
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -284,21 +285,33 @@ def _fit_sections(table: Table, plan: Plan, out: Path, overlays: tuple[Overlay, 
     return lines
 
 
+def aicc(aic: float, n: int, k: int) -> float:
+    """AIC corrected for few points (Hurvich & Tsai): ``AIC + 2k(k+1)/(n-k-1)``; infinite when
+    ``n <= k + 1`` (the model has too few points left over to be compared)."""
+    return aic + 2.0 * k * (k + 1) / (n - k - 1) if n - k - 1 > 0 else math.inf
+
+
 def _comparison(done: list[tuple[str, FitReport]]) -> list[str]:
     rows = []
     series = sorted({s for _, r in done for s in r.series})
     for s in series:
         entries = [(t, r.series[s]) for t, r in done if s in r.series]
-        best = min(res.aic for _, res in entries)
-        for title, res in entries:
+        scores = [aicc(res.aic, res.n, len(res.fitted_names)) for _, res in entries]
+        best = min(scores)
+        for (title, res), score in zip(entries, scores, strict=True):
+            comparable = math.isfinite(score)
             rows.append([s, title, len(res.fitted_names), res.n, md.num(res.rms_residual, 4),
-                         res.residual_space, md.num(res.aic, 4), md.num(res.aic - best, 3),
-                         len(res.warnings)])
+                         res.residual_space, md.num(score, 4) if comparable else "n/a (too few points)",
+                         md.num(score - best, 3) if comparable and math.isfinite(best) else "",
+                         "yes" if comparable and score == best else "", len(res.warnings)])
     return ["## Model comparison", "",
-            "Models of one data set are fitted in the same residual space; lower AIC is better "
-            "(a difference above ~2 is meaningful, above ~10 decisive).", "",
-            md.table(["series", "model", "fitted params", "n", "rms residual", "residual space", "AIC",
-                      "ΔAIC", "warnings"], rows), ""]
+            "Models of one data set are fitted in the same residual space; lower AICc (AIC corrected "
+            "for few points) is better (a difference above ~2 is meaningful, above ~10 decisive). A "
+            "model with no more than one point beyond its fitted parameters cannot be compared: "
+            "with 3 points, a 2-parameter fit always looks better by plain AIC. The first fit above "
+            "is the protocol's own, the one `labkit fit` gives for this session.", "",
+            md.table(["series", "model", "fitted params", "n", "rms residual", "residual space", "AICc",
+                      "ΔAICc", "preferred", "warnings"], rows), ""]
 
 
 def _video_path(source: Path, video: str) -> Path:

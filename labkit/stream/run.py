@@ -80,7 +80,8 @@ class RerunRunSink:
         self.protocol = ""
         self.hints: Hints | None = None   # the run's, None: no figure
         self.figure: FigureSpec | None = None
-        self.points: list[tuple[float, float]] = []
+        self.points: list[tuple[float, float]] = []  # what the live fit uses
+        self.left_out = 0  # points drawn but not fitted (a step marked consistent: false)
         self.fits: list[LiveFit] = []
         self._styled: set[str] = set()
         self.flush_error: str | None = None
@@ -190,7 +191,12 @@ class RerunRunSink:
         xy = self.hints.point_xy(e.point) if self.hints is not None else None
         if xy is None or self.figure is None:
             return
-        self.points.append(xy)
+        if e.point.get("consistent") is False:  # its trials disagreed: drawn, not fitted (labkit fit too)
+            self.left_out += 1
+            self._text(f"point {xy[0]:.6g}, {xy[1]:.6g} left out of the live fit: its trials did not "
+                       "agree (consistent: false)", "WARN")
+        else:
+            self.points.append(xy)
         fig = self.figure
         self._style(f"{fig.root}/plot/data", self.rr.SeriesPoints(
             names=fig.y_label, colors=[30, 110, 220], markers="circle", marker_sizes=5))

@@ -85,7 +85,12 @@ def _check_exponent(result: FitResult, name: str, log_span: float) -> FitResult:
         return result
     return replace(result, warnings=(*result.warnings,
                    f"exponent {name} not identifiable: 95 % interval +-{half:.2g}; x spans only a factor "
-                   f"{math.exp(log_span):.3g} (the paper's Fig. 5.25 spans ~3): widen the range"))
+                   f"{_factor(log_span)} (the paper's Fig. 5.25 spans ~3): widen the range"))
+
+
+def _factor(log_span: float) -> str:
+    """``exp(log_span)`` in words, also where it is beyond a float (x from 1e-311 to 1)."""
+    return f"{math.exp(log_span):.3g}" if log_span < 700 else f"10^{log_span / math.log(10):.0f}"
 
 
 #: the two least-squares problems :func:`least_squares_power_law` solves (docs/fitting.md)
