@@ -29,7 +29,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("input", nargs="+",
                    help="session directory, results JSON, CSV with a header row, or `labkit analyse "
                    "--json` files (several, a folder of them or a glob pattern: one row per clip)")
-    p.add_argument("--model", required=True, choices=list(FIT_MODELS), help="model to fit")
+    p.add_argument("--model", choices=list(FIT_MODELS),
+                   help="model to fit (default: the one a session's protocol declares, e.g. "
+                   "power-law for a speed sweep, spin-critical for a spin-critical series)")
     p.add_argument("--x", help="x column (default per model, see docs/fitting.md)")
     p.add_argument("--y", help="y column")
     p.add_argument("--sigma", help="column of y uncertainties (default: <y>_stderr if present)")
@@ -82,6 +84,18 @@ def parse_fixes(items: list[str]) -> dict[str, float]:
     return out
 
 
+def _declared_model(inputs: list[str], table) -> str:
+    """The model the input declares (a session's hints), else a clear refusal."""
+    from labkit.report.build import declared_fit_model
+
+    model = declared_fit_model(Path(inputs[0]), table) if len(inputs) == 1 else None
+    if model is None or model not in FIT_MODELS:
+        raise FitError(f"{' '.join(inputs)}: does not say which model fits it (no session of a known "
+                       f"protocol); give --model, one of {', '.join(FIT_MODELS)}")
+    print(f"labkit fit: model {model} (the one this session's protocol declares)", file=sys.stderr)
+    return model
+
+
 def run(args: argparse.Namespace) -> int:
     from labkit.fit.data import load_tables, write_table
     from labkit.fit.table_fit import FitOptions, fit_table
@@ -95,6 +109,8 @@ def run(args: argparse.Namespace) -> int:
                          omega_c=parse_omega_c(args.omega_c), fixed=parse_fixes(args.fix),
                          bootstrap=args.bootstrap, seed=args.seed)
     table = load_tables(args.input)
+    if args.model is None:
+        args.model = _declared_model(args.input, table)
     if table.meta.get("skipped"):
         left_out = table.meta["skipped"]
         print(f"labkit fit: left out {len(left_out)} JSON file(s) that are not analysis results: "

@@ -99,6 +99,19 @@ def build_report(source: str | Path, out: str | Path | None = None, *, model: st
 MAX_START_LINE = 1_000_000
 
 
+def declared_fit_model(source: Path, table: Table) -> str | None:
+    """The ``labkit fit`` model a session (or a table of a known protocol) declares in its hints:
+    the one ``labkit run``'s quick fit, the live fit and the report's first fit use; None when the
+    input does not say (a plain CSV of unknown columns)."""
+    run = table.meta.get("run", {})
+    protocol = table.meta.get("protocol") or run.get("protocol")
+    try:
+        hints = hints_for(protocol, _start_hints(source), table.numeric)
+    except HintsError as exc:
+        raise DataFileError(str(source / "events.jsonl"), "hints", str(exc)) from None
+    return hints.fit if hints is not None else None
+
+
 def _start_hints(source: Path) -> dict | None:
     """The hints of a session's start document (first line of events.jsonl), None when the
     source is no session, the line is no start document or was written before ADR 0021."""
