@@ -88,7 +88,8 @@ def fault_on_signal(faults: list[str], hosts: dict[str, PtyHost], clock: Any, an
     wanted = [parse_fault_option(text) for text in faults]
     for role, _ in wanted:
         if role not in hosts:
-            raise PortURLError(role, f"--fault-on-usr2: no emulated device {role!r} (have {', '.join(hosts)})")
+            raise PortURLError(role, f"--fault-on-usr2: no emulated device {role!r} "
+                                     f"(have {', '.join(hosts)})")
     if not wanted or not hasattr(signal, "SIGUSR2"):
         return
 
@@ -115,9 +116,10 @@ class TruthLog:
             for name in names:
                 speed = plant.speed(t, name)
                 motor = plant.motor(name)
-                self.file.write(json.dumps({"t": t, "motor": name, "rpm": speed * 60.0 / (2.0 * math.pi),
-                                            "duty": motor.duty, "stalled": motor.drive_duty != motor.duty})
-                                + "\n")
+                rpm = speed * 60.0 / (2.0 * math.pi)
+                line = {"t": t, "motor": name, "rpm": rpm, "duty": motor.duty,
+                        "stalled": motor.drive_duty != motor.duty}
+                self.file.write(json.dumps(line) + "\n")
         self.file.flush()
 
     def close(self) -> None:
@@ -193,8 +195,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         help="on SIGUSR1 (kill -USR1 PID), unplug ROLE's pty for good, e.g. to see what "
                              "a run does when its motor controller's cable is pulled (repeatable)")
     parser.add_argument("--fault-on-usr2", action="append", metavar="ROLE:NAME",
-                        help="on SIGUSR2 (kill -USR2 PID), start fault NAME of ROLE now, e.g. rotor_tach:zero, "
-                             f"rotor_tach:stuck, rotor_motor:stall (repeatable; NAME: {', '.join(TIMED_FAULTS)})")
+                        help="on SIGUSR2 (kill -USR2 PID), start fault NAME of ROLE now, e.g. "
+                             "rotor_tach:zero, rotor_tach:stuck, rotor_motor:stall "
+                             f"(repeatable; NAME: {', '.join(TIMED_FAULTS)})")
     parser.add_argument("--truth", metavar="FILE",
                         help="append every emulated motor's true speed and duty to FILE as JSON lines "
                              "every 20 ms (t is time.monotonic)")

@@ -140,7 +140,8 @@ class Emulator:
         """Start the time-triggered fault ``name`` (``zero``, ``stall``...) now, from outside
         (``labkit emulate --fault-on-usr2``): ``NAME_at`` becomes the time since open."""
         if name not in TIMED_FAULTS:
-            raise ValueError(f"fault {name!r} cannot be started on a signal; use one of {', '.join(TIMED_FAULTS)}")
+            raise ValueError(f"fault {name!r} cannot be started on a signal; "
+                             f"use one of {', '.join(TIMED_FAULTS)}")
         self.faults[f"{name}_at"] = max(0.0, self.since_open(t))
 
     def connected(self, t: float) -> bool:

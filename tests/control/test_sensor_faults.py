@@ -1,0 +1,147 @@
+"""Sensor and motor faults injected at the emulator (sim:// faults=...), virtual clock.
+
+The shipped emulated Fig. 5.25 rig with its limit lowered to 12 000 RPM holds 8 000 RPM; at
+6 s the fault starts. Each must trip the interlock within the stated time with a reason that
+names the device and the numbers, with the true rotor (the plant, not the tachometer) never
+above the limit. The same faults with `labkit emulate` in its own process:
+tests/safety/test_sensor_faults_pty.py.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from labkit.control import build_speed_control
+from labkit.emulators.sim_port import build_emulator
+from labkit.errors import SafetyError
+from labkit.io.clock import VirtualClock, use_clock
+from labkit.rig import open_rig, parse_rig
+from labkit.units import rad_s_to_rpm, rpm_to_rad_s
+
+RIG = (Path(__file__).resolve().parents[2] / "rigs" / "emulated-fig525.toml").read_text() \
+    .replace("max_speed_rpm = 24000", "max_speed_rpm = 12000")
+LIMIT_RPM = 12000.0
+FAULT_AT = 6.0
+
+
+def run(tach_faults="", motor_faults="", full_speed_rpm=None, target_rpm=8000.0, seconds=15.0):
+    """(trip time, reason, peak true RPM, plant) of a hold at ``target_rpm`` with the faults."""
+    from labkit.emulators.plant import shared_plant
+
+    text = RIG
+    if tach_faults:
+        text = text.replace("role=rotor_tach", f"role=rotor_tach&faults={tach_faults}")
+    if motor_faults:
+        text = text.replace("role=rotor_motor", f"role=rotor_motor&faults={motor_faults}")
+    if full_speed_rpm:
+        text = text.replace("full_speed_rpm = 23873", f"full_speed_rpm = {full_speed_rpm}")
+    clock = VirtualClock()
+    with use_clock(clock):
+        opened = open_rig(parse_rig(text, "test.toml"), clock)
+        control = build_speed_control(opened, clock)
+        plant = shared_plant("model-fig525")
+        try:
+            control.set_targets({"rotor": rpm_to_rad_s(target_rpm)})
+            peak = 0.0
+            while control.tripped is None and clock.now() < seconds:
+                clock.sleep(0.01)
+                peak = max(peak, rad_s_to_rpm(plant.speed(clock.now())))
+        finally:
+            control.stop()
+            opened.close()
+    return control.tripped_at, control.tripped, peak, plant
+
+
+@pytest.mark.parametrize("fault, within_s, words", [
+    ("zero_at", 1.0, ["rotor_tach implausible: reads 0 RPM", "rotor_motor", "predicts at least"]),
+    ("stuck_at", 1.5, ["rotor_tach stuck: the same value", "times over"]),
+    ("repeat_at", 1.5, ["rotor_tach stuck: the same value", "times over"]),
+    ("stop_at", 1.0, ["rotor_tach silent"]),
+])
+def test_a_lying_tachometer_trips_within_its_time_and_the_rotor_stays_under_the_limit(fault, within_s, words):
+    tripped_at, reason, peak, _ = run(tach_faults=f"{fault}:{FAULT_AT}")
+    assert tripped_at is not None, f"{fault}: no trip"
+    assert FAULT_AT < tripped_at <= FAULT_AT + within_s, (tripped_at, reason)
+    assert peak <= LIMIT_RPM, f"{fault}: true rotor at {peak:.0f} RPM"
+    for word in words:
+        assert word in reason, reason
+
+
+def test_a_tachometer_stuck_during_the_ramp_trips_on_the_duty_it_does_not_follow():
+    tripped_at, reason, peak, _ = run(tach_faults="stuck_at:1.0")
+    assert tripped_at is not None and tripped_at <= 1.0 + 1.0, (tripped_at, reason)
+    assert "stuck" in reason and "moved the expected speed" in reason
+    assert peak <= LIMIT_RPM
+
+
+def test_a_stalled_motor_trips_within_3_s_of_the_duty_saturating():
+    tripped_at, reason, peak, plant = run(motor_faults=f"stall_at:{FAULT_AT}")
+    motor = plant.motor("rotor")
+    saturated = [t for t, duty in motor.duty_changes if t >= FAULT_AT and duty >= 0.5]
+    assert saturated, "the loop never raised its duty into the stall"
+    assert tripped_at is not None and tripped_at - saturated[0] <= 3.0, (saturated[0], tripped_at, reason)
+    assert "rotor_motor" in reason and "saturated" in reason
+    assert peak <= LIMIT_RPM
+
+
+def test_the_duty_cap_holds_the_rotor_under_the_limit_with_a_tachometer_that_reads_zero():
+    # zero from the start: nothing to compare with during the spin-up grace, only the cap
+    tripped_at, reason, peak, plant = run(tach_faults="zero_at:0")
+    assert tripped_at is not None and "reads 0 RPM" in reason
+    smc_step = 1 / 3200  # the SMC's speed resolution: the cap's duty is rounded to it
+    assert max(d for _, d in plant.motor("rotor").duty_changes) <= LIMIT_RPM / 23873 + smc_step
+    assert peak <= LIMIT_RPM
+
+
+def test_a_feed_forward_typo_trips_with_a_message_naming_it():
+    # 2387 for 23 873: 2000 RPM asks duty 0.84, the rotor heads for 20 000 RPM
+    tripped_at, reason, peak, _ = run(full_speed_rpm=2387, target_rpm=2000)
+    assert tripped_at is not None and tripped_at < 1.5, (tripped_at, reason)
+    assert "full_speed_rpm" in reason and "far above" in reason
+    assert peak <= LIMIT_RPM
+
+
+def test_a_target_the_feed_forward_cannot_reach_is_refused_before_the_rotor_turns():
+    with pytest.raises(SafetyError, match="needs duty 2.51 by the feed-forward.*full_speed_rpm"):
+        run(full_speed_rpm=2387, target_rpm=6000)
+
+
+def test_a_lagging_tachometer_within_the_band_does_not_trip():
+    tripped_at, reason, peak, _ = run(tach_faults="lag_s:0.3", seconds=12.0)
+    assert tripped_at is None, reason
+
+
+def _lines(url, seconds, clock_step=0.05):
+    """The labkit-tach lines an emulator sends over ``seconds`` with the rotor at 6 000 RPM."""
+    emulator = build_emulator(url)
+    emulator.plant.set_duty(0.26, 0.0)
+    emulator.open(0.0)
+    out = b""
+    t = 0.0
+    while t < seconds:
+        t += clock_step
+        out += emulator.emit(t)
+    return [line for line in out.decode().splitlines() if line.startswith("T,")]
+
+
+def test_labkit_tach_fault_bytes():
+    base = "sim://labkit_tach?seed=2&plant=fig525.faultbytes&rate_hz=20"
+    zero = [line.split(",") for line in _lines(base + "&faults=zero_at:3", 4.0)]
+    after = [f for f in zero if int(f[2]) >= 3000]
+    assert after and all(f[3] == "0.0" and f[6] == "Z" for f in after)
+    stuck = [line.split(",") for line in _lines(base + "&faults=stuck_at:3", 4.0)]
+    late = stuck[-10:]
+    assert len({tuple(f[3:]) for f in late}) == 1 and len({f[1] for f in late}) == 10  # seq advances
+    repeat = _lines(base + "&faults=repeat_at:3", 4.0)
+    assert len(set(repeat[-10:])) == 1
+
+
+def test_start_fault_on_a_signal_sets_the_time_since_open():
+    emulator = build_emulator("sim://labkit_tach?plant=fig525.signal")
+    emulator.open(10.0)
+    emulator.start_fault("zero", 12.5)
+    assert emulator.faults["zero_at"] == pytest.approx(2.5)
+    with pytest.raises(ValueError, match="cannot be started on a signal"):
+        emulator.start_fault("garbage", 12.5)
