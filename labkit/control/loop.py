@@ -276,6 +276,30 @@ class SpeedControl:
                 self.loops[name].set_target(speed)
         self.start()
 
+    def suspect_since(self) -> float | None:
+        """Start of a plausibility violation of any loop that has not tripped yet (None: none):
+        readings taken after it may be from a faulty sensor until the verdict."""
+        with self._lock:
+            times = [s for loop in self.loops.values() if loop.plausibility is not None
+                     and (s := loop.plausible.pending_since(loop.plausibility.stuck_s)) is not None]
+            return min(times, default=None)
+
+    def await_verdict(self, until: float, checkpoint: Callable[[], None],
+                      each_period: Callable[[], None] = lambda: None) -> None:
+        """Wait (in control periods, calling ``checkpoint``) while a plausibility violation that
+        began at or before ``until`` is pending, so readings up to ``until`` become a point
+        only once it has cleared: or it trips and ``checkpoint`` raises. Bounded by the
+        longest a verdict can take."""
+        waits = [max(p.hold_s, p.stuck_s) for loop in self.loops.values()
+                 if (p := loop.plausibility) is not None]
+        deadline = self.clock.now() + max(waits, default=0.0) + 2.0 * self.period_s
+        while (since := self.suspect_since()) is not None and since <= until:
+            checkpoint()
+            if self.clock.now() >= deadline:
+                return
+            self.clock.sleep(self.period_s)
+            each_period()
+
     def settled(self) -> bool:
         with self._lock:
             return all(loop.snapshot.settled for loop in self.loops.values())

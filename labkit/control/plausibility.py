@@ -5,7 +5,7 @@ commanded and the rig's feed-forward ``full_speed`` (the speed at full duty), so
 ``duty * full_speed`` is the speed the motor should be heading for. A first-order motor
 (time constant ``motor_tau_s``, the emulator's d(omega)/dt = (duty*full - omega)/tau) can
 only get there with a lag, and it coasts down more slowly than its duty falls. Three
-envelopes of the feed-forward speed follow from that (docs/decisions/0017-plausibility.md):
+envelopes of the feed-forward speed follow from that (docs/decisions/0017-plausibility-interlocks.md):
 
 * ``expected`` - the first-order lag of the feed-forward speed with ``motor_tau_s``;
 * ``low`` - a floor: it rises with twice the motor's time constant and falls at once with

@@ -271,6 +271,8 @@ class RunContext:
             self.emit_reading(role, reading)
             out.append(reading)
             self._control_event()
+        # a plausibility violation pending at the end trips (no point) or clears first
+        self.control.await_verdict(self.clock.now(), self.checkpoint, self._control_event)
         return out
 
     def tach_readings(self, role: str, since: float) -> list[Any]:
