@@ -11,7 +11,8 @@ envelopes of the feed-forward speed follow from that (docs/decisions/0017-plausi
 * ``low`` - a floor: it rises with twice the motor's time constant and falls at once with
   the duty (a motor is never slower than that floor unless something is wrong);
 * ``high`` - a ceiling: it rises at once with the duty and falls with five times the time
-  constant (coasting).
+  constant (coasting); while the duty is zero it is at least the reading (a rotor still
+  coasting from before is no fault).
 
 The verdicts (each a trip reason naming the tachometer, the motor and the numbers):
 
@@ -75,6 +76,7 @@ class PlausibilityState:
     same_expected: float = 0.0            # ``expected`` when that value first came
     saturated_since: float | None = None
     cross_since: float | None = None      # tachometer and controller disagree since
+    motor_speed: float | None = None      # the controller's own last measured speed (VESC)
 
     def pending_since(self, stuck_s: float) -> float | None:
         """Start of a violation that has not tripped yet (a point recorded across it must
@@ -138,6 +140,9 @@ def judge(s: PlausibilitySettings, state: PlausibilityState, t: float, measured:
         state.low_since = t if state.low_since is None else state.low_since
         if t - state.low_since >= s.hold_s - 1e-9:
             cause = "the tachometer lost its target, or the motor stalls"
+            if state.motor_speed is not None:
+                cause = (f"motor controller {motor} measures {_rpm(state.motor_speed)}: " +
+                         ("the tachometer is wrong" if state.motor_speed > floor else "the motor stalls"))
             if state.saturated_since is not None:
                 cause += f" (duty saturated for {t - state.saturated_since:.1f} s)"
             return (f"tachometer {tach} implausible: reads {_rpm(measured)} for {t - state.low_since:.2f} s "
@@ -146,6 +151,8 @@ def judge(s: PlausibilitySettings, state: PlausibilityState, t: float, measured:
     else:
         state.low_since = None
     # ---- reads too high while driven (feed-forward wrong) ----------------------------------
+    if state.duty <= 0:  # undriven, the rotor may still coast from before: the ceiling starts there
+        state.high = max(state.high, measured)
     ceiling = state.high * s.ratio + s.slack_rad_s
     if state.duty > 0 and measured > ceiling:
         if state.high_since is None or measured < state.high_first - 0.02 * state.high_first:
@@ -203,9 +210,9 @@ def cross_check(s: PlausibilitySettings, state: PlausibilityState, t: float, mea
     pole pairs); None when the controller reports none (Pololu SMC, ESC bridge: their
     "speed" is the command). Same band and hold time as :func:`judge`."""
     if motor_speed is None or not math.isfinite(motor_speed):
-        state.cross_since = None
+        state.cross_since = state.motor_speed = None
         return None
-    motor_speed = abs(motor_speed)
+    motor_speed = state.motor_speed = abs(motor_speed)
     low, high = motor_speed / s.ratio - s.slack_rad_s, motor_speed * s.ratio + s.slack_rad_s
     if low <= measured <= high:
         state.cross_since = None

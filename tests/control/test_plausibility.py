@@ -21,11 +21,11 @@ DT = 0.05
 NAMES = ("rotor_tach", "rotor_motor")
 
 
-def drive(duties, reading, tau=0.4, full=FULL, s=SETTINGS, max_duty=1.0, tau_down=None):
+def drive(duties, reading, tau=0.4, full=FULL, s=SETTINGS, max_duty=1.0, tau_down=None, speed0=0.0):
     """Run the rules over ``duties`` (one per 50 ms tick); ``reading(t, true_speed)`` is what the
     tachometer shows. Returns (trip time or None, reason, the true speed at each tick)."""
     state = plaus.PlausibilityState()
-    speed, trace = 0.0, []
+    speed, trace = speed0, []
     for i, duty in enumerate(duties):
         t = i * DT
         plaus.advance(s, state, t)
@@ -109,6 +109,13 @@ def test_a_feed_forward_ten_times_too_low_trips_as_such():
 def test_coasting_down_after_a_step_down_is_not_too_high():
     duties = [0.5] * 100 + [0.0] * 20 + [0.1] * 200   # 12 000 RPM, duty off, then 2 400 RPM
     when, reason, _ = drive(duties, truthful, tau_down=4.0)  # a rotor that coasts ten times slower
+    assert when is None, reason
+
+
+def test_a_rotor_still_coasting_when_the_loop_starts_is_not_too_high():
+    # a new run ramps its setpoint from zero while the rotor still turns at 8 000 RPM
+    duties = [0.0] * 10 + [min(0.25, 0.01 * i) for i in range(200)]
+    when, reason, _ = drive(duties, truthful, speed0=rpm_to_rad_s(8000), tau_down=3.0)
     assert when is None, reason
 
 

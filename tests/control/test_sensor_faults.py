@@ -145,3 +145,37 @@ def test_start_fault_on_a_signal_sets_the_time_since_open():
     assert emulator.faults["zero_at"] == pytest.approx(2.5)
     with pytest.raises(ValueError, match="cannot be started on a signal"):
         emulator.start_fault("garbage", 12.5)
+
+
+def _vesc_rig(driver_pole_pairs: int, tach_faults: str = "") -> str:
+    """The rig with a VESC (7 pole pairs in the emulator) in place of the SMC."""
+    start, end = RIG.index("[devices.rotor_motor]"), RIG.index("[devices.rotor_tach]")
+    vesc = ('[devices.rotor_motor]\nkind = "motor"\nprotocol = "vesc"\n'
+            'port = "sim://vesc?seed=1&plant=model-fig525&role=rotor_motor&pole_pairs=7&timeout_ms=1000"\n'
+            f'options = {{ pole_pairs = {driver_pole_pairs}, timeout_ms = 1000 }}\n\n')
+    text = RIG[:start] + vesc + RIG[end:]
+    return text.replace("role=rotor_tach", f"role=rotor_tach&faults={tach_faults}") if tach_faults else text
+
+
+def _hold(text: str, seconds: float = 10.0):
+    clock = VirtualClock()
+    with use_clock(clock):
+        opened = open_rig(parse_rig(text, "test.toml"), clock)
+        control = build_speed_control(opened, clock)
+        try:
+            control.set_targets({"rotor": rpm_to_rad_s(8000)})
+            while control.tripped is None and clock.now() < seconds:
+                clock.sleep(0.01)
+        finally:
+            control.stop()
+            opened.close()
+    return control.tripped_at, control.tripped
+
+
+def test_the_tachometer_is_cross_checked_against_the_vesc_s_own_speed():
+    assert _hold(_vesc_rig(7)) == (None, None)  # agree: no trip
+    tripped_at, reason = _hold(_vesc_rig(1))      # wrong pole pairs: the VESC says 7x
+    assert tripped_at is not None and "motor controller rotor_motor measures" in reason
+    assert "check pole_pairs" in reason
+    tripped_at, reason = _hold(_vesc_rig(7, tach_faults=f"zero_at:{FAULT_AT}"))
+    assert "reads 0 RPM" in reason and "the tachometer is wrong" in reason
