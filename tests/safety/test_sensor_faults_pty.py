@@ -53,7 +53,8 @@ def run_with_fault(tmp_path, fault: str) -> dict:
         "result_points": results[-1]["results"]["points"] if results else None,
     }
     print("sensor fault:", json.dumps({k: v for k, v in outcome.items()
-                                       if k in ("fault", "trip_s", "zeroed_s", "saturated_s", "peak_rpm")}))
+                                       if k in ("fault", "trip_s", "zeroed_s", "saturated_s", "peak_rpm", "returncode")}))
+    print(stderr.strip().splitlines()[0] if stderr.strip() else "(no stderr)")
     return outcome
 
 
