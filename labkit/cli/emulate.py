@@ -95,7 +95,8 @@ def fault_on_signal(faults: list[str], hosts: dict[str, PtyHost], clock: Any, an
 
     def start(signum: int, frame: Any) -> None:
         for role, name in wanted:
-            hosts[role].emulator.start_fault(name, clock.now())
+            emulator: Any = hosts[role].emulator  # an Emulator (PtyHost types it as a protocol)
+            emulator.start_fault(name, clock.now())
             announce(role, hosts[role].path, f"fault {name}")
 
     signal.signal(signal.SIGUSR2, start)

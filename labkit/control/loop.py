@@ -281,7 +281,7 @@ class SpeedControl:
         readings taken after it may be from a faulty sensor until the verdict."""
         with self._lock:
             times = [s for loop in self.loops.values() if loop.plausibility is not None
-                     and (s := loop.plausible.pending_since(loop.plausibility.stuck_s)) is not None]
+                     and (s := loop.plausible.pending_since()) is not None]
             return min(times, default=None)
 
     def await_verdict(self, until: float, checkpoint: Callable[[], None],

@@ -78,7 +78,7 @@ class PlausibilityState:
     cross_since: float | None = None      # tachometer and controller disagree since
     motor_speed: float | None = None      # the controller's own last measured speed (VESC)
 
-    def pending_since(self, stuck_s: float) -> float | None:
+    def pending_since(self) -> float | None:
         """Start of a violation that has not tripped yet (a point recorded across it must
         wait for the verdict); None when every reading so far is plausible."""
         times = [x for x in (self.low_since, self.high_since, self.cross_since) if x is not None]
