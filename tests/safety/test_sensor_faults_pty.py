@@ -81,6 +81,12 @@ def test_tachometer_stuck_mid_step_stops_the_run(tmp_path):
     assert_stopped_safely(outcome, 2.0, ["tachometer rotor_tach stuck", "the same value", "RPM"])
 
 
+def test_tachometer_repeating_its_last_line_mid_step_stops_the_run(tmp_path):
+    # the same line, sequence number and all: no new reading, so the tachometer is silent
+    outcome = run_with_fault(tmp_path, "rotor_tach:repeat")
+    assert_stopped_safely(outcome, 2.0, ["tachometer rotor_tach silent for"])
+
+
 def test_tachometer_frozen_mid_step_stops_the_run(tmp_path):
     outcome = run_with_fault(tmp_path, "rotor_tach:stop")
     assert_stopped_safely(outcome, 2.0, ["tachometer rotor_tach silent for"])
