@@ -318,6 +318,14 @@ def duty_cap(max_duty: float, max_speed_rad_s: float, full_speed_rad_s: float) -
     return min(max_duty, max_speed_rad_s / full_speed_rad_s)
 
 
+def unreachable_target(rig: Any, target_rad_s: float) -> str | None:
+    """Why ``rig``'s loops cannot reach ``target_rad_s`` by the feed-forward (a likely typo in
+    ``full_speed``), or None; checked with the plan, before anything starts."""
+    c, lim = rig.control, rig.limits
+    cap = duty_cap(lim.max_duty, lim.max_speed_rad_s, c.full_speed_rad_s)
+    return plaus.unreachable(plausibility_settings(c), target_rad_s, cap)
+
+
 def plausibility_settings(control: Any) -> plaus.PlausibilitySettings:
     """The rig's ``[control]`` plausibility keys (docs/rig-files.md)."""
     return plaus.PlausibilitySettings(

@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from labkit import documents as doc
-from labkit.control.loop import SpeedControl, build_speed_control
+from labkit.control.loop import SpeedControl, build_speed_control, unreachable_target
 from labkit.errors import LabkitError, SafetyError
 from labkit.protocols.events import EventBus, Sink
 from labkit.protocols.exit_paths import STOP_SIGNALS, SessionGuard, signal_name, stop_failed_text
@@ -104,6 +104,9 @@ def check_plan(protocol: ProtocolDef, rig: Rig, steps: list[Step]) -> None:
                     "nothing was started")
             if target < 0:
                 raise SafetyError(f"{protocol.name}: step {step.index + 1} asks a negative speed")
+            if problem := unreachable_target(rig, target):
+                raise SafetyError(f"{protocol.name}: step {step.index + 1}: {problem} ({rig.path}); "
+                                  "nothing was started")
 
 
 def format_plan(protocol: ProtocolDef, rig: Rig, steps: list[Step], done: set[int] | None = None) -> str:

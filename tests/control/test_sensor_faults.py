@@ -179,3 +179,13 @@ def test_the_tachometer_is_cross_checked_against_the_vesc_s_own_speed():
     assert "check pole_pairs" in reason
     tripped_at, reason = _hold(_vesc_rig(7, tach_faults=f"zero_at:{FAULT_AT}"))
     assert "reads 0 RPM" in reason and "the tachometer is wrong" in reason
+
+
+def test_a_plan_the_feed_forward_cannot_reach_is_refused_by_the_dry_run(tmp_path, capsys):
+    from labkit.cli import main
+
+    rig = tmp_path / "typo.toml"
+    rig.write_text(RIG.replace("full_speed_rpm = 23873", "full_speed_rpm = 2387"))
+    code = main(["run", str(rig), "speed-sweep", "--set", "speeds_rpm=6000", "--dry-run"])
+    err = capsys.readouterr().err
+    assert code == 2 and "step 1: target 6000 RPM needs duty 2.51" in err and "nothing was started" in err

@@ -52,8 +52,8 @@ def run_with_fault(tmp_path, fault: str) -> dict:
         "peak_rpm": max(s["rpm"] for s in truth), "points": [e for e in events if e["type"] == "point"],
         "result_points": results[-1]["results"]["points"] if results else None,
     }
-    print("sensor fault:", json.dumps({k: v for k, v in outcome.items()
-                                       if k in ("fault", "trip_s", "zeroed_s", "saturated_s", "peak_rpm", "returncode")}))
+    shown = ("fault", "trip_s", "zeroed_s", "saturated_s", "peak_rpm", "returncode")
+    print("sensor fault:", json.dumps({k: v for k, v in outcome.items() if k in shown}))
     print(stderr.strip().splitlines()[0] if stderr.strip() else "(no stderr)")
     return outcome
 
