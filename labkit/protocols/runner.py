@@ -428,6 +428,7 @@ class Runner:
                                             label=step.label, targets_rad_s=step.targets_rad_s,
                                             eta_s=step.est_duration_s))
                 point = self.protocol.run_step(ctx, step)
+                self.control.check()  # an interlock that tripped in the step's last moments: no point
                 point = normalise({"step": step.index, **point})
                 new_points.append(point)
                 self.bus.emit(doc.PointDone(t=self.clock.now(), index=step.index, point=point))

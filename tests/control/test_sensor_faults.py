@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 
 from labkit.control import build_speed_control
+from labkit.emulators.plant import use_emulation
 from labkit.emulators.sim_port import build_emulator
 from labkit.errors import SafetyError
 from labkit.io.clock import VirtualClock, use_clock
@@ -159,7 +160,7 @@ def _vesc_rig(driver_pole_pairs: int, tach_faults: str = "") -> str:
 
 def _hold(text: str, seconds: float = 10.0):
     clock = VirtualClock()
-    with use_clock(clock):
+    with use_emulation(), use_clock(clock):
         opened = open_rig(parse_rig(text, "test.toml"), clock)
         control = build_speed_control(opened, clock)
         try:
@@ -189,3 +190,32 @@ def test_a_plan_the_feed_forward_cannot_reach_is_refused_by_the_dry_run(tmp_path
     code = main(["run", str(rig), "speed-sweep", "--set", "speeds_rpm=6000", "--dry-run"])
     err = capsys.readouterr().err
     assert code == 2 and "step 1: target 6000 RPM needs duty 2.51" in err and "nothing was started" in err
+
+
+def _sweep(tach_faults: str, zero: str = "each"):
+    """A speed-sweep run (8 000 RPM, 2 s record, rest readings) in-process on the virtual clock."""
+    from labkit.protocols import ListSink, Runner
+    from labkit.protocols.params import resolve_params
+    from labkit.protocols.speed_sweep import SpeedSweep
+
+    text = RIG.replace("role=rotor_tach", f"role=rotor_tach&faults={tach_faults}") if tach_faults else RIG
+    proto, clock, sink = SpeedSweep(), VirtualClock(), ListSink()
+    params = resolve_params(proto.defaults, {"speeds_rpm": [8000.0], "record_s": 2.0, "zero": zero})
+    with use_emulation(), use_clock(clock):  # a fresh plant: each run starts from rest at t = 0
+        return Runner(proto, parse_rig(text, "test.toml"), params, clock=clock, sinks=[sink]).run(), sink
+
+
+@pytest.mark.parametrize("zero", ["each", "start"])
+@pytest.mark.parametrize("before_end_s", [0.05, 0.15, 0.25])
+def test_a_fault_in_the_last_moments_of_a_recording_gives_no_point(before_end_s, zero):
+    # the clean run's recording ends at a fixed virtual time; a zero reading that starts just
+    # before it has not tripped when the recording ends: the step waits for the verdict (with
+    # zero=start nothing comes after the recording in the step to give it time)
+    clean, sink = _sweep("", zero)
+    assert clean.status == "completed" and len(clean.results["points"]) == 1
+    settled_t = sink.of_type("settled")[0]["t"]  # the 2 s recording follows
+    end = max(e["t"] for e in sink.of_type("reading")
+              if e["device"] == "balance" and settled_t <= e["t"] <= settled_t + 2.5)
+    outcome, sink = _sweep(f"zero_at:{end - before_end_s}", zero)
+    assert outcome.status == "failed" and outcome.results["points"] == []
+    assert "reads 0 RPM" in outcome.reason and sink.of_type("point") == []
