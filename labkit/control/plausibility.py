@@ -24,7 +24,9 @@ The verdicts (each a trip reason naming the tachometer, the motor and the number
   ``slack`` (and a fraction ``1 - 1/ratio`` of it): the value does not follow the duty; or
   the same value ``stuck_n`` times over ``stuck_s`` while the rotor is driven;
 * **stall**: the duty saturated for ``stall_s`` with the reading below half the speed the
-  saturated duty gives.
+  saturated duty gives;
+* **cross-check** (:func:`cross_check`): where the controller measures the speed itself (the
+  VESC), the reading must lie in the same band around that speed.
 
 A target the feed-forward cannot reach (:func:`unreachable`) is refused before the rotor
 turns: ``full_speed_rpm = 2387`` for 23 873 asks duty 2.5 for 6000 RPM.
