@@ -219,3 +219,14 @@ def test_a_fault_in_the_last_moments_of_a_recording_gives_no_point(before_end_s,
     outcome, sink = _sweep(f"zero_at:{end - before_end_s}", zero)
     assert outcome.status == "failed" and outcome.results["points"] == []
     assert "reads 0 RPM" in outcome.reason and sink.of_type("point") == []
+
+
+def test_fault_on_usr2_option_names_a_role_and_a_timed_fault():
+    from labkit.cli.emulate import parse_fault_option
+    from labkit.errors import PortURLError
+
+    assert parse_fault_option("rotor_tach:zero") == ("rotor_tach", "zero")
+    assert parse_fault_option("rotor_motor:stall") == ("rotor_motor", "stall")
+    for bad in ("rotor_tach", "rotor_tach:garbage", ":zero"):
+        with pytest.raises(PortURLError, match="ROLE:NAME"):
+            parse_fault_option(bad)
