@@ -33,6 +33,7 @@ Time-triggered faults can also start on a signal: ``labkit emulate --fault-on-us
 
 from __future__ import annotations
 
+import collections
 import math
 
 from labkit.emulators.base import Emulator, register_emulator
@@ -54,6 +55,7 @@ class _StreamingTachEmulator(Emulator):
         self._down = False
         self._started_mid_frame = False
         self._held_frame: bytes | None = None        # stuck_at / repeat_at
+        self._seen: collections.deque[tuple[float, float]] = collections.deque()  # lag_s
         self._held_fields: list[str] | None = None   # labkit-tach stuck_at
 
     def source_speed(self, t: float) -> float:
@@ -61,8 +63,15 @@ class _StreamingTachEmulator(Emulator):
         seconds late; 0 once ``zero_at`` has begun)."""
         if self.fault_on("zero_at", t):
             return 0.0
+        now = self.plant.tach_reading(t, self.source)
         lag = self.faults.get("lag_s", 0.0)
-        return self.plant.tach_reading(max(0.0, t - lag) if lag else t, self.source)
+        if not lag:
+            return now
+        # the plant cannot go back in time: keep what the sensor saw, show what it saw lag_s ago
+        self._seen.append((t, now))
+        while len(self._seen) > 1 and self._seen[1][0] <= t - lag:
+            self._seen.popleft()
+        return self._seen[0][1] if self._seen[0][0] <= t - lag else 0.0
 
     def faulted_frame(self, t: float, data: bytes) -> bytes:
         """The frame as the ``stuck_at`` / ``repeat_at`` faults send it (the first frame after
