@@ -6,17 +6,25 @@ plant, so the balance sees the force of the speed the motor emulator reached. Pr
 ``role -> /dev/pts/N`` line per device (``--json``: one JSON object), then runs on the real
 clock until Ctrl-C or ``--seconds``. A device that unplugs (``faults=disconnect_at:...``)
 comes back under a new path, printed as another ``role -> /dev/pts/M`` line.
+
+Faults can start from outside, mid-run: ``--unplug-on-usr1 ROLE`` pulls a cable on SIGUSR1,
+``--fault-on-usr2 ROLE:NAME`` starts a time-triggered fault (``zero``, ``stuck``, ``repeat``,
+``stop`` of a tachometer, ``stall`` of a motor, ...) on SIGUSR2. ``--truth FILE`` writes the
+true speed and duty of every emulated motor as JSON lines (clock: ``time.monotonic``), so a
+test can tell what the rotor did whatever its tachometer said.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import signal
 import sys
 import threading
 from typing import Any
 
+from labkit.emulators.base import TIMED_FAULTS
 from labkit.emulators.sim_port import build_emulator
 from labkit.errors import PortURLError
 from labkit.io.clock import RealClock
@@ -67,6 +75,58 @@ def unplug_on_signal(roles: list[str], hosts: dict[str, PtyHost], announce: Any)
     signal.signal(signal.SIGUSR1, pull)
 
 
+def parse_fault_option(text: str) -> tuple[str, str]:
+    """``"rotor_tach:zero"`` -> ``("rotor_tach", "zero")``; PortURLError for anything else."""
+    role, sep, name = text.partition(":")
+    if not sep or not role.strip() or name.strip() not in TIMED_FAULTS:
+        raise PortURLError(text, f"expected --fault-on-usr2 ROLE:NAME, NAME one of {', '.join(TIMED_FAULTS)}")
+    return role.strip(), name.strip()
+
+
+def fault_on_signal(faults: list[str], hosts: dict[str, PtyHost], clock: Any, announce: Any) -> None:
+    """SIGUSR2 starts each ``ROLE:NAME`` fault now (its ``NAME_at`` becomes the time since open)."""
+    wanted = [parse_fault_option(text) for text in faults]
+    for role, _ in wanted:
+        if role not in hosts:
+            raise PortURLError(role, f"--fault-on-usr2: no emulated device {role!r} "
+                                     f"(have {', '.join(hosts)})")
+    if not wanted or not hasattr(signal, "SIGUSR2"):
+        return
+
+    def start(signum: int, frame: Any) -> None:
+        for role, name in wanted:
+            emulator: Any = hosts[role].emulator  # an Emulator (PtyHost types it as a protocol)
+            emulator.start_fault(name, clock.now())
+            announce(role, hosts[role].path, f"fault {name}")
+
+    signal.signal(signal.SIGUSR2, start)
+
+
+class TruthLog:
+    """Every emulated motor's true speed and duty, as JSON lines (``--truth FILE``)."""
+
+    def __init__(self, path: str, hosts: dict[str, PtyHost]) -> None:
+        self.file = open(path, "a", encoding="utf-8")  # noqa: SIM115 - closed by close()
+        self.plants = {id(h.emulator.plant): h.emulator.plant for h in hosts.values()
+                       if hasattr(h.emulator, "plant")}
+
+    def sample(self, t: float) -> None:
+        for plant in self.plants.values():
+            with plant._lock:
+                names = list(plant.motors)
+            for name in names:
+                speed = plant.speed(t, name)
+                motor = plant.motor(name)
+                rpm = speed * 60.0 / (2.0 * math.pi)
+                line = {"t": t, "motor": name, "rpm": rpm, "duty": motor.duty,
+                        "stalled": motor.drive_duty != motor.duty}
+                self.file.write(json.dumps(line) + "\n")
+        self.file.flush()
+
+    def close(self) -> None:
+        self.file.close()
+
+
 def run(args: argparse.Namespace) -> int:
     devices, skipped = emulated_devices(args.rig, args.device or [])
     for role in skipped:
@@ -78,6 +138,7 @@ def run(args: argparse.Namespace) -> int:
     clock = RealClock()
     lock = threading.Lock()
     hosts: dict[str, PtyHost] = {}
+    truth: TruthLog | None = None
 
     def announce(role: str, path: str, note: str = "") -> None:
         with lock:
@@ -98,17 +159,24 @@ def run(args: argparse.Namespace) -> int:
             for role, host in hosts.items():
                 announce(role, host.path)
         unplug_on_signal(args.unplug_on_usr1 or [], hosts, announce)
+        fault_on_signal(args.fault_on_usr2 or [], hosts, clock, announce)
+        truth = TruthLog(args.truth, hosts) if args.truth else None
         if sys.stderr.isatty():
             print("Ctrl-C to stop", file=sys.stderr)
         deadline = None if args.seconds is None else clock.now() + args.seconds
+        step = 0.02 if truth is not None else 0.1
         while deadline is None or clock.now() < deadline:
             for role, host in hosts.items():
                 if host.error is not None:
                     raise RuntimeError(f"{role}: emulator failed: {host.error!r}") from host.error
-            clock.sleep(0.1 if deadline is None else max(0.0, min(0.1, deadline - clock.now())))
+            if truth is not None:
+                truth.sample(clock.now())
+            clock.sleep(step if deadline is None else max(0.0, min(step, deadline - clock.now())))
     except KeyboardInterrupt:
         pass
     finally:
+        if truth is not None:
+            truth.close()
         for host in hosts.values():
             host.close()
     return 0
@@ -127,6 +195,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     parser.add_argument("--unplug-on-usr1", action="append", metavar="ROLE",
                         help="on SIGUSR1 (kill -USR1 PID), unplug ROLE's pty for good, e.g. to see what "
                              "a run does when its motor controller's cable is pulled (repeatable)")
+    parser.add_argument("--fault-on-usr2", action="append", metavar="ROLE:NAME",
+                        help="on SIGUSR2 (kill -USR2 PID), start fault NAME of ROLE now, e.g. "
+                             "rotor_tach:zero, rotor_tach:stuck, rotor_motor:stall "
+                             f"(repeatable; NAME: {', '.join(TIMED_FAULTS)})")
+    parser.add_argument("--truth", metavar="FILE",
+                        help="append every emulated motor's true speed and duty to FILE as JSON lines "
+                             "every 20 ms (t is time.monotonic)")
     parser.set_defaults(func=run)
 
 

@@ -7,9 +7,14 @@ real clock, in-line on a virtual one). Every control period each loop
    disconnected, implausible reading (not finite, negative, above twice the limit),
    over-speed (above ``max_speed*(1+overspeed_margin)``), controller error flags;
    (read every ``status_period_s``; the trip follows in the tick that reads them);
-2. moves its ramped setpoint toward the target at the rig's ``max_ramp``;
-3. commands feed-forward + PI duty (:func:`labkit.control.pi.pi_step`);
-4. updates its settle detector.
+2. checks that the reading is plausible for the duty it commanded
+   (:mod:`labkit.control.plausibility`: reads far too low or too high for the feed-forward,
+   stuck, stalled motor; and against the controller's own speed where it reports one);
+3. moves its ramped setpoint toward the target at the rig's ``max_ramp``;
+4. commands feed-forward + PI duty (:func:`labkit.control.pi.pi_step`), capped so that the
+   feed-forward speed ``duty * full_speed`` stays at or below the rig's ``max_speed``
+   whatever the tachometer says (:func:`duty_cap`);
+5. updates its settle detector.
 
 Any trip, and any exception inside a tick, commands *every* motor of the rig to zero in
 that same tick and latches the reason; :meth:`SpeedControl.check` raises it as
@@ -24,6 +29,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any
 
+from labkit.control import plausibility as plaus
 from labkit.control.pi import PIGains, PIState, SettleDetector, pi_step, ramp_toward
 from labkit.control.stopping import stop_motor
 from labkit.documents import Interlock, RunDocument
@@ -54,8 +60,13 @@ class SpeedLoop:
     def __init__(self, name: str, motor: Any, tach: Any, *, period_s: float, gains: PIGains,
                  max_speed_rad_s: float, max_ramp_rad_s2: float, overspeed_margin: float,
                  settle_tolerance_rad_s: float, settle_hold_s: float, tach_timeout_s: float,
-                 status_period_s: float = 0.0) -> None:
+                 status_period_s: float = 0.0,
+                 plausibility: plaus.PlausibilitySettings | None = None) -> None:
         self.name, self.motor, self.tach = name, motor, tach
+        #: None: the tachometer is trusted as it reads (only SpeedLoops built by hand)
+        self.plausibility = plausibility
+        self.plausible = plaus.PlausibilityState()
+        self.last_reading_t: float | None = None
         self.period_s = period_s
         self.gains = gains
         self.max_speed = max_speed_rad_s
@@ -80,6 +91,10 @@ class SpeedLoop:
             raise SafetyError(
                 f"{self.name}: target {speed_rad_s * 60 / (2 * math.pi):.0f} RPM is above the rig's "
                 f"limit of {self.max_speed * 60 / (2 * math.pi):.0f} RPM")
+        if self.plausibility is not None:
+            problem = plaus.unreachable(self.plausibility, speed_rad_s, self.gains.max_duty)
+            if problem:
+                raise SafetyError(f"{self.name}: {problem}")
         self.target = speed_rad_s
         self.settle.reset()
         self.snapshot = replace(self.snapshot, target_rad_s=speed_rad_s, settled=False)
@@ -96,6 +111,7 @@ class SpeedLoop:
                           f"(limit {self.tach_timeout:.2f} s)")
         if reading is None:
             return None
+        self.last_reading_t = reading.t
         value = reading.value
         if reading.overload or not math.isfinite(value) or value < 0 or value > 2.0 * self.max_speed:
             raw = reading.raw.decode("latin-1", "replace").strip()
@@ -112,6 +128,12 @@ class SpeedLoop:
         dt = self.period_s if self.last_t is None else max(0.0, t - self.last_t)
         self.last_t = t
         measured = self._measure(t)
+        if self.plausibility is not None:
+            plaus.advance(self.plausibility, self.plausible, t)
+            reason = plaus.judge(self.plausibility, self.plausible, t, measured, self.last_reading_t,
+                                 (self.tach.name, self.motor.name), self.gains.max_duty)
+            if reason:
+                raise Tripped(f"{self.name}: {reason}")
         self.setpoint = ramp_toward(self.setpoint, self.target, self.max_ramp, dt)
         if self.target > 0 and not self.enabled:
             self.motor.enable()
@@ -119,10 +141,15 @@ class SpeedLoop:
         due = self.last_status_t is None or t - self.last_status_t >= self.status_period - 1e-9
         if self.enabled and due:  # right after enabling too: before any duty is sent
             self.last_status_t = t
-            errors = self.motor.status().errors
-            if errors:
+            status = self.motor.status()
+            if status.errors:
                 raise Tripped(f"motor controller {self.motor.name} reports errors: "
-                              f"{', '.join(sorted(errors))}")
+                              f"{', '.join(sorted(status.errors))}")
+            if self.plausibility is not None and measured is not None:
+                reason = plaus.cross_check(self.plausibility, self.plausible, t, measured,
+                                           status.speed_rad_s, (self.tach.name, self.motor.name))
+                if reason:
+                    raise Tripped(f"{self.name}: {reason}")
         if self.enabled:
             duty = pi_step(self.gains, self.state, self.setpoint,
                            measured if measured is not None else 0.0, dt)
@@ -130,6 +157,8 @@ class SpeedLoop:
                 raise Tripped(f"{self.name}: controller output duty {duty!r} is not a finite number "
                               "(check kp, ki and full_speed in the rig file)")
             self.motor.set_duty(duty)
+            if self.plausibility is not None:
+                plaus.command(self.plausible, t, duty, duty >= self.gains.max_duty - 1e-9)
         error = (measured if measured is not None else math.inf) - self.target
         settled = self.setpoint == self.target and self.settle.update(t, error)
         self.snapshot = LoopSnapshot(t, self.target, self.setpoint, measured, self.state.duty, settled)
@@ -247,6 +276,30 @@ class SpeedControl:
                 self.loops[name].set_target(speed)
         self.start()
 
+    def suspect_since(self) -> float | None:
+        """Start of a plausibility violation of any loop that has not tripped yet (None: none):
+        readings taken after it may be from a faulty sensor until the verdict."""
+        with self._lock:
+            times = [s for loop in self.loops.values() if loop.plausibility is not None
+                     and (s := loop.plausible.pending_since()) is not None]
+            return min(times, default=None)
+
+    def await_verdict(self, until: float, checkpoint: Callable[[], None],
+                      each_period: Callable[[], None] = lambda: None) -> None:
+        """Wait (in control periods, calling ``checkpoint``) while a plausibility violation that
+        began at or before ``until`` is pending, so readings up to ``until`` become a point
+        only once it has cleared: or it trips and ``checkpoint`` raises. Bounded by the
+        longest a verdict can take."""
+        waits = [max(p.hold_s, p.stuck_s) for loop in self.loops.values()
+                 if (p := loop.plausibility) is not None]
+        deadline = self.clock.now() + max(waits, default=0.0) + 2.0 * self.period_s
+        while (since := self.suspect_since()) is not None and since <= until:
+            checkpoint()
+            if self.clock.now() >= deadline:
+                return
+            self.clock.sleep(self.period_s)
+            each_period()
+
     def settled(self) -> bool:
         with self._lock:
             return all(loop.snapshot.settled for loop in self.loops.values())
@@ -256,12 +309,40 @@ class SpeedControl:
             return {name: loop.snapshot for name, loop in self.loops.items()}
 
 
+def duty_cap(max_duty: float, max_speed_rad_s: float, full_speed_rad_s: float) -> float:
+    """The highest duty a loop may command: the rig's ``max_duty``, and no more than the duty
+    whose feed-forward speed ``duty * full_speed`` is the rig's ``max_speed``, so a tachometer
+    that reads low cannot drive the rotor past the limit (docs/safety.md, "Sensor faults")."""
+    if full_speed_rad_s <= 0:
+        return max_duty
+    return min(max_duty, max_speed_rad_s / full_speed_rad_s)
+
+
+def unreachable_target(rig: Any, target_rad_s: float) -> str | None:
+    """Why ``rig``'s loops cannot reach ``target_rad_s`` by the feed-forward (a likely typo in
+    ``full_speed``), or None; checked with the plan, before anything starts."""
+    c, lim = rig.control, rig.limits
+    cap = duty_cap(lim.max_duty, lim.max_speed_rad_s, c.full_speed_rad_s)
+    return plaus.unreachable(plausibility_settings(c), target_rad_s, cap)
+
+
+def plausibility_settings(control: Any) -> plaus.PlausibilitySettings:
+    """The rig's ``[control]`` plausibility keys (docs/rig-files.md)."""
+    return plaus.PlausibilitySettings(
+        full_speed_rad_s=control.full_speed_rad_s, motor_tau_s=control.motor_tau_s,
+        ratio=control.plausible_ratio, slack_rad_s=control.plausible_slack_rad_s,
+        hold_s=control.plausible_hold_s, grace_s=control.spin_up_grace_s,
+        stuck_s=control.tach_stuck_s, stall_s=control.stall_s)
+
+
 def build_speed_control(open_rig: Any, clock: Any, emit: Emit | None = None,
                         loops: list[str] | None = None) -> SpeedControl:
     """Speed loops for ``open_rig`` as its rig file pairs them (``[control]``)."""
     rig = open_rig.rig
     c, lim = rig.control, rig.limits
-    gains = PIGains(c.full_speed_rad_s, c.kp, c.ki, lim.max_duty)
+    gains = PIGains(c.full_speed_rad_s, c.kp, c.ki,
+                    duty_cap(lim.max_duty, lim.max_speed_rad_s, c.full_speed_rad_s))
+    settings = plausibility_settings(c)
     built = []
     for cfg in c.loops:
         if loops is not None and cfg.name not in loops:
@@ -271,5 +352,6 @@ def build_speed_control(open_rig: Any, clock: Any, emit: Emit | None = None,
             period_s=c.period_s, gains=gains, max_speed_rad_s=lim.max_speed_rad_s,
             max_ramp_rad_s2=lim.max_ramp_rad_s2, overspeed_margin=lim.overspeed_margin,
             settle_tolerance_rad_s=c.settle_tolerance_rad_s, settle_hold_s=c.settle_hold_s,
-            tach_timeout_s=c.tach_timeout_s, status_period_s=c.status_period_s))
+            tach_timeout_s=c.tach_timeout_s, status_period_s=c.status_period_s,
+            plausibility=settings))
     return SpeedControl(clock, built, list(open_rig.motors().values()), c.period_s, emit)

@@ -51,7 +51,18 @@ PROTOCOL_FAULTS = {
     "noisy": "labkit-tach: probability per line of a rejected glitch",
     "low_vin": "Pololu SMC: low-VIN error",
     "fault_code": "VESC: report this fault code and refuse to run",
+    "zero_at": "tachometers: s after open from which the meter reads 0 (target lost; labkit-tach: "
+               "lines of 0 RPM with the zero flag Z)",
+    "stuck_at": "tachometers: s after open from which the value stays what it was (labkit-tach: the "
+                "sequence number and time still advance; Lutron, Monarch: the same frame)",
+    "repeat_at": "tachometers: s after open from which the same line/frame is sent again and again "
+                 "(labkit-tach: its sequence number too)",
+    "lag_s": "tachometers: the reading shows the speed of this many seconds ago",
+    "stall_at": "motor controllers: s after open from which the motor does not follow its command "
+                "(rotor jammed: it stops whatever the duty)",
 }
+#: faults that ``labkit emulate --fault-on-usr2 ROLE:NAME`` can start at the signal (NAME_at = now)
+TIMED_FAULTS = ("zero", "stuck", "repeat", "stop", "stall", "disconnect", "reset")
 KNOWN_FAULTS = frozenset(COMMON_FAULTS) | frozenset(PROTOCOL_FAULTS)
 
 
@@ -119,6 +130,19 @@ class Emulator:
 
     def since_open(self, t: float) -> float:
         return t - (self._opened_at if self._opened_at is not None else t)
+
+    def fault_on(self, name: str, t: float) -> bool:
+        """True once the time-triggered fault ``name`` (``zero_at``, ...) has begun at ``t``."""
+        at = self.faults.get(name)
+        return at is not None and self._opened_at is not None and self.since_open(t) >= at
+
+    def start_fault(self, name: str, t: float) -> None:
+        """Start the time-triggered fault ``name`` (``zero``, ``stall``...) now, from outside
+        (``labkit emulate --fault-on-usr2``): ``NAME_at`` becomes the time since open."""
+        if name not in TIMED_FAULTS:
+            raise ValueError(f"fault {name!r} cannot be started on a signal; "
+                             f"use one of {', '.join(TIMED_FAULTS)}")
+        self.faults[f"{name}_at"] = max(0.0, self.since_open(t))
 
     def connected(self, t: float) -> bool:
         at = self.faults.get("disconnect_at")

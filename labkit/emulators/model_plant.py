@@ -37,7 +37,7 @@ class ModelMotor(MotorPlant):
     def _relax(self, t: float) -> None:
         if t <= self.t:
             return
-        drive = self.duty * self.max_speed_rad_s
+        drive = self.drive_duty * self.max_speed_rad_s
         target = abs(drive)
         if self.drag > 0 and target > 0:
             target = (-1.0 + math.sqrt(1.0 + 4.0 * self.drag * target)) / (2.0 * self.drag)

@@ -15,6 +15,9 @@ reconnect_after, wrong_baud):
 * ``fault_code`` - VESC: report this fault code and refuse to run.
 * ``reset_at`` - clock time (s after open) of a controller reset: SMC/bridge re-arm safe
   start and report reset flags; VESC reboots from the watchdog (fault 10, motor released).
+* ``stall_at`` - s after open from which the motor does not follow its command: the rotor is
+  jammed and stops whatever the duty, while the controller reports no error (a real
+  controller heats). Also on a signal: ``labkit emulate --fault-on-usr2 ROLE:stall``.
 """
 
 from __future__ import annotations
@@ -55,6 +58,10 @@ class _MotorEmulator(Emulator):
         return self.next_ready_time()  # no unsolicited output, only replies
 
     def check_events(self, t: float) -> None:
+        stall = self.faults.get("stall_at")
+        motor = self.plant.motor(self.motor_name)
+        if stall is not None and motor.stalled_at is None and self._opened_at is not None:
+            motor.stalled_at = self._opened_at + stall
         at = self.faults.get("reset_at")
         if at is not None and not self._reset_done and self.since_open(t) >= at:
             self._reset_done = True

@@ -55,18 +55,29 @@ class MotorPlant:
     #: command re-arms it (set by motor emulators): the timeout then acts even while nobody
     #: talks to the controller's port (an emulator only runs when its port is used)
     watchdog_at: float | None = None
+    #: clock time from which the motor does not follow its command (jammed: it stops whatever
+    #: the duty); set by a motor emulator's ``stall_at`` fault
+    stalled_at: float | None = None
 
     def advance(self, t: float) -> None:
         if self.watchdog_at is not None and t >= self.watchdog_at:
             at = max(self.watchdog_at, self.t)
             self.watchdog_at = None
             self.set_duty(0.0, at)
+        if self.stalled_at is not None and self.t < self.stalled_at < t:
+            self._relax(self.stalled_at)
         self._relax(t)
+
+    @property
+    def drive_duty(self) -> float:
+        """The duty that moves the rotor: the commanded one, 0 once the motor has stalled."""
+        stalled = self.stalled_at is not None and self.t >= self.stalled_at
+        return 0.0 if stalled else self.duty
 
     def _relax(self, t: float) -> None:
         if t <= self.t:
             return
-        target = self.duty * self.max_speed_rad_s
+        target = self.drive_duty * self.max_speed_rad_s
         if target > 0:
             target = max(0.0, target - self.load_rad_s)
         elif target < 0:

@@ -17,10 +17,23 @@ Fault knobs besides the common ones of :mod:`labkit.emulators.base`
 * ``wrong_baud`` - also garbles what the device sends (the host reads at the wrong rate).
 * ``stop_at`` - s after open at which the device stops sending (meter switched off, cable
   pulled at the meter end): no more bytes, but the port stays open and ``in_waiting`` works.
+  A frozen meter.
+* ``zero_at`` - s after open from which the meter reads zero (reflective mark lost, cable
+  pulled at the sensor end); labkit-tach: ``0.0`` RPM lines with the zero flag ``Z`` at once
+  (as after its zero timeout).
+* ``stuck_at`` - s after open from which the value stays what it was; labkit-tach: the
+  sequence number and ``t_ms`` still advance, rpm, period and pulses do not; Lutron and
+  Monarch: the same frame again and again.
+* ``repeat_at`` - s after open from which the same line or frame is sent again and again
+  (labkit-tach: the same sequence number too).
+* ``lag_s`` - the reading shows the speed of ``lag_s`` seconds ago (a slow filter).
+
+Time-triggered faults can also start on a signal: ``labkit emulate --fault-on-usr2 ROLE:NAME``.
 """
 
 from __future__ import annotations
 
+import collections
 import math
 
 from labkit.emulators.base import Emulator, register_emulator
@@ -41,10 +54,33 @@ class _StreamingTachEmulator(Emulator):
         self._next_t: float | None = None
         self._down = False
         self._started_mid_frame = False
+        self._held_frame: bytes | None = None        # stuck_at / repeat_at
+        self._seen: collections.deque[tuple[float, float]] = collections.deque()  # lag_s
+        self._held_fields: list[str] | None = None   # labkit-tach stuck_at
 
     def source_speed(self, t: float) -> float:
-        """rad/s seen by the sensor: the named motor's speed, or the floator's spin."""
-        return self.plant.tach_reading(t, self.source)
+        """rad/s seen by the sensor: the named motor's speed, or the floator's spin (``lag_s``
+        seconds late; 0 once ``zero_at`` has begun)."""
+        if self.fault_on("zero_at", t):
+            return 0.0
+        now = self.plant.tach_reading(t, self.source)
+        lag = self.faults.get("lag_s", 0.0)
+        if not lag:
+            return now
+        # the plant cannot go back in time: keep what the sensor saw, show what it saw lag_s ago
+        self._seen.append((t, now))
+        while len(self._seen) > 1 and self._seen[1][0] <= t - lag:
+            self._seen.popleft()
+        return self._seen[0][1] if self._seen[0][0] <= t - lag else 0.0
+
+    def faulted_frame(self, t: float, data: bytes) -> bytes:
+        """The frame as the ``stuck_at`` / ``repeat_at`` faults send it (the first frame after
+        the fault began, again and again; labkit-tach overrides ``stuck_at``)."""
+        if data and (self.fault_on("repeat_at", t) or self.fault_on("stuck_at", t)):
+            if self._held_frame is None:
+                self._held_frame = data
+            return self._held_frame
+        return data
 
     def stream_start(self, t: float) -> float:
         return t
@@ -71,7 +107,7 @@ class _StreamingTachEmulator(Emulator):
         self.check_events(t)
         while self._next_t is not None and self._next_t <= t:
             when = self._next_t
-            data = self.frame(when)
+            data = self.faulted_frame(when, self.frame(when))
             self._next_t = when + 1.0 / self.rate_hz
             if data:
                 self.send(data, when)
@@ -212,7 +248,19 @@ class LabkitTachEmulator(_StreamingTachEmulator):
         return math.floor(us / self.tick_us) * self.tick_us
 
     # ---- one output window --------------------------------------------------------------
+    def faulted_frame(self, t: float, data: bytes) -> bytes:
+        """``stuck_at``: rpm, period and pulses of the first line after the fault, with this
+        line's sequence number and time; ``repeat_at``: the whole line again."""
+        if self.fault_on("stuck_at", t) and not self.fault_on("repeat_at", t) and data.startswith(b"T,"):
+            fields = data.decode("ascii").rstrip("\n").split(",")
+            if self._held_fields is None:
+                self._held_fields = fields[3:]
+            return (",".join(fields[:3] + self._held_fields) + "\n").encode("ascii")
+        return super().faulted_frame(t, data) if data.startswith(b"T,") else data
+
     def frame(self, t: float) -> bytes:
+        if self.fault_on("zero_at", t):  # no pulses, and the zero timeout taken as elapsed
+            self._last_period_us, self._count, self._sum_periods_us = None, 0, 0.0
         speed = abs(self.source_speed(t))
         rate = speed / TWO_PI * self.ppr            # pulses per second
         start = self._window_t

@@ -28,7 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from labkit import documents as doc
-from labkit.control.loop import SpeedControl, build_speed_control
+from labkit.control.loop import SpeedControl, build_speed_control, unreachable_target
 from labkit.errors import LabkitError, SafetyError
 from labkit.protocols import exit_paths
 from labkit.protocols.declaration import declaration_of
@@ -76,6 +76,9 @@ def check_plan(protocol: ProtocolDef, rig: Rig, steps: list[Step]) -> None:
                     "nothing was started")
             if target < 0:
                 raise SafetyError(f"{protocol.name}: step {step.index + 1} asks a negative speed")
+            if problem := unreachable_target(rig, target):
+                raise SafetyError(f"{protocol.name}: step {step.index + 1}: {problem} ({rig.path}); "
+                                  "nothing was started")
 
 
 def format_plan(protocol: ProtocolDef, rig: Rig, steps: list[Step], done: set[int] | None = None) -> str:
@@ -243,6 +246,8 @@ class RunContext:
             self.emit_reading(role, reading)
             out.append(reading)
             self._control_event()
+        # a plausibility violation pending at the end trips (no point) or clears first
+        self.control.await_verdict(self.clock.now(), self.checkpoint, self._control_event)
         return out
 
     def tach_readings(self, role: str, since: float) -> list[Any]:
@@ -398,6 +403,7 @@ class Runner:
                                             label=step.label, targets_rad_s=step.targets_rad_s,
                                             eta_s=step.est_duration_s))
                 point = self.protocol.run_step(ctx, step)
+                self.control.check()  # an interlock that tripped in the step's last moments: no point
                 point = normalise({"step": step.index, **point})
                 new_points.append(point)
                 self.bus.emit(doc.PointDone(t=self.clock.now(), index=step.index, point=point))

@@ -121,6 +121,14 @@ class ControlSettings:
     settle_timeout_s: float = 30.0
     tach_timeout_s: float = 0.5           # tachometer silent this long -> interlock
     status_period_s: float = 0.25         # how often controller error flags are read
+    # plausibility of the tachometer against the duty (labkit.control.plausibility, ADR 0017)
+    motor_tau_s: float = 0.4              # the motor's mechanical time constant
+    plausible_ratio: float = 2.0          # reading within [floor/ratio - slack, ceiling*ratio + slack]
+    plausible_slack_rad_s: float = 1000.0 * math.pi / 30.0   # 1000 RPM
+    plausible_hold_s: float = 0.3         # a violation this long trips
+    spin_up_grace_s: float = 1.5          # duty on this long before "reads too low" applies
+    tach_stuck_s: float = 1.0             # the same reading this long while driven: stuck
+    stall_s: float = 2.0                  # saturated duty, rotor below half its speed: stall
     loops: tuple[LoopConfig, ...] = ()
 
 
@@ -243,6 +251,7 @@ def _control(file: str, table: Any, devices: dict[str, DeviceConfig]) -> Control
         tach_timeout_s=sec.quantity("tach_timeout", "s", default=d.tach_timeout_s,
                                     cap=(MAX_TACH_TIMEOUT_S, f"{MAX_TACH_TIMEOUT_S:g} s")),
         status_period_s=sec.quantity("status_period", "s", default=d.status_period_s),
+        **_plausibility(sec, d),
     )
     for gain in ("kp", "ki"):
         v = sec.raw(gain, (int, float), default=getattr(d, gain))
@@ -270,6 +279,24 @@ def _control(file: str, table: Any, devices: dict[str, DeviceConfig]) -> Control
                     raise lsec.error(key, f"{role!r} is not a {kind} device of this rig")
             loops.append(LoopConfig(name, motor, tach))
     return ControlSettings(loops=tuple(loops), **values)
+
+
+def _plausibility(sec: _Section, d: ControlSettings) -> dict[str, float]:
+    """The ``[control]`` keys of the plausibility interlocks (docs/rig-files.md)."""
+    cap = (MAX_TACH_TIMEOUT_S, f"{MAX_TACH_TIMEOUT_S:g} s")
+    values = {
+        "motor_tau_s": sec.quantity("motor_tau", "s", default=d.motor_tau_s, cap=cap),
+        "plausible_slack_rad_s": sec.quantity("plausible_slack", "rad/s", default=d.plausible_slack_rad_s),
+        "plausible_hold_s": sec.quantity("plausible_hold", "s", default=d.plausible_hold_s, cap=cap),
+        "spin_up_grace_s": sec.quantity("spin_up_grace", "s", default=d.spin_up_grace_s, cap=cap),
+        "tach_stuck_s": sec.quantity("tach_stuck", "s", default=d.tach_stuck_s, cap=cap),
+        "stall_s": sec.quantity("stall", "s", default=d.stall_s, cap=cap),
+    }
+    ratio = sec.raw("plausible_ratio", (int, float), default=d.plausible_ratio)
+    if not 1.0 < ratio <= 10.0:
+        raise sec.error("plausible_ratio", f"must be in (1, 10], got {ratio}")
+    values["plausible_ratio"] = float(ratio)
+    return values  # type: ignore[return-value]
 
 
 def parse_rig_config(text: str, file: str = "<rig>", check_device: DeviceCheck | None = None) -> Rig:

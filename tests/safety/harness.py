@@ -73,8 +73,16 @@ class EmulatedRig:
     """`labkit emulate` of the shipped rig in its own process, and a rig file on its ptys."""
 
     def __init__(self, workdir: Path, motor_faults: str = "", unplug: tuple[str, ...] = (),
-                 watchdog_ms: int = 500) -> None:
+                 watchdog_ms: int = 500, tach_faults: str = "", fault_on_usr2: tuple[str, ...] = (),
+                 truth: bool = False, pty_rig_edits: tuple[tuple[str, str], ...] = ()) -> None:
         self.workdir = workdir
+        # sensor faults (issue 29): faults of the tachometer's sim:// URL, ROLE:NAME faults started
+        # by SIGUSR2 (inject_fault), the emulator's true motor speeds (true_motor), and text
+        # replacements in the rig file labkit runs (e.g. a lower max_speed_rpm)
+        self.tach_faults = tach_faults
+        self.fault_on_usr2 = fault_on_usr2
+        self.truth_file = workdir / "truth.jsonl" if truth else None
+        self.pty_rig_edits = pty_rig_edits
         self.watchdog_ms = watchdog_ms  # the emulated controller's command timeout (0: off)
         self.motor_faults = motor_faults
         self.unplug_roles = unplug
@@ -88,8 +96,12 @@ class EmulatedRig:
         text = text.replace("command_timeout_ms=500", f"command_timeout_ms={self.watchdog_ms}")
         if self.motor_faults:
             text = text.replace("role=rotor_motor", f"role=rotor_motor&faults={self.motor_faults}")
+        if self.tach_faults:
+            text = text.replace("role=rotor_tach", f"role=rotor_tach&faults={self.tach_faults}")
         served.write_text(text)
         unplug = [arg for role in self.unplug_roles for arg in ("--unplug-on-usr1", role)]
+        unplug += [arg for spec in self.fault_on_usr2 for arg in ("--fault-on-usr2", spec)]
+        unplug += ["--truth", str(self.truth_file)] if self.truth_file is not None else []
         self.proc = subprocess.Popen(labkit("emulate", str(served), "--json", *unplug),
                                      stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=REPO)
         try:
@@ -105,6 +117,9 @@ class EmulatedRig:
             text = (text.replace("options = { command_timeout_ms = 500 }",
                                  "options = { command_timeout_ms = 500, reply_timeout_s = 1.0 }")
                     .replace("tach_timeout_s = 0.5", "tach_timeout_s = 2.0"))
+            for old, new in self.pty_rig_edits:
+                assert old in text, f"pty_rig_edits: {old!r} is not in the rig file"
+                text = text.replace(old, new)
             self.rig_file.write_text(text)
         except BaseException:
             end_process(self.proc)
@@ -120,7 +135,28 @@ class EmulatedRig:
         assert self.proc is not None
         os.kill(self.proc.pid, signal.SIGUSR1)
 
-    def start_run(self, sessions: Path, record_s: float = 60.0, terminal: bool = False) -> LabkitRun:
+    def inject_fault(self) -> float:
+        """Start the ``fault_on_usr2`` faults now (SIGUSR2 to `labkit emulate`); when (monotonic)."""
+        assert self.proc is not None and self.fault_on_usr2
+        sent = time.monotonic()
+        os.kill(self.proc.pid, signal.SIGUSR2)
+        return sent
+
+    def true_motor(self, motor: str = "rotor") -> list[dict]:
+        """The emulator's samples of ``motor`` (t monotonic, rpm, duty, stalled), every 20 ms."""
+        assert self.truth_file is not None, "EmulatedRig(truth=True)"
+        out = []
+        for line in self.truth_file.read_text().splitlines():
+            try:
+                sample = json.loads(line)
+            except json.JSONDecodeError:
+                continue  # a torn last line while the emulator writes
+            if sample.get("motor") == motor:
+                out.append(sample)
+        return out
+
+    def start_run(self, sessions: Path, record_s: float = 60.0, terminal: bool = False,
+                  speed_rpm: float = HOLD_RPM) -> LabkitRun:
         """`labkit run` in its own session and process group (killpg ends all of labkit); with
         ``terminal`` a pseudo-terminal is its controlling terminal, as in a lab's shell window."""
         master = slave = None
@@ -128,14 +164,14 @@ class EmulatedRig:
             master, slave = os.openpty()
         try:
             proc = subprocess.Popen(
-                labkit("run", str(self.rig_file), "speed-sweep", "--set", f"speeds_rpm={HOLD_RPM}",
+                labkit("run", str(self.rig_file), "speed-sweep", "--set", f"speeds_rpm={speed_rpm}",
                        "--set", f"record_s={record_s}", "--sessions", str(sessions), "--no-progress"),
                 stdin=slave, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=REPO,
                 start_new_session=True, preexec_fn=_take_terminal if terminal else None)
         finally:
             if slave is not None:
                 os.close(slave)
-        return LabkitRun(proc, sessions, master)
+        return LabkitRun(proc, sessions, master, hold_rpm=speed_rpm)
 
     def rotor_rpm_at(self, when: float, timeout: float = 20.0) -> float:
         """The rotor speed from its tachometer at the first reading after ``when`` (monotonic)."""
@@ -177,8 +213,10 @@ def _try_open(open_port, path: str, clock):
 class LabkitRun:
     """One `labkit run` process (the supervisor) and its session folder."""
 
-    def __init__(self, proc: subprocess.Popen, sessions: Path, terminal: int | None = None) -> None:
+    def __init__(self, proc: subprocess.Popen, sessions: Path, terminal: int | None = None,
+                 hold_rpm: float = HOLD_RPM) -> None:
         self.proc = proc
+        self.hold_rpm = hold_rpm
         self.sessions = sessions
         self.terminal = terminal  # master side of its controlling terminal, if it has one
         self.stderr = ""
@@ -224,10 +262,15 @@ class LabkitRun:
             for event in reversed(self.events()):
                 if event.get("type") == "control":
                     measured = event["loops"]["rotor"].get("measured_rad_s") or 0.0
-                    return measured >= 0.95 * HOLD_RPM * RAD_S_PER_RPM
+                    return measured >= 0.95 * self.hold_rpm * RAD_S_PER_RPM
             return False
 
-        wait_for(near_speed, timeout, f"rotor at {HOLD_RPM} RPM", self.proc)
+        wait_for(near_speed, timeout, f"rotor at {self.hold_rpm} RPM", self.proc)
+
+    def wait_event(self, kind: str, timeout: float = 60.0) -> dict:
+        """The first event of type ``kind`` (``settled``, ``interlock``...) the run writes."""
+        return wait_for(lambda: next((e for e in self.events() if e.get("type") == kind), None),
+                        timeout, f"a {kind!r} event", self.proc)
 
     def worker(self) -> int:
         kids = wait_for(lambda: children(self.proc.pid), 10, "the supervised worker process")

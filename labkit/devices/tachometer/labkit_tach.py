@@ -6,7 +6,8 @@ period method, averaging over every pulse of an output window, and prints one li
 window (115200 8N1, LF)::
 
     T,<seq>,<t_ms>,<rpm>,<period_us>,<pulses>,<flags>
-      seq        line counter (restarts at 0 after a reset)
+      seq        line counter (restarts at 0 after a reset); a line with the seq of the one
+                 before is the same measurement again: dropped, counted in lines_repeated
       t_ms       device millis() at the end of the window
       rpm        60e6 / (period_us * ppr), mechanical revolutions per minute
       period_us  mean pulse period in the window (0 when no pulse)
@@ -165,6 +166,7 @@ class LabkitTachometer(StreamingTachometer):
         self.banner: dict[str, str] = {}
         self.resets = 0
         self.lines_lost = 0
+        self.lines_repeated = 0
         self._state_lock = threading.Lock()
         self._alive = False
         self._flag_reset = False
@@ -209,6 +211,9 @@ class LabkitTachometer(StreamingTachometer):
         if not consistent_with_ppr(sample, self.ppr):
             raise ValueError(f"rpm {sample.rpm} disagrees with period {sample.period_us} us, ppr {self.ppr}")
         with self._state_lock:
+            if self._last_seq is not None and sample.seq == self._last_seq:
+                self.lines_repeated += 1  # the same measurement again: no new reading (a stuck
+                return None               # firmware or link; the loop's tach_timeout sees it)
             if self._last_seq is not None and sample.seq > self._last_seq + 1:
                 self.lines_lost += sample.seq - self._last_seq - 1
             self._last_seq = sample.seq
