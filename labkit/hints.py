@@ -28,7 +28,7 @@ from labkit.units import RAD_S_PER_RPM
 RESIDUALS: dict[str, str] = {"ratio": "residual [%] (data / fit - 1)",
                              "difference": "residual [{y_unit}] (data - fit)"}
 #: models a reference curve may have (the curve is evaluated here, without the fit package)
-CURVE_MODELS = ("power-law",)
+CURVE_MODELS = ("power-law", "spin-critical")
 #: the x units a step's speed target (rad/s) can be drawn in, with the factor from rad/s
 TARGET_UNITS: dict[str, float] = {"rad/s": 1.0, "RPM": 1.0 / RAD_S_PER_RPM}
 
@@ -70,7 +70,12 @@ class Curve:
         return f"{self.name} {self.figure}: {self.formula}" if self.figure else self.live_label
 
     def at(self, x: Any) -> Any:
-        """The curve at ``x`` (a number or a numpy array): ``a x^b`` for the power law."""
+        """The curve at ``x`` (a number or a numpy array): ``a x^b`` for the power law; for
+        ``spin-critical`` the spin at the drop from Eq. 6.37, ``-k w^2 = C (1 - w/w_c)`` with
+        ``k = v/w - 1``, i.e. ``v = w - C/w + C/w_c`` (params ``C``, ``omega_c``)."""
+        if self.model == "spin-critical":
+            c, w_c = self.params["C"], self.params["omega_c"]
+            return x - c / x + c / w_c
         return self.params["a"] * x ** self.params["b"]
 
 

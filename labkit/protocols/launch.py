@@ -236,9 +236,10 @@ class ReplayOutcome:
 REPLAY_FIT_RTOL = 1e-6
 REPLAY_FIT_ATOL = 1e-12
 DERIVED_KEYS = frozenset({"fit"})
-#: keys a newer labkit adds to a point (docs/decisions/0018-heartbeat-and-drift.md): a recording
+#: keys a newer labkit adds to a point (docs/decisions/0018-heartbeat-and-drift.md; the trial
+#: spreads of a spin-critical step since issue 27): a recording
 #: made before them lacks them, which is not a difference; every key it has is still compared
-ADDED_KEYS = frozenset({"drift_g", "warnings"})
+ADDED_KEYS = frozenset({"drift_g", "warnings", "rotor_std_rad_s", "spin_std_rad_s"})
 
 
 def _close(a: float, b: float) -> bool:

@@ -13,6 +13,9 @@ from labkit.hints import Column, Curve, Hints, ReportFit
 
 #: the paper's Fig. 5.25: y [g] = 224e6 x [RPM]^-1.9
 PAPER_FIG525 = Curve("paper", "y = 224e6 x^-1.9", "power-law", {"a": 224e6, "b": -1.9}, figure="Fig. 5.25")
+#: the paper's Fig. 6.18, series 1: Eq. 6.37 with C = 4.7e5 s^-2 and omega_c = 3000 rad/s
+PAPER_FIG618 = Curve("paper", "Eq. 6.37, C = 4.7e5 s^-2, omega_c = 3000 rad/s", "spin-critical",
+                     {"C": 4.7e5, "omega_c": 3000.0}, figure="Fig. 6.18")
 
 _NO_INERTIA = " (no floator inertia in the rig file: K/I and tau_S/I are reported)"
 
@@ -32,10 +35,11 @@ FIG_6_18 = Hints(
     x="rotor_rad_s", y="spin_rad_s", x_name="rotor speed", x_unit="rad/s", y_name="spin", y_unit="rad/s",
     figure="Fig. 6.18", title="spin [rad/s] against rotor speed [rad/s] at the drop", root="/fig6_18",
     fit="spin-critical", residual="difference", legend_corner="LeftTop",
+    reference=PAPER_FIG618,
     report_title="Spin-critical pairs (cf. paper Fig. 6.18)",
     report_fits=(
         ReportFit("eq637", "Eq. 6.37 with omega_c = 3000 rad/s (paper)", "spin-critical",
-                  "Spin-critical pairs (cf. paper Fig. 6.18)", omega_c=3000.0),
+                  "Spin-critical pairs (cf. paper Fig. 6.18)", omega_c=3000.0, reference=True),
         ReportFit("eq637-fit", "Eq. 6.37 with omega_c fitted", "spin-critical", omega_c="fit"),
         ReportFit("eq569", "Eq. 5.69 (no omega_c term)", "spin-critical", omega_c="inf"),
     ),
@@ -70,6 +74,9 @@ SPIN_CRITICAL_ROW = (
     Column("rotor_rpm", "RPM", "the same in RPM"),
     Column("spin_rad_s", "rad/s", "floator spin just before the drop (median of the trials used)"),
     Column("spin_rpm", "RPM", "the same in RPM"),
+    Column("rotor_std_rad_s", "rad/s", "spread (standard deviation) of the rotor speeds of the trials used; "
+                                       "null with one trial (the report's error bars)"),
+    Column("spin_std_rad_s", "rad/s", "spread of the spins of the trials used; null with one trial"),
     Column("k", "", "v/w - 1 (Eq. 6.37)"),
     Column("consistent", "", "the last consistent_n spins agreed within consistency_pct"),
     Column("trials", "", "each trial: rotor_rad_s, spin_rad_s, cause, hold_s"),

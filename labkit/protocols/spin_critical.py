@@ -10,8 +10,9 @@ before the drop) is registered. Trials repeat until ``consistent_n`` successive 
 within ``consistency_pct`` (at most ``max_trials``).
 
 Result rows: step, target_rpm, rotor_rad_s, rotor_rpm, spin_rad_s, spin_rpm, k (= v/w - 1,
-Eq. 6.37), consistent, trials [{rotor_rad_s, spin_rad_s, cause, hold_s}], no_drop.
-Quick fit: C of Eq. 6.37, ``-k w^2 = C (1 - w/3000)``.
+Eq. 6.37), consistent, trials [{rotor_rad_s, spin_rad_s, cause, hold_s}], no_drop,
+rotor_std_rad_s and spin_std_rad_s (the spread of the trials used: the report's error bars).
+Quick fit: C of Eq. 6.37, ``-k w^2 = C (1 - w/3000)``, without steps marked inconsistent.
 """
 
 from __future__ import annotations
@@ -175,13 +176,16 @@ class SpinCritical(ProtocolDef):
         row: dict[str, Any] = {"target_rpm": step.data["target_rpm"], "trials": trials,
                                "consistent": consistent, "no_drop": not trials}
         if not trials:
-            row.update(rotor_rad_s=None, rotor_rpm=None, spin_rad_s=None, spin_rpm=None, k=None)
+            row.update(rotor_rad_s=None, rotor_rpm=None, spin_rad_s=None, spin_rpm=None, k=None,
+                       rotor_std_rad_s=None, spin_std_rad_s=None)
             return row
         use = trials[-int(p["consistent_n"]):] if consistent else trials
         w = statistics.fmean(t["rotor_rad_s"] for t in use)
         v = statistics.median(t["spin_rad_s"] for t in use)
+        spread = {f"{key[:-len('_rad_s')]}_std_rad_s": statistics.stdev(t[key] for t in use) if len(use) > 1
+                  else None for key in ("rotor_rad_s", "spin_rad_s")}
         row.update(rotor_rad_s=w, rotor_rpm=rad_s_to_rpm(w), spin_rad_s=v, spin_rpm=rad_s_to_rpm(v),
-                   k=v / w - 1.0)
+                   k=v / w - 1.0, **spread)
         return row
 
     def fit(self, points: list[dict[str, Any]]) -> dict[str, Any]:

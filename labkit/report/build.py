@@ -25,6 +25,7 @@ from labkit.report.figures import contact_sheet, fit_figure
 from labkit.report.flags import flags_section
 from labkit.report.plans import Plan, plan_for
 from labkit.report.video import overlay, sample_frames
+from labkit.units import split_suffix
 
 MAX_TABLE_COLUMNS = 10
 
@@ -216,8 +217,9 @@ def event_in_words(ev: dict) -> str:
 
 def spread_column(table: Table, column: str) -> np.ndarray | None:
     """The recorded spread of a column: ``force_g`` -> ``force_stderr_g`` (or ``_std_``),
-    ``speed_rpm`` -> ``speed_std_rpm``; None when the session has none."""
-    head, _, unit = column.rpartition("_")
+    ``speed_rpm`` -> ``speed_std_rpm``, ``spin_rad_s`` -> ``spin_std_rad_s``; None when the
+    session has none."""
+    head, unit = split_suffix(column) or column.rpartition("_")[::2]
     for kind in ("stderr", "std"):
         name = f"{head}_{kind}_{unit}" if head else ""
         if name in table.numeric:
