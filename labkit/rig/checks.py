@@ -216,7 +216,8 @@ def check_toml_shape(text: str, file: str) -> None:
         parts = key.count(".") + 1
         if parts > MAX_KEY_PARTS:
             raise RigFileError(file, f"(line {number})",
-                               f"a key of {parts} dotted parts; a rig file nests at most {MAX_KEY_PARTS} deep")
+                               f"a key of {parts} dotted parts; a rig file nests at most "
+                               f"{MAX_KEY_PARTS} deep")
 
 
 def read_rig_text(path: Path) -> str:

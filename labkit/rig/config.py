@@ -26,8 +26,8 @@ from labkit.rig.checks import (
     MAX_TACH_TIMEOUT_S,
     MIN_CONTROL_PERIOD_S,
     _check_finite,
-    check_rate_options,
     _Section,
+    check_rate_options,
     check_role,
     check_toml_shape,
     split_unit,
@@ -253,8 +253,8 @@ def _control(file: str, table: Any, devices: dict[str, DeviceConfig]) -> Control
     for base in ("period", "status_period"):  # a loop every nanosecond is a run that never ends
         if values[base + "_s"] < MIN_CONTROL_PERIOD_S:
             key = next(k for k in sec.table if (s := split_unit(k)) and s[0] == base)
-            raise sec.error(key, f"{sec.table[key]!r} is below the floor of {MIN_CONTROL_PERIOD_S * 1e3:g} ms "
-                                 "(no serial device answers faster)")
+            raise sec.error(key, f"{sec.table[key]!r} is below the floor of "
+                                 f"{MIN_CONTROL_PERIOD_S * 1e3:g} ms (no serial device answers faster)")
     for gain in ("kp", "ki"):
         v = sec.raw(gain, (int, float), default=getattr(d, gain))
         if v < 0:

@@ -108,9 +108,10 @@ def test_run_refuses_before_anything_opens(tmp_path, capsys, old, new, key):
     for dev in ("pololu_smc?seed=1", "labkit_tach?seed=2", "mtsics?seed=3"):
         start = text.index(f'"sim://{dev}')
         text = text[:start] + '"/dev/ttyLABKIT_NONE"' + text[text.index("\n", start):]
-    path.write_text(text.replace("options = { command_timeout_ms = 500 }", "options = { command_timeout_ms = 500 }"))
+    path.write_text(text)
     sessions = tmp_path / "sessions"
-    code, out, err = cli(["run", path, "speed-sweep", "--sessions", sessions, "--no-progress", "--yes"], capsys)
+    code, out, err = cli(["run", path, "speed-sweep", "--sessions", sessions, "--no-progress", "--yes"],
+                         capsys)
     assert code == 2, err
     assert err.startswith(f"labkit run: {path}:{key}: "), err
     assert "ttyLABKIT_NONE" not in err and not sessions.exists()
