@@ -111,6 +111,9 @@ def run(args: argparse.Namespace) -> int:
         return _run_map(args, pair)
     if args.speed_rpm is None:
         raise PredictInputError("--speed-rpm missing (the rotator speed to predict at)")
+    from labkit.predict.pair import check_speed_can_bind
+
+    check_speed_can_bind(pair, args.speed_rpm / RPM, RPM)  # a speed far too low: refused at once
     steps = ["bound state, stiffness and stability"] + ([] if args.no_limits else ["speed limits"]) + (
         [] if args.no_verify else [f"a {args.verify_cycles}-cycle simulation check"])
     print(f"labkit predict: computing {', '.join(steps)}...", file=sys.stderr, flush=True)

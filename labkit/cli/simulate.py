@@ -14,18 +14,22 @@ import json
 import math
 import sys
 
+from labkit.cli.numbers import number
 from labkit.cli.output import add_json_argument, note_first_compile, write_json
 from labkit.cli.parsers import command_parser
 from labkit.sim.integrators import DEFAULT_INTEGRATOR, INTEGRATORS
 
 SINK_MODULE = "labkit.stream.sim_sink"
+#: more drive periods than this is a typo (the longest bundled scene runs 2000)
+MAX_CYCLES = 1e8
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = command_parser(sub, "simulate", "simulate a scene (rigid magnetic bodies, rotators, fields)", __doc__)
     p.add_argument("scene", nargs="?", help="scene TOML file or bundled scene name")
     p.add_argument(
-        "--cycles", type=float, default=None, help="drive periods to simulate (default: the scene's)"
+        "--cycles", type=number(0, MAX_CYCLES, low_open=True), default=None,
+        help="drive periods to simulate (default: the scene's)"
     )
     p.add_argument(
         "--integrator",
@@ -35,11 +39,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--steps-per-period",
-        type=int,
+        type=number(1, 10**7, integer=True),
         default=None,
         help="fixed steps per drive period for splittings (default: automatic)",
     )
-    p.add_argument("--samples-per-period", type=int, default=8, help="stored samples per period (default 8)")
+    p.add_argument("--samples-per-period", type=number(1, 10**5, integer=True), default=8,
+                   help="stored samples per period (default 8)")
     p.add_argument(
         "--decimate",
         type=int,
@@ -63,10 +68,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="choose the splitting (order 4, 6 or 8) and steps per period that reach this stroboscopic "
         "error over the run, from short pilot runs (overrides --integrator and --steps-per-period)",
     )
-    p.add_argument("--rtol", type=float, default=1e-10, help="relative tolerance of scipy references")
+    p.add_argument("--rtol", type=number(0, 1, low_open=True), default=1e-10,
+                   help="relative tolerance of scipy references")
     p.add_argument(
         "--drift-threshold",
-        type=float,
+        type=number(0, low_open=True),
         default=1e-6,
         help="relative invariant drift that marks the run as failed (default 1e-6)",
     )

@@ -28,7 +28,14 @@ from labkit.model.mbs import scaled_speed
 from labkit.model.stability import criterion_holds, min_static_torque
 from labkit.predict.estimate import CLOSED_FORM, SIMULATION, STEADY_STATE, Estimate, timed
 from labkit.predict.magnets import Magnet
-from labkit.predict.pair import ForceCurve, Pair, min_speed, scaled_min_speed_guess, speed_for_distance
+from labkit.predict.pair import (
+    ForceCurve,
+    Pair,
+    check_speed_can_bind,
+    min_speed,
+    scaled_min_speed_guess,
+    speed_for_distance,
+)
 from labkit.predict.verify import VerifyResult, verify
 
 SCHEMA = "labkit.predict/1"
@@ -92,7 +99,11 @@ def scaled_floator(floator: Magnet, mass_factor: float) -> Magnet:
 
 def predict(pair: Pair, omega: float, run_verify: bool = True, verify_cycles: int = 2000,
             speed_limits: bool = True, scaling: bool = True, xtol: float = 1e-9) -> Prediction:
-    """Everything the ``labkit predict`` table shows, for ``pair`` at ``omega`` (rad/s)."""
+    """Everything the ``labkit predict`` table shows, for ``pair`` at ``omega`` (rad/s).
+
+    Raises :class:`labkit.predict.pair.NoSmallConeError` at once when the speed is far too low
+    for any bound state (:func:`labkit.predict.pair.check_speed_can_bind`)."""
+    check_speed_can_bind(pair, omega, RPM)
     pred = Prediction(inputs={
         "rotator": pair.rotator.to_json(), "floator": pair.floator.to_json(),
         "speed_rpm": omega * RPM, "tilt_deg": math.degrees(pair.gamma), "placement": pair.placement,
