@@ -116,8 +116,8 @@ def test_a_laser_clip_analysed_as_strobe_exits_non_zero(laser_clip, capsys):
 
 
 @pytest.mark.parametrize("argv, words", [
-    (["simulate", "conical_5_1", "--cycles", "-1"], ["--cycles: must be a finite number > 0", "got -1"]),
-    (["simulate", "conical_5_1", "--cycles", "nan"], ["--cycles: must be a finite number > 0", "got nan"]),
+    (["simulate", "conical_5_1", "--cycles", "-1"], ["--cycles: must be a finite number > 0, got -1"]),
+    (["simulate", "conical_5_1", "--cycles", "nan"], ["--cycles: must be a finite number > 0, got nan"]),
     (["simulate", "conical_5_1", "--samples-per-period", "0"],
      ["--samples-per-period: must be a whole number >= 1", "got 0"]),
     (["fit", "nothing.csv", "--model", "pfr-force", "--bootstrap", "1000000000"],
