@@ -71,8 +71,8 @@ def test_a_tilt_beyond_the_screen_geometry_is_doubtful_with_the_reason(laser_cli
     assert f"({semi_mm:.3g} mm) is longer than the screen distance (12 mm)" in reason
     assert "result doubtful" in out and "longer than the screen distance" in out
     # the same clip seen from a plausible distance keeps its verdict
-    code, out, err = cli(["analyse", "laser", laser_clip, "--screen-distance-mm", "500", "--mm-per-px", "0.21",
-                          "--json", out_json], capsys)
+    code, out, err = cli(["analyse", "laser", laser_clip, "--screen-distance-mm", "500",
+                          "--mm-per-px", "0.21", "--json", out_json], capsys)
     assert code == 0 and "tilt_geometry" not in json.loads(out_json.read_text())["quality"]["checks"]
 
 
@@ -194,7 +194,7 @@ def test_check_number_returns_only_finite_values_in_range(text, low, span, low_o
 
 @settings(max_examples=200, deadline=None)
 @given(rotor_hz=st.floats(1, 5000), strobe_hz=st.floats(1, 1000), frames=st.integers(2, 2000))
-def test_strobe_coverage_problem_refuses_exactly_the_still_and_undersampled_clips(rotor_hz, strobe_hz, frames):
+def test_strobe_coverage_refuses_exactly_the_still_and_undersampled_clips(rotor_hz, strobe_hz, frames):
     problem = strobe_coverage_problem(rotor_hz, strobe_hz, frames)
     ratio = rotor_hz / strobe_hz
     apparent = abs(ratio - round(ratio)) * strobe_hz
