@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING
 
 from labkit.cli.confirm import CONFIRM_POINTS, add_yes_argument, confirm_size
 from labkit.cli.output import add_json_argument, note_first_compile, write_json
+from labkit.cli.progress import ProgressLines
 from labkit.predict.inputs import (
     PredictInputError,
     check_remanence,
@@ -121,7 +122,8 @@ def run(args: argparse.Namespace) -> int:
         note_first_compile("predict")
     pred = predict(pair, args.speed_rpm / RPM, run_verify=not args.no_verify,
                    verify_cycles=args.verify_cycles, speed_limits=not args.no_limits,
-                   scaling=not args.no_limits)
+                   scaling=not args.no_limits,
+                   on_stage=ProgressLines("labkit predict", "").say)  # lines only after 2 s
     print(format_prediction(pred))
     if args.json:
         _write_json(args.json, pred.to_json())

@@ -18,6 +18,7 @@ Physics (point dipoles, floator on the rotator's spin axis, gravity included):
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -98,8 +99,10 @@ def scaled_floator(floator: Magnet, mass_factor: float) -> Magnet:
 
 
 def predict(pair: Pair, omega: float, run_verify: bool = True, verify_cycles: int = 2000,
-            speed_limits: bool = True, scaling: bool = True, xtol: float = 1e-9) -> Prediction:
+            speed_limits: bool = True, scaling: bool = True, xtol: float = 1e-9,
+            on_stage: Callable[[str], None] | None = None) -> Prediction:
     """Everything the ``labkit predict`` table shows, for ``pair`` at ``omega`` (rad/s).
+    ``on_stage(name)`` is called as each stage starts (``labkit predict`` prints progress lines).
 
     Raises :class:`labkit.predict.pair.NoSmallConeError` at once when the speed is far too low
     for any bound state (:func:`labkit.predict.pair.check_speed_can_bind`)."""
@@ -121,11 +124,15 @@ def predict(pair: Pair, omega: float, run_verify: bool = True, verify_cycles: in
                       note=f"at r = {bs.r_limit * 1e3:.3f} mm; weight {abs(pair.load):.4g} N"))
     if bs.bound:
         _bound_state_numbers(pred, pair, omega, curve, bs)
+    stage = on_stage or (lambda name: None)
     if speed_limits:
+        stage("bound state done; searching the speed limits")
         _speed_limits(pred, pair, omega, curve, bs)
     if scaling and "min_speed_rpm" in pred.estimates:
+        stage("scaling the minimum speed to similar floators")
         _scaling(pred, pair, omega)
     if bs.bound and run_verify:
+        stage(f"simulating {verify_cycles} cycles")
         state = curve.state(bs.r_eq)
         ver, cost = timed(lambda: verify(pair, omega, state, cycles=verify_cycles))
         pred.cost_s += cost

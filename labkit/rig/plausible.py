@@ -51,6 +51,12 @@ def check_plausible(rig: Rig, data: dict[str, Any]) -> None:
     _check_full_speed(keys, rig)
 
 
+def check_body_plausible(file: str, name: str, body: BodySpec, table: dict[str, Any]) -> None:
+    """The body checks of :func:`check_plausible` for one ``[bodies.NAME]`` read on its own
+    (``labkit predict RIG`` reads only the bodies); ``table`` is that body's TOML table."""
+    _check_body(_Keys(file, {"bodies": {name: table}}), name, body)
+
+
 class _Keys:
     """The key a rig file used for a quantity (``gap_mm`` or ``gap_m``) and its written value."""
 

@@ -191,3 +191,10 @@ def test_any_body_numbers_give_a_rig_or_a_file_key_reason(shape, body, gap):
     except RigFileError as exc:
         assert exc.file == "f.toml" and exc.key.startswith(("bodies.rotator.", "geometry.gap")), exc
         assert exc.reason
+
+
+def test_predict_reading_only_the_bodies_refuses_a_slip_in_them(tmp_path, capsys):
+    path = rig_with(tmp_path, "mass_g = 5.9", "mass_g = 0.0059")
+    code, out, err = cli(["predict", path, "--speed-rpm", "25000", "--no-verify"], capsys)
+    assert code == 2 and out == ""
+    assert err.startswith(f"labkit predict: {path}:bodies.rotator.mass_g: ") and "looks like kilograms" in err
