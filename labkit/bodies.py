@@ -7,11 +7,23 @@ constants of sintered NdFeB. Pure functions, no labkit imports: used by a predic
 from __future__ import annotations
 
 import math
+import re
 
 MU0 = 4e-7 * math.pi
 NDFEB_DENSITY_KG_M3 = 7500.0  # sintered NdFeB, 7.4-7.6 g/cm^3 in datasheets
 #: remanence of the NdFeB grades N35..N55 (T), the datasheet range
 NDFEB_REMANENCE_T = (1.17, 1.49)
+#: remanence B_r (T), middle of the datasheet range of each grade
+GRADE_REMANENCE_T: dict[str, float] = {
+    "N35": 1.19, "N38": 1.24, "N40": 1.275, "N42": 1.305, "N45": 1.34,
+    "N48": 1.385, "N50": 1.415, "N52": 1.445, "N55": 1.48,
+}
+
+
+def grade_remanence(grade: str) -> float | None:
+    """B_r (T) of an NdFeB grade such as ``N42`` or ``N42SH`` (the base grade); None otherwise."""
+    match = re.fullmatch(r"(N\d\d)[A-Z]*", grade.strip().upper())
+    return GRADE_REMANENCE_T.get(match.group(1)) if match else None
 
 
 def shape_properties(shape: str, sizes_m: tuple[float, ...]) -> tuple[float, float, float, float]:

@@ -18,13 +18,8 @@ import math
 import re
 from dataclasses import dataclass
 
-from labkit.bodies import MU0, NDFEB_DENSITY_KG_M3, shape_properties
+from labkit.bodies import GRADE_REMANENCE_T, MU0, NDFEB_DENSITY_KG_M3, shape_properties
 
-#: remanence B_r (T), middle of the datasheet range of each grade
-GRADE_REMANENCE_T: dict[str, float] = {
-    "N35": 1.19, "N38": 1.24, "N40": 1.275, "N42": 1.305, "N45": 1.34,
-    "N48": 1.385, "N50": 1.415, "N52": 1.445, "N55": 1.48,
-}
 DEFAULT_GRADE = "N42"
 SHAPES = ("sphere", "cylinder", "cube", "block")
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING, Any
 
-from labkit.bodies import MU0, NDFEB_DENSITY_KG_M3, NDFEB_REMANENCE_T, shape_properties
+from labkit.bodies import MU0, NDFEB_DENSITY_KG_M3, NDFEB_REMANENCE_T, grade_remanence, shape_properties
 from labkit.errors import RigFileError
 from labkit.rig.checks import MAX_SPEED_RPM, split_unit
 from labkit.units import RAD_S_PER_RPM
@@ -30,6 +30,9 @@ DENSITY_BOUNDS_KG_M3 = (1000.0, 20000.0)
 #: B_r = m mu0 / V a dipole moment implies: ferrite magnets have 0.2-0.45 T, sintered NdFeB
 #: 1.17-1.49 T; 2 T is the cap `labkit predict --remanence-t` allows (no permanent magnet has it)
 REMANENCE_BOUNDS_T = (0.05, 2.0)
+#: with an NdFeB ``grade`` given: the remanence the moment implies within this fraction of the
+#: grade's, the density within this fraction of 7500 kg/m^3 (datasheets: 7400-7600)
+NDFEB_GRADE_TOLERANCE = 0.2
 #: a given moment of inertia against the uniform body of its shape and mass
 INERTIA_RATIO_BOUNDS = (0.1, 10.0)
 #: rotator tilt out of the rotation plane (the paper's rotators: 4-6 deg)
@@ -114,6 +117,8 @@ def _check_body(keys: _Keys, name: str, body: BodySpec) -> None:
         _check_density(keys, section, body.mass_kg, volume, what)
     if body.dipole_moment_a_m2 is not None:
         _check_moment(keys, section, body.dipole_moment_a_m2, volume, what)
+    if body.grade and (b_r := grade_remanence(body.grade)) is not None:
+        _check_grade(keys, section, body, b_r, volume, what)
     mass = body.mass_kg if body.mass_kg is not None else NDFEB_DENSITY_KG_M3 * volume
     for base, given, per_mass in (("inertia_axial", body.inertia_axial_kg_m2, i_axial),
                                   ("inertia_radial", body.inertia_radial_kg_m2, i_radial)):
@@ -155,6 +160,27 @@ def _check_moment(keys: _Keys, section: str, moment: float, volume: float, what:
         f"{moment:.4g} A m^2 for a {what} means B_r = m mu0 / V = {remanence:.4g} T (Eq. 6.16); "
         f"a permanent magnet has {low:g}-{high:g} T (sintered NdFeB {NDFEB_REMANENCE_T[0]:g}-"
         f"{NDFEB_REMANENCE_T[1]:g} T: {nd_low:.3g}-{nd_high:.3g} A m^2 here)"))
+
+
+def _check_grade(keys: _Keys, section: str, body: BodySpec, b_r: float, volume: float, what: str) -> None:
+    """A body of NdFeB grade ``body.grade`` (B_r ``b_r``): its moment near B_r V / mu0 and its mass
+    near rho V, within :data:`NDFEB_GRADE_TOLERANCE`."""
+    tol = NDFEB_GRADE_TOLERANCE
+    if body.dipole_moment_a_m2 is not None:
+        expected = b_r * volume / MU0
+        if abs(body.dipole_moment_a_m2 / expected - 1) > tol:
+            raise keys.error(section, "dipole_moment", (
+                f"{body.dipole_moment_a_m2:.4g} A m^2 is {body.dipole_moment_a_m2 / expected:.3g} times "
+                f"B_r V / mu0 = {expected:.4g} A m^2 of a {what} of grade {body.grade} (B_r {b_r:g} T, "
+                f"Eq. 6.16); more than {tol:.0%} off is another grade or a slip"))
+    if body.mass_kg is not None:
+        expected = NDFEB_DENSITY_KG_M3 * volume
+        if abs(body.mass_kg / expected - 1) > tol:
+            raise keys.error(section, "mass", (
+                f"{body.mass_kg * 1e3:.4g} g is {body.mass_kg / expected:.3g} times the "
+                f"{expected * 1e3:.4g} g "
+                f"of a {what} of sintered NdFeB ({NDFEB_DENSITY_KG_M3:g} kg/m^3; grade {body.grade}); "
+                f"more than {tol:.0%} off is not a solid NdFeB magnet of these sizes"))
 
 
 def _check_gap(keys: _Keys, rig: Rig) -> None:
