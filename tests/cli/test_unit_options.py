@@ -205,3 +205,14 @@ def test_strobe_coverage_refuses_exactly_the_still_and_undersampled_clips(rotor_
         assert problem is None, problem
     if problem is not None:
         assert "--strobe-hz" in problem or "--frames" in problem
+
+
+def test_a_long_simulation_announces_its_estimated_time(monkeypatch, capsys):
+    import labkit.cli.simulate as simulate_cli
+
+    monkeypatch.setattr(simulate_cli, "ESTIMATE_SAY_S", 0.0)  # every run counts as long here
+    code, out, err = cli(["simulate", "conical_5_1", "--cycles", "2000"], capsys)
+    assert code == 0, err
+    assert "labkit simulate: 2000 cycles will take about" in err and "(a 20-cycle pilot took" in err
+    code, out, err = cli(["simulate", "conical_5_1", "--cycles", "999"], capsys)
+    assert code == 0 and "will take about" not in err  # short runs are not piloted
