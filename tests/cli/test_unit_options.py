@@ -140,6 +140,21 @@ def test_predict_refuses_a_speed_far_too_low_at_once(capsys):
     assert err.count("\n") == 1
 
 
+def test_predict_refuses_a_speed_far_below_the_minimum_speed_quickly(capsys):
+    start = time.monotonic()
+    code, out, err = cli(["predict", "--rotator", "cylinder:6x3mm", "--floator", "sphere:10mm",
+                          "--speed-rpm", "250", "--no-verify"], capsys)
+    assert time.monotonic() - start < 10
+    assert code == 2 and out == ""
+    # the estimate against the minimum speed the full prediction finds (9382 rpm at 25000 rpm)
+    assert err.startswith("labkit predict: no bound state at 250 rpm: the minimum speed is about 9")
+    assert "Eq. 5.81" in err and err.count("\n") == 1
+    # a speed a quarter of the minimum is predicted in full (no bound state, said in the table)
+    code, out, err = cli(["predict", "--rotator", "cylinder:6x3mm", "--floator", "sphere:10mm",
+                          "--speed-rpm", "2500", "--no-verify"], capsys)
+    assert code == 0 and "no bound state" in out
+
+
 def _labkit(*argv: str, **kw) -> subprocess.Popen:
     env = {**os.environ, "PYTHONPATH": str(REPO)}
     return subprocess.Popen([sys.executable, "-m", "labkit", *argv], env=env, stderr=subprocess.PIPE,
@@ -147,9 +162,9 @@ def _labkit(*argv: str, **kw) -> subprocess.Popen:
 
 
 def test_ctrl_c_of_predict_does_not_speak_of_motors():
-    # 250 rpm passes the quick refusal and then solves for a long time: Ctrl-C lands mid-work
-    proc = _labkit("predict", "--rotator", "cylinder:6x3mm", "--floator", "sphere:10mm", "--speed-rpm", "250",
-                   "--no-verify", stdout=subprocess.DEVNULL)
+    # a full prediction with its simulation check takes several seconds: Ctrl-C lands mid-work
+    proc = _labkit("predict", "--rotator", "cylinder:6x3mm", "--floator", "sphere:10mm", "--speed-rpm",
+                   "25000", stdout=subprocess.DEVNULL)
     try:
         line = proc.stderr.readline().decode()
         assert "computing" in line
