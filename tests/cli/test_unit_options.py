@@ -231,3 +231,13 @@ def test_a_long_simulation_announces_its_estimated_time(monkeypatch, capsys):
     assert "labkit simulate: 2000 cycles will take about" in err and "(a 20-cycle pilot took" in err
     code, out, err = cli(["simulate", "conical_5_1", "--cycles", "999"], capsys)
     assert code == 0 and "will take about" not in err  # short runs are not piloted
+
+
+def test_a_map_point_far_too_slow_is_a_falling_floator_not_a_crash(tmp_path, capsys):
+    store = tmp_path / "map.jsonl"
+    code, out, err = cli(["predict", "--rotator", "cylinder:6x3mm", "--floator", "sphere:10mm",
+                          "--map", "tilt_deg=5", "speed_rpm=250,25000", "--out", store], capsys)
+    assert code == 0, err
+    rows = {r["speed_rpm"]: r for r in map(json.loads, store.read_text().splitlines()) if "speed_rpm" in r}
+    assert rows[250]["bound"] is False and rows[250]["verdict"].startswith("no bound state at 250 rpm")
+    assert rows[25000]["bound"] is True
