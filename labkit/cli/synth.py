@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -206,8 +207,10 @@ def run_strobe(args: argparse.Namespace) -> int:
     if not 0 < spec.tilt_amplitude_rad < math.pi / 2:
         raise VideoError(args.out, "--tilt-rad must lie in (0, pi/2)")
     problem = strobe_coverage_problem(spec.rotor_hz, spec.strobe_hz, spec.frames)
-    if problem is not None:
-        raise VideoError(args.out, problem)
+    if problem is not None and problem.startswith(STILL):
+        raise VideoError(args.out, problem)  # nothing moves: no clip is worth writing
+    if problem is not None:  # written (a clip to test poor coverage is a use), but said
+        print(f"labkit synth: warning: {args.out}: {problem}", file=sys.stderr)
     truth = strobe_truth(spec)
     path = write_clip(args.out, render_strobe(spec), spec.strobe_hz, spec.codec, truth)
     print(f"wrote {path} ({spec.frames} frames, apparent {abs(spec.apparent_hz):.3f} Hz) and "
@@ -227,16 +230,21 @@ def phase_spread(apparent_hz: float, strobe_hz: float, frames: int) -> float:
     return float(2 * max(0.0, np.linalg.eigvalsh(cov)[0]))
 
 
+#: how a still clip's problem starts (refused; a poorly covered cycle is only warned about)
+STILL = "a still clip: "
+
+
 def strobe_coverage_problem(rotor_hz: float, strobe_hz: float, frames: int) -> str | None:
     """Why a clip of these settings cannot be measured by ``labkit analyse strobe`` (None: it
     can): an apparent frequency of 0 (the rotor turns a whole number of times between flashes)
-    shows a still body; too few frames for the apparent cycle sample too little of it."""
+    shows a still body (the text starts with :data:`STILL`); too few frames for the apparent
+    cycle sample too little of it."""
     from labkit.vision.strobe_quality import MIN_PHASE_SPREAD
 
     ratio = rotor_hz / strobe_hz
     apparent = (ratio - round(ratio)) * strobe_hz
     if abs(apparent) < 1e-9 * strobe_hz:
-        return (f"--rotor-hz {rotor_hz:g} is {round(ratio)} x --strobe-hz {strobe_hz:g}: the apparent "
+        return (f"{STILL}--rotor-hz {rotor_hz:g} is {round(ratio)} x --strobe-hz {strobe_hz:g}: the apparent "
                 "frequency is 0 Hz, every flash catches the magnet at the same phase and the clip shows "
                 "a still body that labkit analyse strobe cannot measure; choose a strobe a little off "
                 f"rotor/n, e.g. --strobe-hz {rotor_hz / (round(ratio) + 0.16):.4g}")
@@ -245,8 +253,8 @@ def strobe_coverage_problem(rotor_hz: float, strobe_hz: float, frames: int) -> s
         need = math.ceil(strobe_hz / abs(apparent))
         return (f"{frames} frames at {strobe_hz:g} Hz cover {frames * abs(apparent) / strobe_hz:.2g} of the "
                 f"apparent cycle ({abs(apparent):.4g} Hz; phase spread {spread:.2f} of 1, labkit analyse "
-                f"strobe needs {MIN_PHASE_SPREAD:g}): use --frames {need} or more, or a strobe further "
-                "from rotor/n")
+                f"strobe needs {MIN_PHASE_SPREAD:g} and will call the clip doubtful or failed): use "
+                f"--frames {need} or more, or a strobe further from rotor/n")
     return None
 
 
