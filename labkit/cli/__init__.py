@@ -2,6 +2,9 @@
 exposing ``register(subparsers)``, which adds its parser and sets ``func(args) -> int``.
 
 Expected faults (:class:`labkit.errors.LabkitError`) end as one line on stderr and exit 2.
+Ctrl-C ends as one line naming what the command stops (motors only for commands that drive
+them, :data:`MOTOR_COMMANDS`), exit 130. A reader that closes the pipe (``labkit ... | head``)
+ends the command quietly with exit 141, as a shell reports SIGPIPE, not a BrokenPipeError traceback.
 ``--json -`` (labkit.cli.output) keeps stdout for the JSON document alone.
 """
 
@@ -40,15 +43,38 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+#: commands that open a rig and drive its motors: only their Ctrl-C line speaks of motors
+MOTOR_COMMANDS = frozenset({"run", "demo", "bench", "twin", "replay"})
+#: exit status after the reader closed stdout (128 + SIGPIPE, what a shell shows)
+EXIT_BROKEN_PIPE = 141
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run one command; ``argv`` None means the program's own (``labkit ...``, ``python -m labkit``),
-    which then also ends quickly (:func:`end_quickly`)."""
+    which then also ends quickly (:func:`end_quickly`) and quietly when its reader goes away."""
     if argv is None:
         try:
-            return _run(sys.argv[1:])
+            code = _run(sys.argv[1:])
+            sys.stdout.flush()  # a closed pipe shows here, not in the interpreter's exit
+            return code
+        except BrokenPipeError:
+            _silence_stdout()
+            return EXIT_BROKEN_PIPE
         finally:
             end_quickly()
     return _run(list(argv))
+
+
+def _silence_stdout() -> None:
+    """After a BrokenPipeError: point stdout at /dev/null so the interpreter's final flush of
+    what is still buffered raises nothing (the recipe of the Python docs, "Note on SIGPIPE")."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # stdout replaced or closed: nothing to flush
+        pass
 
 
 def end_quickly() -> None:
@@ -79,7 +105,8 @@ def _run(argv: list[str]) -> int:
         print(f"labkit {args.command}: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print(f"labkit {args.command}: interrupted; motors commanded to zero", file=sys.stderr)
+        stopped = "; motors commanded to zero" if args.command in MOTOR_COMMANDS else ""
+        print(f"labkit {args.command}: interrupted{stopped}", file=sys.stderr)
         return 130
 
 

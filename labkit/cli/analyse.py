@@ -16,6 +16,7 @@ import math
 import sys
 from pathlib import Path
 
+from labkit.cli.numbers import number
 from labkit.cli.output import add_json_argument, write_json
 from labkit.cli.parsers import command_parser
 from labkit.cli.progress import ProgressLines
@@ -34,6 +35,34 @@ def _positive(text: str) -> float:
     v = float(text)
     if not (v > 0 and math.isfinite(v)):
         raise argparse.ArgumentTypeError(f"must be a positive number, got {text}")
+    return v
+
+
+#: a screen closer than this to the magnet catches no reflected trace: the magnet and its
+#: mirror are several millimetres across (a distance typed in metres lands below it)
+MIN_SCREEN_DISTANCE_MM = 10.0
+#: camera scales on a screen: 1 um to 10 mm per pixel (a scale in metres lands below)
+MM_PER_PX_BOUNDS = (1e-3, 10.0)
+
+
+def _screen_distance_mm(text: str) -> float:
+    v = _positive(text)
+    if v < MIN_SCREEN_DISTANCE_MM:
+        hint = (f"; looks like metres: did you mean --screen-distance-mm {v * 1e3:g}?"
+                if v * 1e3 >= MIN_SCREEN_DISTANCE_MM else "")
+        raise argparse.ArgumentTypeError(
+            f"{text} mm from the magnet to the screen is closer than a screen can catch the reflected "
+            f"beam (at least {MIN_SCREEN_DISTANCE_MM:g} mm){hint}")
+    return v
+
+
+def _mm_per_px(text: str) -> float:
+    v = _positive(text)
+    low, high = MM_PER_PX_BOUNDS
+    if not low <= v <= high:
+        hint = f"; looks like metres per pixel: did you mean {v * 1e3:g}?" if low <= v * 1e3 <= high else ""
+        raise argparse.ArgumentTypeError(f"{text} mm per pixel is outside the {low:g}-{high:g} mm/px of a "
+                                         f"camera watching a screen{hint}")
     return v
 
 
@@ -68,12 +97,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     laser = kinds.add_parser("laser", help="circle/ellipse/trochoid pattern of a reflected laser beam")
     laser.add_argument("path", help="video (any container OpenCV reads) or long-exposure photo")
-    laser.add_argument("--screen-distance-mm", type=_positive, help="magnet-to-screen distance L")
-    laser.add_argument("--mm-per-px", type=_positive, help="screen scale S")
+    laser.add_argument("--screen-distance-mm", type=_screen_distance_mm,
+                       help=f"magnet-to-screen distance L in mm (at least {MIN_SCREEN_DISTANCE_MM:g})")
+    laser.add_argument("--mm-per-px", type=_mm_per_px, help="screen scale S, mm on the screen per pixel")
     laser.add_argument("--stride", type=int, default=1, help="analyse every N-th frame (default 1)")
     laser.add_argument("--roi", type=_roi, help="x,y,w,h region of interest in px (default: whole frame)")
     laser.add_argument("--no-subpixel", action="store_true", help="skip sub-pixel refinement")
-    laser.add_argument("--chunk-s", type=float, default=0.5,
+    laser.add_argument("--chunk-s", type=number(0, 3600, low_open=True), default=0.5,
                        help="seconds of video per accumulation chunk: time resolution of drift (default 0.5)")
     laser.add_argument("--max-chunks", type=int, default=12,  # LaserQuality.max_chunks (not imported here)
                        help="at most this many chunks; long clips get longer ones (default 12)")
@@ -117,7 +147,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         help="the camera's encoding exponent, linear = (grey / 255) ** GAMMA (default 2.2, "
                              "sRGB and Rec. 709 cameras; 1 for a linear machine-vision camera); used where "
                              "room light's ghost is taken out, since light adds in linear units")
-    strobe.add_argument("--mm-per-px", type=_positive, help="scale for mm outputs")
+    strobe.add_argument("--mm-per-px", type=_mm_per_px, help="scale for mm outputs")
     strobe.add_argument(
         "--point",
         choices=["tip", "bottom", "centroid"],
@@ -182,7 +212,10 @@ def run_laser(args: argparse.Namespace) -> int:
     if args.stride < 1 or args.max_chunks < 1 or not args.chunk_s > 0:
         raise VideoError(args.path, "--stride and --max-chunks must be at least 1, --chunk-s positive")
     if (args.screen_distance_mm is None) != (args.mm_per_px is None):
-        print("labkit analyse laser: tilt needs both --screen-distance-mm and --mm-per-px", file=sys.stderr)
+        given, missing = (("--screen-distance-mm", "--mm-per-px") if args.mm_per_px is None
+                          else ("--mm-per-px", "--screen-distance-mm"))
+        print(f"labkit analyse laser: no tilt will be printed: {given} without {missing}; the tilt is "
+              "0.5 atan(semi-axis x mm-per-px / screen distance) and needs both", file=sys.stderr)
     quality = LaserQuality(
         stride=args.stride, roi=args.roi, subpixel=not args.no_subpixel, chunk_s=args.chunk_s,
         max_chunks=args.max_chunks, luma=False if args.colour_frames else (True if args.luma else None),

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING
 
 from labkit.cli.confirm import CONFIRM_POINTS, add_yes_argument, confirm_size
 from labkit.cli.output import add_json_argument, note_first_compile, write_json
+from labkit.cli.progress import ProgressLines
 from labkit.predict.inputs import (
     PredictInputError,
     check_remanence,
@@ -111,6 +112,9 @@ def run(args: argparse.Namespace) -> int:
         return _run_map(args, pair)
     if args.speed_rpm is None:
         raise PredictInputError("--speed-rpm missing (the rotator speed to predict at)")
+    from labkit.predict.pair import check_speed_can_bind
+
+    check_speed_can_bind(pair, args.speed_rpm / RPM, RPM)  # a speed far too low: refused at once
     steps = ["bound state, stiffness and stability"] + ([] if args.no_limits else ["speed limits"]) + (
         [] if args.no_verify else [f"a {args.verify_cycles}-cycle simulation check"])
     print(f"labkit predict: computing {', '.join(steps)}...", file=sys.stderr, flush=True)
@@ -118,7 +122,8 @@ def run(args: argparse.Namespace) -> int:
         note_first_compile("predict")
     pred = predict(pair, args.speed_rpm / RPM, run_verify=not args.no_verify,
                    verify_cycles=args.verify_cycles, speed_limits=not args.no_limits,
-                   scaling=not args.no_limits)
+                   scaling=not args.no_limits,
+                   on_stage=ProgressLines("labkit predict", "").say)  # lines only after 2 s
     print(format_prediction(pred))
     if args.json:
         _write_json(args.json, pred.to_json())

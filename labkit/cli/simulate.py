@@ -14,6 +14,7 @@ import json
 import math
 import sys
 
+from labkit.cli.numbers import number
 from labkit.cli.output import add_json_argument, note_first_compile, write_json
 from labkit.cli.parsers import command_parser
 from labkit.sim.integrators import DEFAULT_INTEGRATOR, INTEGRATORS
@@ -25,7 +26,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = command_parser(sub, "simulate", "simulate a scene (rigid magnetic bodies, rotators, fields)", __doc__)
     p.add_argument("scene", nargs="?", help="scene TOML file or bundled scene name")
     p.add_argument(
-        "--cycles", type=float, default=None, help="drive periods to simulate (default: the scene's)"
+        "--cycles", type=number(0, low_open=True), default=None,
+        help="drive periods to simulate (default: the scene's)"
     )
     p.add_argument(
         "--integrator",
@@ -35,11 +37,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--steps-per-period",
-        type=int,
+        type=number(1, 10**7, integer=True),
         default=None,
         help="fixed steps per drive period for splittings (default: automatic)",
     )
-    p.add_argument("--samples-per-period", type=int, default=8, help="stored samples per period (default 8)")
+    p.add_argument("--samples-per-period", type=number(1, 10**5, integer=True), default=8,
+                   help="stored samples per period (default 8)")
     p.add_argument(
         "--decimate",
         type=int,
@@ -63,10 +66,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="choose the splitting (order 4, 6 or 8) and steps per period that reach this stroboscopic "
         "error over the run, from short pilot runs (overrides --integrator and --steps-per-period)",
     )
-    p.add_argument("--rtol", type=float, default=1e-10, help="relative tolerance of scipy references")
+    p.add_argument("--rtol", type=number(0, 1, low_open=True), default=1e-10,
+                   help="relative tolerance of scipy references")
     p.add_argument(
         "--drift-threshold",
-        type=float,
+        type=number(0, low_open=True),
         default=1e-6,
         help="relative invariant drift that marks the run as failed (default 1e-6)",
     )
@@ -99,18 +103,13 @@ def run(args: argparse.Namespace) -> int:
         note_first_compile("simulate")
     if args.target_error is not None:
         _choose(args, scene, system)
-    result = simulate(
-        scene,
-        cycles=args.cycles,
-        integrator=args.integrator,
-        steps_per_period=args.steps_per_period,
-        samples_per_period=args.samples_per_period,
-        rtol=args.rtol,
-        drift_threshold=args.drift_threshold,
-        system=system,
-        decimate=args.decimate,
-        attitude=args.attitude,
-    )
+    settings = dict(integrator=args.integrator, steps_per_period=args.steps_per_period,
+                    samples_per_period=args.samples_per_period, rtol=args.rtol,
+                    drift_threshold=args.drift_threshold, system=system, decimate=args.decimate,
+                    attitude=args.attitude)
+    cycles = float(args.cycles if args.cycles is not None else scene.cycles)
+    _announce_estimate(scene, cycles, settings)
+    result = simulate(scene, cycles=args.cycles, **settings)
     if args.rerun:
         result.spec["rerun"] = args.rerun
         _stream(result, args.rerun)
@@ -118,6 +117,31 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         write_json(result.to_json(args.series), args.json, "simulate")
     return 0 if result.ok else 1
+
+
+#: a run of at least this many drive periods is first timed on a pilot of 1 % of them (at most
+#: PILOT_MAX_CYCLES), and its time announced when above ESTIMATE_SAY_S (the kernels run in one
+#: call, so there is no progress to report from inside)
+PILOT_FROM_CYCLES, PILOT_MAX_CYCLES, ESTIMATE_SAY_S = 1000.0, 1000.0, 5.0
+
+
+def _announce_estimate(scene, cycles: float, settings: dict) -> None:
+    """One stderr line with the run's estimated time from a pilot run, when it is long."""
+    from labkit.sim import simulate
+
+    if cycles < PILOT_FROM_CYCLES:
+        return
+    pilot_cycles = min(cycles / 100, PILOT_MAX_CYCLES)
+    pilot = simulate(scene, cycles=pilot_cycles, **settings)
+    estimate = pilot.wall_s * cycles / pilot_cycles
+    if estimate > ESTIMATE_SAY_S:
+        print(f"labkit simulate: {cycles:g} cycles will take about {_duration(estimate)} "
+              f"(a {pilot_cycles:g}-cycle pilot took {pilot.wall_s:.2g} s)", file=sys.stderr, flush=True)
+
+
+def _duration(seconds: float) -> str:
+    return f"{seconds:.0f} s" if seconds < 120 else f"{seconds / 60:.0f} min" if seconds < 7200 \
+        else f"{seconds / 3600:.1f} h"
 
 
 def _choose(args: argparse.Namespace, scene, system) -> None:

@@ -10,10 +10,12 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from labkit.cli.numbers import number
 from labkit.cli.output import add_json_argument, write_json
 from labkit.cli.parsers import command_parser
 from labkit.errors import VideoError
@@ -94,9 +96,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     strobe = kinds.add_parser("strobe", help="stroboscopic side view of the floating magnet")
     strobe.add_argument("out")
     strobe.add_argument("--level", choices=["easy", "medium", "hard"], default="medium")
-    strobe.add_argument("--frames", type=int, default=48)
-    strobe.add_argument("--rotor-hz", type=float, default=240.0)
-    strobe.add_argument("--strobe-hz", type=float, default=15.15)
+    strobe.add_argument("--frames", type=number(2, 100_000, integer=True), default=48)
+    strobe.add_argument("--rotor-hz", type=number(0, 10_000, low_open=True), default=240.0,
+                        help="rotor revolutions per second (default 240: 14 400 RPM)")
+    strobe.add_argument("--strobe-hz", type=number(0, 10_000, low_open=True), default=15.15,
+                        help="flashes (and frames) per second (default 15.15: 2.4 Hz apparent at 240 Hz)")
     strobe.add_argument("--tilt-rad", type=float, default=0.25, help="tilt amplitude phi")
     strobe.add_argument("--rc-offset-px", type=float, default=60.0, help="delta of Eq. 5.97")
     strobe.add_argument("--codec", default="mp4v")
@@ -202,12 +206,56 @@ def run_strobe(args: argparse.Namespace) -> int:
     )
     if not 0 < spec.tilt_amplitude_rad < math.pi / 2:
         raise VideoError(args.out, "--tilt-rad must lie in (0, pi/2)")
+    problem = strobe_coverage_problem(spec.rotor_hz, spec.strobe_hz, spec.frames)
+    if problem is not None and problem.startswith(STILL):
+        raise VideoError(args.out, problem)  # nothing moves: no clip is worth writing
+    if problem is not None:  # written (a clip to test poor coverage is a use), but said
+        print(f"labkit synth: warning: {args.out}: {problem}", file=sys.stderr)
     truth = strobe_truth(spec)
     path = write_clip(args.out, render_strobe(spec), spec.strobe_hz, spec.codec, truth)
     print(f"wrote {path} ({spec.frames} frames, apparent {abs(spec.apparent_hz):.3f} Hz) and "
           f"{_written(path, None)['truth']}")
     write_json(_written(path, truth), args.json, "synth")
     return 0
+
+
+def phase_spread(apparent_hz: float, strobe_hz: float, frames: int) -> float:
+    """How evenly ``frames`` flashes sample the apparent cycle: twice the smaller eigenvalue of the
+    covariance of (sin psi, cos psi), 1 for uniform phases, 0 for one phase (the measure
+    ``labkit analyse strobe`` reports as ``phase_spread``, labkit.vision.strobe)."""
+    import numpy as np
+
+    psi = 2 * math.pi * apparent_hz * np.arange(frames) / strobe_hz
+    cov = np.cov(np.vstack([np.sin(psi), np.cos(psi)]))
+    return float(2 * max(0.0, np.linalg.eigvalsh(cov)[0]))
+
+
+#: how a still clip's problem starts (refused; a poorly covered cycle is only warned about)
+STILL = "a still clip: "
+
+
+def strobe_coverage_problem(rotor_hz: float, strobe_hz: float, frames: int) -> str | None:
+    """Why a clip of these settings cannot be measured by ``labkit analyse strobe`` (None: it
+    can): an apparent frequency of 0 (the rotor turns a whole number of times between flashes)
+    shows a still body (the text starts with :data:`STILL`); too few frames for the apparent
+    cycle sample too little of it."""
+    from labkit.vision.strobe_quality import MIN_PHASE_SPREAD
+
+    ratio = rotor_hz / strobe_hz
+    apparent = (ratio - round(ratio)) * strobe_hz
+    if abs(apparent) < 1e-9 * strobe_hz:
+        return (f"{STILL}--rotor-hz {rotor_hz:g} is {round(ratio)} x --strobe-hz {strobe_hz:g}: the apparent "
+                "frequency is 0 Hz, every flash catches the magnet at the same phase and the clip shows "
+                "a still body that labkit analyse strobe cannot measure; choose a strobe a little off "
+                f"rotor/n, e.g. --strobe-hz {rotor_hz / (round(ratio) + 0.16):.4g}")
+    spread = phase_spread(apparent, strobe_hz, frames)
+    if spread < MIN_PHASE_SPREAD:
+        need = math.ceil(strobe_hz / abs(apparent))
+        return (f"{frames} frames at {strobe_hz:g} Hz cover {frames * abs(apparent) / strobe_hz:.2g} of the "
+                f"apparent cycle ({abs(apparent):.4g} Hz; phase spread {spread:.2f} of 1, labkit analyse "
+                f"strobe needs {MIN_PHASE_SPREAD:g} and will call the clip doubtful or failed): use "
+                f"--frames {need} or more, or a strobe further from rotor/n")
+    return None
 
 
 def run_testset(args: argparse.Namespace) -> int:

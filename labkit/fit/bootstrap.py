@@ -16,13 +16,17 @@ from labkit.fit.result import FitResult
 
 
 def bootstrap(fit: Callable[[dict[str, np.ndarray]], FitResult], data: dict[str, np.ndarray],
-              result: FitResult, *, n: int = 1000, seed: int = 0) -> FitResult:
-    """Return ``result`` with ``bootstrap_ci95`` filled for every fitted or derived parameter."""
+              result: FitResult, *, n: int = 1000, seed: int = 0,
+              on_progress: Callable[[int, int], None] | None = None) -> FitResult:
+    """Return ``result`` with ``bootstrap_ci95`` filled for every fitted or derived parameter.
+    ``on_progress(done, n)`` is called after each resample (``labkit fit`` prints progress lines)."""
     rng = np.random.default_rng(seed)
     m = len(next(iter(data.values())))
     draws: dict[str, list[float]] = {k: [] for k, p in result.params.items() if not p.fixed}
     failed = 0
-    for _ in range(n):
+    for done in range(1, n + 1):
+        if on_progress is not None:
+            on_progress(done - 1, n)
         idx = rng.integers(0, m, m)
         try:
             r = fit({k: v[idx] for k, v in data.items()})

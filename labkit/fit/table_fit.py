@@ -9,6 +9,7 @@ the single series ``all``.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -34,7 +35,8 @@ from labkit.fit.result import FitResult
 class FitOptions:
     """Options of a table fit. ``x``/``y``/``sigma``/``series`` override the default columns;
     ``inertia`` (kg m^2) for pfr-force and cone-angle; ``omega_c`` (rad/s, ``math.inf`` or
-    ``"fit"``) for spin-critical; ``fixed`` parameter values; ``bootstrap`` resamples (0 = off)."""
+    ``"fit"``) for spin-critical; ``fixed`` parameter values; ``bootstrap`` resamples (0 = off);
+    ``on_progress(done, total)`` is called after each bootstrap resample."""
 
     x: str | None = None
     y: str | None = None
@@ -45,6 +47,7 @@ class FitOptions:
     fixed: dict[str, float] = field(default_factory=dict)
     bootstrap: int = 0
     seed: int = 0
+    on_progress: Callable[[int, int], None] | None = field(default=None, compare=False)
 
 
 @dataclass(frozen=True)
@@ -151,7 +154,8 @@ def _fit_one(table: Table, si: bool, model: str, x_col: str, y_col: str, sigma_c
 
     result = run(data)
     if options.bootstrap:
-        result = bootstrap(run, data, result, n=options.bootstrap, seed=options.seed)
+        result = bootstrap(run, data, result, n=options.bootstrap, seed=options.seed,
+                           on_progress=options.on_progress)
     return result
 
 

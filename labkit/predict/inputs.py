@@ -19,6 +19,7 @@ from labkit.predict.magnets import (
 )
 from labkit.rig import BodySpec, find_rig_file, parse_body, read_rig_text
 from labkit.rig.config import load_toml
+from labkit.rig.plausible import check_body_plausible
 
 
 class PredictInputError(LabkitError):
@@ -62,6 +63,7 @@ def magnets_from_rig(path: str | Path, remanence_t: float | None = None) -> tupl
         if name not in tables:
             raise RigFileError(file, f"bodies.{name}", "missing (required for a prediction)")
         body = parse_body(file, name, tables[name])
+        check_body_plausible(file, name, body, tables[name])  # mass_g = 0.0059: a slip, refused
         if body.grade:
             try:
                 remanence_for_grade(body.grade)

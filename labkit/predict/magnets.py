@@ -18,14 +18,8 @@ import math
 import re
 from dataclasses import dataclass
 
-MU0 = 4e-7 * math.pi
-NDFEB_DENSITY_KG_M3 = 7500.0  # sintered NdFeB, 7.4-7.6 g/cm^3 in datasheets
+from labkit.bodies import GRADE_REMANENCE_T, MU0, NDFEB_DENSITY_KG_M3, shape_properties
 
-#: remanence B_r (T), middle of the datasheet range of each grade
-GRADE_REMANENCE_T: dict[str, float] = {
-    "N35": 1.19, "N38": 1.24, "N40": 1.275, "N42": 1.305, "N45": 1.34,
-    "N48": 1.385, "N50": 1.415, "N52": 1.445, "N55": 1.48,
-}
 DEFAULT_GRADE = "N42"
 SHAPES = ("sphere", "cylinder", "cube", "block")
 
@@ -70,31 +64,6 @@ def remanence_for_grade(grade: str) -> float:
 def moment_from_remanence(remanence_t: float, volume_m3: float) -> float:
     """Dipole moment m = B_r V / mu0 (A m^2) of a uniformly magnetised body (Eq. 6.16)."""
     return remanence_t * volume_m3 / MU0
-
-
-def shape_properties(shape: str, sizes_m: tuple[float, ...]) -> tuple[float, float, float, float]:
-    """(volume, I_axial/mass, I_radial/mass, axial half extent) of a uniform body.
-
-    sphere (d), cylinder (d, length along the axis), cube (a), block (w, depth, height along
-    the dipole). Inertias per unit mass about the centre; the block's radial value is the mean of
-    its two transverse moments.
-    """
-    if shape == "sphere":
-        (d,) = sizes_m
-        r = d / 2
-        return 4 / 3 * math.pi * r**3, 0.4 * r**2, 0.4 * r**2, r
-    if shape == "cylinder":
-        d, length = sizes_m
-        r = d / 2
-        return math.pi * r**2 * length, r**2 / 2, (3 * r**2 + length**2) / 12, length / 2
-    if shape == "cube":
-        (a,) = sizes_m
-        return a**3, a**2 / 6, a**2 / 6, a / 2
-    if shape == "block":
-        w, b, h = sizes_m
-        radial = ((b**2 + h**2) + (w**2 + h**2)) / 24
-        return w * b * h, (w**2 + b**2) / 12, radial, h / 2
-    raise MagnetSpecError(f"unknown shape {shape!r}; use one of {', '.join(SHAPES)}")
 
 
 _N_SIZES = {"sphere": 1, "cylinder": 2, "cube": 1, "block": 3}

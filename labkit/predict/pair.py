@@ -23,6 +23,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
+from labkit.errors import LabkitError
+from labkit.model.cone import cone_angle_tilted_dipole
 from labkit.model.floator_equilibrium import FloatorSetup, FloatorState, steady_state
 from labkit.predict.axial import AxialBoundState, axial_bound_state
 from labkit.predict.magnets import Magnet
@@ -98,7 +100,7 @@ class ForceCurve:
 
     def search_range(self) -> tuple[float, float]:
         r0 = self.pair.contact_distance
-        return r0, 40.0 * r0
+        return r0, SEARCH_RANGE_CONTACTS * r0
 
     def stiffness_limit(self, xtol: float, guess: float | None = None) -> tuple[float, float]:
         """(r, largest net attraction) over the search range: a log-spaced scan (narrow around
@@ -140,6 +142,75 @@ class ForceCurve:
         lo, hi = self.search_range()
         lim = self.stiffness_limit(xtol)
         return axial_bound_state(self, self.pair.load, lo, hi, xtol=xtol, r_limit=lim)
+
+
+class NoSmallConeError(LabkitError):
+    """No small-cone steady state exists anywhere a bound state is looked for (the speed is far
+    too low): refused at once instead of minutes of steady-state solves that cannot succeed."""
+
+
+#: a search range reaches this many contact distances (:meth:`ForceCurve.search_range`)
+SEARCH_RANGE_CONTACTS = 40.0
+
+
+#: a speed below this fraction of the estimated minimum speed is refused: a slip, not a margin
+FAR_BELOW_MIN_SPEED = 0.1
+#: that estimate scales the force split solved at this many times the asked speed (fast solves)
+REFERENCE_SPEED_FACTOR = 100.0
+
+
+def far_cone_angle(pair: Pair, omega: float, contacts: float = SEARCH_RANGE_CONTACTS) -> float:
+    """The floator's cone angle (rad, Eq. 5.30, closed form) ``contacts`` contact distances from
+    the rotator (default: the far end of the search range, the smallest cone anywhere in it,
+    since the torque falls as r^-3). pi/2 when the static torque outweighs the inertia."""
+    r = contacts * pair.contact_distance
+    tau = K_M * pair.rotator.moment_a_m2 * pair.floator.moment_a_m2 / r**3
+    inertia = pair.floator.inertia_radial_kg_m2
+    if inertia * omega**2 - 2.0 * tau * math.sin(pair.gamma) <= 0:
+        return math.pi / 2
+    return abs(float(cone_angle_tilted_dipole(tau, pair.gamma, inertia, omega)))
+
+
+def check_speed_can_bind(pair: Pair, omega: float, rpm_per_rad_s: float = 60 / (2 * math.pi)) -> None:
+    """NoSmallConeError when even at the far end of the search range the cone (Eq. 5.30) exceeds
+    :data:`MAX_CONE_RAD`: no steady state of the small-cone branch exists at any distance, so no
+    bound state. ``labkit predict --speed-rpm 25`` (the "000" forgotten) is refused in
+    milliseconds instead of 14 minutes of solves. Deterministic: the model's closed form."""
+    phi = far_cone_angle(pair, omega)
+    if phi <= MAX_CONE_RAD:
+        _check_far_below_min_speed(pair, omega, rpm_per_rad_s)
+        return
+    rpm = omega * rpm_per_rad_s
+    hint = f"; did you mean {rpm * 1e3:g} rpm?" if far_cone_angle(pair, omega * 1e3) <= MAX_CONE_RAD else ""
+    r_far = SEARCH_RANGE_CONTACTS * pair.contact_distance
+    raise NoSmallConeError(
+        f"no bound state at {rpm:g} rpm: even {r_far * 1e3:.0f} mm from the rotator "
+        f"({SEARCH_RANGE_CONTACTS:g} contact distances) the floator's cone under the rotating dipole "
+        f"(Eq. 5.30) would be {phi:.2f} rad, "
+        f"beyond the small-cone branch (<= {MAX_CONE_RAD:.3f} rad) the PFR needs; the rotor must turn "
+        f"far faster{hint}")
+
+
+def _check_far_below_min_speed(pair: Pair, omega: float, rpm_per_rad_s: float) -> None:
+    """NoSmallConeError when ``omega`` is below :data:`FAR_BELOW_MIN_SPEED` of the minimum speed
+    estimated by :func:`scaled_min_speed_guess` from the force split at
+    :data:`REFERENCE_SPEED_FACTOR` times ``omega`` (PFR ~ omega^-2, Eq. 5.81). Only looked at when
+    the closed-form cone at contact exceeds :data:`MAX_CONE_RAD` (a slow speed: at normal speeds
+    nothing is added) and the weight pulls the floator away (beneath the rotator)."""
+    if pair.load <= 0 or far_cone_angle(pair, omega, 1.0) <= MAX_CONE_RAD:
+        return
+    reference = ForceCurve(pair, omega * REFERENCE_SPEED_FACTOR)
+    reference.stiffness_limit(1e-7)
+    w_min = scaled_min_speed_guess(reference)
+    if not (math.isfinite(w_min) and omega < FAR_BELOW_MIN_SPEED * w_min):
+        return
+    rpm, min_rpm = omega * rpm_per_rad_s, w_min * rpm_per_rad_s
+    hint = f"; did you mean {rpm * 1e3:g} rpm?" if w_min <= omega * 1e3 <= 5 * w_min else ""
+    raise NoSmallConeError(
+        f"no bound state at {rpm:g} rpm: the minimum speed is about {float(f'{min_rpm:.2g}'):g} rpm (the "
+        f"force split solved at {rpm * REFERENCE_SPEED_FACTOR:g} rpm, its PFR scaled as omega^-2, "
+        f"Eq. 5.81); below a tenth of it there is no bound state to predict and the solves take "
+        f"minutes{hint}")
 
 
 def _log_root(fn, omega0: float, increasing: bool, rtol: float, first_step: float = 0.05,

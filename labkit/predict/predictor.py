@@ -18,6 +18,7 @@ Physics (point dipoles, floator on the rotator's spin axis, gravity included):
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -28,7 +29,14 @@ from labkit.model.mbs import scaled_speed
 from labkit.model.stability import criterion_holds, min_static_torque
 from labkit.predict.estimate import CLOSED_FORM, SIMULATION, STEADY_STATE, Estimate, timed
 from labkit.predict.magnets import Magnet
-from labkit.predict.pair import ForceCurve, Pair, min_speed, scaled_min_speed_guess, speed_for_distance
+from labkit.predict.pair import (
+    ForceCurve,
+    Pair,
+    check_speed_can_bind,
+    min_speed,
+    scaled_min_speed_guess,
+    speed_for_distance,
+)
 from labkit.predict.verify import VerifyResult, verify
 
 SCHEMA = "labkit.predict/1"
@@ -91,8 +99,14 @@ def scaled_floator(floator: Magnet, mass_factor: float) -> Magnet:
 
 
 def predict(pair: Pair, omega: float, run_verify: bool = True, verify_cycles: int = 2000,
-            speed_limits: bool = True, scaling: bool = True, xtol: float = 1e-9) -> Prediction:
-    """Everything the ``labkit predict`` table shows, for ``pair`` at ``omega`` (rad/s)."""
+            speed_limits: bool = True, scaling: bool = True, xtol: float = 1e-9,
+            on_stage: Callable[[str], None] | None = None) -> Prediction:
+    """Everything the ``labkit predict`` table shows, for ``pair`` at ``omega`` (rad/s).
+    ``on_stage(name)`` is called as each stage starts (``labkit predict`` prints progress lines).
+
+    Raises :class:`labkit.predict.pair.NoSmallConeError` at once when the speed is far too low
+    for any bound state (:func:`labkit.predict.pair.check_speed_can_bind`)."""
+    check_speed_can_bind(pair, omega, RPM)
     pred = Prediction(inputs={
         "rotator": pair.rotator.to_json(), "floator": pair.floator.to_json(),
         "speed_rpm": omega * RPM, "tilt_deg": math.degrees(pair.gamma), "placement": pair.placement,
@@ -110,11 +124,15 @@ def predict(pair: Pair, omega: float, run_verify: bool = True, verify_cycles: in
                       note=f"at r = {bs.r_limit * 1e3:.3f} mm; weight {abs(pair.load):.4g} N"))
     if bs.bound:
         _bound_state_numbers(pred, pair, omega, curve, bs)
+    stage = on_stage or (lambda name: None)
     if speed_limits:
+        stage("bound state done; searching the speed limits")
         _speed_limits(pred, pair, omega, curve, bs)
     if scaling and "min_speed_rpm" in pred.estimates:
+        stage("scaling the minimum speed to similar floators")
         _scaling(pred, pair, omega)
     if bs.bound and run_verify:
+        stage(f"simulating {verify_cycles} cycles")
         state = curve.state(bs.r_eq)
         ver, cost = timed(lambda: verify(pair, omega, state, cycles=verify_cycles))
         pred.cost_s += cost

@@ -77,6 +77,7 @@ def _magnet(d: dict) -> Magnet:
 def evaluate_points(points: list[dict]) -> list[dict]:
     """Sweep ``evaluate``: the bound state and the cone's linear stability at each point, plus
     the time-domain check (lateral stiffness, stays bound) when the point asks for it."""
+    from labkit.predict.pair import NoSmallConeError
     from labkit.predict.predictor import predict
 
     rows = []
@@ -85,8 +86,13 @@ def evaluate_points(points: list[dict]) -> list[dict]:
         pair = Pair(_magnet(p["rotator"]), _magnet(p["floator"]), math.radians(p["tilt_deg"]),
                     p["placement"], p["gravity_m_s2"])
         cycles = int(p.get("verify_cycles", 0))
-        pred = predict(pair, p["speed_rpm"] * 2 * math.pi / 60, run_verify=cycles > 0,
-                       verify_cycles=max(cycles, 10), speed_limits=False, scaling=False, xtol=1e-8)
+        try:
+            pred = predict(pair, p["speed_rpm"] * 2 * math.pi / 60, run_verify=cycles > 0,
+                           verify_cycles=max(cycles, 10), speed_limits=False, scaling=False, xtol=1e-8)
+        except NoSmallConeError as exc:  # far too slow: the floator falls, said without minutes of solves
+            rows.append({"bound": False, "stable": False, "verdict": str(exc),
+                         **{k: math.nan for k in _NUMBERS}, "wall_s": time.perf_counter() - t0})
+            continue
         rows.append({
             "bound": pred.bound, "stable": pred.stable, "verdict": pred.verdict,
             "r_eq_mm": _num(pred.value("r_eq_mm")),
@@ -98,6 +104,10 @@ def evaluate_points(points: list[dict]) -> list[dict]:
             "wall_s": time.perf_counter() - t0,
         })
     return rows
+
+
+_NUMBERS = ("r_eq_mm", "axial_stiffness_N_m", "cone_angle_deg", "growth_rate_1_s", "max_load_N",
+            "lateral_stiffness_N_m")
 
 
 def _num(v) -> float:

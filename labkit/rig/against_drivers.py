@@ -15,7 +15,7 @@ from labkit.devices.base import driver_class, unknown_options, unknown_options_m
 from labkit.emulators.base import emulator_class
 from labkit.emulators.urls import parse_sim_url
 from labkit.errors import PortURLError
-from labkit.rig.checks import _Section, read_rig_text
+from labkit.rig.checks import _Section, rate_problem, read_rig_text
 from labkit.rig.config import Rig, find_rig_file, parse_rig_config
 
 
@@ -31,12 +31,17 @@ class DriverCheck:
     def port(self, sec: _Section, url: str) -> None:
         if not url.startswith("sim://"):
             return
-        try:  # an emulated device is checked whole: emulator, seed, fault names
-            emulator_class(parse_sim_url(url).protocol)
+        try:  # an emulated device is checked whole: emulator, seed, fault names, rates
+            spec = parse_sim_url(url)
+            emulator_class(spec.protocol)
         except PortURLError as exc:
             raise sec.error("port", exc.reason) from None
         except KeyError as exc:
             raise sec.error("port", str(exc.args[0])) from None
+        for name, value in spec.options.items():
+            problem = rate_problem(name, value)
+            if problem is not None:
+                raise sec.error("port", f"{name}={value}: {problem}")
 
     def options(self, sec: _Section, kind: str, protocol: str, port: str, options: dict[str, Any]) -> None:
         cls = driver_class(kind, protocol)

@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import difflib
 import math
+import os
 import re
+import stat
 from pathlib import Path
 from typing import Any
 
@@ -29,6 +31,13 @@ MAX_DURATION_S = 3600.0               # every time: settle timeouts, serial time
 MAX_TACH_TIMEOUT_S = 10.0             # tachometer silent longer than this cannot be allowed
 MAX_CONTROL_PERIOD_S = 1.0            # a speed loop slower than 1 Hz cannot hold a ramp
 MAX_RIG_FILE_BYTES = 1_000_000        # a rig file is a few kB; /dev/zero is not a rig file
+MIN_CONTROL_PERIOD_S = 1e-3           # control.period / status_period: no serial device answers faster
+#: a rate (``rate_hz`` of a driver option or a sim:// URL): the fastest device streams 200 lines/s
+#: (labkit_tach RATE 1..200); 1 kHz leaves room and bounds the work of an emulated second
+MAX_RATE_HZ = 1000.0
+#: dotted parts of one TOML key (``a.b.c``): a rig file nests three deep; tomllib takes
+#: quadratic time in the parts (60 000 parts: over a minute), so a bound is read first
+MAX_KEY_PARTS = 32
 #: Device roles and loop names become file names inside a session (``readings/ROLE.jsonl``).
 ROLE_PATTERN = re.compile(r"[a-z][a-z0-9_]{0,63}")
 _CAPS_SI: dict[str, tuple[float, str]] = {
@@ -169,13 +178,69 @@ def check_role(file: str, key: str, role: str) -> None:
                                       "starting with a letter (at most 64 characters)")
 
 
-def read_rig_text(path: Path) -> str:
-    """A rig file's text, read with a bound (:data:`MAX_RIG_FILE_BYTES`). RigFileError otherwise."""
+def rate_problem(name: str, value: Any) -> str | None:
+    """Why an option ``name`` ending in ``_hz`` cannot be ``value`` (None: it can, or it is no
+    rate). A rate of -5 or 1e9 Hz makes an emulator or a device stream for ever."""
+    if not name.lower().endswith("_hz"):
+        return None
     try:
-        with open(path, "rb") as f:
+        rate = float(value)
+    except (TypeError, ValueError):
+        return None  # not a number: the driver or emulator names it
+    if isinstance(value, bool) or not (math.isfinite(rate) and 0 < rate <= MAX_RATE_HZ):
+        return f"a rate must be in (0, {MAX_RATE_HZ:g}] Hz, got {value!r}"
+    return None
+
+
+def check_rate_options(sec: _Section, key: str, options: dict[str, Any]) -> None:
+    """Every ``*_hz`` driver option is a rate in (0, :data:`MAX_RATE_HZ`]."""
+    for name, value in options.items():
+        problem = rate_problem(name, value)
+        if problem is not None:
+            raise sec.error(f"{key}.{name}", problem)
+
+
+def check_toml_shape(text: str, file: str) -> None:
+    """Refuse, before tomllib reads it, a key with more than :data:`MAX_KEY_PARTS` dotted
+    parts (a header ``[a.b.c]`` or the key before a line's first ``=``)."""
+    for number, line in enumerate(text.splitlines(), 1):
+        stripped = line.lstrip()
+        if not stripped or stripped.startswith("#"):
+            continue
+        if stripped.startswith("["):
+            key = stripped.split("]", 1)[0]
+        elif "=" in stripped:
+            key = stripped.split("=", 1)[0]
+        else:
+            continue
+        parts = key.count(".") + 1
+        if parts > MAX_KEY_PARTS:
+            raise RigFileError(file, f"(line {number})",
+                               f"a key of {parts} dotted parts; a rig file nests at most "
+                               f"{MAX_KEY_PARTS} deep")
+
+
+def read_rig_text(path: Path) -> str:
+    """A rig file's text, read with a bound (:data:`MAX_RIG_FILE_BYTES`). RigFileError otherwise.
+
+    Only a regular file is read: a FIFO would wait for a writer for ever, a device (``/dev/zero``)
+    never ends. The file is opened without blocking and checked before a byte is read."""
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except OSError as exc:
+        raise RigFileError(str(path), "(file)", f"cannot read: {exc.strerror or exc}") from None
+    try:
+        mode = os.fstat(fd).st_mode
+        if not stat.S_ISREG(mode):
+            kind = ("a FIFO (named pipe)" if stat.S_ISFIFO(mode) else "a directory" if stat.S_ISDIR(mode)
+                    else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode) else "a socket")
+            raise RigFileError(str(path), "(file)", f"is {kind}, not a regular file; not a rig file")
+        with os.fdopen(fd, "rb", closefd=False) as f:
             data = f.read(MAX_RIG_FILE_BYTES + 1)
     except OSError as exc:
         raise RigFileError(str(path), "(file)", f"cannot read: {exc.strerror or exc}") from None
+    finally:
+        os.close(fd)
     if len(data) > MAX_RIG_FILE_BYTES:
         raise RigFileError(str(path), "(file)",
                            f"larger than {MAX_RIG_FILE_BYTES // 1000} kB; not a rig file")

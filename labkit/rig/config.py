@@ -24,10 +24,15 @@ from labkit.rig.checks import (
     MAX_CONTROL_PERIOD_S,
     MAX_DURATION_S,
     MAX_TACH_TIMEOUT_S,
+    MIN_CONTROL_PERIOD_S,
     _check_finite,
     _Section,
+    check_rate_options,
     check_role,
+    check_toml_shape,
+    split_unit,
 )
+from labkit.rig.plausible import check_plausible
 
 KINDS = ("balance", "tach", "motor")
 SHAPES = ("sphere", "cylinder", "ring", "block", "cube")
@@ -197,6 +202,7 @@ def _device(file: str, role: str, table: Any, check_device: DeviceCheck | None) 
             raise ssec.error(name, f"must be in [0, {MAX_DURATION_S:.0f}] s, got {serial[name]}")
     options = dict(sec.raw("options", dict, default={}))
     _check_finite(sec, "options", options)
+    check_rate_options(sec, "options", options)
     for name, value in options.items():
         scale = 1.0 if name.endswith("_s") else 1e3 if name.endswith("_ms") else None
         if scale is not None and isinstance(value, int | float) and not isinstance(value, bool) \
@@ -253,6 +259,11 @@ def _control(file: str, table: Any, devices: dict[str, DeviceConfig]) -> Control
         status_period_s=sec.quantity("status_period", "s", default=d.status_period_s),
         **_plausibility(sec, d),
     )
+    for base in ("period", "status_period"):  # a loop every nanosecond is a run that never ends
+        if values[base + "_s"] < MIN_CONTROL_PERIOD_S:
+            key = next(k for k in sec.table if (s := split_unit(k)) and s[0] == base)
+            raise sec.error(key, f"{sec.table[key]!r} is below the floor of "
+                                 f"{MIN_CONTROL_PERIOD_S * 1e3:g} ms (no serial device answers faster)")
     for gain in ("kp", "ki"):
         v = sec.raw(gain, (int, float), default=getattr(d, gain))
         if v < 0:
@@ -353,11 +364,14 @@ def parse_rig_config(text: str, file: str = "<rig>", check_device: DeviceCheck |
 
     control = _control(file, top.raw("control", dict, default={}), devices)
     top.finish()
-    return Rig(Path(file), name, description, devices, bodies, geometry, limits, control, text)
+    rig = Rig(Path(file), name, description, devices, bodies, geometry, limits, control, text)
+    check_plausible(rig, data)
+    return rig
 
 
 def load_toml(text: str, file: str) -> dict[str, Any]:
     """Rig-file text -> tables; a syntax error is a RigFileError at key ``(syntax)``."""
+    check_toml_shape(text, file)
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

@@ -94,6 +94,21 @@ def tilt_from_semi_axis(semi_axis_px: float, mm_per_px: float, screen_distance_m
     return 0.5 * math.atan(semi_axis_px * mm_per_px / screen_distance_mm)
 
 
+def tilt_geometry_doubt(semi_axis_px: float, mm_per_px: float, screen_distance_mm: float) -> str | None:
+    """Why a tilt from these numbers is doubtful, or None. A semi-axis on the screen longer than
+    the screen distance is a beam turned by more than 45 deg (a tilt above 22.5 deg, beyond the
+    paper's cones); it is what a distance typed in metres gives (``--screen-distance-mm 0.5``)."""
+    semi_axis_mm = semi_axis_px * mm_per_px
+    if semi_axis_mm <= screen_distance_mm:
+        return None
+    hint = (f"; a distance typed in metres? ({screen_distance_mm:g} m = {screen_distance_mm * 1e3:g} mm)"
+            if screen_distance_mm < 10 <= screen_distance_mm * 1e3 else "")
+    return (f"the trace's semi-axis on the screen ({semi_axis_mm:.3g} mm) is longer than the screen "
+            f"distance ({screen_distance_mm:g} mm): the tilt "
+            f"{math.degrees(tilt_from_semi_axis(semi_axis_px, mm_per_px, screen_distance_mm)):.1f} deg "
+            f"is above 22.5 deg; check --screen-distance-mm and --mm-per-px{hint}")
+
+
 def _clip_roi(roi: tuple[int, int, int, int], size: tuple[int, int]) -> tuple[int, int, int, int]:
     x, y, w, h = (int(v) for v in roi)
     x0, y0 = max(0, x), max(0, y)
@@ -361,6 +376,11 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
             major, minor = pattern["semi_axes_px"]
             tilt = {"major": tilt_from_semi_axis(major, mm_per_px, screen_distance_mm),
                     "minor": tilt_from_semi_axis(minor, mm_per_px, screen_distance_mm)}
+            doubt = tilt_geometry_doubt(major, mm_per_px, screen_distance_mm)
+            if doubt is not None:
+                qual = {**qual, "verdict": "failed" if qual["verdict"] == "failed" else "doubtful",
+                        "reasons": [*qual["reasons"], doubt],
+                        "checks": {**qual["checks"], "tilt_geometry": "doubtful"}}
     qual["settings"] = asdict(quality)
     qual["elapsed_s"] = time.perf_counter() - t_start
     qual["fit_s"] = time.perf_counter() - t_frames  # work left after the last frame: mostly the fit
