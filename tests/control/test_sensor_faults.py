@@ -16,7 +16,7 @@ import pytest
 from labkit.control import build_speed_control
 from labkit.emulators.plant import use_emulation
 from labkit.emulators.sim_port import build_emulator
-from labkit.errors import SafetyError
+from labkit.errors import RigFileError
 from labkit.io.clock import VirtualClock, use_clock
 from labkit.rig import open_rig, parse_rig
 from labkit.units import rad_s_to_rpm, rpm_to_rad_s
@@ -27,11 +27,12 @@ LIMIT_RPM = 12000.0
 FAULT_AT = 6.0
 
 
-def run(tach_faults="", motor_faults="", full_speed_rpm=None, target_rpm=8000.0, seconds=15.0):
+def run(tach_faults="", motor_faults="", full_speed_rpm=None, target_rpm=8000.0, seconds=15.0,
+        limit_rpm=None):
     """(trip time, reason, peak true RPM, plant) of a hold at ``target_rpm`` with the faults."""
     from labkit.emulators.plant import shared_plant
 
-    text = RIG
+    text = RIG if limit_rpm is None else RIG.replace("max_speed_rpm = 12000", f"max_speed_rpm = {limit_rpm}")
     if tach_faults:
         text = text.replace("role=rotor_tach", f"role=rotor_tach&faults={tach_faults}")
     if motor_faults:
@@ -96,16 +97,19 @@ def test_the_duty_cap_holds_the_rotor_under_the_limit_with_a_tachometer_that_rea
     assert peak <= LIMIT_RPM
 
 
-def test_a_feed_forward_typo_trips_with_a_message_naming_it():
-    # 2387 for 23 873: 2000 RPM asks duty 0.84, the rotor heads for 20 000 RPM
-    tripped_at, reason, peak, _ = run(full_speed_rpm=2387, target_rpm=2000)
+def test_a_feed_forward_typo_the_rig_check_admits_still_trips_at_run_time():
+    # 2387 for 23 873 under a 2 500 RPM limit (so labkit.rig.plausible lets it through): 2000 RPM
+    # asks duty 0.84 and the rotor heads for 20 000 RPM; the loop stops it within half a second
+    tripped_at, reason, peak, _ = run(full_speed_rpm=2387, target_rpm=2000, limit_rpm=2500)
     assert tripped_at is not None and tripped_at < 1.5, (tripped_at, reason)
-    assert "full_speed_rpm" in reason and "far above" in reason
-    assert peak <= LIMIT_RPM
+    assert ("full_speed_rpm" in reason and "far above" in reason) or "over-speed" in reason, reason
+    assert peak < 2 * 2500, peak
 
 
-def test_a_target_the_feed_forward_cannot_reach_is_refused_before_the_rotor_turns():
-    with pytest.raises(SafetyError, match="needs duty 2.51 by the feed-forward.*full_speed_rpm"):
+def test_a_feed_forward_typo_is_refused_before_anything_opens():
+    # 2387 for 23 873 under the 12 000 RPM limit: the rig file itself is refused (issue 27)
+    refused = r"control\.full_speed_rpm: 2387 RPM is below limits\.max_speed_rpm"
+    with pytest.raises(RigFileError, match=refused):
         run(full_speed_rpm=2387, target_rpm=6000)
 
 
@@ -193,7 +197,7 @@ def test_a_plan_the_feed_forward_cannot_reach_is_refused_by_the_dry_run(tmp_path
     rig.write_text(RIG.replace("full_speed_rpm = 23873", "full_speed_rpm = 2387"))
     code = main(["run", str(rig), "speed-sweep", "--set", "speeds_rpm=6000", "--dry-run"])
     err = capsys.readouterr().err
-    assert code == 2 and "step 1: target 6000 RPM needs duty 2.51" in err and "nothing was started" in err
+    assert code == 2 and f"{rig}:control.full_speed_rpm: 2387 RPM is below" in err
 
 
 def _sweep(tach_faults: str, zero: str = "each"):
