@@ -32,7 +32,8 @@ def mjpeg_avi(jpegs: Sequence[bytes], fps: float, size: tuple[int, int]) -> byte
     strh = b"vidsMJPG" + struct.pack("<IHHIIIIIIIIhhhh", 0, 0, 0, 0, scale, rate, 0, n, biggest,
                                      0xFFFFFFFF, 0, 0, 0, w, h)
     strf = struct.pack("<IiiHH4sIiiII", 40, w, h, 1, 24, b"MJPG", w * h * 3, 0, 0, 0, 0)
-    hdrl = _list(b"hdrl", _chunk(b"avih", avih) + _list(b"strl", _chunk(b"strh", strh) + _chunk(b"strf", strf)))
+    strl = _list(b"strl", _chunk(b"strh", strh) + _chunk(b"strf", strf))
+    hdrl = _list(b"hdrl", _chunk(b"avih", avih) + strl)
     movi_body = bytearray()
     index = bytearray()
     for jpeg in jpegs:

@@ -96,7 +96,15 @@ class SimCameraSource:
         return RawFrame(encode_jpeg(image, SIM_JPEG_QUALITY), t_device=start, seq=seq)
 
     def render(self, start: float, k: int):
-        from labkit.footage import Camera, LaserShot, Lighting, PrecessionNutation, Screen, ScreenView, render_laser
+        from labkit.footage import (
+            Camera,
+            LaserShot,
+            Lighting,
+            PrecessionNutation,
+            Screen,
+            ScreenView,
+            render_laser,
+        )
 
         phi, w = self.cone_angle(start)
         cycle_hz = max(w / (2 * math.pi), 1e-3)

@@ -19,7 +19,7 @@ from labkit.errors import PortURLError
 from labkit.io.urls import split_query, split_scheme
 
 SETTING_KEYS = ("size", "fps", "fourcc", "exposure_s", "timeout_s")
-SIM_KEYS = ("seed", "plant", "role", "scene")
+SIM_KEYS = ("seed", "plant", "role", "screen_mm", "mm_per_px")
 MAX_SIDE_PX = 8192
 MAX_FPS = 1000.0
 #: a camera that sends nothing for this long ends the wait (``timeout_s`` in the URL changes it)
@@ -48,7 +48,8 @@ def is_camera_url(url: str) -> bool:
         return False
     if scheme == "":
         return url.startswith("/dev/video")
-    return scheme in ("v4l2", "http", "https") or (scheme == "sim" and rest.split("?")[0].strip("/") == "camera")
+    sim_camera = scheme == "sim" and rest.split("?")[0].strip("/") == "camera"
+    return scheme in ("v4l2", "http", "https") or sim_camera
 
 
 def parse_size(url: str, text: str) -> tuple[int, int]:
@@ -118,5 +119,6 @@ def parse_camera_url(url: str) -> CameraRequest:
         if scene.strip("/") != "camera":
             raise PortURLError(url, "a camera's sim:// URL is sim://camera?seed=..&plant=..")
         return CameraRequest("sim", "camera", **_settings(url, query, SIM_KEYS))
-    raise PortURLError(url, "not a camera URL: use /dev/videoN, v4l2:///dev/videoN?..., http://HOST:PORT/PATH, "
-                            "sim://camera?..., record://<camera-url>?cassette=.. or replay://<cassette>")
+    raise PortURLError(url, "not a camera URL: use /dev/videoN, v4l2:///dev/videoN?..., "
+                            "http://HOST:PORT/PATH, sim://camera?..., record://<camera-url>?cassette=.. "
+                            "or replay://<cassette>")
