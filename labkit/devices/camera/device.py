@@ -170,25 +170,37 @@ class Camera(Device):
         return self.settings.as_json()
 
     def close(self) -> None:
+        """Stop the grab thread (it ends within one read: at most ``timeout_s``), then release the
+        source; a source still blocked in a read is left to the process's exit rather than
+        released under it (OpenCV must not free a capture another thread is reading)."""
         self._closing = True
         try:
-            self.source.close()
+            if self._thread is not None and self._thread is not threading.current_thread():
+                self._thread.join(self.timeout_s + 1.0)
+            if self._thread is None or not self._thread.is_alive():
+                self.source.close()
         finally:
             if self.recorder is not None:
                 self.recorder.close()
                 self.recorder = None
 
 
-def open_source(url: str) -> tuple[Any, float]:
-    """The live frame source a camera URL describes and its timeout (s)."""
-    request = parse_camera_url(url)
-    if request.kind == "http":
-        return HttpMjpegSource(request), request.timeout_s
-    if request.kind == "v4l2":
-        return V4l2Source(request), request.timeout_s
-    from labkit.devices.camera.sim import SimCameraSource
+#: frame sources by URL kind; ``sim`` is registered by :mod:`labkit.emulators` when imported
+#: (the emulators own ``sim://``: docs/decisions/0005-emulators-own-sim-urls.md)
+SOURCES: dict[str, Any] = {"http": HttpMjpegSource, "v4l2": V4l2Source}
 
-    return SimCameraSource(request), request.timeout_s
+
+def register_camera_source(kind: str, factory: Any) -> None:
+    """Make ``factory(request)`` open camera URLs of ``kind`` (``sim``: the emulated camera)."""
+    SOURCES[kind] = factory
+
+
+def open_source(url: str) -> tuple[Any, float]:
+    """The frame source a camera URL describes and its timeout (s)."""
+    request = parse_camera_url(url)
+    if request.kind not in SOURCES:
+        raise PortURLError(url, "sim://camera is served by labkit.emulators; import it first")
+    return SOURCES[request.kind](request), request.timeout_s
 
 
 def open_camera(url: str, clock: Clock, name: str = "camera", **options: Any) -> Camera:

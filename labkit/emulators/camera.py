@@ -2,7 +2,8 @@
 
 At each frame the rotor speed of the shared plant (``plant=model-fig525``, the one the motor
 and tachometer emulators drive) gives the model's cone angle phi (the co-rotating steady state of
-:func:`labkit.twin.footage.model_motion`, Eq. 5.7/5.24); the reflected beam of that cone, turning
+:func:`labkit.model.floator_equilibrium.steady_state`, Eq. 5.7/5.24, as ``labkit twin`` uses it);
+the reflected beam of that cone, turning
 at the rotor's frequency, is rendered by :mod:`labkit.footage` on a screen ``screen_mm`` away,
 seen at ``mm_per_px``, with the camera's exposure, on the run's clock and seeded (frame ``k``'s
 sensor noise is seed ``1000 seed + k``). Frames are JPEG bytes, as from an MJPEG webcam.
@@ -22,6 +23,8 @@ from typing import Any
 from labkit.devices.camera.frames import CameraSettings
 from labkit.devices.camera.sources import RawFrame, SourceStopped, encode_jpeg
 from labkit.devices.camera.urls import CameraRequest
+from labkit.emulators.plant import shared_plant
+from labkit.emulators.twin_model import TwinParams
 
 DEFAULTS = {"size": (320, 240), "fps": 30.0, "exposure_s": 0.004, "screen_mm": 500.0, "mm_per_px": 2.0}
 SIM_JPEG_QUALITY = 75
@@ -33,10 +36,12 @@ def model_cone_angle(params: Any, rpm: int) -> float:
     cone (rotor at rest or too slow for the floator to follow)."""
     if rpm < 500:
         return 0.0
-    from labkit.twin.footage import model_motion
+    from labkit.model.floator_equilibrium import FloatorSetup, steady_state
 
+    setup = FloatorSetup(params.m_rotator, params.m_floator, params.mass_kg, params.i_radial,
+                         params.i_axial, rpm * math.pi / 30.0, params.tilt_rad)
     try:
-        phi = float(model_motion(params, float(rpm))["phi"])
+        phi = float(steady_state(setup, params.gap_m).phi)
     except Exception:  # noqa: BLE001 - no steady state: the floator does not follow; no cone to film
         return 0.0
     return phi if math.isfinite(phi) and 0 < phi < math.pi / 4 else 0.0
@@ -64,15 +69,12 @@ class SimCameraSource:
         self.clock: Any = None
 
     def open(self, clock: Any) -> CameraSettings:
-        from labkit.emulators.plant import shared_plant
-
         self.clock = clock
         self.plant = shared_plant(self.plant_name)
         self.params = getattr(self.plant, "params", None)
         if self.params is None:
-            from labkit.emulators.twin_model import TwinParams
-
             self.params = TwinParams()
+        self.render(clock.now(), 0)  # warm up (imports, the model's first solve): no slot is lost to it
         self.t0 = clock.now()
         asked = {"size": f"{self.size[0]}x{self.size[1]}", "fps": self.fps, "exposure_s": self.exposure_s}
         return CameraSettings(tuple(self.size), self.fps, "MJPG", self.exposure_s, "device", "sim-footage",
