@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import threading
 import time
-from typing import Any
+from typing import Any, ClassVar
 
 from labkit.devices.base import Device, register_driver
 from labkit.devices.camera.cassette import FrameCassetteWriter, ReplaySource
@@ -40,7 +40,7 @@ class Camera(Device):
 
     kind = "camera"
     protocol = "frames"
-    default_serial: dict[str, Any] = {}
+    default_serial: ClassVar[dict[str, Any]] = {}
     option_names = frozenset({"burst_frames"})
 
     def __init__(self, source: Any, clock: Clock, name: str = "", url: str = "", timeout_s: float =

@@ -11,9 +11,10 @@ exposure start) and None otherwise (network streams: their timestamps are synthe
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
+if TYPE_CHECKING:
+    import numpy as np
 
 TIMESTAMP_KINDS = ("device", "host")
 
@@ -44,6 +45,7 @@ class Frame:
     def image(self) -> np.ndarray:
         """The frame decoded to 8-bit BGR (ValueError if the bytes are not an image)."""
         import cv2
+        import numpy as np
 
         img = cv2.imdecode(np.frombuffer(self.payload, np.uint8), cv2.IMREAD_COLOR)
         if img is None:

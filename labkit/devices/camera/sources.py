@@ -14,9 +14,10 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
+if TYPE_CHECKING:
+    import numpy as np
 
 from labkit.devices.camera.frames import CameraSettings
 from labkit.devices.camera.urls import CameraRequest
@@ -58,6 +59,8 @@ def fourcc_text(value: float) -> str:
 
 
 def _payload(data: Any, raw_jpeg: bool) -> bytes:
+    import numpy as np
+
     arr = np.asarray(data)
     if raw_jpeg and arr.ndim <= 2 and (arr.ndim == 1 or arr.shape[0] == 1) and arr.dtype == np.uint8:
         return arr.tobytes()  # the camera's own JPEG: stored as sent
@@ -127,7 +130,8 @@ class V4l2Source:
         if not self.cap.isOpened():
             raise SourceStopped(f"could not open {r.target} (no such camera, or in use by another program)")
         if r.fourcc:
-            self.cap.set(cv2.CAP_PROP_FOURCC, cv2.VideoWriter_fourcc(*r.fourcc))
+            code = sum(ord(ch) << (8 * i) for i, ch in enumerate(r.fourcc))  # VideoWriter_fourcc
+            self.cap.set(cv2.CAP_PROP_FOURCC, code)
         if r.size:
             self.cap.set(cv2.CAP_PROP_FRAME_WIDTH, r.size[0])
             self.cap.set(cv2.CAP_PROP_FRAME_HEIGHT, r.size[1])
