@@ -95,7 +95,9 @@ class SimCameraSource:
         image = self.render(start, self.k)
         seq = self.k
         self.k += 1
-        return RawFrame(encode_jpeg(image, SIM_JPEG_QUALITY), t_device=start, seq=seq)
+        phi, w = self.cone_angle(start)
+        return RawFrame(encode_jpeg(image, SIM_JPEG_QUALITY), t_device=start, seq=seq,
+                        meta={"model_cone_angle_rad": phi, "model_speed_rad_s": w})
 
     def render(self, start: float, k: int):
         from labkit.footage import (

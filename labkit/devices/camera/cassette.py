@@ -3,7 +3,8 @@
 * ``ROLE.jsonl`` - the index: a header line ``{"format": "labkit-frames", "version": 1, "url",
   "settings"}`` (the settings the camera *accepted*), then one line per frame handed to the run:
   ``seq``, ``t_host``, ``t_device``, ``trusted``, ``dropped_before``, ``length``, ``fmt``,
-  ``offset`` (into the sidecar) and ``step`` (the burst's label, e.g. the speed step);
+  ``offset`` (into the sidecar), ``step`` (the burst's label, e.g. the speed step) and ``meta``
+  if the source adds any (the emulated camera: the model's cone angle at that frame);
 * ``ROLE.mjpeg`` - the sidecar: the frames' bytes concatenated, exactly as the camera sent them
   when it sends JPEG (MJPEG webcams, phones, the emulated camera), else encoded once at record
   time (:func:`labkit.devices.camera.sources.encode_jpeg`).
@@ -123,7 +124,8 @@ class ReplaySource:
             self.clock.sleep_until(float(e["t_host"]))
         start = int(e["offset"])
         return RawFrame(self.data[start:start + int(e["length"])], e.get("t_device"), e.get("seq"),
-                        t_host=float(e["t_host"]), dropped_before=int(e.get("dropped_before") or 0))
+                        t_host=float(e["t_host"]), dropped_before=int(e.get("dropped_before") or 0),
+                        meta=e.get("meta"))
 
     def step_of_next(self) -> Any:
         return self.entries[self.next].get("step") if self.next < len(self.entries) else None

@@ -77,7 +77,7 @@ class Camera(Device):
                 dropped = max(0, round((t_new - self._last.t) * fps) - 1) \
                     if (t_new - self._last.t) * fps > 1.5 else 0
         self._seq = seq
-        return Frame(seq, t_host, raw.t_device, raw.payload, dropped)
+        return Frame(seq, t_host, raw.t_device, raw.payload, dropped, meta=raw.meta)
 
     def _accept(self, frame: Frame) -> None:
         self.received += 1

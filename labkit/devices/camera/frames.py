@@ -31,6 +31,8 @@ class Frame:
     payload: bytes
     dropped_before: int = 0
     fmt: str = "jpeg"
+    #: what the source adds (the emulated camera: the model's cone angle and speed); stored
+    meta: dict[str, Any] | None = None
 
     @property
     def trusted(self) -> str:
@@ -54,8 +56,9 @@ class Frame:
 
     def index_entry(self) -> dict[str, Any]:
         """The frame's line in a cassette index (without the byte offset)."""
-        return {"seq": self.seq, "t_host": self.t_host, "t_device": self.t_device, "trusted": self.trusted,
-                "dropped_before": self.dropped_before, "length": len(self.payload), "fmt": self.fmt}
+        entry = {"seq": self.seq, "t_host": self.t_host, "t_device": self.t_device, "trusted": self.trusted,
+                 "dropped_before": self.dropped_before, "length": len(self.payload), "fmt": self.fmt}
+        return {**entry, "meta": self.meta} if self.meta else entry
 
 
 @dataclass(frozen=True)

@@ -32,14 +32,15 @@ class SourceStopped(Exception):
 @dataclass(frozen=True)
 class RawFrame:
     """What a source hands the grab thread: JPEG bytes, the device's time on the run's clock
-    (None if it has none), its sequence number (None if it has none) and, for replays, the
-    recorded arrival time."""
+    (None if it has none), its sequence number (None if it has none), for replays the recorded
+    arrival time and drops, and ``meta`` the source adds (the emulated camera: the model's truth)."""
 
     payload: bytes
     t_device: float | None = None
     seq: int | None = None
     t_host: float | None = None
     dropped_before: int | None = None
+    meta: dict[str, Any] | None = None
 
 
 def encode_jpeg(image: np.ndarray, quality: int = JPEG_QUALITY) -> bytes:
