@@ -1,9 +1,10 @@
 """A loopback MJPEG server for the camera tests: 127.0.0.1 only, bounded, in a daemon thread.
 
 Serves ``multipart/x-mixed-replace`` JPEG frames (each different: the frame number is drawn in)
-at ``fps``; ``stall_after`` frames it stops sending but keeps the connection open (a phone whose
-app froze), until the server shuts down or ``MAX_STALL_S`` passes. ``frames`` lists the JPEG bytes
-sent, in order, so a test can compare what the client received byte for byte."""
+at ``fps``; after ``stall_after`` frames (or once ``stall`` is set) it stops sending but keeps the
+connection open (a phone whose app froze), until the server shuts down or ``MAX_STALL_S`` passes.
+``frames`` lists the JPEG bytes sent, in order, so a test can compare what the client received
+byte for byte."""
 
 from __future__ import annotations
 
@@ -30,6 +31,7 @@ class LoopbackMjpeg:
         self.fps, self.stall_after, self.size = fps, stall_after, size
         self.frames: list[bytes] = []
         self.stop = threading.Event()
+        self.stall = threading.Event()  # set: stop sending now (the connection stays open)
         owner = self
 
         class Handler(socketserver.StreamRequestHandler):
@@ -42,7 +44,7 @@ class LoopbackMjpeg:
                 for k in range(MAX_FRAMES):
                     if owner.stop.is_set():
                         return
-                    if owner.stall_after is not None and k >= owner.stall_after:
+                    if owner.stall.is_set() or (owner.stall_after is not None and k >= owner.stall_after):
                         owner.stop.wait(MAX_STALL_S)
                         return
                     jpeg = numbered_jpeg(k, owner.size)

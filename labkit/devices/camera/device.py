@@ -208,6 +208,7 @@ def open_camera(url: str, clock: Clock, name: str = "camera", **options: Any) ->
     the camera and URL; a malformed URL a PortURLError."""
     scheme, _ = split_scheme(url)
     recorder = None
+    shown = url  # the URL messages and the cassette name: the camera's own, not record://
     timeout = DEFAULT_TIMEOUT_S
     if scheme == "replay":
         spec = parse_replay_url(url)
@@ -217,15 +218,17 @@ def open_camera(url: str, clock: Clock, name: str = "camera", **options: Any) ->
         if scheme == "record":
             rec = parse_record_url(url)
             inner, recorder = rec.inner_url, rec.cassette
+            shown = inner
         try:
             source, timeout = open_source(inner)
         except SourceStopped as exc:
             raise PortURLError(inner, str(exc)) from None
     try:
-        return Camera(source, clock, name=name, url=url, timeout_s=timeout, recorder_path=recorder, **options)
+        return Camera(source, clock, name=name, url=shown, timeout_s=timeout, recorder_path=recorder,
+                      **options)
     except SourceStopped as exc:
         source.close()
-        raise DeviceError(f"camera {name} at {url}", "open", b"", str(exc)) from None
+        raise DeviceError(f"camera {name} at {shown}", "open", b"", str(exc)) from None
     except BaseException:
         source.close()
         raise

@@ -84,6 +84,9 @@ class HttpMjpegSource:
         import cv2
 
         ms = int(self.request.timeout_s * 1000)
+        # FFmpeg's interrupt warning would repeat, as a second stderr line, the one-line fault
+        # the camera raises (process-wide: OpenCV has one log level)
+        cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
         self.cap = cv2.VideoCapture(self.request.target, cv2.CAP_FFMPEG,
                                     [cv2.CAP_PROP_OPEN_TIMEOUT_MSEC, ms, cv2.CAP_PROP_READ_TIMEOUT_MSEC, ms])
         if not self.cap.isOpened():
