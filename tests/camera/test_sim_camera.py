@@ -9,6 +9,8 @@ import subprocess
 import sys
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from labkit.devices.camera import open_camera
 from labkit.devices.camera.avi import write_mjpeg_avi
@@ -87,3 +89,32 @@ def test_a_truncated_frame_sidecar_names_file_line_and_problem(tmp_path):
     data.write_bytes(data.read_bytes()[:-10])
     with pytest.raises(CassetteError, match=r"camera.jsonl:4: frame bytes .* truncated sidecar"):
         open_camera(f"replay://{index}", VirtualClock())
+
+
+@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(index=st.text(max_size=300), data=st.binary(max_size=64))
+def test_any_frame_cassette_reads_or_is_a_cassette_error(tmp_path, index, data):
+    path = tmp_path / "camera.jsonl"
+    path.write_text(index, encoding="utf-8")
+    sidecar_path(path).write_bytes(data)
+    try:
+        header, entries, stored = read_cassette(path)
+    except CassetteError as exc:
+        assert str(path) in str(exc)
+        return
+    camera = open_camera(f"replay://{path}", VirtualClock())
+    for _ in entries:
+        frame = camera.burst(1)[0]
+        assert frame.payload in stored
+
+
+def test_frame_cassette_header_lines_are_checked(tmp_path):
+    path = tmp_path / "camera.jsonl"
+    sidecar_path(path).write_bytes(b"")
+    path.write_text(json.dumps({"format": "labkit-frames", "settings": {"size": "0x3"}}) + "\n")
+    with pytest.raises(CassetteError, match="camera.jsonl:1: frame cassette header without usable settings"):
+        read_cassette(path)
+    path.write_text(json.dumps({"format": "labkit-frames", "settings": {"size": "4x3"}}) + "\n"
+                    + json.dumps({"offset": 0, "length": 0}) + "\n")
+    with pytest.raises(CassetteError, match="camera.jsonl:2: frame entry without"):
+        read_cassette(path)

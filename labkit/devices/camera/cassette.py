@@ -82,6 +82,11 @@ def read_cassette(index: str | Path) -> tuple[dict[str, Any], list[dict[str, Any
     if header.get("format") != FORMAT:
         raise CassetteError(str(p), 1, f"not a frame cassette (format {header.get('format')!r}, "
                                        f"expected {FORMAT!r})")
+    try:
+        CameraSettings.from_json(header["settings"])
+    except (KeyError, TypeError, ValueError, AttributeError):
+        raise CassetteError(str(p), 1, "frame cassette header without usable settings "
+                                       "(size WIDTHxHEIGHT, fps, fourcc, ...)") from None
     data_path = sidecar_path(p)
     try:
         data = data_path.read_bytes()
@@ -90,8 +95,11 @@ def read_cassette(index: str | Path) -> tuple[dict[str, Any], list[dict[str, Any
     for n, e in enumerate(entries, 2):
         try:
             end = int(e["offset"]) + int(e["length"])
-        except (KeyError, TypeError, ValueError):
-            raise CassetteError(str(p), n, "frame entry without integer offset and length") from None
+            float(e["t_host"])
+            int(e.get("dropped_before") or 0)
+        except (KeyError, TypeError, ValueError, OverflowError):
+            raise CassetteError(str(p), n, "frame entry without integer offset and length, "
+                                           "numeric t_host and dropped_before") from None
         if end > len(data) or int(e["offset"]) < 0:
             raise CassetteError(str(p), n, f"frame bytes {e['offset']}..{end} beyond {data_path.name} "
                                            f"({len(data)} bytes): truncated sidecar")

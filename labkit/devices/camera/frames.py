@@ -85,6 +85,8 @@ class CameraSettings:
     @classmethod
     def from_json(cls, obj: dict[str, Any]) -> CameraSettings:
         w, h = (int(x) for x in str(obj["size"]).split("x"))
+        if w <= 0 or h <= 0:
+            raise ValueError(f"size {obj['size']!r}")
         return cls((w, h), obj.get("fps"), str(obj.get("fourcc", "")), obj.get("exposure_s"),
                    str(obj.get("timestamps", "host")), str(obj.get("backend", "")),
                    dict(obj.get("requested") or {}))
