@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 import importlib
 
-BENCHES = ["io", "sim", "vision", "run"]
+BENCHES = ["io", "sim", "vision", "run", "camera"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:

@@ -26,3 +26,17 @@ def test_avi_holds_the_jpegs_at_the_rate(tmp_path):
         libjpeg = cv2.imdecode(np.frombuffer(jpeg, np.uint8), cv2.IMREAD_COLOR)
         assert cv2.PSNR(frame, libjpeg) > 35  # chroma upsampling differs at sharp red edges
     assert not cap.read()[0]
+
+
+def test_bench_camera_prints_one_row_per_size_and_rate():
+    import json
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-m", "labkit", "bench", "camera", "--seconds", "0.1", "--json"],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    rows = [json.loads(line) for line in done.stdout.splitlines()]
+    assert [(r["size"], r["fps"]) for r in rows] == [("320x240", 30.0), ("320x240", 60.0),
+                                                    ("640x480", 30.0), ("640x480", 60.0)]
+    assert all(r["ratio"] > 0 and r["bytes_per_frame"] > 0 and r["frames"] >= 3 for r in rows)
