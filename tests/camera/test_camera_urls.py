@@ -30,6 +30,8 @@ def test_http_url_keeps_the_streams_own_query():
     ("sim://camera?gain=3", "unknown camera option 'gain'"),
     ("sim://balance", "sim://camera"),
     ("ftp://x/y", "not a camera URL"),
+    ("http://phone:8080/video?fps=30", "fps: an MJPEG stream's settings are set in the camera"),
+    ("sim://camera?fourcc=YUYV", "always sends MJPEG"),
 ])
 def test_bad_urls_name_the_problem(url, words):
     with pytest.raises(PortURLError) as info:

@@ -113,11 +113,18 @@ def parse_camera_url(url: str) -> CameraRequest:
         query = parse_qsl(query_text, keep_blank_values=True)
         own = [(k, v) for k, v in query if k in SETTING_KEYS]
         kept = "&".join(f"{k}={v}" for k, v in query if k not in SETTING_KEYS)
+        fixed = [k for k, _ in own if k != "timeout_s"]
+        if fixed:  # OpenCV cannot change a stream's settings: asking would be ignored silently
+            raise PortURLError(url, f"{', '.join(fixed)}: an MJPEG stream's settings are set in the "
+                                    "camera or its app (IP Webcam: Video preferences), not in the URL; "
+                                    "only timeout_s")
         return CameraRequest("http", base + (f"?{kept}" if kept else ""), **_settings(url, own, ()))
     if scheme == "sim":
         scene, query = split_query(rest)
         if scene.strip("/") != "camera":
             raise PortURLError(url, "a camera's sim:// URL is sim://camera?seed=..&plant=..")
+        if any(k == "fourcc" for k, _ in query):
+            raise PortURLError(url, "fourcc: the emulated camera always sends MJPEG (JPEG frames)")
         return CameraRequest("sim", "camera", **_settings(url, query, SIM_KEYS))
     raise PortURLError(url, "not a camera URL: use /dev/videoN, v4l2:///dev/videoN?..., "
                             "http://HOST:PORT/PATH, sim://camera?..., record://<camera-url>?cassette=.. "
