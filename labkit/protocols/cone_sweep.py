@@ -71,6 +71,11 @@ class ConeSweep(ProtocolDef):
                      est_duration_s=2 * rpm_to_rad_s(rpm) / ramp + rig.control.settle_hold_s + 3.0)
                 for i, rpm in enumerate(speeds)]
 
+    def shrunk_params(self, params: dict[str, Any], how: Any, scale: float) -> dict[str, Any]:
+        """Parameters of a session whose frames ``labkit shrink`` thinned (``how.kept``) and scaled."""
+        return {**params, "burst_frames": how.kept(int(params["burst_frames"])),
+                "mm_per_px": float(params["mm_per_px"]) / scale}
+
     def _burst(self, ctx: RunContext, step: Step, take: int) -> tuple[dict[str, Any], list[Any]]:
         camera = ctx.devices["camera"]
         p = ctx.params
