@@ -22,6 +22,9 @@ def test_burst_delivers_the_servers_jpeg_bytes_with_arrival_times():
         camera = open_camera(server.url + "?timeout_s=3", RealClock(), name="phone")
         try:
             frames = camera.burst(20)
+            time.sleep(0.4)  # the grab thread keeps draining: those frames are discarded, not queued
+            newest = camera.latest()
+            discarded = camera.discarded
         finally:
             camera.close()
         sent = set(server.frames)
@@ -35,6 +38,7 @@ def test_burst_delivers_the_servers_jpeg_bytes_with_arrival_times():
     rate = (len(frames) - 1) / (times[-1] - times[0])
     assert 15 < rate < 45, rate  # served at 30 fps (loaded 2-core CI machines: wide band)
     assert frames[0].image().shape == (240, 320, 3)
+    assert newest is not None and newest.seq > frames[-1].seq and discarded >= 3
 
 
 def test_a_stream_that_stops_mid_burst_ends_with_one_line_within_the_timeout():

@@ -118,3 +118,17 @@ def test_frame_cassette_header_lines_are_checked(tmp_path):
                     + json.dumps({"offset": 0, "length": 0}) + "\n")
     with pytest.raises(CassetteError, match="camera.jsonl:2: frame entry without"):
         read_cassette(path)
+
+
+def test_a_reader_that_falls_behind_sees_drops_and_idle_slots_are_discarded():
+    clock = VirtualClock()
+    camera = open_camera("sim://camera?seed=3&fps=30", clock)
+    first = camera.burst(3)
+    clock.sleep(0.2)  # six frame slots pass while no burst is taken
+    second = camera.burst(2)
+    assert [f.dropped_before for f in first + second] == [0] * 5
+    assert camera.discarded == second[0].seq - first[-1].seq - 1 >= 5 and camera.dropped == 0
+    clock.every(1 / 60, lambda t: clock.sleep(0.1))  # a busy loop (jobs do not run jobs): falls behind
+    third = camera.burst(3)
+    assert camera.dropped > 0 and sum(f.dropped_before for f in third) == camera.dropped
+    assert all(b.seq - a.seq - 1 == b.dropped_before for a, b in zip(third, third[1:], strict=False))

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import threading
 import time
+from dataclasses import replace
 from typing import Any, ClassVar
 
 from labkit.devices.base import Device, register_driver
@@ -41,7 +42,7 @@ class Camera(Device):
     kind = "camera"
     protocol = "frames"
     default_serial: ClassVar[dict[str, Any]] = {}
-    option_names = frozenset({"burst_frames"})
+    option_names: ClassVar[frozenset[str] | None] = frozenset()  # settings live in the URL
 
     def __init__(self, source: Any, clock: Clock, name: str = "", url: str = "", timeout_s: float =
                  DEFAULT_TIMEOUT_S, recorder_path: str | None = None, **options: Any) -> None:
@@ -133,7 +134,11 @@ class Camera(Device):
                     raw = self.source.read(limit)
                 except SourceStopped as exc:
                     raise self._fault(str(exc), len(out), n) from None
-                self._accept(self._stamp(raw))
+                frame = self._stamp(raw)
+                if not out and frame.dropped_before:  # slots that passed while no burst was taken:
+                    self.discarded += frame.dropped_before  # not read, as a grab thread discards them
+                    frame = replace(frame, dropped_before=0)
+                self._accept(frame)
         finally:
             self._collect = None
         return out
@@ -142,7 +147,6 @@ class Camera(Device):
         out: list[Frame] = []
         with self._cond:
             self._collect = out
-            self._last_arrival = max(self._last_arrival, time.monotonic() - 0.0)
             start = time.monotonic()
             try:
                 while len(out) < n:
