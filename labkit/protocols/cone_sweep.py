@@ -8,9 +8,14 @@ The cone angle is the mean tilt of the pattern's semi-axes on a screen ``screen_
 away seen at ``mm_per_px`` (Sec. 5.2.3: a semi-axis r is a tilt atan(r / L) / 2). A burst whose
 verdict is ``doubtful`` or ``failed`` is taken again once; the point keeps the retake's verdict.
 
+Its standard error (``halves``, default on) comes from the odd and the even frames analysed apart:
+``|phi_odd - phi_even| / 2``, an estimate with one degree of freedom (it doubles the analysis
+time); ``labkit report`` draws it as error bars.
+
 Result rows: step, target_rpm, speed_rad_s, speed_rpm, speed_std_rpm, cone_angle_rad,
-cone_angle_deg, verdict, reasons, frames, dropped, retaken, and model_cone_angle_rad when the
-camera is the emulated one (the model's angle at that speed, for comparison). Fit: Eq. 5.24
+cone_angle_deg, cone_angle_stderr_rad/_deg, verdict, reasons, frames, dropped, retaken, and
+model_cone_angle_rad when the camera is the emulated one (the model's angle at that speed,
+stored with the frames). Fit: Eq. 5.24
 (:func:`labkit.fit.models.cone_angle.fit_cone_angle`, torques over I) on the ``ok`` points.
 """
 
@@ -54,6 +59,7 @@ class ConeSweep(ProtocolDef):
         "screen_distance_mm": 500.0,
         "mm_per_px": 2.0,
         "settle_timeout_s": 0.0,  # 0: the rig's control.settle_timeout
+        "halves": True,           # also analyse odd and even frames apart: the cone angle's stderr
     }
     needs = (("rotor_motor", "motor"), ("rotor_tach", "tach"), ("camera", "camera"))
 
@@ -86,8 +92,13 @@ class ConeSweep(ProtocolDef):
         speeds = [r.value for r in ctx.tach_readings("rotor_tach", t_start)
                   if r.t <= frames[-1].t + 0.1 and math.isfinite(r.value)]
         fps = camera.settings.fps or (len(frames) - 1) / max(frames[-1].t - frames[0].t, 1e-9)
-        result = burst_cone_angle(frames, fps, camera.settings.size, float(p["screen_distance_mm"]),
-                                  float(p["mm_per_px"]))
+        geometry = (camera.settings.size, float(p["screen_distance_mm"]), float(p["mm_per_px"]))
+        result = burst_cone_angle(frames, fps, *geometry)
+        result["cone_angle_stderr_rad"] = None
+        if p["halves"] and result["cone_angle_rad"] is not None and len(frames) >= 8:
+            halves = [burst_cone_angle(frames[k::2], fps / 2, *geometry)["cone_angle_rad"] for k in (0, 1)]
+            if None not in halves:
+                result["cone_angle_stderr_rad"] = abs(halves[0] - halves[1]) / 2
         return {**result, "speeds": speeds, "frames": len(frames),
                 "dropped": sum(f.dropped_before for f in frames[1:])}, frames
 
@@ -105,6 +116,8 @@ class ConeSweep(ProtocolDef):
         point = {"target_rpm": step.data["target_rpm"], "speed_rad_s": speed,
                  "speed_rpm": rad_s_to_rpm(speed), "speed_std_rpm": spread,
                  **shot, "cone_angle_deg": math.degrees(angle) if angle is not None else None,
+                 "cone_angle_stderr_deg": None if shot["cone_angle_stderr_rad"] is None
+                 else math.degrees(shot["cone_angle_stderr_rad"]),
                  "retaken": retaken}
         meta = frames[len(frames) // 2].meta or {}
         if "model_cone_angle_rad" in meta:  # the emulated camera (also replayed): the model's angle

@@ -13,7 +13,8 @@ import pytest
 
 def test_cone_sweep_on_the_emulated_camera_rig_fits_the_model_and_replays(tmp_path):
     run = subprocess.run([sys.executable, "-m", "labkit", "run", "emulated-camera", "cone-sweep",
-                          "--json", "-", "--sessions", str(tmp_path), "--no-progress"],
+                          "--json", "-", "--sessions", str(tmp_path), "--no-progress",
+                          "--set", "burst_frames=20"],
                          capture_output=True, text=True, timeout=180)
     assert run.returncode == 0, run.stderr
     out = json.loads(run.stdout)
@@ -26,6 +27,7 @@ def test_cone_sweep_on_the_emulated_camera_rig_fits_the_model_and_replays(tmp_pa
     assert len(ok) >= 5
     for p in ok:
         assert p["cone_angle_rad"] == pytest.approx(p["model_cone_angle_rad"], rel=0.05), p
+        assert 0 <= p["cone_angle_stderr_rad"] < 0.05 * p["cone_angle_rad"]  # halves analysed apart
     assert fit["model"] == "cone-angle" and len(fit["predicted_rad"]) == len(ok)
     for p, predicted in zip(ok, fit["predicted_rad"], strict=True):
         assert predicted == pytest.approx(p["model_cone_angle_rad"], rel=0.05)
