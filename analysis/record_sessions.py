@@ -9,6 +9,8 @@ file's magnets; the fault recordings add their faults on top).
                            zero, partial results (status "failed")
 * spin-critical-clean      Fig. 6.18 series, 3 speeds
 * spin-critical-garbage    garbage bursts on the balance and the spin tachometer
+* cone-sweep-clean         the filmed cone angle at 6 speeds (rigs/emulated-camera.toml, issue 25):
+                           its camera cassette holds the emulated camera's JPEG frames
 
 Each is replayed bit-for-bit by tests/session/test_recorded_sessions.py. The runs use the
 virtual clock, so the recordings are deterministic apart from run.json's dates and versions.
@@ -41,6 +43,7 @@ RECORDINGS = {
                               {"role=floator_tach&": "role=floator_tach&faults=garbage:0.05&",
                                "role=balance": "role=balance&faults=garbage:0.03"},
                               "spin-critical", SPIN),
+    "cone-sweep-clean": ("emulated-camera.toml", {}, "cone-sweep", ["burst_frames=20"]),
 }
 
 

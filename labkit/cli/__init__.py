@@ -19,7 +19,7 @@ from labkit.errors import LabkitError
 
 COMMANDS = [
     "demo", "ports", "probe", "emulate", "run", "replay", "analyse", "synth",
-    "fit", "simulate", "bench", "reproduce", "report", "sweep", "predict", "rig", "twin",
+    "fit", "simulate", "bench", "reproduce", "report", "sweep", "predict", "rig", "twin", "shrink",
 ]
 
 

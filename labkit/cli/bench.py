@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 import importlib
 
-BENCHES = ["io", "sim", "vision", "run", "sweep"]
+BENCHES = ["io", "sim", "vision", "run", "sweep", "camera"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:

@@ -48,7 +48,9 @@ def emulated_devices(rig_path: str | None, extra: list[str]) -> tuple[dict[str, 
 
         rig = load_rig(rig_path)
         for role, device in rig.devices.items():
-            if device.port.startswith("sim://"):
+            if device.kind == "camera":  # frames, not bytes: a program opens sim://camera itself
+                skipped.append(f"{role} (a camera: open its URL with labkit.devices.camera.open_camera)")
+            elif device.port.startswith("sim://"):
                 devices[role] = device.port
             else:
                 skipped.append(role)
@@ -130,7 +132,8 @@ class TruthLog:
 def run(args: argparse.Namespace) -> int:
     devices, skipped = emulated_devices(args.rig, args.device or [])
     for role in skipped:
-        print(f"labkit emulate: {role}: not emulated (its port is not sim://)", file=sys.stderr)
+        reason = "" if " (" in role else " (its port is not sim://)"
+        print(f"labkit emulate: {role}: not emulated{reason}", file=sys.stderr)
     if not devices:
         print("labkit emulate: no sim:// devices to emulate (give a rig file or --device ROLE=sim://...)",
               file=sys.stderr)

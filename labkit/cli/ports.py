@@ -1,8 +1,10 @@
-"""``labkit ports [--json]``: the serial ports attached to this machine, with rig-file URLs.
+"""``labkit ports [--json]``: the serial ports and cameras attached to this machine, with rig-file URLs.
 
 For each port: device path, description, USB VID:PID, serial number, location, and a
 ``hwgrep://`` URL that finds the same adapter again after it re-enumerates (ttyUSB0 today,
-ttyUSB1 tomorrow); put that URL in the rig file's ``port`` key.
+ttyUSB1 tomorrow); put that URL in the rig file's ``port`` key. Cameras (``/dev/video*``,
+with the name the kernel gives them) are listed with a ``v4l2://`` URL asking for MJPEG
+(docs/camera.md).
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from typing import Any
 NO_PORTS = (
     "no serial ports found. Plug in the USB-serial adapter and run again; on Linux check "
     "`dmesg | tail` and that you are in the 'dialout' group. For emulated devices use "
-    "`labkit emulate RIG`."
+    "`labkit emulate RIG`. No camera (/dev/video*) either."
 )
 
 
@@ -54,6 +56,23 @@ def list_port_rows() -> list[dict[str, Any]]:
     return [port_row(info) for info in sorted(list_ports.comports(), key=lambda i: i.device)]
 
 
+def list_camera_rows(dev: str = "/dev", sysfs: str = "/sys/class/video4linux") -> list[dict[str, Any]]:
+    """``/dev/video*`` devices (a UVC camera usually has two: frames and metadata; the first
+    of the pair gives frames) as rows like the serial ports'."""
+    from pathlib import Path
+
+    rows = []
+    for node in sorted(Path(dev).glob("video*"), key=lambda p: (len(p.name), p.name)):
+        try:
+            name = (Path(sysfs) / node.name / "name").read_text(encoding="utf-8").strip()
+        except OSError:
+            name = "video device"
+        rows.append({"device": str(node), "description": name, "vid_pid": None, "serial_number": None,
+                     "manufacturer": None, "location": None, "hwid": "video4linux",
+                     "url": f"v4l2://{node}?fourcc=MJPG"})
+    return rows
+
+
 def format_table(rows: list[dict[str, Any]]) -> str:
     """Rows as an aligned text table (the non-JSON output)."""
     headers = ("device", "description", "vid_pid", "serial_number", "location", "url")
@@ -65,7 +84,7 @@ def format_table(rows: list[dict[str, Any]]) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    rows = list_port_rows()
+    rows = list_port_rows() + list_camera_rows()
     if args.json:
         print(json.dumps(rows, indent=2))
     elif not rows:
@@ -76,7 +95,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    parser = sub.add_parser("ports", help="list attached serial ports and their hwgrep:// URLs",
+    parser = sub.add_parser("ports", help="list attached serial ports and cameras, with rig-file URLs",
                             description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--json", action="store_true", help="print a JSON list instead of a table")
     parser.set_defaults(func=run)

@@ -1,4 +1,4 @@
-"""``labkit probe {balance,tach,motor}``: a user's first check that a device talks.
+"""``labkit probe {balance,tach,motor,camera}``: a user's first check that a device talks.
 
 Opens the port URL (a device path, ``sim://``, ``replay://``, ``record://`` ...), builds the
 protocol's driver, asks the device who it is (where the protocol allows) and prints N
@@ -6,6 +6,9 @@ readings, one JSON object per line with keys ``t`` (s since the probe started), 
 ``unit``, ``stable``, ``overload``, ``raw``. Motors: status and speed variables only; the
 probe never enables or starts a motor, and closing the driver commands zero.
 A device fault ends with one line naming device, command and last bytes, exit status 2.
+Cameras (no --protocol): one JSON line with the settings the camera accepted (size, fps,
+format, exposure), the timestamp kind, and the measured rate and dropped frames of a burst of
+--frames frames (:mod:`labkit.devices.camera`).
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ from labkit.devices.base import Device, driver_class, known_drivers
 from labkit.errors import DeviceError, LabkitError
 from labkit.io.clock import Clock, current_clock
 
-KINDS = ("balance", "tach", "motor")
+KINDS = ("balance", "tach", "motor", "camera")
 
 try:  # a pty or serial driver may refuse a setting in tcsetattr (not an OSError)
     from termios import error as TermiosError
@@ -37,14 +40,16 @@ def register(sub: argparse._SubParsersAction) -> None:
         description=__doc__.split("\n\n")[1] if __doc__ else None,
     )
     p.add_argument("kind", choices=KINDS, help="device class")
-    p.add_argument("--protocol", required=True,
-                   help="driver protocol, e.g. mtsics, and_std, line_regex, lutron16, pololu_smc")
+    p.add_argument("--protocol",
+                   help="driver protocol, e.g. mtsics, and_std, line_regex, lutron16, pololu_smc "
+                        "(required except for cameras)")
     p.add_argument("--port", required=True, help="port URL: /dev/ttyUSB0, sim://mtsics?seed=1, replay://...")
     p.add_argument("--baud", type=int, help="baud rate (default: the protocol's factory setting)")
     p.add_argument("--bytesize", type=int, choices=(5, 6, 7, 8), help="data bits")
     p.add_argument("--parity", choices=("N", "E", "O"), help="parity: N, E or O")
     p.add_argument("--stopbits", type=float, choices=(1, 1.5, 2), help="stop bits")
     p.add_argument("--samples", type=int, default=5, help="number of readings (default 5)")
+    p.add_argument("--frames", type=int, default=30, help="camera: frames in the measured burst (default 30)")
     p.add_argument("--interval", type=float, default=0.0, metavar="S",
                    help="seconds between readings (default: as fast as the device answers)")
     p.add_argument("--timeout", type=float, default=None, metavar="S",
@@ -131,6 +136,13 @@ def probe(args: argparse.Namespace, out=None, err=None, clock: Clock | None = No
     clock = clock or current_clock()
     if args.samples < 0:
         raise LabkitError("--samples must be >= 0")
+    if args.kind == "camera":
+        from labkit.cli.probe_camera import probe_camera
+
+        return probe_camera(args.port, args.frames, out, clock)
+    if not args.protocol:
+        raise LabkitError(f"probe {args.kind} needs --protocol (known: "
+                          f"{', '.join(known_drivers().get(args.kind, []))})")
     try:
         cls = driver_class(args.kind, args.protocol)
     except KeyError:

@@ -270,6 +270,7 @@ def register_driver(cls: DriverClass) -> DriverClass:
 
 def _load_driver_modules() -> None:
     # Importing the packages registers their drivers.
+    import labkit.devices.camera  # noqa: F401
     import labkit.devices.loadcell  # noqa: F401
     import labkit.devices.motor  # noqa: F401
     import labkit.devices.tachometer  # noqa: F401

@@ -9,10 +9,14 @@ Importing this package registers the ``sim://`` URL handler with pyserial
   emulated rig, scoped (docs/decisions/0006-scoped-emulations.md);
 * :func:`build_emulator` - the emulator a ``sim://`` URL describes;
 * :func:`emulator_class`, :func:`register_emulator`, :class:`Emulator` - the registry;
-* :class:`RigPlant` - the physics the emulators share; :func:`parse_sim_url`.
+* :class:`RigPlant` - the physics the emulators share; :func:`parse_sim_url`;
+* ``sim://camera`` - :class:`labkit.emulators.camera.SimCameraSource`, the emulated camera
+  (registered with :mod:`labkit.devices.camera` here).
 """
 
+from labkit.devices.camera.device import register_camera_source
 from labkit.emulators.base import Emulator, emulator_class, parse_faults, register_emulator
+from labkit.emulators.camera import SimCameraSource
 from labkit.emulators.plant import Emulation, RigPlant, current_emulation, shared_plant, use_emulation
 from labkit.emulators.sim_port import SimSerial, build_emulator
 from labkit.emulators.urls import SimSpec, parse_sim_url
@@ -20,6 +24,7 @@ from labkit.io.ports import register_url_handlers
 
 SIM_HANDLER_PACKAGE = "labkit.emulators.urlhandlers"
 register_url_handlers(SIM_HANDLER_PACKAGE)
+register_camera_source("sim", SimCameraSource)
 
 __all__ = [
     "SIM_HANDLER_PACKAGE", "Emulation", "Emulator", "RigPlant", "SimSerial", "SimSpec", "build_emulator",

@@ -4,12 +4,13 @@ from __future__ import annotations
 
 from labkit.errors import LabkitError
 from labkit.hints import Column, Curve, Hints, ReportFit
+from labkit.protocols.cone_sweep import ConeSweep
 from labkit.protocols.events import EventBus, ListSink, ProgressSink, Sink
 from labkit.protocols.runner import ProtocolDef, RunContext, Runner, RunOutcome, Step, StopRequested
 from labkit.protocols.speed_sweep import SpeedSweep
 from labkit.protocols.spin_critical import SpinCritical
 
-PROTOCOLS: dict[str, type[ProtocolDef]] = {p.name: p for p in (SpeedSweep, SpinCritical)}
+PROTOCOLS: dict[str, type[ProtocolDef]] = {p.name: p for p in (SpeedSweep, SpinCritical, ConeSweep)}
 
 
 def get_protocol(name: str) -> ProtocolDef:

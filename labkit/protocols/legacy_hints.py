@@ -14,10 +14,11 @@ from collections.abc import Iterable
 from typing import Any
 
 from labkit.hints import Hints
-from labkit.protocols.paper_figures import FIG_5_25, FIG_6_18
+from labkit.protocols.paper_figures import EQ_5_24, FIG_5_25, FIG_6_18
 
 #: protocol name -> the hints its sessions had before they were written into the start document
-LEGACY_HINTS: dict[str, Hints] = {"speed-sweep": FIG_5_25, "spin-critical": FIG_6_18}
+#: (cone-sweep: the fixture recordings/sessions/cone-sweep-clean was recorded before the merge)
+LEGACY_HINTS: dict[str, Hints] = {"speed-sweep": FIG_5_25, "spin-critical": FIG_6_18, "cone-sweep": EQ_5_24}
 
 
 def hints_for(protocol: str | None, declared: dict[str, Any] | None = None,

@@ -82,3 +82,34 @@ SPIN_CRITICAL_ROW = (
     Column("trials", "", "each trial: rotor_rad_s, spin_rad_s, cause, hold_s"),
     Column("no_drop", "", "no trial dropped the floator"),
 )
+
+
+EQ_5_24 = Hints(
+    x="speed_rpm", y="cone_angle_deg", x_name="rotor speed", x_unit="RPM", y_name="cone angle",
+    y_unit="deg", figure="Eq. 5.24", title="cone angle [deg] against rotor speed [RPM]", root="/eq5_24",
+    fit="", residual="difference",
+    report_title="Cone angle vs rotor speed (Eq. 5.24)",
+    report_fits=(
+        ReportFit("cone-angle", "Eq. 5.24 / 5.68: tau_C and tau_S", "cone-angle",
+                  "Cone angle vs rotor speed (Eq. 5.24)", inertia=True, y="cone_angle_rad"),
+        ReportFit("cone-angle-s0", "Eq. 5.24 with tau_S = 0", "cone-angle", fixed={"tau_S": 0.0},
+                  inertia=True, y="cone_angle_rad"),
+    ))
+
+CONE_SWEEP_ROW = (
+    Column("step", "", "index of the step in the plan"),
+    Column("target_rpm", "RPM", "the step's target speed"),
+    Column("speed_rad_s", "rad/s", "mean measured rotor speed during the burst"),
+    Column("speed_rpm", "RPM", "the same in RPM"),
+    Column("speed_std_rpm", "RPM", "standard deviation of the measured speed"),
+    Column("cone_angle_rad", "rad", "mean tilt of the laser pattern's semi-axes (Eq. 5.24's phi)"),
+    Column("cone_angle_deg", "deg", "the same in degrees"),
+    Column("cone_angle_stderr_rad", "rad", "half the difference of the odd and even frames' angles"),
+    Column("cone_angle_stderr_deg", "deg", "the same in degrees"),
+    Column("verdict", "", "the burst analysis's verdict (ok, doubtful, failed)"),
+    Column("reasons", "", "why the verdict is not ok"),
+    Column("frames", "", "frames analysed"),
+    Column("dropped", "", "frames the camera dropped during the burst"),
+    Column("retaken", "", "the burst was taken again after a doubtful or failed one"),
+    Column("model_cone_angle_rad", "rad", "the emulated camera's model plant angle (null on hardware)"),
+)

@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from labkit.devices.base import driver_class, unknown_options, unknown_options_message
+from labkit.devices.camera.urls import is_camera_url, parse_camera_url
 from labkit.emulators.base import emulator_class
 from labkit.emulators.urls import parse_sim_url
 from labkit.errors import PortURLError
@@ -29,6 +30,12 @@ class DriverCheck:
             raise sec.error("protocol", str(exc.args[0])) from None
 
     def port(self, sec: _Section, url: str) -> None:
+        if is_camera_url(url):  # cameras: the URL's settings are checked whole (docs/camera.md)
+            try:
+                parse_camera_url(url)
+            except PortURLError as exc:
+                raise sec.error("port", exc.reason) from None
+            return
         if not url.startswith("sim://"):
             return
         try:  # an emulated device is checked whole: emulator, seed, fault names, rates

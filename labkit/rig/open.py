@@ -2,7 +2,7 @@
 
 :func:`open_rig` opens every port of a :class:`~labkit.rig.config.Rig` and instantiates its
 drivers; :class:`OpenRig` gives them back by role and kind (``balance(role)``,
-``tachometer(role)``, ``motor(role)``) and closing it commands every motor to zero first.
+``tachometer(role)``, ``motor(role)``, ``camera(role)``) and closing it commands every motor to zero first.
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ from typing import Any
 from labkit.control.handle import RigMotor
 from labkit.control.stopping import stop_motor
 from labkit.devices.base import Balance, MotorController, Tachometer, driver_class
+from labkit.devices.camera import Camera, open_camera
 from labkit.io.ports import open_port
 from labkit.rig.checks import check_role
 from labkit.rig.config import DeviceConfig, Rig
@@ -76,6 +77,13 @@ class OpenRig:
         self._of_kind(role, "motor")
         return self._handles.setdefault(role, RigMotor(self, role))
 
+    def camera(self, role: str) -> Camera:
+        """The camera ``role`` (:mod:`labkit.devices.camera`)."""
+        return self._of_kind(role, "camera")
+
+    def cameras(self) -> dict[str, Camera]:
+        return {r: d for r, d in self.drivers.items() if self.rig.devices[r].kind == "camera"}
+
     def balances(self) -> dict[str, Balance]:
         return {r: d for r, d in self.drivers.items() if self.rig.devices[r].kind == "balance"}
 
@@ -132,6 +140,10 @@ def open_rig(rig: Rig, clock: Any, record_to: str | Path | None = None,
             url = port_override(dev) if port_override else dev.port
             if record_to is not None:
                 url = _record_url(url, Path(record_to) / f"{role}.jsonl", role)
+            if dev.kind == "camera":  # not a serial port: a frame source (labkit.devices.camera)
+                opened.port_urls[role] = url
+                opened.drivers[role] = open_camera(url, clock, name=role, **dev.options)
+                continue
             cls = driver_class(dev.kind, dev.protocol)
             settings = {**getattr(cls, "default_serial", {}), **dev.serial}
             port = open_port(url, clock=clock, **settings)

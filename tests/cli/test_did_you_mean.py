@@ -38,8 +38,8 @@ def test_a_misspelt_protocol_and_parameter_say_did_you_mean(capsys) -> None:
     from labkit.cli import main
 
     assert main(["run", "emulated-fig525", "speed-swep", "--dry-run"]) == 2
-    assert "unknown protocol 'speed-swep' (did you mean 'speed-sweep'?); known: speed-sweep, spin-critical" \
-        in capsys.readouterr().err
+    assert ("unknown protocol 'speed-swep' (did you mean 'speed-sweep'?); known: cone-sweep, speed-sweep, "
+            "spin-critical") in capsys.readouterr().err
     assert main(["run", "emulated-fig525", "speed-sweep", "--set", "speed_rpm=6000", "--dry-run"]) == 2
     err = capsys.readouterr().err
     assert "--set speed_rpm: unknown parameter of speed-sweep; did you mean 'speeds_rpm'?" in err

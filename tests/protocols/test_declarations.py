@@ -37,7 +37,7 @@ def test_every_recorded_row_has_exactly_the_declared_columns(session):
 
 
 def test_a_replayed_run_starts_with_its_declaration_and_old_sessions_had_none(tmp_path):
-    session = SESSIONS[0]
+    session = next(s for s in SESSIONS if s.name == "speed-sweep-clean")
     recorded = json.loads((session / "events.jsonl").read_text().splitlines()[0])
     assert recorded["type"] == "start" and "hints" not in recorded   # recorded before ADR 0021
     sink = ListSink()
