@@ -1,0 +1,557 @@
+// labkit_strobe.ino - a stroboscope locked to the rotor (protocol: docs/devices-strobe.md)
+//
+// ATmega328P (Uno/Nano, 16 MHz). The rotor's once-per-revolution pulse (active low, e.g. an
+// optical sensor with a pull-up) goes to pin 8 (ICP1, PB0); the LED gate driver to pin 9
+// (OC1A, PB1). Timer1 runs free at prescaler 1 (62.5 ns per tick, wraps every 4.096 ms,
+// extended to 32 bits by counting overflows). Input capture time-stamps every falling edge in
+// hardware; the flash is switched on and off by output compare in hardware, so a flash's
+// start is placed to the timer tick whatever the interrupts are doing.
+//
+// Locking. Flash n falls at rotor position P_n (revolutions since some edge; P_{n+1} =
+// P_n + m + dphi). Each flash is scheduled from the last captured edge t_k with the last
+// measured period T: t = t_k + (P_n - k) * T. With dphi = D*m*T/(1 - D*T) (T in s) the rotor
+// angle seen at successive flashes advances by D revolutions per second: the apparent
+// frequency is exactly the commanded offset D whatever the rotor's speed does, and the
+// strobe frequency is (f_rot - D)/m. A flash closer than LEAD_TICKS to its edge is scheduled
+// from the edge before (at up to T + LEAD_TICKS).
+//
+// Lock: 4 periods in a row within 1/16 of the one before. Lost when a period leaves that
+// band or the next edge is overdue by T/16; the lamp is dark until locked again. An edge
+// sooner than 5/8 T after the last one is noise and ignored (flag N). No edge for 4 T
+// (at most 1 s): no pulses (flag Z), the period is forgotten.
+//
+// Serial 115200 8N1, LF-terminated commands, each answered "OK" or "ERR <text>":
+//   OFFSET <hz>   apparent frequency D, -100..100 (default 0.5)
+//   WIDTH <us>    flash length, 1..1000 us (default 10); at most T/4 is used (flag W)
+//   DIV <m>       flash every m-th revolution, 1..100 (default 1)
+//   OFF / ON      lamp off / on (default on)
+//   RATE <hz>     status lines per second, 1..50 (default 1)
+//   ID?           -> "ID labkit-strobe <ver>"
+// Status line every 1/RATE s:
+//   S,<seq>,<t_ms>,<f_rot_hz>,<f_strobe_hz>,<phase_deg>,<flags>
+//   f_rot, f_strobe: mean over the window's revolutions / flash intervals (0 when none);
+//   phase: rotor angle after the edge at the window's last flash (0-360);
+//   flags: 0 ok, else letters: Z no pulses, L not locked, N noise pulse rejected,
+//          X lamp off by command, W width cut to T/4, R offset too large for this speed
+//          (|dphi| > 1/4 rev), O rotor too fast (> 4 kHz) or too slow (< 5 Hz),
+//          M a flash was missed (scheduled too late), S a flash was stretched (its end
+//          was held up by another interrupt: only widths under ~20 us).
+// Boot banner: "# labkit-strobe <ver> offset=<hz> width=<us> div=<m> rate=<hz>".
+
+#define VERSION "1.0"
+#define TICKS_PER_S 16000000.0
+#define LEAD_TICKS 2400UL          // 150 us: capture ISR latency + its arithmetic, with margin
+#define MIN_ARM_TICKS 300          // a compare armed closer than this may be missed
+#define ARM_WINDOW 45056L          // 0xB000: OCR1A is 16 bits; arm only within this
+#define MIN_PERIOD 4000UL          // 4 kHz
+#define MAX_PERIOD 3200000UL       // 5 Hz
+#define LOCK_PERIODS 4
+
+enum FlashState { IDLE, PENDING, ARMED, ON };
+
+// ---- shared with the interrupts --------------------------------------------------------
+volatile uint16_t ovfCount = 0;
+volatile uint32_t lastEdge = 0;        // extended ticks of the last accepted edge
+volatile uint32_t periodTicks = 0;     // last period (0: unknown)
+volatile bool haveEdge = false;
+volatile byte goodPeriods = 0;
+volatile bool locked = false;
+// the next flash falls posRevs + posFrac / 2^32 revolutions after lastEdge
+volatile int16_t posRevs = 0;
+volatile uint32_t posFrac = 0;
+// flash to flash: incWhole + incFrac / 2^32 = m + dphi revolutions (computed by loop())
+volatile byte incWhole = 1;
+volatile uint32_t incFrac = 0;
+volatile bool rangeOk = true;          // |dphi| <= 1/4 revolution
+volatile uint32_t target = 0;          // extended ticks of the pending flash
+volatile uint16_t flashWidth = 160;    // ticks, after the T/4 cut
+volatile byte state = IDLE;
+volatile bool edgeDeferred = false;    // an edge captured while a flash was armed or on
+volatile uint32_t deferredEdge = 0;
+volatile bool lastFlashValid = false;  // for the strobe frequency: flash to flash in lock
+volatile bool haveFlashed = false;     // lastFlashT/lastPhase hold a flash
+volatile uint32_t lastFlashT = 0;
+volatile uint32_t lastPhase = 0;       // 2^-32 rev
+// window statistics (reset by the status line)
+volatile uint16_t winRevs = 0;
+volatile uint32_t winRevTicks = 0;
+volatile uint16_t winFlashes = 0;
+volatile uint32_t winFlashTicks = 0;
+volatile byte winFlags = 0;            // bits below, sticky for one window
+#define F_NOISE 1
+#define F_MISSED 2
+#define F_WIDTH 4
+#define F_RANGE 8
+#define F_SPEED 16
+#define F_UNLOCKED 32
+#define F_NOPULSE 64
+#define F_LATE 128
+
+// settings (written by loop with interrupts off)
+volatile float offsetHz = 0.5;
+volatile byte divider = 1;
+volatile uint16_t widthTicks = 160;    // 10 us
+volatile bool lampOn = true;
+unsigned int rateHz = 1;
+
+unsigned long seq = 0;
+unsigned long nextStatusMs = 0;
+char line[32];
+byte lineLen = 0;
+
+static void onEdge(uint32_t t);
+
+// Extended timer value; call with interrupts off. An overflow whose interrupt is pending
+// belongs to a small TCNT1.
+static inline uint32_t nowTicks() {
+  uint16_t lo = TCNT1;
+  uint16_t hi = ovfCount;
+  if ((TIFR1 & _BV(TOV1)) && lo < 0x8000) hi++;
+  return ((uint32_t)hi << 16) | lo;
+}
+
+static void cancelFlash() {
+  if (state == PENDING || state == ARMED) {
+    TCCR1A = 0;                 // OC1A disconnected: the pin follows PORTB1 = 0
+    state = IDLE;
+  }                             // a flash already on ends at its own compare
+}
+
+static void unlock() {
+  if (locked) winFlags |= F_UNLOCKED;
+  locked = false;
+  goodPeriods = 0;
+  lastFlashValid = false;
+  cancelFlash();
+}
+
+// ticks from lastEdge to the next flash (float: 24 bits of posFrac are plenty)
+static uint32_t delayTicks() {
+  uint32_t T = periodTicks;
+  return (uint32_t)posRevs * T + (uint32_t)((float)posFrac * (float)T * 2.3283064e-10f + 0.5f);
+}
+
+static void advance() {                  // the next flash: m + dphi revolutions on
+  uint32_t f = posFrac + incFrac;
+  posRevs += incWhole + (f < posFrac ? 1 : 0);
+  posFrac = f;
+}
+
+static void tryArm(uint32_t now) {
+  if (state != PENDING) return;
+  int32_t ahead = (int32_t)(target - now);
+  if (ahead < MIN_ARM_TICKS) {           // too late: skip this flash
+    state = IDLE;
+    advance();
+    winFlags |= F_MISSED;
+    return;
+  }
+  if (ahead < ARM_WINDOW) {
+    OCR1A = (uint16_t)target;
+    TCCR1A = _BV(COM1A1) | _BV(COM1A0);  // set OC1A on compare match
+    state = ARMED;
+  }
+}
+
+// Schedule the next flash from lastEdge when it falls before the next edge (+ lead).
+static void scheduleFromEdge() {
+  uint32_t d = delayTicks();
+  if (d >= periodTicks + LEAD_TICKS) { state = IDLE; return; }
+  target = lastEdge + d;
+  state = PENDING;
+  tryArm(nowTicks());
+}
+
+// On (re)gaining the lock at edge t (period T): place the next flash so that the apparent
+// angle goes on as if the lamp had never stopped, phase + D * (time since the last flash).
+// With x revolutions after t, the flash at t + x T must show angle phi + D x T = frac(x):
+// x = phi / (1 - D T). Floats are fine here (once per lock; no flash is armed).
+static void resumePhase(uint32_t t, uint32_t T) {
+  posRevs = 0;
+  if (!haveFlashed) return;               // the first lock: from the fraction kept
+  float ts = (float)T / TICKS_PER_S;
+  float turns = offsetHz * ((float)(t - lastFlashT) / TICKS_PER_S) + (float)lastPhase * 2.3283064e-10f;
+  turns -= floor(turns);
+  float x = turns / (1.0f - offsetHz * ts);
+  if (x >= 1.0f) { posRevs = 1; x -= 1.0f; }
+  if (x < 0.0f) x = 0.0f;
+  posFrac = (uint32_t)(x * 4294967296.0f);
+}
+
+ISR(TIMER1_CAPT_vect) {
+  uint16_t icr = ICR1;
+  uint16_t hi = ovfCount;
+  if ((TIFR1 & _BV(TOV1)) && icr < 0x8000) hi++;
+  uint32_t t = ((uint32_t)hi << 16) | icr;
+  if (state == ARMED || state == ON) {
+    // A flash is starting about now (it was scheduled from the edge before): keep this
+    // interrupt short so the flash's compare interrupt programs its end in time; the edge
+    // is processed when the flash ends (or by the next housekeeping if it is cancelled).
+    if (edgeDeferred) winFlags |= F_NOISE;   // two edges within one flash: one is noise
+    else { deferredEdge = t; edgeDeferred = true; }
+    return;
+  }
+  onEdge(t);
+}
+
+// Everything about a captured edge (interrupts off); out of line so that the capture
+// interrupt's prologue is short.
+static void __attribute__((noinline)) onEdge(uint32_t t) {
+  winFlags &= ~F_NOPULSE;
+  if (!haveEdge) {
+    lastEdge = t;
+    haveEdge = true;
+    periodTicks = 0;
+    goodPeriods = 0;
+    return;
+  }
+  uint32_t dt = t - lastEdge;
+  uint32_t prev = periodTicks;
+  if (locked && dt < prev / 2 + prev / 8) {  // sooner than 5/8 T: a noise pulse
+    // (only when locked: unlocked, every edge counts, so a rotor found at twice the rate
+    // of a remembered period is not locked onto every other pulse)
+    winFlags |= F_NOISE;
+    return;
+  }
+  lastEdge = t;
+  periodTicks = dt;
+  winRevs++;
+  winRevTicks += dt;
+  uint32_t diff = dt > prev ? dt - prev : prev - dt;
+  bool inRange = dt >= MIN_PERIOD && dt <= MAX_PERIOD;
+  if (!inRange) winFlags |= F_SPEED;
+  if (!prev || !inRange || diff > prev / 16) {
+    unlock();
+    return;
+  }
+  bool wasLocked = locked;
+  if (!wasLocked) {
+    if (++goodPeriods < LOCK_PERIODS) return;
+    locked = true;
+    resumePhase(t, dt);
+  } else if (--posRevs < 0) {
+    posRevs = 0;                  // no flash consumed it (lamp off, offset out of range)
+  }
+  if (state == ARMED || state == ON) return;  // (short: this flash may be starting now)
+  uint16_t w = widthTicks;
+  if (w > (dt >> 2)) { w = dt >> 2; winFlags |= F_WIDTH; }
+  flashWidth = w;
+  if (!rangeOk) {
+    winFlags |= F_RANGE;
+    cancelFlash();
+    return;
+  }
+  if (!lampOn) return;
+  uint32_t d = delayTicks();
+  if (state == PENDING && d < LEAD_TICKS) {          // keep the target set from the edge before
+    tryArm(nowTicks());
+    return;
+  }
+  state = IDLE;
+  while (d < LEAD_TICKS) {                           // too close to this edge: a later one
+    advance();
+    if (wasLocked) winFlags |= F_MISSED;
+    d = delayTicks();
+  }
+  scheduleFromEdge();
+}
+
+// The deferred edge, if any (interrupts off, no flash armed or on).
+static void processDeferredEdge() {
+  if (!edgeDeferred) return;
+  edgeDeferred = false;
+  onEdge(deferredEdge);      // schedules the next flash itself
+}
+
+static void endFlash() {
+  TCCR1A = 0;
+  state = IDLE;
+  if (edgeDeferred) processDeferredEdge();
+  else if (locked && lampOn) scheduleFromEdge();
+}
+
+// The bookkeeping of a flash that has just started, out of line: the compare interrupt's
+// prologue then saves few registers and reaches the end compare within a few microseconds.
+static void __attribute__((noinline)) flashStarted(bool ended) {
+  if (lastFlashValid) {
+    winFlashes++;
+    winFlashTicks += target - lastFlashT;
+  }
+  lastFlashT = target;
+  lastFlashValid = true;
+  haveFlashed = true;
+  lastPhase = posFrac;
+  advance();
+  if (ended) endFlash();
+}
+
+static void __attribute__((noinline)) flashEnded() { endFlash(); }
+
+ISR(TIMER1_COMPA_vect) {
+  uint16_t start = OCR1A;
+  if ((uint16_t)(TCNT1 - start) > 0x4000) return;   // a match of an earlier OCR1A value
+  if (state == ARMED) {
+    TCCR1A = _BV(COM1A1);                    // clear OC1A on the next match
+    uint16_t width = flashWidth;
+    OCR1A = start + width;
+    state = ON;
+    // the end compare is certain only if it was written before TCNT1 got there; if not
+    // (this interrupt was held up by another), end the flash here
+    bool late = (uint16_t)(TCNT1 - start) + 2 >= width;
+    if (late) {
+      while ((uint16_t)(TCNT1 - start) < width) {}
+      PORTB &= ~_BV(PB1);                    // with OC1A disconnected the pin is PORTB1 = 0
+      TCCR1A = 0;
+      winFlags |= F_LATE;
+    }
+    flashStarted(late);
+  } else if (state == ON) {
+    flashEnded();
+  }
+}
+
+// Called from the overflow and mid-period interrupts with interrupts enabled again, so that a
+// flash's compare interrupt is not held up: state is read and changed with them off.
+static void housekeeping() {
+  noInterrupts();
+  uint32_t now = nowTicks();
+  uint32_t last = lastEdge, T = periodTicks;
+  // (an edge waiting for its interrupt, or deferred behind a flash, is not late)
+  bool have = haveEdge && !edgeDeferred && !(TIFR1 & _BV(ICF1));
+  interrupts();
+  if (have) {
+    uint32_t since = now - last;
+    uint32_t zto = T ? 4 * T : 16000000UL;
+    if (zto > 16000000UL) zto = 16000000UL;
+    bool overdue = since > T + T / 16, stopped = since > zto;
+    if (overdue || stopped) {
+      noInterrupts();
+      if (lastEdge == last && haveEdge && !edgeDeferred) {   // no edge came meanwhile
+        if (stopped) {
+          haveEdge = false;
+          periodTicks = 0;
+          winFlags |= F_NOPULSE;
+        }
+        if (locked || stopped) unlock();
+      }
+      interrupts();
+    }
+  }
+  noInterrupts();
+  if (state == IDLE || state == PENDING) processDeferredEdge();
+  tryArm(nowTicks());
+  interrupts();
+}
+
+ISR(TIMER1_OVF_vect) {
+  ovfCount++;
+  interrupts();
+  housekeeping();
+}
+
+ISR(TIMER1_COMPB_vect) {
+  interrupts();
+  housekeeping();
+}
+
+// ---- host side -------------------------------------------------------------------------
+uint32_t incForPeriod = 0;             // the period the increment was computed for
+
+// m + dphi for the last period, dphi = D m T / (1 - D T): the rotor angle at the flashes
+// advances by D revolutions per second. Done here, not in the capture interrupt (a float
+// division is ~30 us on the AVR); it lags the period by one loop pass at most.
+void updateIncrement(bool force) {
+  noInterrupts();
+  uint32_t T = periodTicks;
+  float D = offsetHz;
+  byte m = divider;
+  interrupts();
+  if (T == 0 || (T == incForPeriod && !force)) return;
+  incForPeriod = T;
+  float ts = (float)T / TICKS_PER_S;
+  float dphi = D * m * ts / (1.0f - D * ts);
+  bool ok = dphi <= 0.25f && dphi >= -0.25f;
+  byte whole = m;
+  uint32_t frac = 0;
+  if (ok && dphi >= 0) {
+    frac = (uint32_t)(dphi * 4294967296.0f);
+  } else if (ok) {
+    whole = m - 1;
+    frac = 0UL - (uint32_t)(-dphi * 4294967296.0f);
+  }
+  noInterrupts();
+  rangeOk = ok;
+  incWhole = whole;
+  incFrac = frac;
+  interrupts();
+}
+
+// Milliseconds since boot from the extended Timer1 count (called often enough by loop():
+// the count wraps every 268 s).
+uint32_t lastUptimeTicks = 0;
+uint32_t uptimeRemainder = 0;
+uint32_t uptimeMsCount = 0;
+
+uint32_t uptimeMs() {
+  noInterrupts();
+  uint32_t now = nowTicks();
+  interrupts();
+  uptimeRemainder += now - lastUptimeTicks;
+  lastUptimeTicks = now;
+  uptimeMsCount += uptimeRemainder / 16000UL;
+  uptimeRemainder %= 16000UL;
+  return uptimeMsCount;
+}
+
+void printBanner() {
+  Serial.print(F("# labkit-strobe " VERSION " offset="));
+  Serial.print(offsetHz, 3);
+  Serial.print(F(" width="));
+  Serial.print(widthTicks / 16);
+  Serial.print(F(" div="));
+  Serial.print(divider);
+  Serial.print(F(" rate="));
+  Serial.print(rateHz);
+  Serial.print('\n');
+}
+
+void setup() {
+  Serial.begin(115200);
+  pinMode(8, INPUT_PULLUP);
+  digitalWrite(9, LOW);
+  pinMode(9, OUTPUT);
+  noInterrupts();
+  TCCR1B = 0;                        // undo the core's PWM set-up of Timer1
+  TCCR1A = 0;
+  TCNT1 = 0;
+  OCR1B = 0x8000;                    // mid-period housekeeping
+  TIFR1 = 0xFF;
+  TIMSK1 = _BV(ICIE1) | _BV(OCIE1A) | _BV(OCIE1B) | _BV(TOIE1);
+  TCCR1B = _BV(ICNC1) | _BV(CS10);   // noise canceller, falling edge, prescaler 1
+  TIMSK0 = 0;                        // no millis() interrupt to delay a flash's end: the
+  interrupts();                      // status line times itself with Timer1 (uptimeMs)
+  printBanner();
+  nextStatusMs = uptimeMs() + 1000 / rateHz;
+}
+
+void reply(const __FlashStringHelper *text) { Serial.print(text); Serial.print('\n'); }
+
+void handleCommand(char *cmd) {
+  if (strcmp(cmd, "ID?") == 0) { reply(F("ID labkit-strobe " VERSION)); return; }
+  if (strcmp(cmd, "OFF") == 0 || strcmp(cmd, "ON") == 0) {
+    noInterrupts();
+    lampOn = cmd[1] == 'N';
+    if (!lampOn) cancelFlash();
+    interrupts();
+    reply(F("OK"));
+    return;
+  }
+  char *space = strchr(cmd, ' ');
+  if (space == NULL) { reply(F("ERR unknown command")); return; }
+  *space = '\0';
+  char *arg = space + 1;
+  char *end;
+  double value = strtod(arg, &end);
+  if (end == arg || *end != '\0') { reply(F("ERR bad value")); return; }
+  if (strcmp(cmd, "OFFSET") == 0) {
+    if (value < -100.0 || value > 100.0) { reply(F("ERR bad value")); return; }
+    noInterrupts(); offsetHz = value; interrupts();
+    updateIncrement(true);
+  } else if (strcmp(cmd, "WIDTH") == 0) {
+    if (value < 1 || value > 1000 || value != (long)value) { reply(F("ERR bad value")); return; }
+    noInterrupts(); widthTicks = (uint16_t)value * 16; interrupts();
+  } else if (strcmp(cmd, "DIV") == 0) {
+    if (value < 1 || value > 100 || value != (long)value) { reply(F("ERR bad value")); return; }
+    noInterrupts(); divider = (byte)value; interrupts();
+    updateIncrement(true);
+  } else if (strcmp(cmd, "RATE") == 0) {
+    if (value < 1 || value > 50 || value != (long)value) { reply(F("ERR bad value")); return; }
+    rateHz = (unsigned int)value;
+    nextStatusMs = uptimeMs() + 1000 / rateHz;
+  } else {
+    reply(F("ERR unknown command"));
+    return;
+  }
+  reply(F("OK"));
+}
+
+void readCommands() {
+  while (Serial.available()) {
+    char c = Serial.read();
+    if (c == '\r') continue;
+    if (c == '\n') {
+      line[lineLen] = '\0';
+      if (lineLen) handleCommand(line);
+      lineLen = 0;
+    } else if (lineLen < sizeof(line) - 1) {
+      line[lineLen++] = c;
+    } else {
+      lineLen = 0;
+    }
+  }
+}
+
+// n periods in sum ticks as Hz with 4 decimals ("0.0000" when none)
+void printHz(uint16_t n, uint32_t sum) {
+  if (n == 0 || sum == 0) { Serial.print(F("0.0000")); return; }
+  uint64_t e4 = ((uint64_t)16000000ULL * 10000ULL * n + sum / 2) / sum;
+  uint32_t whole = (uint32_t)(e4 / 10000ULL);
+  uint16_t frac = (uint16_t)(e4 % 10000ULL);
+  Serial.print(whole);
+  Serial.print('.');
+  if (frac < 1000) Serial.print('0');
+  if (frac < 100) Serial.print('0');
+  if (frac < 10) Serial.print('0');
+  Serial.print(frac);
+}
+
+void printStatus() {
+  noInterrupts();
+  uint16_t revs = winRevs, flashes = winFlashes;
+  uint32_t revTicks = winRevTicks, flashTicks = winFlashTicks, phase = lastPhase;
+  byte flagBits = winFlags;
+  bool isLocked = locked, pulses = haveEdge, lamp = lampOn;
+  winRevs = 0; winRevTicks = 0; winFlashes = 0; winFlashTicks = 0;
+  winFlags = pulses ? 0 : F_NOPULSE;
+  interrupts();
+
+  char flags[12];
+  byte f = 0;
+  if (!pulses || (flagBits & F_NOPULSE)) flags[f++] = 'Z';
+  if (!isLocked || (flagBits & F_UNLOCKED)) flags[f++] = 'L';
+  if (flagBits & F_NOISE) flags[f++] = 'N';
+  if (!lamp) flags[f++] = 'X';
+  if (flagBits & F_WIDTH) flags[f++] = 'W';
+  if (flagBits & F_RANGE) flags[f++] = 'R';
+  if (flagBits & F_SPEED) flags[f++] = 'O';
+  if (flagBits & F_MISSED) flags[f++] = 'M';
+  if (flagBits & F_LATE) flags[f++] = 'S';
+  flags[f] = '\0';
+  uint16_t tenths = (uint16_t)(((phase >> 16) * 3600UL + 32768UL) >> 16);
+  if (tenths >= 3600) tenths = 0;
+
+  Serial.print(F("S,"));
+  Serial.print(seq++);
+  Serial.print(',');
+  Serial.print(uptimeMs());
+  Serial.print(',');
+  printHz(revs, revTicks);
+  Serial.print(',');
+  printHz(flashes, flashTicks);
+  Serial.print(',');
+  Serial.print(tenths / 10);
+  Serial.print('.');
+  Serial.print(tenths % 10);
+  Serial.print(',');
+  if (f == 0) Serial.print('0'); else Serial.print(flags);
+  Serial.print('\n');
+}
+
+void loop() {
+  updateIncrement(false);
+  readCommands();
+  if ((long)(uptimeMs() - nextStatusMs) >= 0) {
+    nextStatusMs += 1000 / rateHz;
+    printStatus();
+  }
+}
