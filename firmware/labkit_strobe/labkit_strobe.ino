@@ -436,6 +436,14 @@ void setup() {
 
 void reply(const __FlashStringHelper *text) { Serial.print(text); Serial.print('\n'); }
 
+// After OFFSET or DIV the status window's strobe frequency counts only the new flashes, so
+// that f_rot - m * f_strobe is the new offset from the next line on (interrupts off).
+void restartStrobeWindow() {
+  winFlashes = 0;
+  winFlashTicks = 0;
+  lastFlashValid = false;
+}
+
 void handleCommand(char *cmd) {
   if (strcmp(cmd, "ID?") == 0) { reply(F("ID labkit-strobe " VERSION)); return; }
   if (strcmp(cmd, "OFF") == 0 || strcmp(cmd, "ON") == 0) {
@@ -455,14 +463,14 @@ void handleCommand(char *cmd) {
   if (end == arg || *end != '\0') { reply(F("ERR bad value")); return; }
   if (strcmp(cmd, "OFFSET") == 0) {
     if (value < -100.0 || value > 100.0) { reply(F("ERR bad value")); return; }
-    noInterrupts(); offsetHz = value; interrupts();
+    noInterrupts(); offsetHz = value; restartStrobeWindow(); interrupts();
     updateIncrement(true);
   } else if (strcmp(cmd, "WIDTH") == 0) {
     if (value < 1 || value > 1000 || value != (long)value) { reply(F("ERR bad value")); return; }
     noInterrupts(); widthTicks = (uint16_t)value * 16; interrupts();
   } else if (strcmp(cmd, "DIV") == 0) {
     if (value < 1 || value > 100 || value != (long)value) { reply(F("ERR bad value")); return; }
-    noInterrupts(); divider = (byte)value; interrupts();
+    noInterrupts(); divider = (byte)value; restartStrobeWindow(); interrupts();
     updateIncrement(true);
   } else if (strcmp(cmd, "RATE") == 0) {
     if (value < 1 || value > 50 || value != (long)value) { reply(F("ERR bad value")); return; }

@@ -29,7 +29,7 @@ from labkit.rig.checks import (
     check_role,
 )
 
-KINDS = ("balance", "tach", "motor")
+KINDS = ("balance", "tach", "motor", "strobe")
 SHAPES = ("sphere", "cylinder", "ring", "block", "cube")
 
 class DeviceCheck(Protocol):
@@ -54,7 +54,7 @@ class DeviceConfig:
     """One device of a rig, by role (``rotor_motor``, ``rotor_tach``, ``balance``...)."""
 
     role: str
-    kind: str                      # "balance" | "tach" | "motor"
+    kind: str                      # "balance" | "tach" | "motor" | "strobe"
     protocol: str                  # driver registry name, e.g. "mtsics"
     port: str                      # URL for serial_for_url / labkit.io.open_port
     serial: dict[str, Any] = field(default_factory=dict)
