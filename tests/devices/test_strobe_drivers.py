@@ -155,8 +155,8 @@ def test_the_emulator_in_its_own_process_over_ptys(tmp_path):
                    '\n[devices.strobe]\nkind = "strobe"\nprotocol = "labkit_strobe"\n'
                    'port = "sim://labkit_strobe?seed=4&plant=model-fig525&role=strobe&boot_s=0.05"\n',
                    encoding="utf-8")
-    proc = subprocess.Popen([sys.executable, "-m", "labkit", "emulate", str(rig), "--json", "--seconds", "20"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    command = [sys.executable, "-m", "labkit", "emulate", str(rig), "--json", "--seconds", "20"]
+    proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         assert proc.stdout is not None
         paths = json.loads(proc.stdout.readline())

@@ -59,8 +59,9 @@ def test_a_bad_field_is_named(line, field):
 
 def firmware_line(seq, t_ms, rot_e4, strobe_e4, tenths, flags) -> bytes:
     """A status line printed the way the sketch prints it (integer arithmetic)."""
-    text = f"S,{seq},{t_ms},{rot_e4 // 10000}.{rot_e4 % 10000:04d},{strobe_e4 // 10000}.{strobe_e4 % 10000:04d}," \
-           f"{tenths // 10}.{tenths % 10},{flags or '0'}"
+    rot = f"{rot_e4 // 10000}.{rot_e4 % 10000:04d}"
+    strobe = f"{strobe_e4 // 10000}.{strobe_e4 % 10000:04d}"
+    text = f"S,{seq},{t_ms},{rot},{strobe},{tenths // 10}.{tenths % 10},{flags or '0'}"
     return text.encode()
 
 

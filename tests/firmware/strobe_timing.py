@@ -54,7 +54,8 @@ def fit_flashes(edges: list[int], flash_starts: list[int]) -> FlashFit:
     residual_ticks = (angle - design @ coef) * period
     worst = int(np.argmax(np.abs(residual_ticks)))
     return FlashFit(len(t), float(coef[0]), float(np.abs(residual_ticks[worst])),
-                    float(np.sqrt(np.mean(residual_ticks ** 2))), int(t_cycles[worst]), float(position[worst]))
+                    float(np.sqrt(np.mean(residual_ticks ** 2))), int(t_cycles[worst]),
+                    float(position[worst]))
 
 
 def flashes_between(oc1a: list[tuple[int, int]], start: int, end: int) -> list[int]:
