@@ -22,7 +22,7 @@
 //
 // Serial 115200 8N1, LF-terminated commands, each answered "OK" or "ERR <text>":
 //   OFFSET <hz>   apparent frequency D, -100..100 (default 0.5)
-//   WIDTH <us>    flash length, 1..1000 us (default 10); at most T/4 is used (flag W)
+//   WIDTH <us>    flash length, 1..1000 us (default 20); at most T/4 is used (flag W)
 //   DIV <m>       flash every m-th revolution, 1..100 (default 1)
 //   OFF / ON      lamp off / on (default on)
 //   RATE <hz>     status lines per second, 1..50 (default 1)
@@ -64,7 +64,7 @@ volatile byte incWhole = 1;
 volatile uint32_t incFrac = 0;
 volatile bool rangeOk = true;          // |dphi| <= 1/4 revolution
 volatile uint32_t target = 0;          // extended ticks of the pending flash
-volatile uint16_t flashWidth = 160;    // ticks, after the T/4 cut
+volatile uint16_t flashWidth = 320;    // ticks, after the T/4 cut
 volatile byte state = IDLE;
 volatile bool edgeDeferred = false;    // an edge captured while a flash was armed or on
 volatile uint32_t deferredEdge = 0;
@@ -90,7 +90,7 @@ volatile byte winFlags = 0;            // bits below, sticky for one window
 // settings (written by loop with interrupts off)
 volatile float offsetHz = 0.5;
 volatile byte divider = 1;
-volatile uint16_t widthTicks = 160;    // 10 us
+volatile uint16_t widthTicks = 320;    // 20 us: ended by hardware even when interrupts collide
 volatile bool lampOn = true;
 unsigned int rateHz = 1;
 

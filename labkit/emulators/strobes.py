@@ -11,7 +11,7 @@ no rotation (below 1 Hz), ``L`` not locked (rotor below 5 Hz or above 4 kHz, fla
 or for the first 5 revolutions after it came into range), ``X`` lamp off, ``W`` width
 over T/4, ``R`` offset over 1/4 revolution per flash, ``N`` (fault ``noisy``).
 
-Options: ``rate_hz`` (1), ``offset_hz`` (0.5), ``width_us`` (10), ``divider`` (1): the
+Options: ``rate_hz`` (1), ``offset_hz`` (0.5), ``width_us`` (20), ``divider`` (1): the
 power-on settings; ``boot_s`` (0.2: bootloader after the DTR reset of opening the port),
 ``version`` (1.0), ``source`` (rotor). Faults besides the common ones
 (docs/design/device-rules.md#emulator-faults): ``noisy`` (probability per line of a
@@ -40,7 +40,7 @@ class LabkitStrobeEmulator(Emulator):
         self.version = self.options.get("version", "1.0")
         self.boot_s = float(self.options.get("boot_s", 0.2))
         self.source = self.options.get("source", "rotor")
-        self._defaults = (float(self.options.get("offset_hz", 0.5)), int(self.options.get("width_us", 10)),
+        self._defaults = (float(self.options.get("offset_hz", 0.5)), int(self.options.get("width_us", 20)),
                           int(self.options.get("divider", 1)), int(self.options.get("rate_hz", 1)),)
         self._line = bytearray()
         self._reset_done = False

@@ -16,11 +16,14 @@ Simulated durations are kept to a second or two per case: simavr runs in real ti
 
 from __future__ import annotations
 
+import json
 import time
 
 import pytest
 import serial
 from strobe_timing import fit_flashes, flashes_between
+
+from labkit.cli import main
 
 pytestmark = pytest.mark.timeout(120)
 
@@ -229,3 +232,21 @@ def test_lamp_off_and_commands(strobe):
         replies += sketch._pump()
     assert replies[:5] == [b"ID labkit-strobe 1.0", b"ERR bad value", b"ERR bad value", b"ERR bad value",
                            b"ERR unknown command"], replies
+
+
+def test_labkit_probe_strobe_reads_the_sketch(simavr, capsys):
+    """labkit's own driver (``labkit probe strobe``) on the sketch's pseudo-terminal: the
+    settings it sends are taken, and the status lines give the rotor and the offset."""
+    sim = simavr("labkit_strobe")
+    sim.rotor(800.0)
+    code = main(["probe", "strobe", "--protocol", "labkit_strobe", "--port", sim.pty, "--samples", "4",
+                 "--json", "-o", "offset_hz=1.25", "-o", "rate_hz=10", "-o", "divider=2"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    assert '"model": "labkit-strobe"' in err
+    last = [json.loads(line) for line in out.splitlines()][-2:]
+    for status in last:
+        assert status["stable"] and status["flags"] == [], status
+        assert status["rotor_hz"] == pytest.approx(800.0, rel=1e-5), status
+        assert status["apparent_hz"] == pytest.approx(1.25, abs=5e-4), status
+        assert status["strobe_hz"] == pytest.approx((800.0 - 1.25) / 2, rel=1e-5), status
