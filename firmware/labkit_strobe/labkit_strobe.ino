@@ -35,7 +35,7 @@
 //          X lamp off by command, W width cut to T/4, R offset too large for this speed
 //          (|dphi| > 1/4 rev), O rotor too fast (> 4 kHz) or too slow (< 5 Hz),
 //          M a flash was missed (scheduled too late), S a flash was stretched (its end
-//          was held up by another interrupt: only widths under ~20 us).
+//          was held up by another interrupt: only widths of a few us).
 // Boot banner: "# labkit-strobe <ver> offset=<hz> width=<us> div=<m> rate=<hz>".
 
 #define VERSION "1.0"
@@ -46,6 +46,9 @@
 #define MIN_PERIOD 4000UL          // 4 kHz
 #define MAX_PERIOD 3200000UL       // 5 Hz
 #define LOCK_PERIODS 4
+#define MID_PERIOD 0x8000          // OCR1B: the mid-period housekeeping
+#define SHORT_WIDTH 320            // flashes under 20 us get their end compare set at the start
+#define PRE_TICKS 400              // ... by an interrupt this long before it that waits there
 
 enum FlashState { IDLE, PENDING, ARMED, ON };
 
@@ -66,6 +69,7 @@ volatile bool rangeOk = true;          // |dphi| <= 1/4 revolution
 volatile uint32_t target = 0;          // extended ticks of the pending flash
 volatile uint16_t flashWidth = 320;    // ticks, after the T/4 cut
 volatile byte state = IDLE;
+volatile bool preArmed = false;       // OCR1B is set just before a short flash
 volatile bool edgeDeferred = false;    // an edge captured while a flash was armed or on
 volatile uint32_t deferredEdge = 0;
 volatile bool lastFlashValid = false;  // for the strobe frequency: flash to flash in lock
@@ -115,6 +119,10 @@ static void cancelFlash() {
     TCCR1A = 0;                 // OC1A disconnected: the pin follows PORTB1 = 0
     state = IDLE;
   }                             // a flash already on ends at its own compare
+  if (preArmed) {
+    preArmed = false;
+    OCR1B = MID_PERIOD;
+  }
 }
 
 static void unlock() {
@@ -150,6 +158,10 @@ static void tryArm(uint32_t now) {
     OCR1A = (uint16_t)target;
     TCCR1A = _BV(COM1A1) | _BV(COM1A0);  // set OC1A on compare match
     state = ARMED;
+    if (flashWidth < SHORT_WIDTH && ahead > PRE_TICKS + MIN_ARM_TICKS) {
+      OCR1B = (uint16_t)(target - PRE_TICKS);   // wake up just before it: see TIMER1_COMPB
+      preArmed = true;
+    }
   }
 }
 
@@ -287,27 +299,30 @@ static void __attribute__((noinline)) flashStarted(bool ended) {
 
 static void __attribute__((noinline)) flashEnded() { endFlash(); }
 
+// The flash has just been switched on by the compare at ``start``: program its end (interrupts
+// off). If TCNT1 may already be past the end, end it here.
+static void startFlash(uint16_t start) {
+  TCCR1A = _BV(COM1A1);                    // clear OC1A on the next match
+  uint16_t width = flashWidth;
+  OCR1A = start + width;
+  state = ON;
+  // the end compare is certain only if it was written before TCNT1 got there; if not
+  // (this interrupt was held up by another), end the flash here
+  bool late = (uint16_t)(TCNT1 - start) + 2 >= width;
+  if (late) {
+    while ((uint16_t)(TCNT1 - start) < width) {}
+    PORTB &= ~_BV(PB1);                    // with OC1A disconnected the pin is PORTB1 = 0
+    TCCR1A = 0;
+    winFlags |= F_LATE;
+  }
+  flashStarted(late);
+}
+
 ISR(TIMER1_COMPA_vect) {
   uint16_t start = OCR1A;
   if ((uint16_t)(TCNT1 - start) > 0x4000) return;   // a match of an earlier OCR1A value
-  if (state == ARMED) {
-    TCCR1A = _BV(COM1A1);                    // clear OC1A on the next match
-    uint16_t width = flashWidth;
-    OCR1A = start + width;
-    state = ON;
-    // the end compare is certain only if it was written before TCNT1 got there; if not
-    // (this interrupt was held up by another), end the flash here
-    bool late = (uint16_t)(TCNT1 - start) + 2 >= width;
-    if (late) {
-      while ((uint16_t)(TCNT1 - start) < width) {}
-      PORTB &= ~_BV(PB1);                    // with OC1A disconnected the pin is PORTB1 = 0
-      TCCR1A = 0;
-      winFlags |= F_LATE;
-    }
-    flashStarted(late);
-  } else if (state == ON) {
-    flashEnded();
-  }
+  if (state == ARMED) startFlash(start);
+  else if (state == ON) flashEnded();
 }
 
 // Called from the overflow and mid-period interrupts with interrupts enabled again, so that a
@@ -349,7 +364,22 @@ ISR(TIMER1_OVF_vect) {
   housekeeping();
 }
 
+// Mid-period housekeeping, or (preArmed) the moment just before a short flash: wait here,
+// interrupts off, until the hardware has switched the lamp on, then set the end compare at
+// once, so that even a 1 us flash is ended by the hardware.
 ISR(TIMER1_COMPB_vect) {
+  if (preArmed) {
+    preArmed = false;
+    OCR1B = MID_PERIOD;
+    if (state == ARMED) {
+      uint16_t start = OCR1A;
+      while (!(TIFR1 & _BV(OCF1A)) && (int16_t)(TCNT1 - start) < 8) {}
+      // (the match's own interrupt then finds OCR1A moved on and returns; TIFR1 is not
+      // written: simavr 1.6 would clear every Timer1 flag, a pending overflow too)
+      startFlash(start);
+    }
+    return;
+  }
   interrupts();
   housekeeping();
 }
@@ -366,7 +396,7 @@ void setup() {
   TCCR1B = 0;                        // undo the core's PWM set-up of Timer1
   TCCR1A = 0;
   TCNT1 = 0;
-  OCR1B = 0x8000;                    // mid-period housekeeping
+  OCR1B = MID_PERIOD;                // mid-period housekeeping
   TIFR1 = 0xFF;
   TIMSK1 = _BV(ICIE1) | _BV(OCIE1A) | _BV(OCIE1B) | _BV(TOIE1);
   TCCR1B = _BV(ICNC1) | _BV(CS10);   // noise canceller, falling edge, prescaler 1

@@ -37,7 +37,7 @@ STROBE_FLAGS: dict[str, tuple[bool, str]] = {
     "offset_out_of_range": (True, "the offset needs more than 1/4 revolution per flash: no flashes"),
     "rotor_out_of_range": (True, "rotor below 5 Hz or above 4 kHz: not locked"),
     "flash_missed": (True, "a flash could not be scheduled in time and was skipped"),
-    "flash_stretched": (True, "a flash's end was held up by another interrupt (widths under ~20 us)"),
+    "flash_stretched": (True, "a flash's end was held up by another interrupt (widths of a few us)"),
 }
 COMMANDS = ("OFFSET", "WIDTH", "DIV", "RATE")
 LIMITS = {"OFFSET": (-100.0, 100.0), "WIDTH": (1, 1000), "DIV": (1, 100), "RATE": (1, 50)}
