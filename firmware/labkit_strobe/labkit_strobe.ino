@@ -38,6 +38,8 @@
 //          was held up by another interrupt: only widths of a few us).
 // Boot banner: "# labkit-strobe <ver> offset=<hz> width=<us> div=<m> rate=<hz>".
 
+#include <avr/wdt.h>
+
 #define VERSION "1.0"
 #define TICKS_PER_S 16000000.0
 #define LEAD_TICKS 2400UL          // 150 us: capture ISR latency + its arithmetic, with margin
@@ -47,8 +49,8 @@
 #define MAX_PERIOD 3200000UL       // 5 Hz
 #define LOCK_PERIODS 4
 #define MID_PERIOD 0x8000          // OCR1B: the mid-period housekeeping
-#define SHORT_WIDTH 320            // flashes under 20 us get their end compare set at the start
-#define PRE_TICKS 400              // ... by an interrupt this long before it that waits there
+#define PRE_TICKS 400              // a flash's end compare is set by an interrupt this long
+                                   // before it that waits there for the start (TIMER1_COMPB)
 
 enum FlashState { IDLE, PENDING, ARMED, ON };
 
@@ -158,7 +160,7 @@ static void tryArm(uint32_t now) {
     OCR1A = (uint16_t)target;
     TCCR1A = _BV(COM1A1) | _BV(COM1A0);  // set OC1A on compare match
     state = ARMED;
-    if (flashWidth < SHORT_WIDTH && ahead > PRE_TICKS + MIN_ARM_TICKS) {
+    if (ahead > PRE_TICKS + MIN_ARM_TICKS) {
       OCR1B = (uint16_t)(target - PRE_TICKS);   // wake up just before it: see TIMER1_COMPB
       preArmed = true;
     }
@@ -364,7 +366,7 @@ ISR(TIMER1_OVF_vect) {
   housekeeping();
 }
 
-// Mid-period housekeeping, or (preArmed) the moment just before a short flash: wait here,
+// Mid-period housekeeping, or (preArmed) the moment just before a flash: wait here,
 // interrupts off, until the hardware has switched the lamp on, then set the end compare at
 // once, so that even a 1 us flash is ended by the hardware.
 ISR(TIMER1_COMPB_vect) {
@@ -388,6 +390,8 @@ ISR(TIMER1_COMPB_vect) {
 #include "labkit_strobe_host.h"
 
 void setup() {
+  MCUSR = 0;
+  wdt_disable();                     // a watchdog reset leaves it running: stop it first
   Serial.begin(115200);
   pinMode(8, INPUT_PULLUP);
   digitalWrite(9, LOW);
@@ -404,9 +408,11 @@ void setup() {
   interrupts();                      // status line times itself with Timer1 (uptimeMs)
   printBanner();
   nextStatusMs = uptimeMs() + 1000 / rateHz;
-}
+  wdt_enable(WDTO_500MS);            // a hung sketch resets: pin 9 becomes an input, the gate's
+}                                    // pull-down keeps the LED dark
 
 void loop() {
+  wdt_reset();
   updateIncrement(false);
   readCommands();
   if ((long)(uptimeMs() - nextStatusMs) >= 0) {
