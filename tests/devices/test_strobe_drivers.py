@@ -138,7 +138,7 @@ def test_a_rig_with_a_strobe_role_on_sim(tmp_path):
 def test_labkit_probe_strobe(capsys):
     code = main(["probe", "strobe", "--protocol", "labkit_strobe", "--samples", "3", "--json",
                  "--port", "sim://labkit_strobe?plant=probe-strobe&seed=1&rate_hz=20",
-                 "-o", "offset_hz=1.5"])
+                 "-o", "offset_hz=1.5", "-o", "rate_hz=20"])
     out, err = capsys.readouterr()
     assert code == 0, err
     assert json.loads(err.splitlines()[0])["model"] == "labkit-strobe"
