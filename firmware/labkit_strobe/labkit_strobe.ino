@@ -20,6 +20,14 @@
 // sooner than 5/8 T after the last one is noise and ignored (flag N). No edge for 4 T
 // (at most 1 s): no pulses (flag Z), the period is forgotten.
 //
+// Interrupts. The end compare of a flash can only be written once it has started: an OCR1B
+// interrupt PRE_TICKS before the flash waits for the start and writes it at once (the start's
+// own OCR1A interrupt is the fallback; if it comes too late the flash is ended in software
+// and flagged S). An edge captured while a flash is armed or on is only stored; it is
+// processed when the flash ends, so the capture interrupt never holds up a flash. Timer0's
+// millis() interrupt is off (the uptime comes from Timer1). A watchdog (0.5 s) resets a hung
+// sketch: the pins become inputs and the gate's pull-down keeps the LED dark.
+//
 // Serial 115200 8N1, LF-terminated commands, each answered "OK" or "ERR <text>":
 //   OFFSET <hz>   apparent frequency D, -100..100 (default 0.5)
 //   WIDTH <us>    flash length, 1..1000 us (default 20); at most T/4 is used (flag W)
