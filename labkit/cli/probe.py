@@ -1,4 +1,4 @@
-"""``labkit probe {balance,tach,motor,camera}``: a user's first check that a device talks.
+"""``labkit probe {balance,tach,motor,camera,strobe}``: a user's first check that a device talks.
 
 Opens the port URL (a device path, ``sim://``, ``replay://``, ``record://`` ...), builds the
 protocol's driver, asks the device who it is (where the protocol allows) and prints N
@@ -25,7 +25,7 @@ from labkit.devices.base import Device, driver_class, known_drivers
 from labkit.errors import DeviceError, LabkitError
 from labkit.io.clock import Clock, current_clock
 
-KINDS = ("balance", "tach", "motor", "camera")
+KINDS = ("balance", "tach", "motor", "camera", "strobe")
 
 try:  # a pty or serial driver may refuse a setting in tcsetattr (not an OSError)
     from termios import error as TermiosError
@@ -100,6 +100,8 @@ def one_sample(device: Device, timeout: float | None) -> dict[str, Any]:
         return device.read(timeout=timeout).as_json()  # type: ignore[attr-defined]
     if device.kind == "tach":
         return device.wait_reading(timeout=timeout).as_json()  # type: ignore[attr-defined]
+    if device.kind == "strobe":  # one status line: rotor and strobe frequency, phase, flags
+        return device.wait_status(timeout=timeout).as_json()  # type: ignore[attr-defined]
     return device.status().as_json()  # type: ignore[attr-defined]
 
 

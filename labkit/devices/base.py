@@ -126,7 +126,7 @@ def unknown_options_message(cls: type[Device], unknown: list[str]) -> str:
 class Device(ABC):
     """Common part of every driver."""
 
-    kind: ClassVar[str] = ""          # "balance" | "tach" | "motor"
+    kind: ClassVar[str] = ""          # "balance" | "tach" | "motor" | "strobe"
     protocol: ClassVar[str] = ""      # registry name, e.g. "mtsics"
     #: serial settings the real device ships with (e.g. A&D: 2400 7E1)
     default_serial: ClassVar[dict[str, Any]] = {"baudrate": 9600}
@@ -273,6 +273,7 @@ def _load_driver_modules() -> None:
     import labkit.devices.camera  # noqa: F401
     import labkit.devices.loadcell  # noqa: F401
     import labkit.devices.motor  # noqa: F401
+    import labkit.devices.strobe  # noqa: F401
     import labkit.devices.tachometer  # noqa: F401
 
 

@@ -43,12 +43,12 @@ PROTOCOL_FAULTS = {
     "overload": "balances, tachometers, motor controllers: over-range / over-temperature",
     "underload": "balances: probability per weight reply of an underload reply",
     "unstable": "balances: probability a reply is forced dynamic",
-    "error_reply": "balances, labkit-tach: probability a command gets an error reply",
+    "error_reply": "balances, labkit-tach, labkit-strobe: probability a command gets an error reply",
     "reset_at": "s after open of a device reset (power-on state)",
     "stop_at": "streaming devices: s after open at which the output stops (meter switched off, "
                "cable pulled at the meter); the port stays open",
     "mid_frame": "the first bytes after open are the tail of a frame/line",
-    "noisy": "labkit-tach: probability per line of a rejected glitch",
+    "noisy": "labkit-tach, labkit-strobe: probability per line of a rejected glitch",
     "low_vin": "Pololu SMC: low-VIN error",
     "fault_code": "VESC: report this fault code and refuse to run",
     "zero_at": "tachometers: s after open from which the meter reads 0 (target lost; labkit-tach: "
@@ -219,7 +219,7 @@ def emulator_class(protocol: str) -> type[Emulator]:
     import importlib
 
     # importing a module registers its emulators
-    for name in ("balances", "hx711_sketch", "motors", "vesc_emulator", "tachometers"):
+    for name in ("balances", "hx711_sketch", "motors", "vesc_emulator", "tachometers", "strobes"):
         module_name = f"labkit.emulators.{name}"
         try:
             importlib.import_module(module_name)

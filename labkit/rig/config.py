@@ -34,7 +34,7 @@ from labkit.rig.checks import (
 )
 from labkit.rig.plausible import check_plausible
 
-KINDS = ("balance", "tach", "motor", "camera")
+KINDS = ("balance", "tach", "motor", "camera", "strobe")
 SHAPES = ("sphere", "cylinder", "ring", "block", "cube")
 
 class DeviceCheck(Protocol):
@@ -59,7 +59,7 @@ class DeviceConfig:
     """One device of a rig, by role (``rotor_motor``, ``rotor_tach``, ``balance``...)."""
 
     role: str
-    kind: str                      # "balance" | "tach" | "motor" | "camera"
+    kind: str                      # "balance" | "tach" | "motor" | "camera" | "strobe"
     protocol: str                  # driver registry name, e.g. "mtsics"
     port: str                      # URL for serial_for_url / labkit.io.open_port
     serial: dict[str, Any] = field(default_factory=dict)

@@ -2,7 +2,8 @@
 
 :func:`open_rig` opens every port of a :class:`~labkit.rig.config.Rig` and instantiates its
 drivers; :class:`OpenRig` gives them back by role and kind (``balance(role)``,
-``tachometer(role)``, ``motor(role)``, ``camera(role)``) and closing it commands every motor to zero first.
+``tachometer(role)``, ``motor(role)``, ``camera(role)``, ``strobe(role)``) and closing it commands
+every motor to zero first.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from labkit.control.handle import RigMotor
 from labkit.control.stopping import stop_motor
 from labkit.devices.base import Balance, MotorController, Tachometer, driver_class
 from labkit.devices.camera import Camera, open_camera
+from labkit.devices.strobe.labkit_strobe import Strobe
 from labkit.io.ports import open_port
 from labkit.rig.checks import check_role
 from labkit.rig.config import DeviceConfig, Rig
@@ -71,6 +73,10 @@ class OpenRig:
     def tachometer(self, role: str) -> Tachometer:
         """The tachometer driver ``role``."""
         return self._of_kind(role, "tach")
+
+    def strobe(self, role: str) -> Strobe:
+        """The stroboscope driver ``role`` (device kind ``strobe``, docs/devices-strobe.md)."""
+        return self._of_kind(role, "strobe")
 
     def motor(self, role: str) -> RigMotor:
         """The rig-aware handle of motor ``role`` (speeds within the rig's limits and interlocks)."""

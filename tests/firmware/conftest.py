@@ -42,7 +42,7 @@ def build(args: list[str], out: Path) -> Path:
 
 @pytest.fixture(scope="session")
 def firmware(tmp_path_factory) -> dict[str, Path]:
-    """Both sketches' .hex and the harness, built once per session from the checkout."""
+    """The sketches' .hex and the harness, built once per session from the checkout."""
     reason = missing_toolchain()
     if reason:
         pytest.skip(reason)
@@ -50,13 +50,16 @@ def firmware(tmp_path_factory) -> dict[str, Path]:
     return {
         "labkit_tach": build([str(ROOT / "firmware" / "labkit_tach")], out),
         "labkit_esc_bridge": build([str(ROOT / "firmware" / "labkit_esc_bridge")], out),
+        "labkit_strobe": build([str(ROOT / "firmware" / "labkit_strobe")], out),
         "harness": build(["--harness"], out),
     }
 
 
 class SimAvr:
     """A running harness: ``pty`` is the sketch's serial port; pulse widths measured on pin
-    9 arrive in ``pwm`` as (simulated time in us, high time in us)."""
+    9 arrive in ``pwm`` as (simulated time in us, high time in us) and, cycle-exact, in
+    ``oc1a`` as (rising cycle, falling cycle); the falling edges driven on pin 8 (ICP1) in
+    ``edges`` (cycles), spurious ones in ``glitches``."""
 
     def __init__(self, harness: Path, hex_file: Path) -> None:
         self.proc = subprocess.Popen([str(harness), str(hex_file)], stdin=subprocess.PIPE,
@@ -64,6 +67,10 @@ class SimAvr:
                                      bufsize=1)
         self.pwm: list[tuple[float, float]] = []
         self.acks: list[str] = []
+        self.oc1a: list[tuple[int, int]] = []
+        self.edges: list[int] = []
+        self.glitches: list[int] = []
+        self.cycle = 0
         self.pty = ""
         self._changed = threading.Condition()
         self._reader = threading.Thread(target=self._read, daemon=True)
@@ -79,6 +86,14 @@ class SimAvr:
             with self._changed:
                 if words[:1] == ["PWM"] and len(words) == 3:
                     self.pwm.append((float(words[1]), float(words[2])))
+                elif words[:1] == ["EDGE"] and len(words) == 2:
+                    self.edges.append(int(words[1]))
+                elif words[:1] == ["OC1A"] and len(words) == 3:
+                    self.oc1a.append((int(words[1]), int(words[2])))
+                elif words[:1] == ["CYCLE"] and len(words) == 2:
+                    self.cycle = int(words[1])
+                elif words[:1] == ["GLITCH"] and len(words) == 2:
+                    self.glitches.append(int(words[1]))
                 elif words[:1] == ["PTY"]:
                     self.pty = words[1]
                 elif words[:1] == ["OK"]:
@@ -100,6 +115,35 @@ class SimAvr:
         self.proc.stdin.write(f"rpm {rpm} ppr {ppr} jitter {jitter} miss {miss}\n")
         self.proc.stdin.flush()
         assert self.wait_for(lambda: len(self.acks) > count, 5.0), "harness did not take the pulse train"
+
+    def _send(self, line: str) -> None:
+        assert self.proc.stdin is not None
+        count = len(self.acks)
+        self.proc.stdin.write(line + "\n")
+        self.proc.stdin.flush()
+        assert self.wait_for(lambda: len(self.acks) > count, 5.0), f"harness did not take {line!r}"
+
+    def rotor(self, hz: float, ramp_per_s: float = 0.0, low_us: float = 20.0) -> None:
+        """Drive pin 8 (ICP1) with a once-per-revolution pulse at ``hz`` from now on, the
+        frequency changing by ``ramp_per_s`` (relative) per second; 0 Hz stops it."""
+        self._send(f"icp {hz} ramp {ramp_per_s} low_us {low_us}")
+
+    def glitch(self, fraction: float, low_cycles: int) -> None:
+        """One spurious pulse ``fraction`` of a period after the next rotor edge."""
+        self._send(f"glitch {fraction} {low_cycles}")
+
+    def now_cycles(self) -> int:
+        """The simulated clock (cycles) as the harness last reported it (every 10 ms)."""
+        return self.cycle
+
+    def run_for(self, seconds: float, timeout: float = 30.0) -> int:
+        """Wait until the simulation has run ``seconds`` past now (by its own reports, so a
+        slow host only takes longer); returns the cycle it started from."""
+        start = self.now_cycles()
+        end = start + int(seconds * 16e6)
+        assert self.wait_for(lambda: self.now_cycles() >= end, timeout), (
+            f"simulation did not reach {seconds} s past cycle {start} in {timeout} s")
+        return start
 
     def close(self) -> None:
         if self.proc.poll() is None:
