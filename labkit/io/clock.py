@@ -171,3 +171,46 @@ class use_clock:  # noqa: N801 - used as a context manager, reads as a verb
     def __exit__(self, *exc: object) -> None:
         assert self._previous is not None
         set_current_clock(self._previous)
+
+
+class ReplayClock(VirtualClock):
+    """A virtual clock on which periodic jobs take none of their caller's time.
+
+    On a :class:`VirtualClock` a job that waits (a motor status query waiting for its reply)
+    moves everyone's time forward, as if the threads took turns. Replaying a real-clock
+    recording (``replay://...?mode=faithful``), where the control thread's queries ran beside
+    the protocol's balance polls, that stolen time would put the protocol behind the recorded
+    device. Here a wait inside a job moves only the job's own time (``now()`` inside the job),
+    and the caller resumes at the time it slept to.
+    """
+
+    def __init__(self, start: float = 0.0) -> None:
+        super().__init__(start)
+        self._job_time = 0.0
+
+    def now(self) -> float:
+        return self._now + self._job_time
+
+    def sleep(self, dt: float) -> None:
+        if dt < 0:
+            return
+        with self._lock:
+            if self._running_jobs:  # a wait inside a job: the job's own time only
+                self._job_time += dt
+                return
+            target = self._now + dt
+            self._running_jobs = True
+            try:
+                while self._jobs and self._jobs[0][0] <= target:
+                    due, _, job = heapq.heappop(self._jobs)
+                    if job.cancelled:
+                        continue
+                    self._now = max(self._now, due)
+                    try:
+                        job.callback(self._now)
+                    finally:
+                        self._job_time = 0.0
+                    heapq.heappush(self._jobs, (due + job.period, next(self._seq), job))
+            finally:
+                self._running_jobs = False
+            self._now = max(self._now, target)

@@ -294,7 +294,7 @@ class Runner:
     def __init__(self, protocol: ProtocolDef, rig: Rig, params: dict[str, Any], *, clock: Any,
                  sinks: list[Sink] | None = None, session: Any = None,
                  previous_points: list[dict[str, Any]] | None = None, done_steps: set[int] | None = None,
-                 port_override: Any = None, operator: Operator | None = None) -> None:
+                 port_override: Any = None, operator: Operator | None = None, offline: bool = False) -> None:
         self.protocol = protocol
         self.rig = rig
         self.params = params
@@ -306,6 +306,10 @@ class Runner:
         self.previous_points = list(previous_points or [])
         self.done_steps = set(done_steps or ())
         self.port_override = port_override
+        #: a replay of recorded ports: no motor turns, so nothing tells a person to cut power
+        self.offline = offline
+        #: the ports the run opened, by role (a replay reads what each matched)
+        self.ports: dict[str, Any] = {}
         self.operator = operator if operator is not None else default_operator(clock)
         self.stop_count = 0
         self.stop_signal: str | None = None   # "SIGTERM", ... (None: Ctrl-C or not stopped)
@@ -408,6 +412,7 @@ class Runner:
             resumed_from=(self.session.meta.get("resumed_from") if self.session else None)))
         try:
             opened = open_rig(self.rig, self.clock, record_to=cassettes, port_override=self.port_override)
+            self.ports = {role: getattr(dev, "port", None) for role, dev in opened.drivers.items()}
             self._recording_ports = [dev.port for dev in opened.drivers.values()
                                      if hasattr(getattr(dev, "port", None), "record_error")]
             self.control = build_speed_control(opened, self.clock, emit=self.bus.emit)
@@ -448,7 +453,7 @@ class Runner:
             self.bus.emit(doc.StopFailed(t=self.clock.now(), devices=dict(stop_failed)))
             if reason:  # "motors commanded to zero" is not the whole truth any more
                 reason = reason.replace("; motors commanded to zero", "").replace("; motors at zero", "")
-            reason = stop_failed_text(stop_failed) + (f" (after: {reason})" if reason else "")
+            reason = stop_failed_text(stop_failed, self.offline) + (f" (after: {reason})" if reason else "")
             status = "failed" if status == "completed" else status
         try:
             outcome = self._save(status, reason, error, ctx, new_points, stop_failed)
