@@ -23,10 +23,11 @@ recorded device behaved, on one time line:
 * **Replies follow their command.** On a polled port (default) bytes recorded after a write
   are that write's reply (read by the thread that wrote, ``th``): they arrive at their
   recorded time, or at once if the program asked later (:func:`reply_time`); a repeated
-  poll's, and a motor controller's (``setpoints=1``: its status is polled by the control
-  loop, whose ticks must not wait for the recording's), after their recorded latency. What the device said before a command (a power-on banner) is there before the
-  command is matched. On a ``stream=1`` port (a tachometer) every byte arrives at its
-  recorded time.
+  poll's after its recorded latency; a motor controller's (``setpoints=1``: its status is
+  polled by the control loop, whose ticks must not wait for the recording's) after its
+  recorded latency, at most :data:`STATUS_REPLY_S`. What the device said before a command
+  (a power-on banner) is there before the command. On a ``stream=1`` port (a tachometer)
+  every byte arrives at its recorded time, a configuration reply not before its command.
 * **Errors at their time.** A recorded error (an unplug) kills the port at its recorded time:
   bytes already in the buffer are still read, then every call raises the recorded error.
 
@@ -53,6 +54,10 @@ from labkit.io.urls import parse_replay_url
 WINDOW_S = 0.5
 #: the longest (s) a reply is held back beyond its recorded latency to arrive at its recorded time
 HOLD_S = 0.05
+#: a motor controller's status reply arrives at most this long (s) after its query: a later
+#: recorded reply was late because the recording's reading thread waited for the CPU (a
+#: loaded lab PC), which the replay does not, and would miss the driver's reply timeout
+STATUS_REPLY_S = 0.02
 TIME_EPS = 1e-9
 
 
@@ -91,6 +96,7 @@ class DeviceBytes:
     kind: str        # "rx" | "error"
     data: bytes
     event: dict[str, Any]
+    gate: int | None = None  # stream port: the write recorded just before it (a reply may follow)
 
 
 @dataclass
@@ -131,8 +137,9 @@ def faithful_sessions(cassette: Cassette, origin: float, stream: bool) -> list[F
                                                 event.get("th")))
         elif kind == "rx" or (kind == "error" and event.get("call") != "open"):
             index = len(current.device)
+            gate = len(current.writes) - 1 if stream and current.writes else None
             current.device.append(DeviceBytes(t, "rx" if kind == "rx" else "error",
-                                              event.get("bytes", b""), event))
+                                              event.get("bytes", b""), event, gate))
             asked = None if stream or kind == "error" else _last_write_of(current.writes, event.get("th"))
             if asked is None:
                 current.unsolicited.append(index)
@@ -200,6 +207,7 @@ class FaithfulSerial(ClockedSerial):
         self._session = session
         self._times = [w.t for w in session.writes]
         self._buffer = bytearray()
+        self._held: list[int] = []
         self._dead = None
         first_write = session.writes[0].before if session.writes else len(session.device)
         now = self._resolve_clock().now()
@@ -227,7 +235,8 @@ class FaithfulSerial(ClockedSerial):
     def report(self) -> dict[str, Any]:
         """What this port's replay matched: writes identical / near / not repeated, replies dropped."""
         writes = [w for s in self.sessions for w in s.writes]
-        count = {state: sum(1 for w in writes if w.state == state) for state in ("identical", "near", "pending")}
+        count = {state: sum(1 for w in writes if w.state == state)
+                 for state in ("identical", "near", "pending")}
         return {"port": self.port_name, "recorded_writes": len(writes), "identical": count["identical"],
                 "near": count["near"], "repeats": self._repeats, "not_repeated": count["pending"]}
 
@@ -238,7 +247,21 @@ class FaithfulSerial(ClockedSerial):
         assert session is not None
         while self._due and self._due[0][0] <= now + TIME_EPS and self._dead is None:
             _, index = heapq.heappop(self._due)
+            item = session.device[index]
+            if item.gate is not None and self._held_back(item, now):
+                self._held.append(index)  # not before the command it may answer (stream ports)
+                continue
             self._due_now(index)
+        for index in [i for i in self._held if not self._held_back(session.device[i], now)]:
+            self._held.remove(index)
+            self._due_now(index)
+
+    def _held_back(self, item: DeviceBytes, now: float) -> bool:
+        """A stream port's bytes recorded within the window after a write wait for that write
+        (the reply to a configuration command), at most the window past their time."""
+        assert self._session is not None and item.gate is not None
+        write = self._session.writes[item.gate]
+        return write.state == "pending" and item.t - write.t <= self.window and now < item.t + self.window
 
     def _next_arrival(self) -> float | None:
         return self._due[0][0] if self._due and self._dead is None else None
@@ -264,28 +287,27 @@ class FaithfulSerial(ClockedSerial):
         return len(data)
 
     def _match(self, data: bytes, now: float) -> tuple[int | None, str]:
-        """The recorded write nearest in time within the window that has the same bytes, one
-        not matched yet first (else a repeat: a poll sent more often than recorded); on a
-        setpoint port then the same command with another value."""
+        """The recorded write nearest in time within the window with the same bytes (one not
+        matched yet wins a tie; an earlier match again is a poll or keep-alive sent more often
+        than recorded); on a setpoint port else the nearest write of the same command with
+        another value that had no reply."""
         session = self._session
         assert session is not None
         lo = bisect.bisect_left(self._times, now - self.window)
         hi = bisect.bisect_right(self._times, now + self.window)
-        best: dict[str, tuple[float, int]] = {}
+        same: tuple[float, int, int] | None = None
+        near: tuple[float, int, int] | None = None
         for i in range(lo, hi):
             write = session.writes[i]
+            key = (abs(write.t - now), write.state != "pending", i)
             if write.data == data:
-                how = "identical" if write.state == "pending" else "repeat"
-            elif self.setpoints and same_command(write.data, data):
-                how = "near" if write.state == "pending" else "near-repeat"
-            else:
-                continue
-            gap = abs(write.t - now)
-            if how not in best or gap < best[how][0]:
-                best[how] = (gap, i)
-        for how in ("identical", "repeat", "near", "near-repeat"):
-            if how in best:
-                return best[how][1], how
+                same = key if same is None or key < same else same
+            elif self.setpoints and not write.replies and same_command(write.data, data):
+                near = key if near is None or key < near else near
+        if same is not None:
+            return same[2], "identical"
+        if near is not None:
+            return near[2], "near"
         return None, ""
 
     def _accept(self, index: int, how: str, now: float) -> None:
@@ -297,7 +319,11 @@ class FaithfulSerial(ClockedSerial):
             write.state = how
         else:
             self._repeats += 1
-        if not self.stream:  # what the device said before this command was read before it
+        if self.stream:  # bytes held back for this write come after it
+            for i in [i for i in self._held if self._session.device[i].gate == index]:
+                self._held.remove(i)
+                heapq.heappush(self._due, (now + session.device[i].t - write.t, i))
+        else:  # what the device said before this command was read before it
             early = [(t, i) for t, i in self._due if i < write.before]
             if early:
                 self._due = [(t, i) for t, i in self._due if i >= write.before]
@@ -306,8 +332,12 @@ class FaithfulSerial(ClockedSerial):
                     self._due_now(i)
         for item in write.replies:
             recorded = session.device[item].t
-            paced = first and not self.setpoints
-            arrive = reply_time(now, write.t, recorded) if paced else now + recorded - write.t
+            if self.setpoints:
+                arrive = now + min(recorded - write.t, STATUS_REPLY_S)
+            elif first:
+                arrive = reply_time(now, write.t, recorded)
+            else:
+                arrive = now + recorded - write.t
             heapq.heappush(self._due, (arrive, item))
 
     def _due_now(self, index: int) -> None:
