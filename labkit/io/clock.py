@@ -13,12 +13,16 @@ Drivers never call :func:`time.sleep` themselves. Code that needs "the" clock of
 
 from __future__ import annotations
 
+import bisect
 import heapq
 import itertools
+import json
+import os
 import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 
 @dataclass
@@ -56,9 +60,14 @@ class Clock:
 
 
 class RealClock(Clock):
-    """Wall time from ``time.monotonic``; periodic jobs each get a daemon thread."""
+    """Wall time from ``time.monotonic``; periodic jobs each get a daemon thread.
+
+    ``on_run(name, t)``, when set, is called each time a job runs (with the reading the job is
+    given): a recorded session keeps its speed loop's ticks (:class:`TickRecorder`) so that a
+    faithful replay ticks when the recording did."""
 
     is_virtual = False
+    on_run: Callable[[str, float], None] | None = None
 
     def now(self) -> float:
         return time.monotonic()
@@ -77,7 +86,10 @@ class RealClock(Clock):
             while not job.cancelled:
                 next_t += period
                 try:
-                    callback(time.monotonic())
+                    t = time.monotonic()
+                    if self.on_run is not None:
+                        self.on_run(name, t)
+                    callback(t)
                 except Exception:  # a job reports its own errors; the thread must not die silently
                     job.cancelled = True
                     raise
@@ -90,6 +102,71 @@ class RealClock(Clock):
         job._thread = threading.Thread(target=loop, name=f"labkit-{name or 'job'}", daemon=True)
         job._thread.start()
         return job
+
+
+#: the session file holding recorded job runs (one ``{"job": NAME, "t": T}`` per line)
+TICKS_FILE = "clock.jsonl"
+#: the jobs whose runs a real-clock session records (their timing makes the run's decisions)
+RECORDED_JOBS = frozenset({"speed-control"})
+
+
+class TickRecorder:
+    """``RealClock.on_run`` hook appending the runs of :data:`RECORDED_JOBS` to ``path``
+    (each line flushed; a failure to write only stops the recording of ticks)."""
+
+    def __init__(self, path: str | os.PathLike[str], clock: RealClock) -> None:
+        self._file: Any = open(path, "a", encoding="utf-8")  # noqa: SIM115 - closed by close()
+        self._lock = threading.Lock()
+        self.clock = clock
+        clock.on_run = self
+
+    def __call__(self, name: str, t: float) -> None:
+        if name not in RECORDED_JOBS:
+            return
+        with self._lock:
+            if self._file is None:
+                return
+            try:
+                self._file.write(f'{{"job": "{name}", "t": {t!r}}}\n')
+                self._file.flush()
+            except OSError:
+                self._file = None
+
+    def close(self) -> None:
+        self.clock.on_run = None
+        with self._lock:
+            if self._file is not None:
+                self._file.close()
+                self._file = None
+
+
+def record_ticks(clock: Clock, session: str | os.PathLike[str]) -> TickRecorder | None:
+    """On a real clock, keep when the speed loop ticks in SESSION/clock.jsonl (a faithful
+    replay ticks then too, so it sees the readings the recording's loop saw); None on a
+    virtual clock or when the file cannot be opened (the session's own writes report that)."""
+    if not isinstance(clock, RealClock):
+        return None
+    try:
+        return TickRecorder(os.path.join(session, TICKS_FILE), clock)
+    except OSError:
+        return None
+
+
+def recorded_ticks(session: str | os.PathLike[str]) -> dict[str, list[float]]:
+    """The job runs a session recorded (:class:`TickRecorder`), by job name; {} without any."""
+    path = os.path.join(session, TICKS_FILE)
+    out: dict[str, list[float]] = {}
+    try:
+        with open(path, encoding="utf-8") as f:
+            for line in f:
+                try:
+                    row = json.loads(line)
+                    out.setdefault(str(row["job"]), []).append(float(row["t"]))
+                except (ValueError, KeyError, TypeError):
+                    continue  # a torn last line
+    except OSError:
+        return {}
+    return out
 
 
 class VirtualClock(Clock):
@@ -182,11 +259,40 @@ class ReplayClock(VirtualClock):
     the protocol's balance polls, that stolen time would put the protocol behind the recorded
     device. Here a wait inside a job moves only the job's own time (``now()`` inside the job),
     and the caller resumes at the time it slept to.
+
+    ``schedules``: job name -> the clock readings at which that job ran in the recording (a
+    stream reader's reads, the speed loop's ticks): such a job runs at those times, so it sees
+    what it saw then; once they run out it runs every period.
     """
 
-    def __init__(self, start: float = 0.0) -> None:
+    def __init__(self, start: float = 0.0, schedules: dict[str, list[float]] | None = None) -> None:
         super().__init__(start)
         self._job_time = 0.0
+        #: job name -> the times (sorted) it ran in the recording: it runs then, not every period
+        self.schedules = {name: sorted(times) for name, times in (schedules or {}).items()}
+        self._next_fire: dict[int, int] = {}
+
+    def every(self, period: float, callback: Callable[[float], None], name: str = "") -> PeriodicJob:
+        times = self.schedules.get(name)
+        if not times:
+            return super().every(period, callback, name)
+        job = PeriodicJob(period, callback, name)
+        with self._lock:
+            index = bisect.bisect_right(times, self._now)
+            self._next_fire[id(job)] = index
+            heapq.heappush(self._jobs, (self._due_after(job, self._now), next(self._seq), job))
+        return job
+
+    def _due_after(self, job: PeriodicJob, last: float) -> float:
+        """A scheduled job's next recorded time (then every period once they run out)."""
+        times = self.schedules.get(job.name)
+        index = self._next_fire.get(id(job))
+        if times is None or index is None:
+            return last + job.period
+        while index < len(times) and times[index] <= last:
+            index += 1
+        self._next_fire[id(job)] = index + 1
+        return times[index] if index < len(times) else last + job.period
 
     def now(self) -> float:
         return self._now + self._job_time
@@ -210,7 +316,7 @@ class ReplayClock(VirtualClock):
                         job.callback(self._now)
                     finally:
                         self._job_time = 0.0
-                    heapq.heappush(self._jobs, (due + job.period, next(self._seq), job))
+                    heapq.heappush(self._jobs, (self._due_after(job, due), next(self._seq), job))
             finally:
                 self._running_jobs = False
             self._now = max(self._now, target)

@@ -136,6 +136,8 @@ def _prepare(rig_path: str | Path | None, protocol_name: str | None, sets: list[
         rig = load_rig(rig_path)
         protocol = get_protocol(protocol_name)
         params = resolve_params(protocol.defaults, sets, protocol.name)
+    if record is not None and clock == "auto" and record.meta.get("clock") == "real":
+        clock = "real"  # a real-clock session resumes on the real clock, even on emulators
     the_clock = make_clock(clock, rig)
     points: list[dict[str, Any]] = []
     if record is not None:

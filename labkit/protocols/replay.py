@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from labkit.errors import CassetteError, LabkitError
-from labkit.io.clock import ReplayClock, VirtualClock, use_clock
+from labkit.io.clock import ReplayClock, VirtualClock, recorded_ticks, use_clock
 from labkit.protocols import get_protocol
 from labkit.protocols.events import Sink
 from labkit.protocols.launch import diff_results, recorded_points, replay_url
@@ -109,6 +109,26 @@ def faithful_start(record: SessionRecord) -> float:
     return 0.0
 
 
+def faithful_schedules(record: SessionRecord, rig: Any) -> dict[str, list[float]]:
+    """When the recording's jobs ran (clock readings): each stream reader at the reads it made
+    (the cassette's ``rx`` events of its thread), the speed loop at its ticks (``clock.jsonl``)."""
+    from labkit.io.cassette import load_cassette
+
+    schedules: dict[str, list[float]] = {}
+    for role, dev in rig.devices.items():
+        path = record.path / "cassettes" / f"{role}.jsonl"
+        if not path.is_file() or not streams_unasked(dev.kind, dev.protocol):
+            continue
+        cassette = load_cassette(path)
+        origin = cassette.header.get("clock_origin")
+        if isinstance(origin, int | float):
+            job = f"{role}-reader"
+            schedules[job] = [origin + e["t"] for e in cassette.events
+                              if e["dir"] == "rx" and e.get("th") == job]
+    schedules.update(recorded_ticks(record.path))
+    return schedules
+
+
 def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str = "auto") -> ReplayOutcome:
     """Replay a session at ``level`` (auto: exact for a virtual-clock session, faithful for a
     real-clock one) and compare it with the recording."""
@@ -127,7 +147,8 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
     points, dropped = check_carried_points(carried, protocol.plan(rig, params))
     done = {int(p["step"]) for p in points}
     faithful = chosen == "faithful"
-    clock = ReplayClock(start=faithful_start(record)) if faithful else VirtualClock()
+    clock = (ReplayClock(faithful_start(record), faithful_schedules(record, rig)) if faithful
+             else VirtualClock())
     collect = _Collect()
 
     def port_for(dev: Any) -> str:

@@ -159,7 +159,8 @@ def diff_decisions(replayed: list[dict[str, Any]], recorded: list[dict[str, Any]
     out: list[str] = []
     for i, (a, b) in enumerate(zip(replayed, recorded, strict=False)):
         loose = ("settle_time_s", "reason")  # settle times within tolerance; reasons by key
-        same = {k: v for k, v in a.items() if k not in loose} == {k: v for k, v in b.items() if k not in loose}
+        same = ({k: v for k, v in a.items() if k not in loose}
+                == {k: v for k, v in b.items() if k not in loose})
         if not same:
             out.append(f"the replay diverged at decision {i + 1}: the recording, {describe(b, labels)}; "
                        f"the replay, {describe(a, labels)}")

@@ -29,6 +29,7 @@ from typing import Any
 from labkit import documents as doc
 from labkit.control.loop import SpeedControl, build_speed_control
 from labkit.errors import LabkitError, SafetyError
+from labkit.io.clock import record_ticks
 from labkit.protocols.events import EventBus, Sink
 from labkit.protocols.exit_paths import STOP_SIGNALS, SessionGuard, signal_name, stop_failed_text
 from labkit.protocols.operator import Operator, default_operator
@@ -306,10 +307,8 @@ class Runner:
         self.previous_points = list(previous_points or [])
         self.done_steps = set(done_steps or ())
         self.port_override = port_override
-        #: a replay of recorded ports: no motor turns, so nothing tells a person to cut power
-        self.offline = offline
-        #: the ports the run opened, by role (a replay reads what each matched)
-        self.ports: dict[str, Any] = {}
+        self.offline = offline  # a replay: no motor turns, nothing tells a person to cut power
+        self.ports: dict[str, Any] = {}  # the ports the run opened, by role (a replay reads them)
         self.operator = operator if operator is not None else default_operator(clock)
         self.stop_count = 0
         self.stop_signal: str | None = None   # "SIGTERM", ... (None: Ctrl-C or not stopped)
@@ -406,6 +405,7 @@ class Runner:
         previous_handlers = self._install_signal_handlers()
         self._guard_session()
         cassettes = self.session.cassette_dir if self.session is not None else None
+        ticks = record_ticks(self.clock, self.session.path) if self.session is not None else None
         self.bus.emit(doc.RunStart(
             t=self.clock.now(), protocol=self.protocol.name, params=self.params, rig=self.rig.name,
             n_steps=len(self.steps), session=str(self.session.path) if self.session is not None else None,
@@ -448,6 +448,8 @@ class Runner:
                 self.control.stop()
             if opened is not None:
                 opened.close()
+            if ticks is not None:
+                ticks.close()
         stop_failed = dict(opened.stop_failures) if opened is not None else {}
         if stop_failed:
             self.bus.emit(doc.StopFailed(t=self.clock.now(), devices=dict(stop_failed)))
