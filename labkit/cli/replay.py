@@ -113,6 +113,8 @@ def port_line(port: dict) -> str:
         text += f", {port['near']} with another value"
     if port.get("repeats"):
         text += f", {port['repeats']} polls repeated"
+    if port.get("held_up"):
+        text += f", {port['held_up']} held up as in the recording"
     if port.get("not_repeated"):
         text += f", {port['not_repeated']} not sent again (keep-alives and polls)"
     return text

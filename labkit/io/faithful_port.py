@@ -31,7 +31,9 @@ recorded device behaved, on one time line:
 * **Errors at their time.** A recorded error (an unplug) kills the port at its recorded time:
   bytes already in the buffer are still read, then every call raises the recorded error.
 
-A write with no recorded counterpart within the window raises
+A write with no counterpart within the window that the recording sent later (within
+:data:`HELD_UP_S`) waits for that time: the recording's program was held up there. Any other
+write with no recorded counterpart within the window raises
 :class:`~labkit.errors.ReplayMismatch` naming the port, the time, what was sent and what the
 recording holds around it. :meth:`FaithfulSerial.report` counts what was matched how.
 """
@@ -58,6 +60,8 @@ HOLD_S = 0.05
 #: recorded reply was late because the recording's reading thread waited for the CPU (a
 #: loaded lab PC), which the replay does not, and would miss the driver's reply timeout
 STATUS_REPLY_S = 0.02
+#: how far (s) ahead of the recording a write may find the recorded one it waits for
+HELD_UP_S = 5.0
 TIME_EPS = 1e-9
 
 
@@ -168,6 +172,7 @@ class FaithfulSerial(ClockedSerial):
         self._buffer = bytearray()
         self._dead: dict[str, Any] | None = None
         self._repeats = 0
+        self._held_writes = 0
         self._lock = threading.RLock()
         super().__init__(*args, **kwargs)
 
@@ -238,7 +243,8 @@ class FaithfulSerial(ClockedSerial):
         count = {state: sum(1 for w in writes if w.state == state)
                  for state in ("identical", "near", "pending")}
         return {"port": self.port_name, "recorded_writes": len(writes), "identical": count["identical"],
-                "near": count["near"], "repeats": self._repeats, "not_repeated": count["pending"]}
+                "near": count["near"], "repeats": self._repeats, "not_repeated": count["pending"],
+                "held_up": self._held_writes}
 
     # -- the time line ------------------------------------------------------------------
     def _arrive(self, now: float) -> None:
@@ -275,6 +281,11 @@ class FaithfulSerial(ClockedSerial):
         self._require_open()
         data = bytes(data)
         clock = self._resolve_clock()
+        now = clock.now()
+        later = self._held_up(data, now)
+        if later is not None and clock.is_virtual:
+            self._held_writes += 1
+            clock.sleep_until(later)  # the recording's program sent it then: it was held up
         with self._lock:
             now = clock.now()
             self._arrive(now)
@@ -286,6 +297,25 @@ class FaithfulSerial(ClockedSerial):
             self._accept(index, how, now)
         return len(data)
 
+    def _held_up(self, data: bytes, now: float) -> float | None:
+        """When a write has no recorded counterpart within the window but the recording sent
+        the same bytes later (within :data:`HELD_UP_S`), the time it did: the recording's
+        program was held up there (its thread waited for a lock the control loop held while a
+        motor reply was late), and the replay waits as it did."""
+        session = self._session
+        assert session is not None
+        lo = bisect.bisect_left(self._times, now - self.window)
+        hi = bisect.bisect_right(self._times, now + self.window)
+        # an instrument's poll is served once (each recorded reply counts in an average); a
+        # motor controller's keep-alives and status polls may repeat
+        for w in session.writes[lo:hi]:
+            if w.data == data and (self.setpoints or w.state == "pending"):
+                return None
+            if self.setpoints and not w.replies and same_command(w.data, data):
+                return None
+        end = bisect.bisect_right(self._times, now + HELD_UP_S)
+        later = next((w.t for w in session.writes[hi:end] if w.data == data and w.state == "pending"), None)
+        return None if later is None else later - self.window / 2
     def _match(self, data: bytes, now: float) -> tuple[int | None, str]:
         """The recorded write nearest in time within the window with the same bytes (one not
         matched yet wins a tie; an earlier match again is a poll or keep-alive sent more often

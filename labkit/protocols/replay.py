@@ -77,11 +77,37 @@ def recorded_clock(record: SessionRecord) -> str:
 
 
 def choose_level(record: SessionRecord, level: str = "auto") -> str:
+    """``level``, or for ``auto``: exact for a virtual-clock session, faithful for a real-clock
+    one whose cassettes carry their clock origin (labkit since 2026-11-27), else analysis."""
     if level not in LEVELS:
         raise LabkitError(f"replay level {level!r}: choose one of {', '.join(LEVELS)}")
     if level != "auto":
         return level
-    return "faithful" if recorded_clock(record) == "real" else "exact"
+    if recorded_clock(record) == "virtual":
+        return "exact"
+    return "faithful" if faithful_ready(record) else "analysis"
+
+
+def faithful_ready(record: SessionRecord) -> bool:
+    """Whether a session kept its speed loop's ticks (``clock.jsonl``) and every cassette names
+    its clock origin (older real-clock sessions cannot be put on one time line: they are
+    re-analysed instead)."""
+    import json
+
+    from labkit.io.clock import TICKS_FILE
+
+    if not (record.path / TICKS_FILE).is_file():
+        return False
+    cassettes = sorted((record.path / "cassettes").glob("*.jsonl"))
+    for path in cassettes:
+        try:
+            with path.open(encoding="utf-8") as f:
+                header = json.loads(f.readline() or "{}")
+        except (OSError, ValueError):
+            return False
+        if not isinstance(header, dict) or "clock_origin" not in header:
+            return False
+    return bool(cassettes)
 
 
 def streams_unasked(kind: str, protocol: str) -> bool:
@@ -137,7 +163,11 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
     if chosen == "analysis":
         from labkit.protocols.reanalyse import reanalyse_session
 
-        return reanalyse_session(record)
+        result = reanalyse_session(record)
+        if level == "auto":
+            result.warnings.insert(0, f"{record.path}: a real-clock session from a labkit that did not "
+                                      "record its clock origin and threads: re-analysed, not replayed")
+        return result
     if not (record.path / "cassettes").is_dir():
         raise LabkitError(f"{record.path}: no cassettes to replay")
     rig = load_rig(record.rig_path())

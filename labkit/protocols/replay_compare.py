@@ -20,12 +20,13 @@ import math
 import re
 from typing import Any
 
-#: key -> ("rel" | "abs", tolerance); keys not listed compare within DEFAULT_RTOL
+#: key -> ("rel" | "abs" | "count", tolerance); "count": relative, but one more or fewer always
+#: passes; keys not listed compare within DEFAULT_RTOL
 POINT_TOLERANCES: dict[str, tuple[str, float]] = {
     "settle_time_s": ("abs", 0.25),      # five control periods of the shipped rigs
     "hold_s": ("abs", 0.25),
-    "n": ("rel", 0.05),                  # balance readings in the averaging window
-    "unstable": ("rel", 0.10),
+    "n": ("count", 0.15),                # balance readings in the averaging window
+    "unstable": ("count", 0.25),
     "k": ("abs", 0.01),                  # v/w - 1: a difference of two 0.5 % numbers
     "drift_n": ("abs", 1e-4),            # N (0.01 g): rest readings of the balance
 }
@@ -71,6 +72,8 @@ def _within(a: float, b: float, how: tuple[str, float]) -> bool:
     kind, tol = how
     if kind == "abs":
         return abs(a - b) <= tol
+    if kind == "count":
+        return abs(a - b) <= max(tol * max(abs(a), abs(b)), 1.0)
     return abs(a - b) <= tol * max(abs(a), abs(b)) + 1e-12
 
 
@@ -86,7 +89,7 @@ def diff_within(a: Any, b: Any, path: str = "results", key: str = "", derived: b
         if _within(float(a), float(b), how):
             return []
         unit = " s" if how[0] == "abs" and key.endswith("_s") else ""
-        tol = f"{how[1] * 100:g} %" if how[0] == "rel" else f"{how[1]:g}{unit}"
+        tol = f"{how[1] * 100:g} %" if how[0] != "abs" else f"{how[1]:g}{unit}"
         return [f"{path}: replay {a!r}, recording {b!r} (beyond {tol})"]
     if type(a) is not type(b):
         return [f"{path}: replay {a!r}, recording {b!r}"]
