@@ -4,8 +4,8 @@ faithful-replay acceptance counts (docs/replay.md).
     python analysis/record_real_sessions.py [NAME ...] [--out recordings/sessions]
     python analysis/record_real_sessions.py --repeat 10 --out /tmp/acc sweep-5-inprocess
 
-Each recording is `labkit run ... --clock real` in its own process. All but the
-``*-inprocess`` ones run on the pseudo-terminals of `labkit emulate` in another process (the
+Each recording is `labkit run ... --clock real` in its own process. All but the ``inprocess``
+ones (emulated ``sim://`` ports in labkit's own process) run on the pseudo-terminals of `labkit emulate` in another process (the
 rig file rewritten to the ptys, as tests/safety/harness.py does), so the bytes cross real
 ptys on the real clock, as with a USB adapter. Options per recording:
 
@@ -38,15 +38,18 @@ SWEEP_FIXTURE = ["speeds_rpm=6000:14000:step=2000", "record_s=1.0", "zero=start"
 SWEEP_ACCEPT = ["speeds_rpm=6000:14000:step=2000"]
 SPIN = ["start_rpm=6600", "stop_rpm=9000", "step_pct=15", "max_trials=2", "consistent_n=2",
         "consistency_pct=10"]
+SPIN_FIXTURE = ["start_rpm=6600", "stop_rpm=8000", "step_pct=15", "max_trials=2", "consistent_n=2",
+                "consistency_pct=10"]
 
 RECORDINGS: dict[str, dict] = {
     # shipped fixtures (recordings/sessions/real-*)
     "real-speed-sweep": dict(rig="emulated-fig525.toml", protocol="speed-sweep", sets=SWEEP_FIXTURE),
     "real-speed-sweep-busy": dict(rig="emulated-fig525.toml", protocol="speed-sweep", sets=SWEEP_FIXTURE,
-                                  busy=2),
+                                  busy=2, inprocess=True),
     "real-speed-sweep-tach-unplug": dict(rig="emulated-fig525.toml", protocol="speed-sweep",
                                          sets=SWEEP_FIXTURE, unplug=("rotor_tach", 3)),
-    "real-spin-critical": dict(rig="emulated-fig618.toml", protocol="spin-critical", sets=SPIN),
+    "real-spin-critical": dict(rig="emulated-fig618.toml", protocol="spin-critical", sets=SPIN_FIXTURE),
+    "spin-3-emulate": dict(rig="emulated-fig618.toml", protocol="spin-critical", sets=SPIN),
     # acceptance (the 5-step sweep, 6000-14000 RPM, default averaging), not shipped
     "sweep-5-inprocess": dict(rig="emulated-fig525.toml", protocol="speed-sweep", sets=SWEEP_ACCEPT,
                               inprocess=True),

@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import bisect
 import heapq
+import statistics
 import threading
 from dataclasses import dataclass, field
 from typing import Any
@@ -55,13 +56,16 @@ from labkit.io.urls import parse_replay_url
 #: how far (s) a replayed write may lie from the recorded write it is matched to
 WINDOW_S = 0.5
 #: the longest (s) a reply is held back beyond its recorded latency to arrive at its recorded time
-HOLD_S = 0.05
+#: (below the 0.5 s after which a balance driver sends its poll again)
+HOLD_S = 0.4
 #: a motor controller's status reply arrives at most this long (s) after its query: a later
 #: recorded reply was late because the recording's reading thread waited for the CPU (a
 #: loaded lab PC), which the replay does not, and would miss the driver's reply timeout
 STATUS_REPLY_S = 0.02
 #: how far (s) ahead of the recording a write may find the recorded one it waits for
 HELD_UP_S = 5.0
+#: a reply later than its command's typical reply by more than this (s) was a stalled program
+STALL_S = 0.1
 TIME_EPS = 1e-9
 
 
@@ -112,6 +116,15 @@ class FaithfulSession:
     writes: list[RecordedWrite] = field(default_factory=list)
     device: list[DeviceBytes] = field(default_factory=list)
     unsolicited: list[int] = field(default_factory=list)
+    #: write bytes -> the median time from such a write to its reply
+    typical_latency: dict[bytes, float] = field(default_factory=dict)
+
+    def measure_latencies(self) -> None:
+        by_command: dict[bytes, list[float]] = {}
+        for write in self.writes:
+            if write.replies:
+                by_command.setdefault(write.data, []).append(self.device[write.replies[0]].t - write.t)
+        self.typical_latency = {data: statistics.median(times) for data, times in by_command.items()}
 
 
 def _last_write_of(writes: list[RecordedWrite], thread: str | None) -> RecordedWrite | None:
@@ -151,6 +164,8 @@ def faithful_sessions(cassette: Cassette, origin: float, stream: bool) -> list[F
                 asked.replies.append(index)
         elif kind == "error":
             current.open_error = event
+    for session in sessions:
+        session.measure_latencies()
     return sessions
 
 
@@ -173,6 +188,7 @@ class FaithfulSerial(ClockedSerial):
         self._dead: dict[str, Any] | None = None
         self._repeats = 0
         self._held_writes = 0
+        self._stalls = 0
         self._lock = threading.RLock()
         super().__init__(*args, **kwargs)
 
@@ -244,7 +260,7 @@ class FaithfulSerial(ClockedSerial):
                  for state in ("identical", "near", "pending")}
         return {"port": self.port_name, "recorded_writes": len(writes), "identical": count["identical"],
                 "near": count["near"], "repeats": self._repeats, "not_repeated": count["pending"],
-                "held_up": self._held_writes}
+                "held_up": self._held_writes + self._stalls}
 
     # -- the time line ------------------------------------------------------------------
     def _arrive(self, now: float) -> None:
@@ -294,8 +310,28 @@ class FaithfulSerial(ClockedSerial):
             index, how = self._match(data, now)
             if index is None:
                 raise ReplayMismatch(self._mismatch_text(data, now))
+            first = self._session.writes[index].state == "pending"
             self._accept(index, how, now)
+            stalled = self._stall(index) if first and not self.setpoints else 0.0
+        if stalled > 0 and clock.is_virtual:
+            self._stalls += 1
+            clock.sleep(stalled)  # the recording's program stood still here (see _stall)
         return len(data)
+
+    def _stall(self, index: int) -> float:
+        """How long the recording's program stood still after this write: its reply took longer
+        than this command's typical reply by more than :data:`STALL_S` (a loaded PC did not run
+        the reading thread). The replay stands still as long, so the driver, on the replay's
+        clock, does not time out and send the command again where the recording's did not."""
+        session = self._session
+        assert session is not None
+        write = session.writes[index]
+        if not write.replies:
+            return 0.0
+        typical = session.typical_latency.get(write.data)
+        latency = session.device[write.replies[0]].t - write.t
+        extra = latency - typical if typical is not None else 0.0
+        return extra if extra > STALL_S else 0.0
 
     def _held_up(self, data: bytes, now: float) -> float | None:
         """When a write has no recorded counterpart within the window but the recording sent
@@ -317,10 +353,11 @@ class FaithfulSerial(ClockedSerial):
         later = next((w.t for w in session.writes[hi:end] if w.data == data and w.state == "pending"), None)
         return None if later is None else later - self.window / 2
     def _match(self, data: bytes, now: float) -> tuple[int | None, str]:
-        """The recorded write nearest in time within the window with the same bytes (one not
-        matched yet wins a tie; an earlier match again is a poll or keep-alive sent more often
-        than recorded); on a setpoint port else the nearest write of the same command with
-        another value that had no reply."""
+        """The recorded write within the window with the same bytes: on a setpoint port the
+        nearest (one not matched yet wins a tie; an earlier match again is a keep-alive or
+        status poll sent more often than recorded), else the earliest not matched yet (an
+        instrument's polls are answered in the recorded order), else the nearest; on a setpoint
+        port then the nearest write of the same command with another value that had no reply."""
         session = self._session
         assert session is not None
         lo = bisect.bisect_left(self._times, now - self.window)
@@ -329,7 +366,11 @@ class FaithfulSerial(ClockedSerial):
         near: tuple[float, int, int] | None = None
         for i in range(lo, hi):
             write = session.writes[i]
-            key = (abs(write.t - now), write.state != "pending", i)
+            # a motor controller's write: the nearest; an instrument's poll: the earliest not
+            # served yet (its replies keep the recording's order and pace)
+            pending = write.state == "pending"
+            key = ((abs(write.t - now), not pending, i) if self.setpoints
+                   else (not pending, write.t if pending else abs(write.t - now), i))
             if write.data == data:
                 same = key if same is None or key < same else same
             elif self.setpoints and not write.replies and same_command(write.data, data):
