@@ -402,7 +402,10 @@ class FaithfulSerial(ClockedSerial):
                 for _, i in sorted(early, key=lambda e: e[1]):
                     self._due_now(i)
         for item in write.replies:
-            recorded = session.device[item].t
+            # an instrument's reply arrives whole with its first bytes: lines the recording's
+            # program read only later (a stale duplicate it dropped before its next command)
+            # must not turn up after that command
+            recorded = session.device[item if self.setpoints else write.replies[0]].t
             if self.setpoints:
                 arrive = now + min(recorded - write.t, STATUS_REPLY_S)
             elif first:

@@ -113,8 +113,9 @@ def diff_within(a: Any, b: Any, path: str = "results", key: str = "", derived: b
 
 def _reason_key(reason: Any) -> str:
     """An interlock or fault reason without its numbers (a silence of 0.52 s or 0.55 s is the
-    same decision) and without motor instructions."""
+    same decision), the last bytes it quotes and motor instructions."""
     text = offline_wording(str(reason or ""))
+    text = re.sub(r"last bytes (\.\.\.)?b(['\"]).*?\2(?=\)|$)", "last bytes", text)  # diagnostics
     return re.sub(r"[-+]?\d[\d.,e+-]*", "#", text).strip()
 
 
