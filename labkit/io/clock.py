@@ -67,14 +67,22 @@ class RealClock(Clock):
     faithful replay ticks when the recording did."""
 
     is_virtual = False
-    on_run: Callable[[str, float], None] | None = None
+    #: ``on_run(name, t)`` at each job run; ``on_run(STALL_JOB, planned, woke)`` when the main
+    #: thread woke from a sleep more than :data:`STALL_S` late
+    on_run: Callable[..., None] | None = None
 
     def now(self) -> float:
         return time.monotonic()
 
     def sleep(self, dt: float) -> None:
         if dt > 0:
+            start = time.monotonic()
             time.sleep(dt)
+            hook = self.on_run
+            if hook is not None and threading.current_thread() is threading.main_thread():
+                woke = time.monotonic()
+                if woke - (start + dt) > STALL_S:  # the protocol's thread stood still (a loaded PC)
+                    hook(STALL_JOB, start + dt, woke)
 
     def every(self, period: float, callback: Callable[[float], None], name: str = "") -> PeriodicJob:
         if period <= 0:
@@ -108,6 +116,12 @@ class RealClock(Clock):
 TICKS_FILE = "clock.jsonl"
 #: the jobs whose runs a real-clock session records (their timing makes the run's decisions)
 RECORDED_JOBS = frozenset({"speed-control"})
+#: the protocol thread's late wake-ups: ``{"job": STALL_JOB, "t": planned, "woke": actual}``
+STALL_JOB = "main-stall"
+#: a wake-up later than this (s) is recorded (a faithful replay then stands still as long)
+STALL_S = 0.05
+#: a replayed sleep ends where a recorded stall was planned when within this (s)
+STALL_MATCH_S = 0.01
 
 
 class TickRecorder:
@@ -120,14 +134,15 @@ class TickRecorder:
         self.clock = clock
         clock.on_run = self
 
-    def __call__(self, name: str, t: float) -> None:
-        if name not in RECORDED_JOBS:
+    def __call__(self, name: str, t: float, woke: float | None = None) -> None:
+        if name not in RECORDED_JOBS and name != STALL_JOB:
             return
+        extra = "" if woke is None else f', "woke": {woke!r}'
         with self._lock:
             if self._file is None:
                 return
             try:
-                self._file.write(f'{{"job": "{name}", "t": {t!r}}}\n')
+                self._file.write(f'{{"job": "{name}", "t": {t!r}{extra}}}\n')
                 self._file.flush()
             except OSError:
                 self._file = None
@@ -162,6 +177,8 @@ def recorded_ticks(session: str | os.PathLike[str]) -> dict[str, list[float]]:
                 try:
                     row = json.loads(line)
                     out.setdefault(str(row["job"]), []).append(float(row["t"]))
+                    if "woke" in row:
+                        out.setdefault(STALL_JOB + "-woke", []).append(float(row["woke"]))
                 except (ValueError, KeyError, TypeError):
                     continue  # a torn last line
     except OSError:
@@ -262,14 +279,17 @@ class ReplayClock(VirtualClock):
 
     ``schedules``: job name -> the clock readings at which that job ran in the recording (a
     stream reader's reads, the speed loop's ticks): such a job runs at those times, so it sees
-    what it saw then; once they run out it runs every period.
+    what it saw then; once they run out it runs every period. The recorded stalls of the
+    protocol's thread (:data:`STALL_JOB`) make the replayed sleep that ended there end late
+    as it did.
     """
 
     def __init__(self, start: float = 0.0, schedules: dict[str, list[float]] | None = None) -> None:
         super().__init__(start)
         self._job_time = 0.0
         #: job name -> the times (sorted) it ran in the recording: it runs then, not every period
-        self.schedules = {name: sorted(times) for name, times in (schedules or {}).items()}
+        self.schedules = {name: (list(times) if name.startswith(STALL_JOB) else sorted(times))
+                          for name, times in (schedules or {}).items()}
         self._next_fire: dict[int, int] = {}
 
     def every(self, period: float, callback: Callable[[float], None], name: str = "") -> PeriodicJob:
@@ -282,6 +302,18 @@ class ReplayClock(VirtualClock):
             self._next_fire[id(job)] = index
             heapq.heappush(self._jobs, (self._due_after(job, self._now), next(self._seq), job))
         return job
+
+    def _stalled_until(self, target: float) -> float:
+        """When the recording's protocol thread woke from the sleep ending at ``target``: later
+        than planned where it recorded a stall (``clock.jsonl``), else ``target``."""
+        planned = self.schedules.get(STALL_JOB)
+        woke = self.schedules.get(STALL_JOB + "-woke")
+        if not planned or not woke or len(planned) != len(woke):
+            return target
+        i = bisect.bisect_left(planned, target - STALL_MATCH_S)
+        if i < len(planned) and abs(planned[i] - target) <= STALL_MATCH_S:
+            return max(target, woke[i])
+        return target
 
     def _due_after(self, job: PeriodicJob, last: float) -> float:
         """A scheduled job's next recorded time (then every period once they run out)."""
@@ -304,7 +336,7 @@ class ReplayClock(VirtualClock):
             if self._running_jobs:  # a wait inside a job: the job's own time only
                 self._job_time += dt
                 return
-            target = self._now + dt
+            target = self._stalled_until(self._now + dt)
             self._running_jobs = True
             try:
                 while self._jobs and self._jobs[0][0] <= target:

@@ -14,7 +14,8 @@ recorded device behaved, on one time line:
   timeout, ``in_waiting`` counts them). A recorded timeout needs no replaying: a read that
   finds nothing times out by itself.
 * **Writes are matched by content.** Each write is matched to the recorded write of the same
-  bytes nearest in time within ``window`` seconds (default :data:`WINDOW_S`), one not
+  bytes nearest in time within ``window`` seconds (default :data:`WINDOW_S`,
+  :data:`SETPOINT_WINDOW_S` on a motor controller's port), one not
   matched yet if there is one, else again (a poll sent more often than recorded: its
   recorded reply is served again). Recorded writes never matched (a keep-alive or poll the
   replay sent less often) are counted, not an error. On a ``setpoints=1`` port (a motor
@@ -55,6 +56,10 @@ from labkit.io.urls import parse_replay_url
 
 #: how far (s) a replayed write may lie from the recorded write it is matched to
 WINDOW_S = 0.5
+#: the same on a motor controller's port: its writes change nothing the replay reads (the
+#: tachometer is recorded), and a loaded recording spread one tick's status queries over
+#: more than a second
+SETPOINT_WINDOW_S = 2.0
 #: the longest (s) a reply is held back beyond its recorded latency to arrive at its recorded time
 #: (below the 0.5 s after which a balance driver sends its poll again)
 HOLD_S = 0.4
@@ -199,7 +204,8 @@ class FaithfulSerial(ClockedSerial):
         if self.cassette is None:
             spec = parse_replay_url(self.portstr)
             self.stream, self.setpoints = spec.stream, spec.setpoints
-            self.window = spec.window if spec.window is not None else WINDOW_S
+            default = SETPOINT_WINDOW_S if self.setpoints else WINDOW_S
+            self.window = spec.window if spec.window is not None else default
             self.cassette = load_cassette(spec.cassette)
             self.port_name = self.cassette.port
             origin = self.cassette.header.get("clock_origin")
