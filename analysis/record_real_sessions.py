@@ -5,9 +5,10 @@ faithful-replay acceptance counts (docs/replay.md).
     python analysis/record_real_sessions.py --repeat 10 --out /tmp/acc sweep-5-inprocess
 
 Each recording is `labkit run ... --clock real` in its own process. All but the ``inprocess``
-ones (emulated ``sim://`` ports in labkit's own process) run on the pseudo-terminals of `labkit emulate` in another process (the
-rig file rewritten to the ptys, as tests/safety/harness.py does), so the bytes cross real
-ptys on the real clock, as with a USB adapter. Options per recording:
+ones (emulated ``sim://`` ports in labkit's own process) run on the pseudo-terminals of
+`labkit emulate` in another process (the rig file rewritten to the ptys, as
+tests/safety/harness.py does), so the bytes cross real ptys on the real clock, as with a USB
+adapter. Options per recording:
 
 * ``busy``: that many busy loops (``python -c "while True: pass"``) run during the recording,
   so the scheduler delays labkit's threads as on a loaded lab PC;

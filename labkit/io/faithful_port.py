@@ -67,8 +67,11 @@ HOLD_S = 0.4
 #: recorded reply was late because the recording's reading thread waited for the CPU (a
 #: loaded lab PC), which the replay does not, and would miss the driver's reply timeout
 STATUS_REPLY_S = 0.02
-#: how far (s) ahead of the recording a write may find the recorded one it waits for
-HELD_UP_S = 5.0
+#: how far (s) ahead of the recording a write may find the recorded one it waits for (a
+#: recorded program held up for about a motor reply's timeout, 1 s on a loaded PC; a poll
+#: more than the recording made at the end of an averaging window finds the next step's
+#: polls seconds later, and is answered again instead)
+HELD_UP_S = 1.5
 #: a reply later than its command's typical reply by more than this (s) was a stalled program
 STALL_S = 0.1
 TIME_EPS = 1e-9

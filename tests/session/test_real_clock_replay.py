@@ -50,7 +50,8 @@ def test_the_replay_takes_the_recorded_decisions_at_the_recorded_steps(session):
     result = replay_session(session)
     assert result.level == "faithful" and result.identical, result.differences[:5]
     recorded = decisions(record.events)
-    assert [(d["decision"], d["step"]) for d in result.decisions] == [(d["decision"], d["step"]) for d in recorded]
+    steps = [(d["decision"], d["step"]) for d in recorded]
+    assert [(d["decision"], d["step"]) for d in result.decisions] == steps
     for mine, theirs in zip(result.outcome.results["points"], record.results["points"], strict=True):
         for key in ("speed_rpm", "force_g", "rotor_rpm", "spin_rpm"):
             if isinstance(theirs.get(key), float):

@@ -10,7 +10,8 @@ import pytest
 
 from labkit.protocols.launch import REPLAY_FIT_RTOL, replay_session
 
-SESSIONS = [p for p in sorted((Path(__file__).resolve().parents[2] / "recordings" / "sessions").glob("*/run.json"))
+RECORDINGS = Path(__file__).resolve().parents[2] / "recordings" / "sessions"
+SESSIONS = [p for p in sorted(RECORDINGS.glob("*/run.json"))
             if json.loads(p.read_text()).get("clock") != "real"]
 
 
