@@ -114,3 +114,17 @@ def test_a_resumed_real_clock_session_stays_on_the_real_clock(tmp_path):
     prep = prepare_run(None, None, None, resume=real, clock="virtual", session_root=tmp_path / "s")
     prep.lock.release()
     assert isinstance(prep.clock, VirtualClock)  # an explicit --clock still wins
+
+
+def test_a_run_recorded_on_the_ptys_of_labkit_emulate_replays(tmp_path, capsys):
+    """As a lab records: `labkit emulate` in its own process, `labkit run` (real clock) on its
+    ptys in another, then `labkit replay` of that session offline."""
+    from tests.safety.harness import EmulatedRig
+
+    with EmulatedRig(tmp_path) as rig:
+        run = rig.start_run(tmp_path / "sessions", record_s=1.0)
+        run.finish(timeout=120.0)
+        session = run.session()
+    assert session is not None and json.loads((session / "run.json").read_text())["clock"] == "real"
+    assert main(["replay", str(session)]) == 0, capsys.readouterr().err[-2000:]
+    assert "replay level: faithful" in capsys.readouterr().out
