@@ -259,7 +259,7 @@ class FaithfulSerial(ClockedSerial):
     def _path(self) -> str:
         return str(self.cassette.path) if self.cassette else self.portstr
 
-    def close(self) -> None:
+    def close(self) -> None:  # what was not sent again is counted (report), not an error
         self.is_open = False
 
     def report(self) -> dict[str, Any]:
@@ -296,7 +296,6 @@ class FaithfulSerial(ClockedSerial):
 
     def _next_arrival(self) -> float | None:
         return self._due[0][0] if self._due and self._dead is None else None
-
     def _raise_if_dead(self) -> None:
         if self._dead is not None and not self._buffer:
             raise rebuild_error(self._dead)
@@ -438,7 +437,7 @@ class FaithfulSerial(ClockedSerial):
         assert session is not None
         lo = bisect.bisect_left(self._times, now - self.window)
         hi = bisect.bisect_right(self._times, now + self.window)
-        around = [w for w in session.writes[lo:hi]]
+        around = session.writes[lo:hi]
         kinds: dict[bytes, int] = {}
         for w in around:
             kinds[w.data] = kinds.get(w.data, 0) + 1
