@@ -148,10 +148,14 @@ class TickRecorder:
                 self._file = None
 
     def close(self) -> None:
+        """Stop recording; never raises (it runs on every exit path of a run)."""
         self.clock.on_run = None
         with self._lock:
             if self._file is not None:
-                self._file.close()
+                try:
+                    self._file.close()
+                except OSError:
+                    pass  # a full disk: the ticks written so far stay readable
                 self._file = None
 
 

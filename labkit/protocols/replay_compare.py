@@ -32,11 +32,13 @@ POINT_TOLERANCES: dict[str, tuple[str, float]] = {
 }
 #: every other number of a point: speeds, forces, spins
 DEFAULT_RTOL = 0.005
-#: spread statistics of a window (a reading more or less at its edge moves them)
-SPREAD_RTOL = 0.35
+#: spread statistics of a window and the fit's standard errors: within a factor of 3 (a reading
+#: more or less at a window's edge, or a point moved by 0.5 %, changes the residuals they come
+#: from by their own size)
+SPREAD_RTOL = 2 / 3
 #: the quick fit's parameters (from points within 0.5 %) and their uncertainties
 FIT_RTOL = 0.02
-FIT_STDERR_RTOL = 0.5
+FIT_STDERR_RTOL = 2 / 3
 SETTLE_TOL_S = 0.25
 
 _MOTOR_WORDS = (
@@ -89,7 +91,7 @@ def diff_within(a: Any, b: Any, path: str = "results", key: str = "", derived: b
         if _within(float(a), float(b), how):
             return []
         unit = " s" if how[0] == "abs" and key.endswith("_s") else ""
-        tol = f"{how[1] * 100:g} %" if how[0] != "abs" else f"{how[1]:g}{unit}"
+        tol = f"{how[1] * 100:.3g} %" if how[0] != "abs" else f"{how[1]:g}{unit}"
         return [f"{path}: replay {a!r}, recording {b!r} (beyond {tol})"]
     if type(a) is not type(b):
         return [f"{path}: replay {a!r}, recording {b!r}"]
