@@ -70,6 +70,23 @@ class _Collect:
             self.events.append(event)
 
 
+class _StepPacer:
+    """Sink holding a faithful replay's protocol at each step's start until the recording's
+    step began: between steps the recorded program may have stood still (writing its files
+    on a loaded PC) in code that records nothing, and a step begun early settles early."""
+
+    def __init__(self, clock: ReplayClock, record: SessionRecord) -> None:
+        self.clock = clock
+        self.starts = {e.get("index"): float(e["t"]) for e in record.events
+                       if e.get("type") == "step" and isinstance(e.get("t"), int | float)}
+
+    def on_event(self, event: Any) -> None:
+        if event.get("type") == "step":
+            began = self.starts.get(event.get("index"))
+            if began is not None and began > self.clock.now():
+                self.clock.sleep_until(began)
+
+
 def recorded_clock(record: SessionRecord) -> str:
     """``virtual`` or ``real``: the clock a session ran on (sessions without the key: virtual,
     the only kind an older labkit replayed)."""
@@ -184,7 +201,8 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
     def port_for(dev: Any) -> str:
         return faithful_url(record.path, dev) if faithful else replay_url(record.path, dev.role)
 
-    runner = Runner(protocol, rig, params, clock=clock, sinks=[*(sinks or []), collect],
+    pacer = [_StepPacer(clock, record)] if isinstance(clock, ReplayClock) else []
+    runner = Runner(protocol, rig, params, clock=clock, sinks=[*pacer, *(sinks or []), collect],
                     previous_points=points, done_steps=done, port_override=port_for, offline=True)
     with use_clock(clock):
         outcome = runner.run()
