@@ -13,14 +13,14 @@ recorded device behaved, on one time line:
   reads take what is there (pyserial's semantics: ``read(n)`` waits for ``n`` bytes or the
   timeout, ``in_waiting`` counts them). A recorded timeout needs no replaying: a read that
   finds nothing times out by itself.
-* **Writes are matched by content.** Each write is matched to the recorded write of the same
-  bytes nearest in time within ``window`` seconds (default :data:`WINDOW_S`,
-  :data:`SETPOINT_WINDOW_S` on a motor controller's port), one not
-  matched yet if there is one, else again (a poll sent more often than recorded: its
-  recorded reply is served again). Recorded writes never matched (a keep-alive or poll the
-  replay sent less often) are counted, not an error. On a ``setpoints=1`` port (a motor
-  controller) a write may also match a recorded write of the same command with another
-  value (a duty computed from a tick a few ms apart).
+* **Writes are matched by content** within ``window`` seconds (default :data:`WINDOW_S`,
+  :data:`SETPOINT_WINDOW_S` on a motor controller's port): an instrument's poll to the
+  earliest recorded one of the same bytes not answered yet, a motor controller's write to
+  the nearest one not matched yet; else again (a poll sent more often than recorded: its
+  reply is served again). Recorded writes never matched (a keep-alive or poll the replay
+  sent less often) are counted, not an error. On a ``setpoints=1`` port a write may also
+  match a recorded write of the same command with another value (a duty computed from a
+  tick a few ms apart).
 * **Replies follow their command.** On a polled port (default) bytes recorded after a write
   are that write's reply (read by the thread that wrote, ``th``): they arrive at their
   recorded time, or at once if the program asked later (:func:`reply_time`); a repeated
