@@ -1,9 +1,12 @@
 """``labkit replay SESSION``: re-run a session's protocol against its own serial cassettes.
 
-Every port is served from ``SESSION/cassettes/ROLE.jsonl`` (strict: what the drivers send
-must match the recording byte for byte), on a virtual clock, so a recorded run replays in
-seconds. The results are compared with the session's ``results.json``; any difference is
-printed and the exit status is 1. ``--export-csv`` instead writes ``readings/*.csv``.
+Three levels (docs/replay.md): **exact** for a session recorded on the virtual clock (what
+the drivers send must match the recording byte for byte; results identical), **faithful**
+for one recorded on the real clock (device bytes at their recorded times, writes matched by
+content; the same decisions and the points within tolerance), chosen from run.json's clock,
+and **analysis only** (``--analysis-only``: the recorded bytes re-parsed into readings,
+points and fit; no protocol run). Any difference is printed and the exit status is 1.
+``--export-csv`` instead writes ``readings/*.csv``.
 """
 
 from __future__ import annotations
@@ -15,7 +18,7 @@ from pathlib import Path
 from labkit.cli.output import add_json_argument, announce_rerun_file, write_json
 from labkit.cli.run import close_sinks
 from labkit.protocols.events import FlagTally
-from labkit.protocols.launch import replay_session
+from labkit.protocols.replay import LEVEL_WORDS, LEVELS, replay_session
 from labkit.session import export_csv, load_session
 from labkit.stream import add_rerun_argument
 
@@ -28,6 +31,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("session", help="session directory")
     p.add_argument("--export-csv", action="store_true", help="only export readings/*.jsonl to CSV")
+    p.add_argument("--level", choices=LEVELS, default="auto",
+                   help="exact, faithful or analysis (default auto: exact for a virtual-clock session, "
+                        "faithful for a real-clock one)")
+    p.add_argument("--analysis-only", dest="level", action="store_const", const="analysis",
+                   help="no protocol run: re-parse the recorded bytes into readings, points and fit "
+                        "(any session, also from an older labkit)")
     add_json_argument(p, "the comparison (identical, differences, status, results)")
     add_rerun_argument(p)
     p.set_defaults(func=main)
@@ -49,35 +58,63 @@ def main(args: argparse.Namespace) -> int:
     if args.rerun is not None:  # the same rerun sink as `labkit run`
         sinks.append(run_sink(args.rerun, None))
     try:
-        result = replay_session(Path(args.session), sinks=sinks)
+        result = replay_session(Path(args.session), sinks=sinks, level=args.level)
     finally:
         close_sinks(sinks, "replay")
     announce_rerun_file(args.rerun, "replay")
     for warning in result.warnings:
         print(f"labkit replay: warning: {warning}", file=sys.stderr)
     out = result.outcome
-    write_json({"session": str(args.session), "identical": result.identical,
+    write_json({"session": str(args.session), "level": result.level, "identical": result.identical,
                 "differences": result.differences, "status": out.status, "reason": out.reason,
-                "warnings": result.warnings, "results": out.results}, args.json, "replay")
+                "warnings": result.warnings, "ports": result.ports, "results": out.results},
+               args.json, "replay")
+    print(f"replay level: {LEVEL_WORDS[result.level]}")
     if flags.counts:
         print(f"device flags: {flags.summary()}")
     if out.status != "completed" and out.error is not None and result.recorded is None:
         print(f"labkit replay: {out.status}: {out.reason}", file=sys.stderr)
         return 2
     if result.identical:
-        n = len((out.results or {}).get("points", []))
-        print(f"replayed {args.session}: {n} points, results identical to results.json "
-              "(points exact, fits within relative 1e-6)")
+        print(success_line(args.session, result))
+        for port in result.ports:
+            print(f"  {port_line(port)}")
         return 0
-    print(f"labkit replay: results differ from {args.session}/results.json:", file=sys.stderr)
+    print(f"labkit replay: the replay of {args.session} differs from the recording:", file=sys.stderr)
     for line in result.differences[:20]:
         print(f"  {line}", file=sys.stderr)
-    if out.status != "completed":
+    if out.status != "completed" and not any("diverged" in d for d in result.differences):
         print(f"  the replayed run ended {out.status}: {out.reason}", file=sys.stderr)
-    if load_session(args.session).meta.get("clock") == "real":
-        print(
-            "  (this session was recorded on a real clock: the order of commands depends on timing, "
-            "so only emulator sessions on the virtual clock replay exactly)",
-            file=sys.stderr,
-        )
+    if result.level != "analysis":
+        print(f"  (the numbers alone: labkit replay --analysis-only {args.session})", file=sys.stderr)
     return 1
+
+
+def success_line(session: str, result) -> str:
+    """One line saying what the replay reproduced, in the level's own terms."""
+    n = len((result.outcome.results or {}).get("points", []))
+    if result.level == "exact":
+        return (f"replayed {session}: {n} points, results identical to results.json "
+                "(points exact, fits within relative 1e-6)")
+    if result.level == "analysis":
+        return (f"re-analysed {session}: {n} points and the fit recomputed from the recorded bytes, "
+                "within tolerance of results.json (speed and force 0.5 %)")
+    steps = sum(1 for d in result.decisions if d["decision"] == "step")
+    ended = [d for d in result.decisions if d["decision"] in ("interlock", "fault")]
+    how = f"; {ended[0]['decision']} in step {ended[0]['step'] + 1} as recorded" if ended else ""
+    return (f"replayed {session}: {n} points within tolerance of results.json (speed and force 0.5 %), "
+            f"the same decisions in {steps} steps{how}")
+
+
+def port_line(port: dict) -> str:
+    text = (f"{port['port']}: {port['identical']} of {port['recorded_writes']} recorded writes sent again "
+            "as recorded")
+    if port.get("near"):
+        text += f", {port['near']} with another value"
+    if port.get("repeats"):
+        text += f", {port['repeats']} polls repeated"
+    if port.get("held_up"):
+        text += f", {port['held_up']} held up as in the recording"
+    if port.get("not_repeated"):
+        text += f", {port['not_repeated']} not sent again (keep-alives and polls)"
+    return text

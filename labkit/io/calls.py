@@ -35,3 +35,14 @@ def current_call(default: str) -> str:
     """The innermost active annotation of this thread, else ``default``."""
     stack = getattr(_local, "stack", None)
     return stack[-1] if stack else default
+
+
+def current_thread_tag() -> str | None:
+    """The recording thread's name for a cassette's ``th`` key (None for the main thread):
+    replies are read by the thread that sent the command, so a faithful replay pairs them
+    by it when two threads share a port (a motor's keep-alive and its status queries)."""
+    thread = threading.current_thread()
+    if thread is threading.main_thread():
+        return None
+    name = thread.name
+    return name[len("labkit-"):] if name.startswith("labkit-") else name

@@ -6,7 +6,12 @@ Line 1 is a header::
     {"format": "labkit-cassette", "schema": 1, "labkit_version": "0.1.0",
      "created": "2026-11-22T09:00:00+00:00", "port": "balance", "url": "sim://mtsics?seed=3",
      "serial": {"baudrate": 9600, "bytesize": 8, "parity": "N", "stopbits": 1, "timeout": 1.0},
-     "device": {"vid_pid": "0403:6001", "serial_number": "A12", ...}, "clock": "real"}
+     "device": {"vid_pid": "0403:6001", "serial_number": "A12", ...}, "clock": "real",
+     "clock_origin": 8123.456}
+
+(``clock_origin``, the clock's reading at ``t`` = 0, is written since labkit 0.1.0 of
+2026-11-27; the cassettes of one run share that clock, so their events can be put on one
+time line.)
 
 Then one event per line, ``t`` in seconds since the port was first opened (on the port's
 clock)::
@@ -76,8 +81,10 @@ def decode_data(event: dict[str, Any]) -> bytes:
 
 
 def make_header(port: str, url: str, serial: dict[str, Any], device: dict[str, Any] | None = None,
-                clock: str = "real") -> dict[str, Any]:
-    return {
+                clock: str = "real", clock_origin: float | None = None) -> dict[str, Any]:
+    """The header line. ``clock_origin``: the clock's reading at the first open (``t`` = 0),
+    so the cassettes of one run share a time base (faithful replay lines them up)."""
+    header = {
         "format": FORMAT,
         "schema": SCHEMA,
         "labkit_version": __version__,
@@ -88,6 +95,9 @@ def make_header(port: str, url: str, serial: dict[str, Any], device: dict[str, A
         "device": device or {},
         "clock": clock,
     }
+    if clock_origin is not None:
+        header["clock_origin"] = clock_origin
+    return header
 
 
 class CassetteWriter:

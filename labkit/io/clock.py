@@ -13,12 +13,16 @@ Drivers never call :func:`time.sleep` themselves. Code that needs "the" clock of
 
 from __future__ import annotations
 
+import bisect
 import heapq
 import itertools
+import json
+import os
 import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 
 @dataclass
@@ -56,16 +60,29 @@ class Clock:
 
 
 class RealClock(Clock):
-    """Wall time from ``time.monotonic``; periodic jobs each get a daemon thread."""
+    """Wall time from ``time.monotonic``; periodic jobs each get a daemon thread.
+
+    ``on_run(name, t)``, when set, is called each time a job runs (with the reading the job is
+    given): a recorded session keeps its speed loop's ticks (:class:`TickRecorder`) so that a
+    faithful replay ticks when the recording did."""
 
     is_virtual = False
+    #: ``on_run(name, t)`` at each job run; ``on_run(STALL_JOB, planned, woke)`` when the main
+    #: thread woke from a sleep more than :data:`STALL_S` late
+    on_run: Callable[..., None] | None = None
 
     def now(self) -> float:
         return time.monotonic()
 
     def sleep(self, dt: float) -> None:
         if dt > 0:
+            start = time.monotonic()
             time.sleep(dt)
+            hook = self.on_run
+            if hook is not None and threading.current_thread() is threading.main_thread():
+                woke = time.monotonic()
+                if woke - (start + dt) > STALL_S:  # the protocol's thread stood still (a loaded PC)
+                    hook(STALL_JOB, start + dt, woke)
 
     def every(self, period: float, callback: Callable[[float], None], name: str = "") -> PeriodicJob:
         if period <= 0:
@@ -77,7 +94,10 @@ class RealClock(Clock):
             while not job.cancelled:
                 next_t += period
                 try:
-                    callback(time.monotonic())
+                    t = time.monotonic()
+                    if self.on_run is not None:
+                        self.on_run(name, t)
+                    callback(t)
                 except Exception:  # a job reports its own errors; the thread must not die silently
                     job.cancelled = True
                     raise
@@ -90,6 +110,84 @@ class RealClock(Clock):
         job._thread = threading.Thread(target=loop, name=f"labkit-{name or 'job'}", daemon=True)
         job._thread.start()
         return job
+
+
+#: the session file holding recorded job runs (one ``{"job": NAME, "t": T}`` per line)
+TICKS_FILE = "clock.jsonl"
+#: the jobs whose runs a real-clock session records (their timing makes the run's decisions)
+RECORDED_JOBS = frozenset({"speed-control"})
+#: the protocol thread's late wake-ups: ``{"job": STALL_JOB, "t": planned, "woke": actual}``
+STALL_JOB = "main-stall"
+#: a wake-up later than this (s) is recorded (a faithful replay then stands still as long)
+STALL_S = 0.05
+#: a replayed sleep ends where a recorded stall was planned when within this (s)
+STALL_MATCH_S = 0.01
+
+
+class TickRecorder:
+    """``RealClock.on_run`` hook appending the runs of :data:`RECORDED_JOBS` to ``path``
+    (each line flushed; a failure to write only stops the recording of ticks)."""
+
+    def __init__(self, path: str | os.PathLike[str], clock: RealClock) -> None:
+        self._file: Any = open(path, "a", encoding="utf-8")  # noqa: SIM115 - closed by close()
+        self._lock = threading.Lock()
+        self.clock = clock
+        clock.on_run = self
+
+    def __call__(self, name: str, t: float, woke: float | None = None) -> None:
+        if name not in RECORDED_JOBS and name != STALL_JOB:
+            return
+        extra = "" if woke is None else f', "woke": {woke!r}'
+        with self._lock:
+            if self._file is None:
+                return
+            try:
+                self._file.write(f'{{"job": "{name}", "t": {t!r}{extra}}}\n')
+                self._file.flush()
+            except OSError:
+                self._file = None
+
+    def close(self) -> None:
+        """Stop recording; never raises (it runs on every exit path of a run)."""
+        self.clock.on_run = None
+        with self._lock:
+            if self._file is not None:
+                try:
+                    self._file.close()
+                except OSError:
+                    pass  # a full disk: the ticks written so far stay readable
+                self._file = None
+
+
+def record_ticks(clock: Clock, session: str | os.PathLike[str]) -> TickRecorder | None:
+    """On a real clock, keep when the speed loop ticks in SESSION/clock.jsonl (a faithful
+    replay ticks then too, so it sees the readings the recording's loop saw); None on a
+    virtual clock or when the file cannot be opened (the session's own writes report that)."""
+    if not isinstance(clock, RealClock):
+        return None
+    try:
+        return TickRecorder(os.path.join(session, TICKS_FILE), clock)
+    except OSError:
+        return None
+
+
+def recorded_ticks(session: str | os.PathLike[str]) -> dict[str, list[float]]:
+    """The job runs a session recorded (:class:`TickRecorder`), by job name; {} without any."""
+    path = os.path.join(session, TICKS_FILE)
+    out: dict[str, list[float]] = {}
+    try:
+        with open(path, encoding="utf-8") as f:
+            for line in f:
+                try:
+                    row = json.loads(line)
+                    out.setdefault(str(row["job"]), []).append(float(row["t"]))
+                    if "woke" in row:
+                        out.setdefault(STALL_JOB + "-woke", []).append(float(row["woke"]))
+                except (ValueError, KeyError, TypeError):
+                    continue  # a torn last line
+    except OSError:
+        return {}
+    return out
 
 
 class VirtualClock(Clock):
@@ -171,3 +269,90 @@ class use_clock:  # noqa: N801 - used as a context manager, reads as a verb
     def __exit__(self, *exc: object) -> None:
         assert self._previous is not None
         set_current_clock(self._previous)
+
+
+class ReplayClock(VirtualClock):
+    """A virtual clock on which periodic jobs take none of their caller's time.
+
+    On a :class:`VirtualClock` a job that waits (a motor status query waiting for its reply)
+    moves everyone's time forward, as if the threads took turns. Replaying a real-clock
+    recording (``replay://...?mode=faithful``), where the control thread's queries ran beside
+    the protocol's balance polls, that stolen time would put the protocol behind the recorded
+    device. Here a wait inside a job moves only the job's own time (``now()`` inside the job),
+    and the caller resumes at the time it slept to.
+
+    ``schedules``: job name -> the clock readings at which that job ran in the recording (a
+    stream reader's reads, the speed loop's ticks): such a job runs at those times, so it sees
+    what it saw then; once they run out it runs every period. The recorded stalls of the
+    protocol's thread (:data:`STALL_JOB`) make the replayed sleep that ended there end late
+    as it did.
+    """
+
+    def __init__(self, start: float = 0.0, schedules: dict[str, list[float]] | None = None) -> None:
+        super().__init__(start)
+        self._job_time = 0.0
+        #: job name -> the times (sorted) it ran in the recording: it runs then, not every period
+        self.schedules = {name: (list(times) if name.startswith(STALL_JOB) else sorted(times))
+                          for name, times in (schedules or {}).items()}
+        self._next_fire: dict[int, int] = {}
+
+    def every(self, period: float, callback: Callable[[float], None], name: str = "") -> PeriodicJob:
+        times = self.schedules.get(name)
+        if not times:
+            return super().every(period, callback, name)
+        job = PeriodicJob(period, callback, name)
+        with self._lock:
+            index = bisect.bisect_right(times, self._now)
+            self._next_fire[id(job)] = index
+            heapq.heappush(self._jobs, (self._due_after(job, self._now), next(self._seq), job))
+        return job
+
+    def _stalled_until(self, target: float) -> float:
+        """When the recording's protocol thread woke from the sleep ending at ``target``: later
+        than planned where it recorded a stall (``clock.jsonl``), else ``target``."""
+        planned = self.schedules.get(STALL_JOB)
+        woke = self.schedules.get(STALL_JOB + "-woke")
+        if not planned or not woke or len(planned) != len(woke):
+            return target
+        i = bisect.bisect_left(planned, target - STALL_MATCH_S)
+        if i < len(planned) and abs(planned[i] - target) <= STALL_MATCH_S:
+            return max(target, woke[i])
+        return target
+
+    def _due_after(self, job: PeriodicJob, last: float) -> float:
+        """A scheduled job's next recorded time (then every period once they run out)."""
+        times = self.schedules.get(job.name)
+        index = self._next_fire.get(id(job))
+        if times is None or index is None:
+            return last + job.period
+        while index < len(times) and times[index] <= last:
+            index += 1
+        self._next_fire[id(job)] = index + 1
+        return times[index] if index < len(times) else last + job.period
+
+    def now(self) -> float:
+        return self._now + self._job_time
+
+    def sleep(self, dt: float) -> None:
+        if dt < 0:
+            return
+        with self._lock:
+            if self._running_jobs:  # a wait inside a job: the job's own time only
+                self._job_time += dt
+                return
+            target = self._stalled_until(self._now + dt)
+            self._running_jobs = True
+            try:
+                while self._jobs and self._jobs[0][0] <= target:
+                    due, _, job = heapq.heappop(self._jobs)
+                    if job.cancelled:
+                        continue
+                    self._now = max(self._now, due)
+                    try:
+                        job.callback(self._now)
+                    finally:
+                        self._job_time = 0.0
+                    heapq.heappush(self._jobs, (self._due_after(job, due), next(self._seq), job))
+            finally:
+                self._running_jobs = False
+            self._now = max(self._now, target)

@@ -14,7 +14,7 @@ from typing import Any
 import serial
 from serial.serialutil import to_bytes
 
-from labkit.io.calls import current_call
+from labkit.io.calls import current_call, current_thread_tag
 from labkit.io.cassette import CassetteWriter, make_header
 from labkit.io.clocked import ClockedSerial
 from labkit.io.urls import parse_record_url
@@ -79,7 +79,8 @@ class RecordSerial(ClockedSerial):
         wire: the failure is kept in ``record_error`` for the runner to stop the run safely."""
         if self.writer is not None and not self._failed and self.record_error is None:
             try:
-                self.writer.event(self._t(), self.port_name, direction, data, **fields)
+                self.writer.event(self._t(), self.port_name, direction, data, th=current_thread_tag(),
+                                  **fields)
             except OSError as exc:
                 self.record_error = f"cannot write {self.cassette_path}: {exc.strerror or exc}"
 
@@ -105,7 +106,7 @@ class RecordSerial(ClockedSerial):
             identity = usb_identity(spec.inner_url)
             self.writer = CassetteWriter(spec.cassette, make_header(
                 spec.port, spec.inner_url, self.settings_summary(), identity,
-                clock="virtual" if clock.is_virtual else "real",
+                clock="virtual" if clock.is_virtual else "real", clock_origin=self._t0,
             ))
         else:
             self.writer.reopen()

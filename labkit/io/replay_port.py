@@ -1,4 +1,5 @@
-"""``replay://<cassette>?mode=strict|timed``: a recorded port, served back byte-exact.
+"""``replay://<cassette>?mode=strict|timed``: a recorded port, served back byte-exact
+(``mode=faithful``, for real-clock recordings: :mod:`labkit.io.faithful_port`).
 
 * Every read call returns exactly the next recorded chunk (what the recorded read returned),
   an empty recorded read returns ``b""``, a recorded error (e.g. an unplug) is raised again
@@ -393,7 +394,11 @@ class ReplaySerial(ClockedSerial):
             self._raise_if_dead()
 
 
-def serial_class_for_url(url: str) -> tuple[str, type[ReplaySerial]]:
-    """pyserial hook (``labkit.io.urlhandlers.protocol_replay``)."""
-    parse_replay_url(url)
+def serial_class_for_url(url: str) -> tuple[str, type[ClockedSerial]]:
+    """pyserial hook (``labkit.io.urlhandlers.protocol_replay``); ``mode=faithful`` is
+    :class:`labkit.io.faithful_port.FaithfulSerial`."""
+    if parse_replay_url(url).mode == "faithful":
+        from labkit.io.faithful_port import FaithfulSerial
+
+        return url, FaithfulSerial
     return url, ReplaySerial

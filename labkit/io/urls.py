@@ -6,8 +6,10 @@
   of the query; every other query key stays with the inner URL, so
   ``record://sim://mtsics?seed=3&cassette=rec/b.jsonl&port=balance`` records
   ``sim://mtsics?seed=3``. A real device: ``record:///dev/ttyUSB0?cassette=rec/b.jsonl``.
-* ``replay://<cassette-path>?mode=strict|timed`` (relative paths are relative to the working
-  directory; ``replay:///abs/path.jsonl`` for absolute ones).
+* ``replay://<cassette-path>?mode=strict|timed|faithful`` (relative paths are relative to the
+  working directory; ``replay:///abs/path.jsonl`` for absolute ones). ``faithful`` takes
+  ``stream=1`` (a device that talks unasked), ``setpoints=1`` (a motor controller: a write
+  may match a recorded one of the same command with another value) and ``window=SECONDS``.
 """
 
 from __future__ import annotations
@@ -18,7 +20,9 @@ from urllib.parse import parse_qsl, quote, unquote
 from labkit.errors import PortURLError
 
 RECORD_KEYS = ("cassette", "port")
-REPLAY_MODES = ("strict", "timed")
+REPLAY_MODES = ("strict", "timed", "faithful")
+#: ``replay://`` options of ``mode=faithful`` (labkit.io.faithful_port)
+FAITHFUL_FLAGS = ("stream", "setpoints")
 
 
 def split_scheme(url: str) -> tuple[str, str]:
@@ -74,6 +78,9 @@ class ReplaySpec:
 
     cassette: str
     mode: str = "strict"
+    stream: bool = False
+    setpoints: bool = False
+    window: float | None = None
 
 
 def parse_replay_url(url: str) -> ReplaySpec:
@@ -86,11 +93,32 @@ def parse_replay_url(url: str) -> ReplaySpec:
     if not path:
         raise PortURLError(url, "no cassette path after replay://")
     mode = "strict"
+    flags: dict[str, bool] = {}
+    window = None
     for key, value in query:
         if key == "mode":
             if value not in REPLAY_MODES:
                 raise PortURLError(url, f"mode={value!r}; choose one of {', '.join(REPLAY_MODES)}")
             mode = value
+        elif key in FAITHFUL_FLAGS:
+            if value not in ("0", "1"):
+                raise PortURLError(url, f"{key}={value!r}; expected 0 or 1")
+            flags[key] = value == "1"
+        elif key == "window":
+            window = _positive_seconds(url, key, value)
         else:
-            raise PortURLError(url, f"unknown replay option {key!r} (only mode=strict|timed)")
-    return ReplaySpec(path, mode)
+            raise PortURLError(url, f"unknown replay option {key!r} (mode=strict|timed|faithful; "
+                                    f"with faithful: stream, setpoints, window)")
+    if (flags or window is not None) and mode != "faithful":
+        raise PortURLError(url, "stream, setpoints and window belong to mode=faithful")
+    return ReplaySpec(path, mode, flags.get("stream", False), flags.get("setpoints", False), window)
+
+
+def _positive_seconds(url: str, key: str, value: str) -> float:
+    try:
+        seconds = float(value)
+    except ValueError:
+        seconds = float("nan")
+    if not seconds > 0 or seconds == float("inf"):
+        raise PortURLError(url, f"{key}={value!r}; expected a positive number of seconds")
+    return seconds

@@ -104,7 +104,10 @@ def sink_failure_text(session: Any, event: dict[str, Any], exc: BaseException) -
     return f"cannot write {Path(session.path) / name}: {exc.strerror or exc}"
 
 
-def stop_failed_text(stop_failed: dict[str, str]) -> str:
-    """``could not stop rotor_motor: port gone (...); cut the motor's power``."""
+def stop_failed_text(stop_failed: dict[str, str], offline: bool = False) -> str:
+    """``could not stop rotor_motor: port gone (...); cut the motor's power``; ``offline`` (a
+    replay, where no motor turns): ``the replayed stop of rotor_motor failed: ...``."""
+    if offline:
+        return "; ".join(f"the replayed stop of {role} failed: {why}" for role, why in stop_failed.items())
     return "; ".join(f"could not stop {role}: {why}; cut the motor's power"
                      for role, why in stop_failed.items())

@@ -5,7 +5,8 @@
   input fails here, before any port is opened or any motor turns.
 * :func:`execute` runs a prepared plan into a new session directory.
 * :func:`replay_session` re-runs a session's protocol against its own cassettes on a
-  virtual clock and compares the results with the recorded ``results.json``.
+  virtual clock and compares the results with the recorded ``results.json``
+  (:mod:`labkit.protocols.replay`).
 """
 
 from __future__ import annotations
@@ -18,13 +19,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from labkit.errors import CassetteError, LabkitError
+from labkit.errors import LabkitError
 from labkit.io.clock import Clock, RealClock, VirtualClock, use_clock
 from labkit.protocols import get_protocol
 from labkit.protocols.events import Sink
 from labkit.protocols.params import resolve_params
+from labkit.protocols.replay_compare import ADDED_KEYS
 from labkit.protocols.resume import ResumeLock, check_carried_points, rig_differences
-from labkit.protocols.runner import ProtocolDef, Runner, RunOutcome, normalise
+from labkit.protocols.runner import ProtocolDef, Runner, RunOutcome
 from labkit.rig import Rig, load_rig
 from labkit.session import Session, SessionRecord, check_writable, load_session
 
@@ -135,6 +137,8 @@ def _prepare(rig_path: str | Path | None, protocol_name: str | None, sets: list[
         rig = load_rig(rig_path)
         protocol = get_protocol(protocol_name)
         params = resolve_params(protocol.defaults, sets, protocol.name, protocol.bounds)
+    if record is not None and clock == "auto" and record.meta.get("clock") == "real":
+        clock = "real"  # a real-clock session resumes on the real clock, even on emulators
     the_clock = make_clock(clock, rig)
     points: list[dict[str, Any]] = []
     if record is not None:
@@ -219,16 +223,6 @@ def replay_url(session: Path, role: str) -> str:
     return f"replay://{(session / 'cassettes' / f'{role}.jsonl').resolve()}?mode=timed"
 
 
-@dataclass
-class ReplayOutcome:
-    outcome: RunOutcome
-    recorded: dict[str, Any] | None
-    identical: bool
-    differences: list[str]
-    #: ``file:line: reason`` of damaged lines skipped while reading the session
-    warnings: list[str] = field(default_factory=list)
-
-
 #: Derived numbers (fits) may differ between CPUs in their last digits: BLAS and LAPACK pick
 #: different kernels per instruction set, and a fit sums in a different order. Recorded bytes,
 #: readings and points are compared exactly; values under a derived key (``fit``) are equal when
@@ -236,10 +230,6 @@ class ReplayOutcome:
 REPLAY_FIT_RTOL = 1e-6
 REPLAY_FIT_ATOL = 1e-12
 DERIVED_KEYS = frozenset({"fit"})
-#: keys a newer labkit adds to a point (docs/decisions/0018-heartbeat-and-drift.md; the trial
-#: spreads of a spin-critical step since issue 27): a recording
-#: made before them lacks them, which is not a difference; every key it has is still compared
-ADDED_KEYS = frozenset({"drift_g", "warnings", "rotor_std_rad_s", "spin_std_rad_s"})
 
 
 def _close(a: float, b: float) -> bool:
@@ -281,25 +271,9 @@ def diff_results(a: Any, b: Any, path: str = "results", derived: bool = False) -
     return [f"{path}: replay {a!r} != recording {b!r}"]
 
 
-def replay_session(path: str | Path, sinks: list[Sink] | None = None) -> ReplayOutcome:
-    """Re-run a session's protocol against its cassettes on a virtual clock; compare results."""
-    record = load_session(path)
-    if not (record.path / "cassettes").is_dir():
-        raise LabkitError(f"{record.path}: no cassettes to replay")
-    rig = load_rig(record.rig_path())
-    protocol = get_protocol(record.protocol)
-    params = resolve_params(protocol.defaults, record.params, protocol.name, protocol.bounds)
-    carried = [(where, p) for where, p in recorded_points(record) if "carried_points" in where]
-    points, dropped = check_carried_points(carried, protocol.plan(rig, params))
-    done = {int(p["step"]) for p in points}
-    clock = VirtualClock()
-    runner = Runner(protocol, rig, params, clock=clock, sinks=sinks, previous_points=points,
-                    done_steps=done, port_override=lambda dev: replay_url(record.path, dev.role))
-    with use_clock(clock):
-        outcome = runner.run()
-    if isinstance(outcome.error, CassetteError):
-        raise outcome.error  # a damaged recording: nothing to compare, one line naming file:line
-    replayed = normalise(outcome.results)
-    recorded = record.results
-    diffs = diff_results(replayed, recorded) if recorded is not None else ["recording has no results.json"]
-    return ReplayOutcome(outcome, recorded, not diffs, diffs, record.problems + dropped)
+def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str = "auto") -> Any:
+    """Replay a session against its cassettes and compare (:func:`labkit.protocols.replay.replay_session`:
+    exact for virtual-clock sessions, faithful for real-clock ones, or ``level="analysis"``)."""
+    from labkit.protocols.replay import replay_session as replay
+
+    return replay(path, sinks, level)

@@ -30,6 +30,7 @@ from typing import Any
 from labkit import documents as doc
 from labkit.control.loop import SpeedControl, build_speed_control, unreachable_target
 from labkit.errors import LabkitError, SafetyError
+from labkit.io.clock import record_ticks
 from labkit.protocols import exit_paths
 from labkit.protocols.declaration import declaration_of
 from labkit.protocols.definition import ProtocolDef, Step
@@ -271,7 +272,7 @@ class Runner:
     def __init__(self, protocol: ProtocolDef, rig: Rig, params: dict[str, Any], *, clock: Any,
                  sinks: list[Sink] | None = None, session: Any = None,
                  previous_points: list[dict[str, Any]] | None = None, done_steps: set[int] | None = None,
-                 port_override: Any = None, operator: Operator | None = None) -> None:
+                 port_override: Any = None, operator: Operator | None = None, offline: bool = False) -> None:
         self.protocol = protocol
         self.rig = rig
         self.params = params
@@ -283,6 +284,8 @@ class Runner:
         self.previous_points = list(previous_points or [])
         self.done_steps = set(done_steps or ())
         self.port_override = port_override
+        self.offline = offline  # a replay: no motor turns, nothing tells a person to cut power
+        self.ports: dict[str, Any] = {}  # the ports the run opened, by role (a replay reads them)
         self.operator = operator if operator is not None else default_operator(clock)
         self.stop_count = 0
         self.stop_signal: str | None = None   # "SIGTERM", ... (None: Ctrl-C or not stopped)
@@ -380,6 +383,7 @@ class Runner:
         previous_handlers = self._install_signal_handlers()
         self._guard_session()
         cassettes = self.session.cassette_dir if self.session is not None else None
+        ticks = record_ticks(self.clock, self.session.path) if self.session is not None else None
         self.bus.emit(doc.RunStart(
             t=self.clock.now(), protocol=self.protocol.name, params=self.params, rig=self.rig.name,
             n_steps=len(self.steps), session=str(self.session.path) if self.session is not None else None,
@@ -387,6 +391,7 @@ class Runner:
             **declaration_of(self.protocol)))
         try:
             opened = open_rig(self.rig, self.clock, record_to=cassettes, port_override=self.port_override)
+            self.ports = {role: getattr(dev, "port", None) for role, dev in opened.drivers.items()}
             self._recording_ports = [dev.port for dev in opened.drivers.values()
                                      if hasattr(getattr(dev, "port", None), "record_error")]
             self.control = build_speed_control(opened, self.clock, emit=self.bus.emit)
@@ -426,12 +431,14 @@ class Runner:
                 opened.close()
             if pulse is not None:
                 pulse.stop()  # motors stopped, ports closed: a supervisor need not watch any more
+            if ticks is not None:
+                ticks.close()
         stop_failed = dict(opened.stop_failures) if opened is not None else {}
         if stop_failed:
             self.bus.emit(doc.StopFailed(t=self.clock.now(), devices=dict(stop_failed)))
             if reason:  # "motors commanded to zero" is not the whole truth any more
                 reason = reason.replace("; motors commanded to zero", "").replace("; motors at zero", "")
-            reason = stop_failed_text(stop_failed) + (f" (after: {reason})" if reason else "")
+            reason = stop_failed_text(stop_failed, self.offline) + (f" (after: {reason})" if reason else "")
             status = "failed" if status == "completed" else status
         try:
             outcome = self._save(status, reason, error, ctx, new_points, stop_failed)

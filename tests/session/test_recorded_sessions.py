@@ -1,5 +1,6 @@
-"""Every recorded session under recordings/sessions/ replays from its cassettes: points exactly, fits
-within the documented tolerance (their last digits depend on the CPU's BLAS kernels)."""
+"""Every virtual-clock session under recordings/sessions/ replays from its cassettes: points exactly,
+fits within the documented tolerance (their last digits depend on the CPU's BLAS kernels). The
+real-clock ones (real-*) replay faithfully: tests/session/test_real_clock_replay.py."""
 
 import json
 import shutil
@@ -9,7 +10,9 @@ import pytest
 
 from labkit.protocols.launch import ADDED_KEYS, REPLAY_FIT_RTOL, replay_session
 
-SESSIONS = sorted((Path(__file__).resolve().parents[2] / "recordings" / "sessions").glob("*/run.json"))
+RECORDINGS = Path(__file__).resolve().parents[2] / "recordings" / "sessions"
+SESSIONS = [p for p in sorted(RECORDINGS.glob("*/run.json"))
+            if json.loads(p.read_text()).get("clock") != "real"]
 
 
 def test_there_are_two_recordings_per_protocol():

@@ -1,0 +1,225 @@
+"""``labkit replay``: a session's serial traffic through the same protocol code, at three levels
+(docs/replay.md, docs/decisions/0019-faithful-replay.md).
+
+* **exact** (sessions recorded on the virtual clock): every port is ``replay://...?mode=timed``,
+  what the drivers send must match the recording byte for byte, and the results must equal
+  ``results.json`` (fits within :data:`~labkit.protocols.launch.REPLAY_FIT_RTOL`).
+* **faithful** (sessions recorded on the real clock): every port is
+  ``replay://...?mode=faithful`` on a virtual clock started at the recording's clock reading;
+  device bytes arrive at their recorded times, writes are matched by content within a
+  window, and the run must take the same decisions (:func:`~labkit.protocols.replay_compare.decisions`)
+  with its points within :data:`~labkit.protocols.replay_compare.POINT_TOLERANCES`.
+* **analysis** (any session, also from an older labkit): no protocol run; the recorded
+  bytes re-parsed by today's drivers (:mod:`labkit.protocols.reanalyse`).
+
+``level="auto"`` picks exact or faithful from the clock ``run.json`` names.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from labkit.errors import CassetteError, LabkitError
+from labkit.io.clock import ReplayClock, VirtualClock, recorded_ticks, use_clock
+from labkit.protocols import get_protocol
+from labkit.protocols.events import Sink
+from labkit.protocols.launch import diff_results, recorded_points, replay_url
+from labkit.protocols.params import resolve_params
+from labkit.protocols.replay_compare import decisions, diff_decisions, diff_within, offline_wording
+from labkit.protocols.resume import check_carried_points
+from labkit.protocols.runner import Runner, RunOutcome, normalise
+from labkit.rig import load_rig
+from labkit.session import SessionRecord, load_session
+
+LEVELS = ("auto", "exact", "faithful", "analysis")
+LEVEL_WORDS = {
+    "exact": "exact (virtual-clock session: every byte as recorded, results identical)",
+    "faithful": "faithful (real-clock session: device bytes at their recorded times, writes matched "
+                "by content; same decisions, points within tolerance)",
+    "analysis": "analysis only (recorded bytes re-parsed by today's drivers; no protocol run)",
+}
+
+
+@dataclass
+class ReplayOutcome:
+    outcome: RunOutcome
+    recorded: dict[str, Any] | None
+    identical: bool
+    differences: list[str]
+    #: ``file:line: reason`` of damaged lines skipped while reading the session
+    warnings: list[str] = field(default_factory=list)
+    level: str = "exact"
+    #: faithful: per port, what its writes matched (labkit.io.faithful_port.FaithfulSerial.report)
+    ports: list[dict[str, Any]] = field(default_factory=list)
+    #: the replay's decisions (faithful), for reports
+    decisions: list[dict[str, Any]] = field(default_factory=list)
+
+
+class _Collect:
+    """Sink keeping the replay's step, settle, drop, interlock, fault and stop documents."""
+
+    KEEP = frozenset({"step", "settled", "drop", "interlock", "fault", "stop"})
+
+    def __init__(self) -> None:
+        self.events: list[Any] = []
+
+    def on_event(self, event: Any) -> None:
+        if event.get("type") in self.KEEP:
+            self.events.append(event)
+
+
+class _StepPacer:
+    """Sink holding a faithful replay's protocol at each step's start until the recording's
+    step began: between steps the recorded program may have stood still (writing its files
+    on a loaded PC) in code that records nothing, and a step begun early settles early."""
+
+    def __init__(self, clock: ReplayClock, record: SessionRecord) -> None:
+        self.clock = clock
+        self.starts = {e.get("index"): float(e["t"]) for e in record.events
+                       if e.get("type") == "step" and isinstance(e.get("t"), int | float)}
+
+    def on_event(self, event: Any) -> None:
+        if event.get("type") == "step":
+            began = self.starts.get(event.get("index"))
+            if began is not None and began > self.clock.now():
+                self.clock.sleep_until(began)
+
+
+def recorded_clock(record: SessionRecord) -> str:
+    """``virtual`` or ``real``: the clock a session ran on (sessions without the key: virtual,
+    the only kind an older labkit replayed)."""
+    return "real" if record.meta.get("clock") == "real" else "virtual"
+
+
+def choose_level(record: SessionRecord, level: str = "auto") -> str:
+    """``level``, or for ``auto``: exact for a virtual-clock session, faithful for a real-clock
+    one whose cassettes carry their clock origin (labkit since 2026-11-27), else analysis."""
+    if level not in LEVELS:
+        raise LabkitError(f"replay level {level!r}: choose one of {', '.join(LEVELS)}")
+    if level != "auto":
+        return level
+    if recorded_clock(record) == "virtual":
+        return "exact"
+    return "faithful" if faithful_ready(record) else "analysis"
+
+
+def faithful_ready(record: SessionRecord) -> bool:
+    """Whether a session kept its speed loop's ticks (``clock.jsonl``) and every cassette names
+    its clock origin (older real-clock sessions cannot be put on one time line: they are
+    re-analysed instead)."""
+    import json
+
+    from labkit.io.clock import TICKS_FILE
+
+    if not (record.path / TICKS_FILE).is_file():
+        return False
+    cassettes = sorted((record.path / "cassettes").glob("*.jsonl"))
+    for path in cassettes:
+        try:
+            with path.open(encoding="utf-8") as f:
+                header = json.loads(f.readline() or "{}")
+        except (OSError, ValueError):
+            return False
+        if not isinstance(header, dict) or "clock_origin" not in header:
+            return False
+    return bool(cassettes)
+
+
+def streams_unasked(kind: str, protocol: str) -> bool:
+    """Whether the driver of this device reads a stream the device sends unasked."""
+    from labkit.devices.base import driver_class
+    from labkit.devices.tachometer.streaming import StreamingTachometer
+
+    cls = driver_class(kind, protocol)
+    return issubclass(cls, StreamingTachometer) or bool(getattr(cls, "talks_unasked", False))
+
+
+def faithful_url(session: Path, dev: Any) -> str:
+    """The ``replay://...?mode=faithful`` URL of one device's cassette."""
+    path = (session / "cassettes" / f"{dev.role}.jsonl").resolve()
+    flags = "&stream=1" if streams_unasked(dev.kind, dev.protocol) else ""
+    flags += "&setpoints=1" if dev.kind == "motor" else ""
+    return f"replay://{path}?mode=faithful{flags}"
+
+
+def faithful_start(record: SessionRecord) -> float:
+    """The recording's clock reading when its run began (its first event), else 0."""
+    for event in record.events:
+        if isinstance(event.get("t"), int | float):
+            return float(event["t"])
+    return 0.0
+
+
+def faithful_schedules(record: SessionRecord, rig: Any) -> dict[str, list[float]]:
+    """When the recording's jobs ran (clock readings): each stream reader at the reads it made
+    (the cassette's ``rx`` events of its thread), the speed loop at its ticks (``clock.jsonl``)."""
+    from labkit.io.cassette import load_cassette
+
+    schedules: dict[str, list[float]] = {}
+    for role, dev in rig.devices.items():
+        path = record.path / "cassettes" / f"{role}.jsonl"
+        if not path.is_file() or not streams_unasked(dev.kind, dev.protocol):
+            continue
+        cassette = load_cassette(path)
+        origin = cassette.header.get("clock_origin")
+        if isinstance(origin, int | float):
+            job = f"{role}-reader"
+            schedules[job] = [origin + e["t"] for e in cassette.events
+                              if e["dir"] == "rx" and e.get("th") == job]
+    schedules.update(recorded_ticks(record.path))
+    return schedules
+
+
+def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str = "auto") -> ReplayOutcome:
+    """Replay a session at ``level`` (auto: exact for a virtual-clock session, faithful for a
+    real-clock one) and compare it with the recording."""
+    record = load_session(path)
+    chosen = choose_level(record, level)
+    if chosen == "analysis":
+        from labkit.protocols.reanalyse import reanalyse_session
+
+        result = reanalyse_session(record)
+        if level == "auto":
+            result.warnings.insert(0, f"{record.path}: a real-clock session from a labkit that did not "
+                                      "record its clock origin and threads: re-analysed, not replayed")
+        return result
+    if not (record.path / "cassettes").is_dir():
+        raise LabkitError(f"{record.path}: no cassettes to replay")
+    rig = load_rig(record.rig_path())
+    protocol = get_protocol(record.protocol)
+    params = resolve_params(protocol.defaults, record.params, protocol.name, protocol.bounds)
+    carried = [(where, p) for where, p in recorded_points(record) if "carried_points" in where]
+    points, dropped = check_carried_points(carried, protocol.plan(rig, params))
+    done = {int(p["step"]) for p in points}
+    faithful = chosen == "faithful"
+    clock = (ReplayClock(faithful_start(record), faithful_schedules(record, rig)) if faithful
+             else VirtualClock())
+    collect = _Collect()
+
+    def port_for(dev: Any) -> str:
+        return faithful_url(record.path, dev) if faithful else replay_url(record.path, dev.role)
+
+    pacer = [_StepPacer(clock, record)] if isinstance(clock, ReplayClock) else []
+    runner = Runner(protocol, rig, params, clock=clock, sinks=[*pacer, *(sinks or []), collect],
+                    previous_points=points, done_steps=done, port_override=port_for, offline=True)
+    with use_clock(clock):
+        outcome = runner.run()
+    if isinstance(outcome.error, CassetteError):
+        raise outcome.error  # a damaged recording: nothing to compare, one line naming file:line
+    outcome.reason = offline_wording(outcome.reason) or outcome.reason
+    replayed = normalise(outcome.results)
+    recorded = record.results
+    warnings = record.problems + dropped
+    if not faithful:
+        diffs = diff_results(replayed, recorded) if recorded is not None else ["no results.json recorded"]
+        return ReplayOutcome(outcome, recorded, not diffs, diffs, warnings, "exact")
+    replay_decisions = decisions(collect.events)
+    diffs = diff_decisions(replay_decisions, decisions(record.events))
+    if recorded is None:
+        diffs.append("recording has no results.json")
+    else:
+        diffs += diff_within(replayed, recorded)
+    ports = [port.report() for port in runner.ports.values() if hasattr(port, "report")]
+    return ReplayOutcome(outcome, recorded, not diffs, diffs, warnings, "faithful", ports, replay_decisions)

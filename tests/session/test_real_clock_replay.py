@@ -1,0 +1,130 @@
+"""Sessions recorded on the real clock replay faithfully (docs/replay.md): the shipped real-clock
+recordings (recordings/sessions/real-*, made by analysis/record_real_sessions.py with
+`labkit run --clock real` on the ptys of `labkit emulate`) replay through the real protocol,
+control and driver code with the recorded decisions and points within tolerance; every shipped
+recording re-analyses; a divergence is reported by step, in a physicist's words; a resumed
+real-clock session stays on the real clock."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from labkit.cli import main
+from labkit.io.clock import RealClock, VirtualClock
+from labkit.protocols.launch import prepare_run
+from labkit.protocols.replay import choose_level, replay_session
+from labkit.protocols.replay_compare import decisions
+from labkit.session import load_session
+
+RECORDINGS = Path(__file__).resolve().parents[2] / "recordings" / "sessions"
+ALL = sorted(p.parent for p in RECORDINGS.glob("*/run.json"))
+REAL = [p for p in ALL if json.loads((p / "run.json").read_text()).get("clock") == "real"]
+MOTOR_WORDS = ("cut the motor", "motor's power", "cut power")
+
+
+def test_every_shipped_protocol_has_a_real_clock_recording():
+    protocols = {json.loads((p / "run.json").read_text())["protocol"] for p in REAL}
+    assert {"speed-sweep", "spin-critical"} <= protocols
+    for session in REAL:
+        assert (session / "clock.jsonl").is_file()
+        header = json.loads((session / "cassettes" / "balance.jsonl").read_text().splitlines()[0])
+        assert isinstance(header["clock_origin"], float)
+
+
+@pytest.mark.parametrize("session", REAL, ids=[p.name for p in REAL])
+def test_a_real_clock_recording_replays_faithfully(session, capsys):
+    assert main(["replay", str(session)]) == 0
+    out = capsys.readouterr()
+    assert "replay level: faithful" in out.out
+    assert "the same decisions" in out.out
+    assert not any(word in (out.out + out.err).lower() for word in MOTOR_WORDS)
+
+
+@pytest.mark.parametrize("session", REAL, ids=[p.name for p in REAL])
+def test_the_replay_takes_the_recorded_decisions_at_the_recorded_steps(session):
+    record = load_session(session)
+    result = replay_session(session)
+    assert result.level == "faithful" and result.identical, result.differences[:5]
+    recorded = decisions(record.events)
+    steps = [(d["decision"], d["step"]) for d in recorded]
+    assert [(d["decision"], d["step"]) for d in result.decisions] == steps
+    for mine, theirs in zip(result.outcome.results["points"], record.results["points"], strict=True):
+        for key in ("speed_rpm", "force_g", "rotor_rpm", "spin_rpm"):
+            if isinstance(theirs.get(key), float):
+                assert mine[key] == pytest.approx(theirs[key], rel=0.005), key
+
+
+def test_the_unplugged_tachometer_trips_the_same_interlock_in_the_same_step():
+    session = RECORDINGS / "real-speed-sweep-tach-unplug"
+    recorded = [d for d in decisions(load_session(session).events) if d["decision"] == "interlock"]
+    result = replay_session(session)
+    replayed = [d for d in result.decisions if d["decision"] == "interlock"]
+    assert len(recorded) == 1 and "rotor_tach" in recorded[0]["reason"]
+    assert [(d["step"], d["key"]) for d in replayed] == [(d["step"], d["key"]) for d in recorded]
+    assert result.outcome.status == "failed"
+
+
+@pytest.mark.parametrize("session", ALL, ids=[p.name for p in ALL])
+def test_analysis_only_recomputes_points_and_fit_of_every_shipped_recording(session, capsys):
+    assert main(["replay", "--analysis-only", str(session)]) == 0
+    assert "replay level: analysis only" in capsys.readouterr().out
+    result = replay_session(session, level="analysis")
+    assert len(result.outcome.results["points"]) == len(load_session(session).results["points"])
+
+
+def test_a_replay_that_diverges_names_the_step_and_no_motor_instruction(tmp_path, capsys):
+    """The tachometer's recording cut short in the middle: the replayed loop finds it silent
+    (an interlock the recording never had) and the report says in which step."""
+    copy = tmp_path / "cut"
+    shutil.copytree(RECORDINGS / "real-speed-sweep", copy)
+    tach = copy / "cassettes" / "rotor_tach.jsonl"
+    lines = tach.read_text().splitlines(keepends=True)
+    tach.write_text("".join(lines[: len(lines) // 2]))
+    assert main(["replay", str(copy)]) == 1
+    err = capsys.readouterr().err
+    assert "the replay diverged at decision" in err and "step " in err and "tachometer" in err
+    assert not any(word in err.lower() for word in MOTOR_WORDS)
+
+
+def test_an_older_real_clock_session_is_re_analysed_and_says_so(tmp_path, capsys):
+    copy = tmp_path / "old"
+    shutil.copytree(RECORDINGS / "real-speed-sweep", copy)
+    (copy / "clock.jsonl").unlink()
+    assert choose_level(load_session(copy)) == "analysis"
+    assert main(["replay", str(copy)]) == 0
+    captured = capsys.readouterr()
+    assert "analysis only" in captured.out and "re-analysed, not replayed" in captured.err
+
+
+def test_a_resumed_real_clock_session_stays_on_the_real_clock(tmp_path):
+    real = tmp_path / "real"
+    shutil.copytree(RECORDINGS / "real-speed-sweep-tach-unplug", real)
+    prep = prepare_run(None, None, None, resume=real, session_root=tmp_path / "s")
+    prep.lock.release()
+    assert isinstance(prep.clock, RealClock)
+    virtual = tmp_path / "virtual"
+    shutil.copytree(RECORDINGS / "speed-sweep-tach-unplug", virtual)
+    prep = prepare_run(None, None, None, resume=virtual, session_root=tmp_path / "s")
+    prep.lock.release()
+    assert isinstance(prep.clock, VirtualClock)
+    prep = prepare_run(None, None, None, resume=real, clock="virtual", session_root=tmp_path / "s")
+    prep.lock.release()
+    assert isinstance(prep.clock, VirtualClock)  # an explicit --clock still wins
+
+
+def test_a_run_recorded_on_the_ptys_of_labkit_emulate_replays(tmp_path, capsys):
+    """As a lab records: `labkit emulate` in its own process, `labkit run` (real clock) on its
+    ptys in another, then `labkit replay` of that session offline."""
+    from tests.safety.harness import EmulatedRig
+
+    with EmulatedRig(tmp_path) as rig:
+        run = rig.start_run(tmp_path / "sessions", record_s=1.0)
+        run.finish(timeout=120.0)
+        session = run.session()
+    assert session is not None and json.loads((session / "run.json").read_text())["clock"] == "real"
+    assert main(["replay", str(session)]) == 0, capsys.readouterr().err[-2000:]
+    assert "replay level: faithful" in capsys.readouterr().out
