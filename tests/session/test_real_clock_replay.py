@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import shutil
+import sys
 from pathlib import Path
 
 import pytest
@@ -119,7 +120,8 @@ def test_a_resumed_real_clock_session_stays_on_the_real_clock(tmp_path):
 def test_a_run_recorded_on_the_ptys_of_labkit_emulate_replays(tmp_path, capsys):
     """As a lab records: `labkit emulate` in its own process, `labkit run` (real clock) on its
     ptys in another, then `labkit replay` of that session offline."""
-    from tests.safety.harness import EmulatedRig
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tests/: the safety package
+    from safety.harness import EmulatedRig
 
     with EmulatedRig(tmp_path) as rig:
         run = rig.start_run(tmp_path / "sessions", record_s=1.0)
