@@ -19,6 +19,7 @@ import serial
 
 from labkit.devices.base import Device, register_driver, register_parser_benchmark
 from labkit.devices.link import ReplyQueue
+from labkit.devices.sketch_commands import SketchCommands
 from labkit.devices.stream import LineFramer, StreamReader
 from labkit.devices.strobe.protocol import (
     StrobeStatus,
@@ -28,7 +29,7 @@ from labkit.devices.strobe.protocol import (
     parse_status_line,
     strip_junk,
 )
-from labkit.errors import DeviceReplyError, DeviceTimeout
+from labkit.errors import DeviceTimeout
 from labkit.io.clock import Clock
 
 
@@ -74,7 +75,7 @@ class Strobe(Device):
 
 
 @register_driver
-class LabkitStrobe(Strobe):
+class LabkitStrobe(SketchCommands, Strobe):
     """Options (all sent on open): ``offset_hz`` (0.5), ``width_us`` (20), ``divider`` (1),
     ``rate_hz`` (status lines per second, 1), ``lamp`` (True); ``boot_timeout_s`` (3: opening
     an Arduino's port resets it), ``reply_timeout_s`` (0.5)."""
@@ -114,7 +115,7 @@ class LabkitStrobe(Strobe):
             pass
         self.reader.start()
         try:
-            self._wait_alive(float(options.get("boot_timeout_s", 3.0)))
+            self._wait_alive(float(options.get("boot_timeout_s", 3.0)), "status line")
             self._configure()
         except Exception:
             self.close()
@@ -180,29 +181,10 @@ class LabkitStrobe(Strobe):
             return [s for s in self._statuses if s.t > t]
 
     # ---- commands -----------------------------------------------------------------------
-    def _wait_alive(self, timeout: float) -> None:
-        deadline = self.clock.now() + timeout
-        while not self._alive:
-            self._check_reader()
-            if self.clock.now() >= deadline:
-                raise DeviceTimeout(self.name, "open", self.reader.last_bytes,
-                                    f"no boot banner or status line in {timeout} s (wrong port or baud?)")
-            self.clock.sleep(0.005)
-
     def command(self, name: str, value: float | None = None) -> bytes:
         """Send one command, return its reply line (``OK``/``ID ...``); ``ERR`` raises."""
         data = format_command(name, value)
-        label = data.decode().strip()
-        for _attempt in range(3):
-            self.replies.replies.clear()
-            self.replies.write(data, label)
-            if self.replies.wait(bool, self.reply_timeout_s):
-                reply = self.replies.replies.popleft()
-                if reply.startswith(b"ERR"):
-                    raise DeviceReplyError(self.name, label, self.reader.last_bytes,
-                                           f"device answered {reply.decode('ascii', 'replace')!r}")
-                return reply
-        raise DeviceTimeout(self.name, label, self.reader.last_bytes, f"no reply in {self.reply_timeout_s} s")
+        return self._exchange(data, data.decode().strip())
 
     def _config_commands(self) -> list[tuple[str, float | None]]:
         out: list[tuple[str, float | None]] = list(self.settings.items())

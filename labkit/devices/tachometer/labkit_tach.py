@@ -30,9 +30,9 @@ from typing import Any
 
 from labkit.devices.base import Reading, register_driver, register_parser_benchmark
 from labkit.devices.link import ReplyQueue
+from labkit.devices.sketch_commands import SketchCommands
 from labkit.devices.stream import LineFramer
 from labkit.devices.tachometer.streaming import StreamingTachometer
-from labkit.errors import DeviceReplyError, DeviceTimeout
 from labkit.units import rpm_to_rad_s
 
 FLAG_NAMES = {"Z": "zero_speed", "O": "over_range", "N": "noisy"}
@@ -141,7 +141,7 @@ def is_reply(line: bytes) -> bool:
 
 
 @register_driver
-class LabkitTachometer(StreamingTachometer):
+class LabkitTachometer(SketchCommands, StreamingTachometer):
     """Driver of the labkit Arduino pulse tachometer.
 
     Options: ``ppr`` (pulses per revolution, default 1: always sent on open), ``rate_hz``
@@ -175,7 +175,7 @@ class LabkitTachometer(StreamingTachometer):
                                   tail=lambda: self.reader.last_bytes)
         super().__init__(port, clock, name, **options)
         try:
-            self._wait_alive(float(options.get("boot_timeout_s", 3.0)))
+            self._wait_alive(float(options.get("boot_timeout_s", 3.0)), "T line")
             self._configure()
         except Exception:
             self.close()
@@ -229,30 +229,10 @@ class LabkitTachometer(StreamingTachometer):
                        flags=frozenset(flags))
 
     # ---- commands -----------------------------------------------------------------------
-    def _wait_alive(self, timeout: float) -> None:
-        deadline = self.clock.now() + timeout
-        while not self._alive:
-            self._check_reader()
-            if self.clock.now() >= deadline:
-                raise DeviceTimeout(self.name, "open", self.reader.last_bytes,
-                                    f"no boot banner or T line in {timeout} s (wrong port or baud?)")
-            self.clock.sleep(0.005)
-
     def command(self, text: str, value: int | None = None) -> bytes:
         """Send one command, return its reply line (``OK``/``ID ...``); ERR raises."""
         data = format_command(text, value)
-        label = data.decode().strip()
-        for _attempt in range(3):
-            self.replies.replies.clear()
-            self.write(data, label)
-            if self.replies.wait(bool, self.reply_timeout_s):
-                reply = self.replies.replies.popleft()
-                if reply.startswith(b"ERR"):
-                    raise DeviceReplyError(self.name, label, self.reader.last_bytes,
-                                           f"device answered {reply.decode('ascii', 'replace')!r}")
-                return reply
-        raise DeviceTimeout(self.name, label, self.reader.last_bytes,
-                            f"no reply in {self.reply_timeout_s} s")
+        return self._exchange(data, data.decode().strip())
 
     def write(self, data: bytes, label: str) -> None:
         """Write to the device; a dead port becomes DeviceDisconnected naming the command."""
