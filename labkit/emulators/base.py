@@ -15,6 +15,7 @@ ones handled here; protocol-specific ones are documented on each emulator.
 from __future__ import annotations
 
 import random
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import ClassVar
 
@@ -231,3 +232,27 @@ def emulator_class(protocol: str) -> type[Emulator]:
         return _EMULATORS[protocol]
     except KeyError:
         raise KeyError(f"no emulator {protocol!r}; known: {', '.join(sorted(_EMULATORS))}") from None
+
+
+class SketchLines:
+    """Host command lines to an emulated labkit sketch (``labkit_tach``, ``labkit_strobe``):
+    bytes sent during its boot or while its cable is out are lost, a line longer than the
+    sketch's buffer (``line_max``) is dropped, and each whole line goes to ``_command``. The
+    emulator sets ``_line`` (a bytearray) and ``_boot_end``."""
+
+    line_max = 64
+    _line: bytearray
+    _boot_end: float
+    connected: Callable[[float], bool]  # Emulator's: the cable is in at t
+    _command: Callable[[str, float], None]  # each sketch's: one command line at t
+
+    def handle(self, data: bytes, t: float) -> None:
+        if t < self._boot_end or not self.connected(t):
+            return  # the bootloader (or an unplugged cable) eats the bytes
+        self._line += data
+        while b"\n" in self._line:
+            raw, _, rest = bytes(self._line).partition(b"\n")
+            self._line = bytearray(rest)
+            self._command(raw.strip().decode("ascii", "replace"), t)
+        if len(self._line) > self.line_max:
+            self._line.clear()

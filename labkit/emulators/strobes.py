@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 
-from labkit.emulators.base import Emulator, register_emulator
+from labkit.emulators.base import Emulator, SketchLines, register_emulator
 
 TWO_PI = 2.0 * math.pi
 MIN_HZ, MAX_HZ, STOP_HZ = 5.0, 4000.0, 1.0
@@ -30,7 +30,8 @@ LOCK_REVOLUTIONS = 5
 
 
 @register_emulator
-class LabkitStrobeEmulator(Emulator):
+class LabkitStrobeEmulator(SketchLines, Emulator):
+    line_max = 31  # the sketch's command buffer
     protocol = "labkit_strobe"
     kind = "strobe"
     serial_settings = {"baudrate": 115200, "bytesize": 8, "parity": "N", "stopbits": 1}
@@ -145,17 +146,6 @@ class LabkitStrobeEmulator(Emulator):
         return line.encode("ascii")
 
     # ---- commands -----------------------------------------------------------------------
-    def handle(self, data: bytes, t: float) -> None:
-        if t < self._boot_end or not self.connected(t):
-            return  # the bootloader (or an unplugged cable) eats the bytes
-        self._line += data
-        while b"\n" in self._line:
-            raw, _, rest = bytes(self._line).partition(b"\n")
-            self._line = bytearray(rest)
-            self._command(raw.strip().decode("ascii", "replace"), t)
-        if len(self._line) > 31:
-            self._line.clear()
-
     def _command(self, text: str, t: float) -> None:
         if not text:
             return

@@ -36,7 +36,7 @@ from __future__ import annotations
 import collections
 import math
 
-from labkit.emulators.base import Emulator, register_emulator
+from labkit.emulators.base import Emulator, SketchLines, register_emulator
 
 TWO_PI = 2.0 * math.pi
 
@@ -177,7 +177,7 @@ class Lutron16Emulator(_StreamingTachEmulator):
 
 
 @register_emulator
-class LabkitTachEmulator(_StreamingTachEmulator):
+class LabkitTachEmulator(SketchLines, _StreamingTachEmulator):
     """The labkit Arduino pulse tachometer
     (docs/devices-tach-motor.md#labkit_tach-the-labkit-pulse-tachometer-labkit-defined,
     ``firmware/labkit_tach``).
@@ -302,17 +302,6 @@ class LabkitTachEmulator(_StreamingTachEmulator):
         return line.encode("ascii")
 
     # ---- commands -----------------------------------------------------------------------
-    def handle(self, data: bytes, t: float) -> None:
-        if t < self._boot_end or not self.connected(t):
-            return  # the bootloader (or an unplugged cable) eats the bytes
-        self._line += data
-        while b"\n" in self._line:
-            raw, _, rest = bytes(self._line).partition(b"\n")
-            self._line = bytearray(rest)
-            self._command(raw.strip().decode("ascii", "replace"), t)
-        if len(self._line) > 64:
-            self._line.clear()
-
     def _command(self, text: str, t: float) -> None:
         if not text:
             return
