@@ -176,6 +176,9 @@ def load_cassette(path: str | Path) -> Cassette:
     """Read and validate a cassette. Problems raise CassetteError naming file, line and key."""
     path = Path(path)
     try:
+        if path.exists() and not path.is_file():  # /dev/zero, a FIFO: st_size says 0, reading never ends
+            raise CassetteError(str(path), 0, "not a regular file (a device, FIFO or folder); a cassette "
+                                              "is a text file in the session")
         if path.stat().st_size > MAX_CASSETTE_BYTES:
             raise CassetteError(str(path), 0, f"larger than {MAX_CASSETTE_BYTES} bytes")
         raw = path.read_bytes()

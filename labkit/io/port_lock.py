@@ -74,12 +74,20 @@ def lock_device(port: str) -> int | None:
     if real is None or fcntl is None:
         return None
     path = _lock_file(real)
+    shared = "LABKIT_LOCK_DIR" not in os.environ  # a folder the user chose keeps its own mode
+    if shared and not path.parent.exists():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            path.parent.chmod(0o1777)  # shared by every user of the machine, like /tmp
+        except OSError:
+            pass
     path.parent.mkdir(parents=True, exist_ok=True)
-    try:
-        path.parent.chmod(0o1777)  # shared by every user of the machine, like /tmp
-    except OSError:
-        pass
-    fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+    try:  # a lock file planted as a symlink (in a folder every user can write) is not followed
+        fd = os.open(path, os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0), 0o666)
+    except OSError as exc:
+        raise LabkitError(f"{port}: cannot use the lock file {path} ({exc.strerror or exc}); a symbolic "
+                          "link there is refused (labkit does not follow links in a folder every user "
+                          "can write): remove it") from None
     try:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except OSError:

@@ -53,6 +53,24 @@ def floator_inertia(session: Path) -> float | None:
     return floator.inertia_radial_kg_m2 or floator.inertia_axial_kg_m2
 
 
+def _check_output_folder(source: Path, out: Path) -> None:
+    """The report folder holds no symbolic link and, inside a session, stays inside it: a
+    session from elsewhere whose ``report/`` or ``report/report.md`` is a link would otherwise
+    make the report overwrite the link's target (a file in the user's home, issue 27)."""
+    from labkit.session.paths import session_file
+
+    if source.is_dir() and out == default_out(source):
+        if out.is_symlink():
+            raise DataFileError(str(out), "", "is a symbolic link: labkit report writes no file through a "
+                                "link (a session from elsewhere?); remove it or give --out")
+        session_file(source, "report")
+    if out.is_dir():
+        for entry in out.iterdir():
+            if entry.is_symlink():
+                raise DataFileError(str(entry), "", "is a symbolic link: labkit report writes no file "
+                                    "through a link (a session from elsewhere?); remove it or give --out")
+
+
 def default_out(source: Path) -> Path:
     return source / "report" if source.is_dir() else source.with_name(source.stem + "-report")
 
@@ -83,6 +101,7 @@ def build_report(source: str | Path, out: str | Path | None = None, *, model: st
     except HintsError as exc:
         raise DataFileError(str(source / "events.jsonl"), "hints", str(exc)) from None
     plan = plan_for(table, hints, inertia, model, x=x, y=y)
+    _check_output_folder(source, out)
     out.mkdir(parents=True, exist_ok=True)
     lines = [f"# labkit report: {source.name}", "",
              f"Source: `{source}`  ", f"Generated: {_now()} by labkit {__version__}", ""]
@@ -358,6 +377,7 @@ def _strobe_sections(source: Path, doc: dict, out: Path) -> list[str]:
 
 
 def _video_report(source: Path, doc: dict, out: Path) -> Path:
+    _check_output_folder(source, out)
     out.mkdir(parents=True, exist_ok=True)
     strobe = "point_pattern" in doc   # labkit analyse strobe; else analyse laser
     pattern = (doc.get("point_pattern") if strobe else doc.get("pattern")) or {}

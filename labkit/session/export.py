@@ -48,11 +48,15 @@ def export_csv(session: Path, problems: list[str] | None = None) -> list[Path]:
     """Export every device's readings of a session to ``readings/ROLE.csv`` (damaged lines
     skipped, reported in ``problems`` as ``file:line: reason``)."""
     from labkit.session.paths import session_file
+    from labkit.session.writer import SessionError
 
     out = []
     for found in sorted((session / "readings").glob("*.jsonl")):
         src = session_file(session, "readings", found.name)  # a symlink out of the session is refused
-        dest = src.with_suffix(".csv")
+        dest = session_file(session, "readings", found.with_suffix(".csv").name)  # and so is one to write
+        if dest.is_symlink() or Path(session, "readings", dest.name).is_symlink():
+            raise SessionError(f"{session}/readings/{dest.name}: is a symbolic link; labkit writes no "
+                               "file through a link (a session from elsewhere?): remove it")
         readings_to_csv(src, dest, problems)
         out.append(dest)
     return out
