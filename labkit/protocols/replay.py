@@ -28,6 +28,7 @@ from labkit.protocols.events import Sink
 from labkit.protocols.launch import diff_results, recorded_points, replay_url
 from labkit.protocols.params import resolve_params
 from labkit.protocols.replay_compare import decisions, diff_decisions, diff_within, offline_wording
+from labkit.protocols.replay_evidence import Evidence, diff_points, diff_readings
 from labkit.protocols.resume import check_carried_points
 from labkit.protocols.runner import Runner, RunOutcome, normalise
 from labkit.rig import load_rig
@@ -172,6 +173,19 @@ def faithful_schedules(record: SessionRecord, rig: Any) -> dict[str, list[float]
     return schedules
 
 
+def _evidence_diffs(record: Any, evidence: Evidence, resumed: bool) -> list[str]:
+    """The session's point events and readings files against what the replay parsed
+    (:mod:`labkit.protocols.replay_evidence`); readings only for a session that was not resumed
+    (a resumed session's files also hold the first run's readings)."""
+    diffs = diff_points(evidence.points, record.point_events())
+    if resumed:
+        return diffs
+    for role in sorted(set(evidence.readings) | {p.stem for p in (record.path / "readings").glob("*.jsonl")}):
+        file = f"{record.path / 'readings' / role}.jsonl"
+        diffs += diff_readings(role, evidence.readings.get(role, []), record.readings(role), file)
+    return diffs
+
+
 def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str = "auto") -> ReplayOutcome:
     """Replay a session at ``level`` (auto: exact for a virtual-clock session, faithful for a
     real-clock one) and compare it with the recording."""
@@ -197,12 +211,13 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
     clock = (ReplayClock(faithful_start(record), faithful_schedules(record, rig)) if faithful
              else VirtualClock())
     collect = _Collect()
+    evidence = Evidence()
 
     def port_for(dev: Any) -> str:
         return faithful_url(record.path, dev) if faithful else replay_url(record.path, dev.role)
 
     pacer = [_StepPacer(clock, record)] if isinstance(clock, ReplayClock) else []
-    runner = Runner(protocol, rig, params, clock=clock, sinks=[*pacer, *(sinks or []), collect],
+    runner = Runner(protocol, rig, params, clock=clock, sinks=[*pacer, *(sinks or []), collect, evidence],
                     previous_points=points, done_steps=done, port_override=port_for, offline=True)
     with use_clock(clock):
         outcome = runner.run()
@@ -214,6 +229,7 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
     warnings = record.problems + dropped
     if not faithful:
         diffs = diff_results(replayed, recorded) if recorded is not None else ["no results.json recorded"]
+        diffs += _evidence_diffs(record, evidence, resumed=bool(points))
         return ReplayOutcome(outcome, recorded, not diffs, diffs, warnings, "exact")
     replay_decisions = decisions(collect.events)
     diffs = diff_decisions(replay_decisions, decisions(record.events))
