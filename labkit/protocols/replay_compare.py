@@ -29,6 +29,7 @@ POINT_TOLERANCES: dict[str, tuple[str, float]] = {
     "unstable": ("count", 0.25),
     "k": ("abs", 0.01),                  # v/w - 1: a difference of two 0.5 % numbers
     "drift_n": ("abs", 1e-4),            # N (0.01 g): rest readings of the balance
+    "drift_g": ("abs", 0.01),            # the same in grams (a 0.006 g drift moved 0.5 % in a replay)
 }
 #: keys a newer labkit adds to a point (docs/decisions/0018-heartbeat-and-drift.md; the trial
 #: spreads of a spin-critical step since issue 27): a recording
