@@ -31,7 +31,8 @@ from labkit.protocols import get_protocol
 from labkit.protocols.params import resolve_params
 from labkit.protocols.replay_compare import diff_within
 from labkit.protocols.runner import RunOutcome, normalise
-from labkit.protocols.speed_sweep import finite_std, mean_stderr, reading_force_n
+from labkit.protocols.speed_sweep import drift_warnings, finite_std, mean_stderr, reading_force_n
+from labkit.protocols.spin_critical import point_from_trials
 from labkit.rig import load_rig
 from labkit.session import SessionRecord
 from labkit.units import G0, rad_s_to_rpm, rpm_to_rad_s
@@ -128,7 +129,7 @@ def _sweep_point(step: int, events: list[dict[str, Any]], readings: dict[str, li
     balance = readings["balance"]
     at_speed = [r for r in balance if t_start < r.t <= t_end]
     speeds = [r.value for r in readings["rotor_tach"] if t_start < r.t <= t_end]
-    drift = 0.0
+    drift, rests_g = 0.0, None
     if params["zero"] == "each":
         go = next((e["t"] for e in targets if e["target_rad_s"] > 0), t_start)
         before = [r for r in balance if r.t <= go and r.t >= events[0]["t"]]
@@ -138,6 +139,7 @@ def _sweep_point(step: int, events: list[dict[str, Any]], readings: dict[str, li
             t_mid = 0.5 * (at_speed[0].t + at_speed[-1].t) if at_speed else t_start
             frac = (t_mid - r0.t) / (r1.t - r0.t) if r1.t > r0.t else 0.5
             drift = reading_force_n(r0) + frac * (reading_force_n(r1) - reading_force_n(r0))
+            rests_g = (reading_force_n(r0) / G0 * 1e3, reading_force_n(r1) / G0 * 1e3)
     force, stderr = mean_stderr([reading_force_n(r) - drift for r in at_speed])
     finite = [v for v in speeds if math.isfinite(v)]
     speed = statistics.fmean(finite) if finite else math.nan
@@ -147,7 +149,10 @@ def _sweep_point(step: int, events: list[dict[str, Any]], readings: dict[str, li
             "speed_std_rpm": rad_s_to_rpm(finite_std(speeds)), "force_n": force, "force_g": force / G0 * 1e3,
             "force_stderr_n": stderr, "force_stderr_g": stderr / G0 * 1e3, "n": len(at_speed),
             "settle_time_s": settled["settle_time_s"], "drift_n": drift,
-            "unstable": sum(1 for r in at_speed if not r.stable)}
+            "drift_g": drift / G0 * 1e3 if rests_g else None,
+            "unstable": sum(1 for r in at_speed if not r.stable),
+            "warnings": drift_warnings(force / G0 * 1e3, drift / G0 * 1e3, rests_g,
+                                       float(params.get("drift_warn", 0.05)))}
 
 
 def _spin_point(step: int, events: list[dict[str, Any]], params: dict[str, Any]) -> dict[str, Any] | None:
@@ -165,17 +170,7 @@ def _spin_point(step: int, events: list[dict[str, Any]], params: dict[str, Any])
         if len(recent) >= n and spread <= params["consistency_pct"]:
             consistent = True
             break
-    row: dict[str, Any] = {"step": step, "target_rpm": point["point"].get("target_rpm"), "trials": trials,
-                           "consistent": consistent, "no_drop": not trials}
-    if not trials:
-        row.update(rotor_rad_s=None, rotor_rpm=None, spin_rad_s=None, spin_rpm=None, k=None)
-        return row
-    use = trials[-n:] if consistent else trials
-    w = statistics.fmean(t["rotor_rad_s"] for t in use)
-    v = statistics.median(t["spin_rad_s"] for t in use)
-    row.update(rotor_rad_s=w, rotor_rpm=rad_s_to_rpm(w), spin_rad_s=v, spin_rpm=rad_s_to_rpm(v),
-               k=v / w - 1.0)
-    return row
+    return {"step": step, **point_from_trials(point["point"].get("target_rpm"), trials, consistent, n)}
 
 
 def reanalyse_session(record: SessionRecord) -> Any:

@@ -33,6 +33,27 @@ from labkit.rig import Rig
 from labkit.units import G0, rad_s_to_rpm, rpm_to_rad_s
 
 
+def point_from_trials(target_rpm: float, trials: list[dict[str, Any]], consistent: bool,
+                      consistent_n: int) -> dict[str, Any]:
+    """A step's row from its drops: the mean rotor speed and the median spin of the trials used
+    (the last ``consistent_n`` when they agreed, else all), k of Eq. 6.37 and the spreads of the
+    trials used (None with one trial). The run and the analysis-only replay share it."""
+    row: dict[str, Any] = {"target_rpm": target_rpm, "trials": trials, "consistent": consistent,
+                           "no_drop": not trials}
+    if not trials:
+        row.update(rotor_rad_s=None, rotor_rpm=None, spin_rad_s=None, spin_rpm=None, k=None,
+                   rotor_std_rad_s=None, spin_std_rad_s=None)
+        return row
+    use = trials[-consistent_n:] if consistent else trials
+    w = statistics.fmean(t["rotor_rad_s"] for t in use)
+    v = statistics.median(t["spin_rad_s"] for t in use)
+    spread = {f"{key[:-len('_rad_s')]}_std_rad_s": statistics.stdev(t[key] for t in use) if len(use) > 1
+              else None for key in ("rotor_rad_s", "spin_rad_s")}
+    row.update(rotor_rad_s=w, rotor_rpm=rad_s_to_rpm(w), spin_rad_s=v, spin_rpm=rad_s_to_rpm(v),
+               k=v / w - 1.0, **spread)
+    return row
+
+
 class SpinCritical(ProtocolDef):
     name = "spin-critical"
     summary = "rotor speed and floator spin at the drop (Fig. 6.18, Eq. 6.37)"
@@ -173,20 +194,7 @@ class SpinCritical(ProtocolDef):
                 if spread * 100.0 <= p["consistency_pct"]:
                     consistent = True
                     break
-        row: dict[str, Any] = {"target_rpm": step.data["target_rpm"], "trials": trials,
-                               "consistent": consistent, "no_drop": not trials}
-        if not trials:
-            row.update(rotor_rad_s=None, rotor_rpm=None, spin_rad_s=None, spin_rpm=None, k=None,
-                       rotor_std_rad_s=None, spin_std_rad_s=None)
-            return row
-        use = trials[-int(p["consistent_n"]):] if consistent else trials
-        w = statistics.fmean(t["rotor_rad_s"] for t in use)
-        v = statistics.median(t["spin_rad_s"] for t in use)
-        spread = {f"{key[:-len('_rad_s')]}_std_rad_s": statistics.stdev(t[key] for t in use) if len(use) > 1
-                  else None for key in ("rotor_rad_s", "spin_rad_s")}
-        row.update(rotor_rad_s=w, rotor_rpm=rad_s_to_rpm(w), spin_rad_s=v, spin_rpm=rad_s_to_rpm(v),
-                   k=v / w - 1.0, **spread)
-        return row
+        return point_from_trials(step.data["target_rpm"], trials, consistent, int(p["consistent_n"]))
 
     def fit(self, points: list[dict[str, Any]]) -> dict[str, Any]:
         """Eq. 6.37's C from the steps with a drop; a step whose trials did not agree
