@@ -66,6 +66,24 @@ def largest_change(before: list[dict[str, Any]], after: list[dict[str, Any]]) ->
     return worst, name
 
 
+def _rewrite_point_events(events: Path, points: list[dict[str, Any]]) -> None:
+    """The shrunk session's ``point`` events carry the points its shrunk bytes give (an exact
+    replay holds events.jsonl against the cassettes, docs/replay.md)."""
+    by_step = {p.get("step"): p for p in points}
+    lines = []
+    for line in events.read_text(encoding="utf-8").splitlines():
+        doc = json.loads(line) if line.strip() else None
+        is_point = isinstance(doc, dict) and doc.get("type") == "point"
+        step = doc.get("point", {}).get("step") if is_point else None
+        if step is not None and step in by_step:
+            doc["point"] = by_step[step]
+            line = json.dumps(doc, allow_nan=False, separators=(",", ":"))
+        lines.append(line)
+    tmp = events.with_suffix(".jsonl.tmp")
+    tmp.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    tmp.replace(events)
+
+
 def run(args: argparse.Namespace) -> int:
     from labkit.devices.camera.shrink import Shrink, shrink_cassette
     from labkit.protocols import get_protocol
@@ -110,6 +128,7 @@ def run(args: argparse.Namespace) -> int:
             raise LabkitError(f"shrink: the shrunk session replays as {replayed.outcome.status!r} "
                               f"({replayed.outcome.reason}); try a milder shrink")
         write_json_atomic(out / "results.json", results)
+        _rewrite_point_events(out / "events.jsonl", results.get("points") or [])
         check = replay_session(out)
         if not check.identical:
             raise LabkitError(f"shrink: the shrunk session does not reproduce its results: "

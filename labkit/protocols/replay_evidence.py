@@ -43,13 +43,15 @@ def _same(a: Any, b: Any) -> bool:
 
 
 def diff_points(replayed: list[dict[str, Any]], recorded: list[tuple[str, Any]]) -> list[str]:
-    """Each recorded point event (``events.jsonl:LINE``) against the replay's point."""
+    """Each recorded point event (``events.jsonl:LINE``) against the replay's point of the same
+    step. A point line that is damaged or missing is the session reader's warning already; a
+    step the replay makes and the events do not hold is results.json's difference."""
     out = []
-    if len(replayed) != len(recorded):
-        out.append(f"events.jsonl: {len(recorded)} point events recorded, the cassettes give {len(replayed)}")
-    for (where, point), again in zip(recorded, replayed, strict=False):
-        if not isinstance(point, dict):
+    by_step = {p.get("step"): p for p in replayed}
+    for where, point in recorded:
+        if not isinstance(point, dict) or point.get("step") not in by_step:
             continue
+        again = by_step[point["step"]]
         keys = sorted(k for k in set(point) | set(again) if not _same(point.get(k), again.get(k))
                       and not (k not in point and k in ADDED_KEYS))  # a key newer than the recording
         if not keys:
