@@ -13,6 +13,31 @@ from labkit.errors import DeviceReplyError, DeviceTimeout
 COMMAND_ATTEMPTS = 3
 
 
+def parse_sketch_banner(line: bytes, sketch: str) -> dict[str, str] | None:
+    """``# <sketch> 1.0 key=value ...`` (the boot banner) -> {"version": "1.0", key: value, ...};
+    None for any other line (other ``#`` lines are plain comments)."""
+    parts = line.strip().split()
+    if len(parts) < 3 or parts[0] != b"#" or parts[1] != sketch.encode("ascii"):
+        return None
+    out = {"version": parts[2].decode("ascii", "replace")}
+    for part in parts[3:]:
+        key, sep, value = part.partition(b"=")
+        if sep:
+            out[key.decode("ascii", "replace")] = value.decode("ascii", "replace")
+    return out
+
+
+def parse_flag_letters(text: bytes, names: dict[str, str]) -> frozenset[str]:
+    """A status line's flags: ``b"0"`` -> {}; each letter once, each a key of ``names`` (the
+    flag's name); ValueError otherwise."""
+    letters = text.decode("ascii", "replace")
+    if letters == "0":
+        return frozenset()
+    if not letters or len(set(letters)) != len(letters) or not all(c in names for c in letters):
+        raise ValueError(f"flags {text[:12]!r} not 0 or a set of {'/'.join(names)}")
+    return frozenset(names[c] for c in letters)
+
+
 class SketchCommands:
     """For drivers of labkit's sketches. They provide ``name``, ``clock``, ``replies`` (a
     ReplyQueue), ``reader`` (its StreamReader), ``reply_timeout_s``, ``_alive`` (set by the
@@ -25,6 +50,25 @@ class SketchCommands:
     reply_timeout_s: float
     _alive: bool
     _check_reader: Callable[[], None]  # raises the reader thread's error in the caller's thread
+    _resend_config: Callable[[], None]  # the settings again, after a reset, without waiting
+    resets: int
+    _flag_reset: bool
+    banner: dict[str, str]
+    _last_seq: int | None
+
+    def _note_banner(self, banner: dict[str, str], lock: Any) -> None:
+        """The sketch's boot banner: a second one means the device reset (counted, flagged on the
+        next reading, its settings sent again)."""
+        with lock:
+            reset = self._alive
+            if reset:
+                self.resets += 1
+                self._flag_reset = True
+            self.banner = banner
+            self._alive = True
+            self._last_seq = None
+        if reset:
+            self._resend_config()
 
     def _wait_alive(self, timeout: float, first_line: str) -> None:
         """Wait for the sketch's boot banner or its first ``first_line``; DeviceTimeout after

@@ -17,7 +17,7 @@ from __future__ import annotations
 import random
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import ClassVar
+from typing import Any, ClassVar
 
 from labkit.emulators.plant import RigPlant
 
@@ -238,13 +238,17 @@ class SketchLines:
     """Host command lines to an emulated labkit sketch (``labkit_tach``, ``labkit_strobe``):
     bytes sent during its boot or while its cable is out are lost, a line longer than the
     sketch's buffer (``line_max``) is dropped, and each whole line goes to ``_command``. The
-    emulator sets ``_line`` (a bytearray) and ``_boot_end``."""
+    emulator sets ``_line`` (a bytearray) and ``_boot_end``. The ``error_reply`` fault answers
+    a command ``ERR busy`` before ``_command`` sees it."""
 
     line_max = 64
     _line: bytearray
     _boot_end: float
     connected: Callable[[float], bool]  # Emulator's: the cable is in at t
     _command: Callable[[str, float], None]  # each sketch's: one command line at t
+    rng: random.Random
+    faults: dict[str, Any]
+    reply: Callable[..., None]
 
     def handle(self, data: bytes, t: float) -> None:
         if t < self._boot_end or not self.connected(t):
@@ -253,6 +257,12 @@ class SketchLines:
         while b"\n" in self._line:
             raw, _, rest = bytes(self._line).partition(b"\n")
             self._line = bytearray(rest)
-            self._command(raw.strip().decode("ascii", "replace"), t)
+            text = raw.strip().decode("ascii", "replace")
+            if not text:
+                continue
+            if self.rng.random() < self.faults.get("error_reply", 0.0):
+                self.reply(b"ERR busy\n", t, 0.001)
+                continue
+            self._command(text, t)
         if len(self._line) > self.line_max:
             self._line.clear()

@@ -147,11 +147,7 @@ class LabkitStrobeEmulator(SketchLines, Emulator):
 
     # ---- commands -----------------------------------------------------------------------
     def _command(self, text: str, t: float) -> None:
-        if not text:
-            return
-        if self.rng.random() < self.faults.get("error_reply", 0.0):
-            self.reply(b"ERR busy\n", t, 0.001)
-        elif text == "ID?":
+        if text == "ID?":
             self.reply(f"ID labkit-strobe {self.version}\n".encode(), t, 0.001)
         elif text in ("ON", "OFF"):
             self.lamp_on = text == "ON"

@@ -303,11 +303,6 @@ class LabkitTachEmulator(SketchLines, _StreamingTachEmulator):
 
     # ---- commands -----------------------------------------------------------------------
     def _command(self, text: str, t: float) -> None:
-        if not text:
-            return
-        if self.rng.random() < self.faults.get("error_reply", 0.0):
-            self.reply(b"ERR busy\n", t, 0.001)
-            return
         if text == "ID?":
             self.reply(f"ID labkit-tach {self.version}\n".encode(), t, 0.001)
             return

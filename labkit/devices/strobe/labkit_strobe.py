@@ -140,18 +140,8 @@ class LabkitStrobe(SketchCommands, Strobe):
 
     def _on_banner(self, line: bytes) -> None:
         banner = parse_banner(line)
-        if banner is None:
-            return
-        with self._lock:
-            reset = self._alive
-            if reset:
-                self.resets += 1
-                self._flag_reset = True
-            self.banner = banner
-            self._alive = True
-            self._last_seq = None
-        if reset:
-            self._resend_config()
+        if banner is not None:
+            self._note_banner(banner, self._lock)
 
     def _add(self, status: StrobeStatus) -> None:
         with self._lock:

@@ -22,6 +22,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+from labkit.devices.sketch_commands import parse_flag_letters, parse_sketch_banner
+
 #: status-line flag letters -> names
 FLAG_NAMES = {
     "Z": "no_pulses", "L": "unlocked", "N": "noisy", "X": "lamp_off", "W": "width_cut",
@@ -102,12 +104,7 @@ def _integer(text: bytes, what: str) -> int:
 
 def parse_flags(text: bytes) -> frozenset[str]:
     """``b"0"`` -> {}; ``b"ZL"`` -> {"no_pulses", "unlocked"}; ValueError otherwise."""
-    letters = text.decode("ascii", "replace")
-    if letters == "0":
-        return frozenset()
-    if not letters or len(set(letters)) != len(letters) or not all(c in FLAG_NAMES for c in letters):
-        raise ValueError(f"flags {text[:12]!r} not 0 or a set of {''.join(FLAG_NAMES)}")
-    return frozenset(FLAG_NAMES[c] for c in letters)
+    return parse_flag_letters(text, FLAG_NAMES)
 
 
 def parse_status_line(line: bytes, t: float = 0.0, device: str = "", divider: int = 1) -> StrobeStatus:
@@ -128,15 +125,7 @@ def parse_status_line(line: bytes, t: float = 0.0, device: str = "", divider: in
 def parse_banner(line: bytes) -> dict[str, str] | None:
     """``# labkit-strobe 1.0 offset=0.500 width=10 div=1 rate=1`` -> {"version": "1.0", ...};
     None for any other line."""
-    parts = line.strip().split()
-    if len(parts) < 3 or parts[0] != b"#" or parts[1] != b"labkit-strobe":
-        return None
-    out = {"version": parts[2].decode("ascii", "replace")}
-    for part in parts[3:]:
-        key, sep, value = part.partition(b"=")
-        if sep:
-            out[key.decode("ascii", "replace")] = value.decode("ascii", "replace")
-    return out
+    return parse_sketch_banner(line, "labkit-strobe")
 
 
 def format_command(name: str, value: float | None = None) -> bytes:

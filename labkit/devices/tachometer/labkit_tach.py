@@ -30,7 +30,7 @@ from typing import Any
 
 from labkit.devices.base import Reading, register_driver, register_parser_benchmark
 from labkit.devices.link import ReplyQueue
-from labkit.devices.sketch_commands import SketchCommands
+from labkit.devices.sketch_commands import SketchCommands, parse_flag_letters, parse_sketch_banner
 from labkit.devices.stream import LineFramer
 from labkit.devices.tachometer.streaming import StreamingTachometer
 from labkit.units import rpm_to_rad_s
@@ -78,13 +78,7 @@ def parse_tach_sample(line: bytes) -> TachSample:
     rpm = _non_negative_number(fields[3], "rpm")
     period_us = _non_negative_number(fields[4], "period_us")
     pulses = _non_negative_int(fields[5], "pulses")
-    flag_text = fields[6].decode("ascii", "replace")
-    if flag_text == "0":
-        flags: frozenset[str] = frozenset()
-    elif flag_text and all(c in FLAG_NAMES for c in flag_text) and len(set(flag_text)) == len(flag_text):
-        flags = frozenset(FLAG_NAMES[c] for c in flag_text)
-    else:
-        raise ValueError(f"flags {fields[6]!r} not 0 or a set of Z/O/N")
+    flags = parse_flag_letters(fields[6], FLAG_NAMES)
     if "zero_speed" in flags and rpm != 0.0:
         raise ValueError(f"zero-speed line with rpm {rpm}")
     if not flags and rpm > 0 and period_us == 0:
@@ -105,15 +99,7 @@ def parse_banner(line: bytes) -> dict[str, str] | None:
 
     None for any other line (other ``#`` lines are plain comments).
     """
-    parts = line.strip().split()
-    if len(parts) < 3 or parts[0] != b"#" or parts[1] != b"labkit-tach":
-        return None
-    out = {"version": parts[2].decode("ascii", "replace")}
-    for part in parts[3:]:
-        key, sep, value = part.partition(b"=")
-        if sep:
-            out[key.decode("ascii", "replace")] = value.decode("ascii", "replace")
-    return out
+    return parse_sketch_banner(line, "labkit-tach")
 
 
 def format_command(name: str, value: int | None = None) -> bytes:
@@ -192,16 +178,7 @@ class LabkitTachometer(SketchCommands, StreamingTachometer):
         if line.startswith(b"#"):
             banner = parse_banner(line)
             if banner is not None:
-                with self._state_lock:
-                    reset = self._alive
-                    if reset:
-                        self.resets += 1
-                        self._flag_reset = True
-                    self.banner = banner
-                    self._alive = True
-                    self._last_seq = None
-                if reset:
-                    self._resend_config()
+                self._note_banner(banner, self._state_lock)
             return None
         if is_reply(line):
             self.replies.put(line)
