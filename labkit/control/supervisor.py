@@ -203,17 +203,24 @@ def _after_frozen_worker(rig: Any, worker: int, frozen: Frozen, err: Any,
     failed = stop_motors(rig)
     if frozen.status is None:  # still not reaped: wait for it now that the STOP went out
         _, frozen.status = os.waitpid(worker, 0)
-    stopped = [role for role in rig.devices if rig.devices[role].kind == "motor" and role not in failed]
     how = (f"stopped responding (no heartbeat for {frozen.silent_s:.1f} s, limit "
            f"{HEARTBEAT_TIMEOUT_S:.1f} s: stopped with SIGSTOP, frozen or starved) and was ended "
            "with SIGKILL")
+    _report_stop(rig, worker, how, failed, err, sessions)
+    return 3 if failed else 128 + signal.SIGKILL
+
+
+def _report_stop(rig: Any, worker: int, how: str, failed: dict[str, str], err: Any,
+                 sessions: str | Path | None) -> None:
+    """Say which motors the supervisor stopped after the worker ended ``how``, which it could
+    not, and record the worker's session as killed."""
+    stopped = [role for role in rig.devices if rig.devices[role].kind == "motor" and role not in failed]
     print(f"labkit run: the run process (PID {worker}) {how}; the supervisor commanded "
           f"{', '.join(stopped) or 'no motor'} to zero", file=err)
     for role, why in failed.items():
         print(f"labkit run: could not stop {role}: {why}; cut the motor's power", file=err)
     if sessions is not None:
         _close_sessions(sessions, worker, how, failed, err)
-    return 3 if failed else 128 + signal.SIGKILL
 
 
 def _after_worker(rig: Any, worker: int, status: int, err: Any, sessions: str | Path | None = None) -> int:
@@ -226,13 +233,7 @@ def _after_worker(rig: Any, worker: int, status: int, err: Any, sessions: str | 
             return code
         how = f"ended with status {code} without stopping safely"
     failed = stop_motors(rig)
-    stopped = [role for role in rig.devices if rig.devices[role].kind == "motor" and role not in failed]
-    print(f"labkit run: the run process (PID {worker}) {how}; the supervisor commanded "
-          f"{', '.join(stopped) or 'no motor'} to zero", file=err)
-    for role, why in failed.items():
-        print(f"labkit run: could not stop {role}: {why}; cut the motor's power", file=err)
-    if sessions is not None:
-        _close_sessions(sessions, worker, how, failed, err)
+    _report_stop(rig, worker, how, failed, err, sessions)
     return 3 if failed else code
 
 

@@ -19,7 +19,7 @@ from labkit.predict.magnets import (
 )
 from labkit.rig import BodySpec, find_rig_file, parse_body, read_rig_text
 from labkit.rig.config import load_toml
-from labkit.rig.plausible import check_body_plausible
+from labkit.rig.plausible import body_size_fields, check_body_plausible
 
 
 class PredictInputError(LabkitError):
@@ -30,12 +30,7 @@ def magnet_from_body(body: BodySpec, remanence_t: float | None = None) -> Magnet
     """A :class:`Magnet` from a rig file's body (sizes by shape: sphere diameter; cylinder
     diameter and length; cube length; block width, diameter as depth, length along the dipole).
     Raises ValueError naming what is missing."""
-    sizes = {
-        "sphere": (body.diameter_m,),
-        "cylinder": (body.diameter_m, body.length_m),
-        "cube": (body.length_m or body.width_m or body.diameter_m,),
-        "block": (body.width_m, body.diameter_m, body.length_m),
-    }.get(body.shape)
+    sizes = body_size_fields(body)
     if sizes is None:
         raise ValueError(f"shape {body.shape!r} is not supported here (sphere, cylinder, cube, block)")
     if any(s is None for s in sizes):

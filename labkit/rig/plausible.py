@@ -82,15 +82,22 @@ class _Keys:
         return RigFileError(self.file, f"{section}.{found[0] if found else base}", reason)
 
 
-def body_sizes(body: BodySpec) -> tuple[float, ...] | None:
-    """The sizes :func:`labkit.bodies.shape_properties` takes, from a rig body; None when the
-    file does not give them all (or the shape is a ring, whose hole the file cannot state)."""
-    sizes = {
+def body_size_fields(body: BodySpec) -> tuple[float | None, ...] | None:
+    """A rig body's sizes in the order :func:`labkit.bodies.shape_properties` takes them (sphere
+    diameter; cylinder diameter and length; cube length; block width, diameter as depth, length
+    along the dipole), None where the file leaves one out; None for a shape without them (a
+    ring, whose hole the file cannot state)."""
+    return {
         "sphere": (body.diameter_m,),
         "cylinder": (body.diameter_m, body.length_m),
         "cube": (body.length_m or body.width_m or body.diameter_m,),
         "block": (body.width_m, body.diameter_m, body.length_m),
     }.get(body.shape)
+
+
+def body_sizes(body: BodySpec) -> tuple[float, ...] | None:
+    """:func:`body_size_fields` when the file gives them all, else None."""
+    sizes = body_size_fields(body)
     if sizes is None or any(s is None for s in sizes):
         return None
     return tuple(float(s) for s in sizes)  # type: ignore[arg-type]
