@@ -81,7 +81,6 @@ class RerunRunSink:
         self.hints: Hints | None = None   # the run's, None: no figure
         self.figure: FigureSpec | None = None
         self.points: list[tuple[float, float]] = []  # what the live fit uses
-        self.left_out = 0  # points drawn but not fitted (a step marked consistent: false)
         self.fits: list[LiveFit] = []
         self._styled: set[str] = set()
         self.flush_error: str | None = None
@@ -192,7 +191,6 @@ class RerunRunSink:
         if xy is None or self.figure is None:
             return
         if e.point.get("consistent") is False:  # its trials disagreed: drawn, not fitted (labkit fit too)
-            self.left_out += 1
             self._text(f"point {xy[0]:.6g}, {xy[1]:.6g} left out of the live fit: its trials did not "
                        "agree (consistent: false)", "WARN")
         else:

@@ -55,3 +55,15 @@ def test_the_same_points_with_a_known_model_get_their_fit(tmp_path):
     assert {"/gap/plot/fit/after_03", "/gap/plot/fit/after_04", "/gap/residual/after_04"} <= entities
     x, y = column(tmp_path / "r.rrd", "/gap/plot/data", "Scalars:scalars", "rotor speed [rad/s]")
     assert x == [100, 200, 300, 400] and [v[0] for v in y] == [50.0, 25.0, 50.0 / 3, 12.5]
+
+
+def test_a_point_marked_inconsistent_is_drawn_but_left_out_of_the_live_fit(tmp_path):
+    hints = Hints("w_rad_s", "gap_um", "rotor speed", "rad/s", "gap", "um", figure="Gap", fit="power-law")
+    points = [{"w_rad_s": 100.0 * k, "gap_um": 50.0 / k, "consistent": k != 3} for k in range(1, 6)]
+    stream_points(tmp_path / "r.rrd", hints, points)
+    entities = entity_paths(tmp_path / "r.rrd")
+    # five points drawn, the fit made of the four consistent ones (after_04 is the last)
+    x, _ = column(tmp_path / "r.rrd", "/gap/plot/data", "Scalars:scalars", "rotor speed [rad/s]")
+    assert x == [100, 200, 300, 400, 500]
+    assert "/gap/plot/fit/after_04" in entities and "/gap/plot/fit/after_05" not in entities
+    assert any("left out of the live fit" in t for t in event_texts(tmp_path / "r.rrd"))
