@@ -217,21 +217,38 @@ class VirtualClock(Clock):
         if dt < 0:
             return
         with self._lock:
-            target = self._now + dt
-            # Jobs do not run jobs: a sleep inside a job only moves time forward.
-            if not self._running_jobs:
-                self._running_jobs = True
-                try:
-                    while self._jobs and self._jobs[0][0] <= target:
-                        due, _, job = heapq.heappop(self._jobs)
-                        if job.cancelled:
-                            continue
-                        self._now = max(self._now, due)
-                        job.callback(self._now)
-                        heapq.heappush(self._jobs, (due + job.period, next(self._seq), job))
-                finally:
-                    self._running_jobs = False
+            if self._running_jobs:  # jobs do not run jobs
+                self._sleep_in_job(dt)
+                return
+            target = self._woken_at(self._now + dt)
+            self._running_jobs = True
+            try:
+                while self._jobs and self._jobs[0][0] <= target:
+                    due, _, job = heapq.heappop(self._jobs)
+                    if job.cancelled:
+                        continue
+                    self._now = max(self._now, due)
+                    self._run_job(job)
+                    heapq.heappush(self._jobs, (self._due_after(job, due), next(self._seq), job))
+            finally:
+                self._running_jobs = False
             self._now = max(self._now, target)
+
+    # the steps :class:`ReplayClock` changes
+    def _sleep_in_job(self, dt: float) -> None:
+        """A sleep inside a job only moves time forward."""
+        self._now += dt
+
+    def _woken_at(self, target: float) -> float:
+        """When a sleep that ends at ``target`` wakes (here: then)."""
+        return target
+
+    def _run_job(self, job: PeriodicJob) -> None:
+        job.callback(self._now)
+
+    def _due_after(self, job: PeriodicJob, last: float) -> float:
+        """A job's next time after it ran at ``last``."""
+        return last + job.period
 
     def advance(self, dt: float) -> None:
         """Alias of :meth:`sleep`, reads better in tests."""
@@ -307,7 +324,7 @@ class ReplayClock(VirtualClock):
             heapq.heappush(self._jobs, (self._due_after(job, self._now), next(self._seq), job))
         return job
 
-    def _stalled_until(self, target: float) -> float:
+    def _woken_at(self, target: float) -> float:
         """When the recording's protocol thread woke from the sleep ending at ``target``: later
         than planned where it recorded a stall (``clock.jsonl``), else ``target``."""
         planned = self.schedules.get(STALL_JOB)
@@ -333,26 +350,12 @@ class ReplayClock(VirtualClock):
     def now(self) -> float:
         return self._now + self._job_time
 
-    def sleep(self, dt: float) -> None:
-        if dt < 0:
-            return
-        with self._lock:
-            if self._running_jobs:  # a wait inside a job: the job's own time only
-                self._job_time += dt
-                return
-            target = self._stalled_until(self._now + dt)
-            self._running_jobs = True
-            try:
-                while self._jobs and self._jobs[0][0] <= target:
-                    due, _, job = heapq.heappop(self._jobs)
-                    if job.cancelled:
-                        continue
-                    self._now = max(self._now, due)
-                    try:
-                        job.callback(self._now)
-                    finally:
-                        self._job_time = 0.0
-                    heapq.heappush(self._jobs, (self._due_after(job, due), next(self._seq), job))
-            finally:
-                self._running_jobs = False
-            self._now = max(self._now, target)
+    def _sleep_in_job(self, dt: float) -> None:
+        """A wait inside a job: the job's own time only."""
+        self._job_time += dt
+
+    def _run_job(self, job: PeriodicJob) -> None:
+        try:
+            job.callback(self._now)
+        finally:
+            self._job_time = 0.0
