@@ -53,10 +53,11 @@ def export_csv(session: Path, problems: list[str] | None = None) -> list[Path]:
     out = []
     for found in sorted((session / "readings").glob("*.jsonl")):
         src = session_file(session, "readings", found.name)  # a symlink out of the session is refused
-        dest = session_file(session, "readings", found.with_suffix(".csv").name)  # and so is one to write
-        if dest.is_symlink() or Path(session, "readings", dest.name).is_symlink():
-            raise SessionError(f"{session}/readings/{dest.name}: is a symbolic link; labkit writes no "
+        name = found.with_suffix(".csv").name
+        if Path(session, "readings", name).is_symlink():  # the path as it stands, before resolving
+            raise SessionError(f"{session}/readings/{name}: is a symbolic link; labkit writes no "
                                "file through a link (a session from elsewhere?): remove it")
+        dest = session_file(session, "readings", name)
         readings_to_csv(src, dest, problems)
         out.append(dest)
     return out
