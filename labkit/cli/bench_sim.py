@@ -19,9 +19,13 @@ QUICK_SCENES = ["conical_5_1"]
 #: the issue's acceptance targets for the headline: (key, comparison, bound)
 TARGETS = {
     "speedup_vs_dop853_at_equal_error": (">=", 30.0),
-    "max_invariant_drift_1e4_cycles": ("<=", 1e-10),
+    # issue 28: drift 1e-12 (it was 1e-10); one body 0.25 s and two bodies 1 s of CPU (wall
+    # time on a shared machine is kept with issue 15's bounds, 1 s and 5 s)
+    "max_invariant_drift_1e4_cycles": ("<=", 1e-12),
     "one_body_1e4_cycles_s": ("<=", 1.0),
     "two_body_1e4_cycles_s": ("<=", 5.0),
+    "one_body_1e4_cycles_cpu_s": ("<=", 0.25),
+    "two_body_1e4_cycles_cpu_s": ("<=", 1.0),
     # issue 15: labkit faster than a compiled DOP853 at every target both reach
     "speedup_vs_compiled_dop853_at_equal_error": (">=", 1.0),
     "compiled_dop853_drift_at_equal_cost_1e4_cycles": ("report", math.inf),
@@ -153,10 +157,27 @@ def _peer_headline(peers: list, notes: dict) -> dict:
     )
     notes["compiled_dop853_drift_at_equal_cost_1e4_cycles"] = (
         f"largest over the scenes {json.dumps({k: float(f'{v:.3g}') for k, v in drifts.items()})}; "
-        f"labkit splitting4 at the same cost: {json.dumps({k: float(f'{v:.3g}') for k, v in ours.items()})}"
+        f"labkit's default at the same cost: {json.dumps({k: float(f'{v:.3g}') for k, v in ours.items()})}"
     )
     return {"speedup_vs_compiled_dop853_at_equal_error": min(ratios.values()),
             "compiled_dop853_drift_at_equal_cost_1e4_cycles": max(drifts.values())}
+
+
+def _cpu_seconds_1e4_cycles(scene, repeats: int = 2) -> float:
+    """CPU seconds of 1e4 drive cycles with the default integrator, one sample per period, the
+    smallest of ``repeats`` runs (CPU time: other jobs on a shared machine stretch wall time)."""
+    from labkit.numerics.stress import _run
+    from labkit.sim import compile_scene, load_scene
+
+    scene = load_scene(scene) if isinstance(scene, str) else scene
+    system = compile_scene(scene)
+    _run(scene, 1, system=system, samples_per_period=1)  # kernels compiled or loaded from the cache
+    best = math.inf
+    for _ in range(repeats):
+        start = time.process_time()
+        _run(scene, 10_000, system=system, samples_per_period=1)
+        best = min(best, time.process_time() - start)
+    return best
 
 
 def _headline(reports, verdicts, quick: bool) -> tuple[dict, dict]:
@@ -216,7 +237,11 @@ def _headline(reports, verdicts, quick: bool) -> tuple[dict, dict]:
         "max_invariant_drift_1e4_cycles": max(one_drift, two_drift),
         "one_body_1e4_cycles_s": one_s,
         "two_body_1e4_cycles_s": two_s,
+        "one_body_1e4_cycles_cpu_s": _cpu_seconds_1e4_cycles(s1_like(I_S1, OMEGA_S1)),
+        "two_body_1e4_cycles_cpu_s": _cpu_seconds_1e4_cycles("mbs_fig6_1"),
     }
+    notes["one_body_1e4_cycles_cpu_s"] = "S1's scene, default integrator, 1 sample per period, min of 2"
+    notes["two_body_1e4_cycles_cpu_s"] = "mbs_fig6_1, default integrator (auto: kahanli8), min of 2"
     notes["speedup_detail"] = speed
     return headline, notes
 

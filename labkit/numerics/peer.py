@@ -23,7 +23,7 @@ import numpy as np
 from labkit.numerics import metrics
 from labkit.numerics.workprecision import Ladder, SceneReport, work_precision
 from labkit.sim import SimResult, compile_scene, load_scene, simulate
-from labkit.sim.integrators import SPLITTINGS
+from labkit.sim.integrators import DEFAULT_INTEGRATOR, SPLITTINGS
 from labkit.sim.integrators.splitting import COMPOSITIONS
 
 PEER = "cyrk-dop853"
@@ -126,7 +126,7 @@ def drift_at_equal_cost(scene_name: str, report: SceneReport, cycles: float = LO
     scene = load_scene(scene_name)
     system = compile_scene(scene)
     _cpu_run(scene, system, 1, PEER, rtol=1e-6)  # load the compiled right-hand side
-    ours, ours_cpu = _cpu_run(scene, system, cycles, "splitting4")
+    ours, ours_cpu = _cpu_run(scene, system, cycles, DEFAULT_INTEGRATOR)
     scale = ours.wall_s / max(ours_cpu, 1e-9)  # the sweep's wall times, in this run's CPU terms
     rtol, slope = _rtol_at_cost(report, ours.wall_s / cycles)
     if not math.isfinite(rtol):
@@ -135,11 +135,11 @@ def drift_at_equal_cost(scene_name: str, report: SceneReport, cycles: float = LO
     if not 0.8 < peer_cpu / ours_cpu < 1.25:  # one correction along the fitted power law
         rtol = float(np.clip(rtol * (ours_cpu / peer_cpu) ** slope, 1e-15, 1e-3))
         peer, peer_cpu = _cpu_run(scene, system, cycles, PEER, rtol=rtol)
-    n8 = max(8, (len(COMPOSITIONS["suzuki4"][0]) * ours.setting["steps_per_period"])
+    n8 = max(8, (ours.setting["stages"] * ours.setting["steps_per_period"])
              // len(COMPOSITIONS["kahanli8"][0]))
     high, high_cpu = _cpu_run(scene, system, cycles, "kahanli8", steps_per_period=n8)
     return {
-        "labkit": {"integrator": "splitting4", "setting": ours.setting, "cpu_s": ours_cpu,
+        "labkit": {"integrator": ours.integrator, "setting": ours.setting, "cpu_s": ours_cpu,
                    "wall_s": ours.wall_s, "invariant_drift": ours.invariant_drift},
         "labkit_order8": {"integrator": "kahanli8", "steps_per_period": n8, "cpu_s": high_cpu,
                           "wall_s": high.wall_s, "invariant_drift": high.invariant_drift},
@@ -177,7 +177,8 @@ def peer_lines(comp: PeerComparison) -> list[str]:
     d = comp.drift
     if d:
         lines.append(
-            f"  1e4 cycles at equal CPU cost: labkit splitting4 {d['labkit']['cpu_s']:.3g} s, drift "
+            f"  1e4 cycles at equal CPU cost: labkit's default ({d['labkit']['integrator']} "
+            f"N={d['labkit']['setting']['steps_per_period']}) {d['labkit']['cpu_s']:.3g} s, drift "
             f"{f(d['labkit']['invariant_drift'], '.2e')}; CyRK rtol={d['peer']['rtol']:.2g} "
             f"{d['peer']['cpu_s']:.3g} s, drift {f(d['peer']['invariant_drift'], '.2e')} "
             f"(cost ratio {d['cost_ratio_peer_over_labkit']:.2f})"

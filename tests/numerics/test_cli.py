@@ -38,6 +38,8 @@ def test_bench_sim_json_follows_the_issue_schema(tmp_path, capsys):
         "max_invariant_drift_1e4_cycles",
         "one_body_1e4_cycles_s",
         "two_body_1e4_cycles_s",
+        "one_body_1e4_cycles_cpu_s",
+        "two_body_1e4_cycles_cpu_s",
         "speedup_vs_compiled_dop853_at_equal_error",
         "compiled_dop853_drift_at_equal_cost_1e4_cycles",
     }

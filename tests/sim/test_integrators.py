@@ -200,3 +200,17 @@ def test_cycle_averaged_force_on_a_pinned_floator_matches_eq_5_71():
     # at the default N = 64 the cone angle carries an O(h^4) ripple of ~1e-6 rad (see the Eq. 5.7 test)
     assert force[2] == pytest.approx(f_z, rel=1e-5)
     assert abs(force[0]) < 1e-5 * f_z and abs(force[1]) < 1e-5 * f_z
+
+
+def test_default_integrator_chooses_the_composition_per_scene():
+    """issue 28: interacting free bodies run Kahan-Li order 8 (drift <= 1e-12 per 1e4 cycles),
+    a driven body keeps splitting4; the choice is recorded in the setting."""
+    pair = simulate("mbs_fig6_1", cycles=1000, samples_per_period=8)
+    assert pair.integrator == "kahanli8" and pair.setting["chosen_by"].startswith("auto")
+    assert pair.setting["steps_per_period"] == 32
+    assert max(pair.invariant_drift, pair.momentum_drift, pair.angular_momentum_drift) < 1e-12
+    explicit = simulate("mbs_fig6_1", cycles=1000, integrator="splitting4", samples_per_period=8)
+    assert explicit.integrator == "splitting4" and "chosen_by" not in explicit.setting
+    assert explicit.invariant_drift > 10 * pair.invariant_drift  # the reason for the choice
+    one = simulate("conical_5_1", cycles=10)
+    assert one.integrator == "splitting4" and one.setting["steps_per_period"] == 64

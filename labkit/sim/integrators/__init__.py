@@ -1,7 +1,9 @@
 """Integrators for compiled scenes.
 
-* ``splitting4`` (default, Suzuki 5-stage order 4), ``yoshida4``, ``yoshida6``, ``strang``:
-  fixed step ``h = T/N`` kick-rotate-kick splittings with exact free rotation (numba, cached);
+* ``auto`` (default): the composition and step chosen per scene by :func:`auto_composition`
+  (``splitting4`` for a driven body, ``kahanli8`` for interacting free bodies);
+* ``splitting4`` (Suzuki 5-stage order 4), ``yoshida4``, ``yoshida6``, ``kahanli6``, ``kahanli8``,
+  ``strang``: fixed step ``h = T/N`` kick-rotate-kick splittings with exact free rotation (numba, cached);
 * ``dop853``, ``radau``, ``lsoda``: :func:`scipy.integrate.solve_ivp` references with
   per-component (scaled) tolerances;
 * ``cyrk-dop853``: the same DOP853 compiled (CyRK's C++ solver with a numba right-hand side),
@@ -23,6 +25,7 @@ if TYPE_CHECKING:  # annotations only: `labkit simulate --help` reads the names 
     import numpy as np
 
 SPLITTINGS = {
+    "auto": "auto",
     "splitting4": "suzuki4",
     "suzuki4": "suzuki4",
     "yoshida4": "yoshida4",
@@ -36,7 +39,7 @@ REFERENCES = {"dop853": "DOP853", "radau": "Radau", "lsoda": "LSODA"}
 #: compiled peers (CyRK's C++ solver, numba right-hand side; the optional ``bench`` extra)
 COMPILED = {"cyrk-dop853": "DOP853"}
 INTEGRATORS = sorted(set(SPLITTINGS) | set(REFERENCES) | set(COMPILED))
-DEFAULT_INTEGRATOR = "splitting4"
+DEFAULT_INTEGRATOR = "auto"
 MAX_SAMPLE_BYTES = 1 << 30
 
 
@@ -66,15 +69,30 @@ class RawRun:
     extra: dict = field(default_factory=dict)
 
 
+def auto_composition(body_pairs: bool) -> tuple[str, str]:
+    """(composition, integrator name) that ``auto`` runs for a scene.
+
+    Interacting free bodies (``mbs_fig6_1``) take Kahan and Li's order-8 composition: over 1e4
+    cycles its energy drift is 4.3e-13 at 32 steps per period (544 force evaluations per period)
+    where ``splitting4`` at 128 steps (640 evaluations) drifts 4.3e-11 (``labkit bench sim``,
+    docs/simulator.md). A driven body keeps ``splitting4``, whose drift there is already ~1e-13."""
+    return ("kahanli8", "kahanli8") if body_pairs else ("suzuki4", "splitting4")
+
+
 def auto_steps_per_period(omega: float, omega_max: float, order: int, multiple: int = 1,
                           body_pairs: bool = False) -> int:
     """Steps per drive period: ``N >= 64`` (order >= 4; 256 for Strang) and ``h omega_max <= 0.5``,
     rounded up to a multiple of ``multiple`` (so samples fall on exact multiples of T/multiple).
 
-    Scenes with interacting free bodies take ``N >= 128``: at 64 the two-body energy error of
-    ``mbs_fig6_1`` is 7e-10 after 1e4 cycles (bounded), at 128 it is 4e-11, for 1.3x the cost
-    (``labkit bench sim``; issue 5's target is 1e-10)."""
-    n_min = (128 if body_pairs else 64) if order >= 4 else 256
+    Scenes with interacting free bodies take ``N >= 128`` with an order-4 or order-6 composition
+    (at 64 the two-body energy error of ``mbs_fig6_1`` is 7e-10 after 1e4 cycles, bounded; at 128
+    it is 4e-11) and ``N >= 32`` with an order-8 one (4.3e-13, :func:`auto_composition`)."""
+    if order < 4:
+        n_min = 256
+    elif body_pairs:
+        n_min = 32 if order >= 8 else 128
+    else:
+        n_min = 64
     n = max(n_min, math.ceil(2.0 * math.pi * omega_max / (0.5 * omega))) if omega > 0 else n_min
     return int(math.ceil(n / multiple) * multiple)
 

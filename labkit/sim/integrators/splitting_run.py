@@ -5,7 +5,13 @@ from __future__ import annotations
 import numpy as np
 
 from labkit.sim.compile import CompiledSystem
-from labkit.sim.integrators import RawRun, SimulationError, auto_steps_per_period, check_memory
+from labkit.sim.integrators import (
+    RawRun,
+    SimulationError,
+    auto_composition,
+    auto_steps_per_period,
+    check_memory,
+)
 from labkit.sim.integrators.shapes import run_fixed_top, run_free_pair, scene_shape, stage_turns
 from labkit.sim.integrators.splitting import COMPOSITIONS, run_reduced, run_rigid
 
@@ -21,10 +27,15 @@ def run(
     decimate: int = 1,
     **_: object,
 ) -> RawRun:
-    """Integrate ``cycles`` drive periods with ``h = T / steps_per_period`` (automatic if None)."""
+    """Integrate ``cycles`` drive periods with ``h = T / steps_per_period`` (automatic if None);
+    ``composition`` "auto" is chosen per scene (:func:`auto_composition`)."""
+    body_pairs = system.kind == "rigid" and system.flags is not None and bool(system.flags[2])
+    chosen_by = None
+    if composition == "auto":
+        composition, name = auto_composition(body_pairs)
+        chosen_by = "auto: " + ("interacting free bodies" if body_pairs else "one driven body or none")
     weights, order = COMPOSITIONS[composition]
     if steps_per_period is None:
-        body_pairs = system.kind == "rigid" and system.flags is not None and bool(system.flags[2])
         steps_per_period = auto_steps_per_period(system.omega, system.omega_max, order, samples_per_period,
                                                  body_pairs=body_pairs)
     if steps_per_period <= 0 or samples_per_period <= 0:
@@ -47,6 +58,8 @@ def run(
         "samples_per_period": samples_per_period,
         "decimate": decimate,
     }
+    if chosen_by:
+        setting["chosen_by"] = chosen_by
     if system.reduced is not None:
         rf = system.reduced
         out_t, out_y, out_yd = np.empty(n_out), np.empty(n_out), np.empty(n_out)
