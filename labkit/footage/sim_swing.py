@@ -1,4 +1,4 @@
-"""The stroboscope's body motion as :mod:`labkit.sim` integrates it (docs/explanation/vision.md, *What the
+"""The stroboscope's body motion as :mod:`labkit.sim` integrates it (docs/explanation/robustness-suite.md, *What the
 renderer models*).
 
 :class:`SimulatedSwing` stands in for the kinematic :class:`~labkit.footage.strobe_scene.Swing`

@@ -1,4 +1,4 @@
-"""Nearest-neighbour queries of the laser analysis, in one place (docs/explanation/vision.md, *The whole
+"""Nearest-neighbour queries of the laser analysis, in one place (docs/explanation/vision-throughput.md, *The whole
 command*).
 
 :class:`PointTree` is an exact kd-tree over 2-D points (``pykdtree``). It replaces

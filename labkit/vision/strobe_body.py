@@ -1,4 +1,4 @@
-"""The floating body in one stroboscope frame, and its orientation over a clip (docs/explanation/vision.md,
+"""The floating body in one stroboscope frame, and its orientation over a clip (docs/explanation/strobe-analysis.md,
 *Stroboscope*).
 
 Per frame (:func:`measure_body`): the lamp's banding and gradients are evened out by row and

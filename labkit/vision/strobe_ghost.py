@@ -1,4 +1,4 @@
-"""Room light in a stroboscope clip, taken out in linear light (docs/explanation/vision.md, *Room light: the
+"""Room light in a stroboscope clip, taken out in linear light (docs/explanation/strobe-analysis.md, *Room light: the
 ghost of the revolution*).
 
 Light adds in the sensor, not in the 8-bit grey levels a camera writes. The frames are taken back

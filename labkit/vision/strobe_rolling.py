@@ -1,4 +1,4 @@
-"""The camera as the strobe under a rolling shutter: a per-row phase model (docs/explanation/vision.md,
+"""The camera as the strobe under a rolling shutter: a per-row phase model (docs/explanation/strobe-analysis.md,
 *Rolling shutter with the camera as the strobe*).
 
 Without a lamp the camera's short exposure is the strobe (Fig. 6.20). A rolling shutter starts

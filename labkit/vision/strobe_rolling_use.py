@@ -1,5 +1,5 @@
 """When and how ``labkit analyse strobe`` uses the per-row model of
-:mod:`labkit.vision.strobe_rolling` (docs/explanation/vision.md, *Rolling shutter with the camera as the
+:mod:`labkit.vision.strobe_rolling` (docs/explanation/strobe-analysis.md, *Rolling shutter with the camera as the
 strobe*), what it reports, and the verdict's checks of it.
 
 It applies when the camera is the strobe (``--rotor-hz`` without ``--strobe-hz``) and the clip
