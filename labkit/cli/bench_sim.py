@@ -325,7 +325,7 @@ def _print_kernels(k: dict) -> None:
 
 def _write_json(path, reports, headline, notes, targets, verdicts, peers, kernel_info, compile_info,
                 quick) -> None:
-    """The ``--json`` document (schema in docs/explanation/numerics.md)."""
+    """The ``--json`` document (schema in docs/reference/bench-sim.md)."""
     from labkit.numerics.report import machine
 
     doc = {

@@ -1,4 +1,4 @@
-"""Error metrics of a run against a reference (docs/explanation/numerics.md#error-metrics), as pure functions.
+"""Error metrics of a run against a reference (docs/reference/bench-sim.md#error-metrics), as pure functions.
 
 Errors are taken on stroboscopic samples only, at exact multiples of the drive period T
 (docs/explanation/numerics-notes.md#unequal-moments-and-the-fig-57-artefact: anything else aliases). The state

@@ -23,7 +23,7 @@ so that the slots finish together, and at least ``MIN_CHUNK`` points, so that a 
 scheduling round trip is small against its work. Dask queues root tasks on its scheduler and
 hands a worker about one at a time: with 16-point tasks of ~45 ms its workers waited for a
 round trip between tasks and a 16-worker cluster ran at half the speed of a local pool
-(docs/explanation/numerics.md, *Sweeps on a cluster*).
+(docs/how-to/run-a-stability-sweep.md, *Sweeps on a cluster*).
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """Stress cases with unequal inertia, off-axis equilibria and free bodies: Fig. 5.7, Fig. 5.4,
-the two-body bound state, contact and escape (S5-S9 of docs/explanation/numerics.md)."""
+the two-body bound state, contact and escape (S5-S9 of docs/reference/bench-sim.md)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """Stress cases on one conical body: exact motion, units, singular and stiff torques, frequency
-sweep, damping (S1-S4, S10, S11 of docs/explanation/numerics.md)."""
+sweep, damping (S1-S4, S10, S11 of docs/reference/bench-sim.md)."""
 
 from __future__ import annotations
 

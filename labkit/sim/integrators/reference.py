@@ -60,7 +60,7 @@ def sample_times(t0: float, t_end: float, n: int, dt: float, decimate: int = 1) 
 
 def tolerance_scale(system: CompiledSystem) -> np.ndarray:
     """Scale per state component (length, length * omega, 1, I * omega; inf for the extras, which
-    are outputs, not steered): absolute tolerances are ``rtol`` times this (docs/explanation/numerics.md)."""
+    are outputs, not steered): absolute tolerances are ``rtol`` times this (docs/reference/bench-sim.md)."""
     nb = system.bf.shape[0]
     i_max = system.bf[:, 1:4].max(axis=1, keepdims=True)
     length = system.length_scale
