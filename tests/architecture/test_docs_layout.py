@@ -101,6 +101,13 @@ def test_the_index_lists_every_page_of_the_sections():
     assert unindexed_pages(REPO) == []
 
 
+def test_the_cli_reference_has_every_command():
+    from labkit.cli import COMMANDS
+
+    page = (REPO / "docs" / "reference" / "cli.md").read_text()
+    assert [name for name in COMMANDS if f"`labkit {name}" not in page] == []
+
+
 def _tree(tmp_path: Path, pages: dict[str, str]) -> Path:
     for name, text in {"README.md": "", "docs/README.md": "", **pages}.items():
         (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
