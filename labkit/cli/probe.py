@@ -183,7 +183,8 @@ def probe(args: argparse.Namespace, out=None, err=None, clock: Clock | None = No
 
 
 def watchdog_note(cls: Any, options: dict[str, Any]) -> str:
-    """What the motor controller's own command timeout is and how to switch it on (docs/explanation/safety.md)."""
+    """What the motor controller's own command timeout is and how to switch it on
+    (docs/explanation/safety.md)."""
     builtin = getattr(cls, "builtin_watchdog_ms", None)
     option = getattr(cls, "watchdog_option", None)
     advice = getattr(cls, "watchdog_advice", "")

@@ -113,8 +113,8 @@ def _check_body(keys: _Keys, name: str, body: BodySpec) -> None:
     if tilt_deg > MAX_TILT_DEG:
         raise keys.error(section, "tilt", (
             f"{tilt_deg:g} deg out of the rotation plane: the tilt is measured from the plane the "
-            f"dipole turns in, not from the spin axis (docs/reference/model.md, Eq. 5.25; the paper's rotators: "
-            f"4-6 deg); did you mean {90 - tilt_deg:g} deg? Above {MAX_TILT_DEG:g} deg is refused"))
+            f"dipole turns in, not from the spin axis (docs/reference/model.md, Eq. 5.25; the paper's "
+            f"rotators: 4-6 deg); did you mean {90 - tilt_deg:g} deg? Above {MAX_TILT_DEG:g} deg is refused"))
     sizes = body_sizes(body)
     if sizes is None:
         return

@@ -48,7 +48,8 @@ from labkit.io.clock import Clock
 
 FLOAT = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d{1,3})?"
 
-#: HX711 24-bit two's complement saturation codes (docs/reference/devices-balance.md#line_regex-hx711--arduino-sketches)
+#: HX711 24-bit two's complement saturation codes
+#: (docs/reference/devices-balance.md#line_regex-hx711--arduino-sketches)
 HX711_MAX = 0x7FFFFF
 HX711_MIN = -0x800000
 

@@ -1,5 +1,5 @@
-"""Lutron 16-byte RS-232 stream (docs/reference/devices-tach-motor.md#lutron16-lutron-16-byte-stream): hand-held
-and panel tachometers.
+"""Lutron 16-byte RS-232 stream (docs/reference/devices-tach-motor.md#lutron16-lutron-16-byte-stream):
+hand-held and panel tachometers.
 
 The meter streams continuously at 9600 8N1; the host never writes. One frame is exactly
 16 bytes, D15 first::
