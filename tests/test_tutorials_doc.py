@@ -1,5 +1,6 @@
-"""The tutorials and how-to guides run: every ```console block of docs/tutorials/*.md and
-docs/how-to/*.md, in order, from a folder holding the repository's `recordings/` and `rigs/`.
+"""The tutorials and marked how-to guides run: every ```console block of docs/tutorials/*.md and of
+the docs/how-to/*.md pages that carry ``RUNS_HERE``, in order, from a folder holding the
+repository's `recordings/` and `rigs/`.
 
 A line starting ``$ labkit`` is a command (run as ``python -m labkit``; it must exit 0); the
 lines after it are what it printed, each of which must be a line of its output (a tutorial may
@@ -19,8 +20,10 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 #: docs/tutorials/notebook.md has its own test (tests/cli/test_notebook_doc.py): python cells, not commands
-TUTORIALS = sorted(p for section in ("tutorials", "how-to") for p in (REPO / "docs" / section).glob("*.md")
-                   if "```console" in p.read_text())
+#: the mark of a how-to guide whose console blocks run here (others show long or failing runs)
+RUNS_HERE = "<!-- commands run by tests/test_tutorials_doc.py -->"
+TUTORIALS = sorted([*(p for p in (REPO / "docs" / "tutorials").glob("*.md") if "```console" in p.read_text()),
+                    *(p for p in (REPO / "docs" / "how-to").glob("*.md") if RUNS_HERE in p.read_text())])
 STAMP = re.compile(r"\d{8}-\d{6}")
 SESSION = re.compile(r"sessions/\d{8}-\d{6}-([\w-]+)")
 
