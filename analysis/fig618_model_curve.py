@@ -1,5 +1,5 @@
 """Fig. 6.18 from the model: the critical spin of the shipped emulated-fig618 rig against the
-paper's series 1 and against Eq. 6.37 with the C derived from the rig (docs/twin.md).
+paper's series 1 and against Eq. 6.37 with the C derived from the rig (docs/explanation/twin.md).
 
     python analysis/fig618_model_curve.py [RIG]
 

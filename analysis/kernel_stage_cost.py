@@ -1,5 +1,5 @@
 """Cost of one stage (one force evaluation) of the splitting kernels, per bundled scene:
-the general kernel against the kernel specialised to the scene's shape (docs/simulator.md).
+the general kernel against the kernel specialised to the scene's shape (docs/reference/simulator.md).
 
     python analysis/kernel_stage_cost.py [--cycles 1000] [--repeats 5]
 

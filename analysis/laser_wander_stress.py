@@ -1,5 +1,5 @@
-"""A camera that wanders more than the robustness suite's hard preset (docs/vision.md, *A centre
-that wanders*): eight hard laser cases of the suite, rendered again by the independent renderer
+"""A camera that wanders more than the robustness suite's hard preset (docs/explanation/laser-analysis.md, *A
+centre that wanders*): eight hard laser cases of the suite, rendered again by the independent renderer
 (labkit.footage, unchanged) with the tripod's slow wander raised from 3 px to 9 and 18 px (at
 640 px; scaled with the frame) and its shake from 0.4 to 1 px, then analysed and scored with the
 suite's tolerances.

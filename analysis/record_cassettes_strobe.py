@@ -1,4 +1,4 @@
-"""Regenerate the strobe cassettes under recordings/cassettes/ (docs/devices-strobe.md).
+"""Regenerate the strobe cassettes under recordings/cassettes/ (docs/reference/devices-strobe.md).
 
 * ``strobe-labkit_strobe``: the emulator (``sim://labkit_strobe``) on a plant whose rotor
   turns at 300 Hz, on a virtual clock;

@@ -8,7 +8,7 @@ through ``record://sim://<protocol>?...`` on a virtual clock and writes
 
 The tests replay each cassette through ``replay://`` and must read the same thing.
 To record a real device instead, run the same script on ``record:///dev/ttyUSB0?cassette=...``
-(see docs/devices-tach-motor.md). Usage: ``python analysis/record_cassettes_tach_motor.py``.
+(see docs/reference/devices-tach-motor.md). Usage: ``python analysis/record_cassettes_tach_motor.py``.
 """
 
 from __future__ import annotations

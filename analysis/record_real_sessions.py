@@ -1,5 +1,5 @@
 """Record real-clock sessions the way a lab does, for recordings/sessions/real-* and for the
-faithful-replay acceptance counts (docs/replay.md).
+faithful-replay acceptance counts (docs/explanation/replay.md).
 
     python analysis/record_real_sessions.py [NAME ...] [--out recordings/sessions]
     python analysis/record_real_sessions.py --repeat 10 --out /tmp/acc sweep-5-inprocess
@@ -16,7 +16,7 @@ adapter. Options per recording:
   after the step (1-based) begins.
 
 With ``--replay`` each recording is replayed (``labkit replay``) and the exit status printed,
-which is how the 10-out-of-10 counts in docs/replay.md were made.
+which is how the 10-out-of-10 counts in docs/explanation/replay.md were made.
 """
 
 from __future__ import annotations

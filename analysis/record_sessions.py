@@ -1,5 +1,5 @@
 """Regenerate recordings/sessions/: two recorded sessions per protocol on the emulated rigs
-(their default model plant, docs/twin.md: the balance force and the drop come from the rig
+(their default model plant, docs/explanation/twin.md: the balance force and the drop come from the rig
 file's magnets; the fault recordings add their faults on top).
 
     python analysis/record_sessions.py [--out recordings/sessions]

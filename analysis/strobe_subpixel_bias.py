@@ -1,5 +1,5 @@
 """How far a small blurred body's measured axis strays from the true one, in pixels at its ends
-(docs/vision.md, *Strobe quality verdict*, the tilt-resolution check).
+(docs/reference/vision-verdicts.md, *Strobe quality verdict*, the tilt-resolution check).
 
 Draws random elongated rectangles (half diagonal 10-40 px, width 0.35-0.6 of the length, axis
 within 0.3 rad of image vertical, sub-pixel centre), blurs each with a Gaussian lens of sigma

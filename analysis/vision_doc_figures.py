@@ -1,10 +1,10 @@
-"""Figures of docs/vision.md (laser part): loops and symmetry of Eq. 6.38's patterns, and the
-``--overlay`` picture for an ok, a doubtful and a failed result.
+"""Figures of docs/explanation/laser-analysis.md (laser part): loops and symmetry of Eq. 6.38's patterns, and
+the ``--overlay`` picture for an ok, a doubtful and a failed result.
 
     python analysis/vision_doc_figures.py [OUT_DIR]      # default out/vision-doc-figures
 
-Writes loops-symmetry.png and overlay-{ok,doubtful,failed}.png. The copies docs/vision.md shows
-are committed under docs/img (small PNGs): refresh them with ``... docs/img``.
+Writes loops-symmetry.png and overlay-{ok,doubtful,failed}.png. The copies docs/explanation/laser-analysis.md
+shows are committed under docs/img (small PNGs): refresh them with ``... docs/img``.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """labkit: measure, replay and model polarity-free magnetic repulsion (PFR) rigs.
 
-The flat public face for scripts and notebooks (docs/scripting.md, docs/notebook.md)::
+The flat public face for scripts and notebooks (docs/how-to/script-labkit.md, docs/tutorials/notebook.md)::
 
     import labkit
     rig = labkit.load_rig("rigs/emulated-fig525.toml")
@@ -12,7 +12,7 @@ Every name is imported on first use (PEP 562 ``__getattr__``), so ``import labki
 ``labkit --help`` stay fast. The fit function is ``fit_data``, not ``fit``: ``labkit.fit`` is the
 subpackage of fit models. The package is typed (``py.typed``).
 
-See README.md for the two commands that set up and run it, and docs/DEVELOPING.md for the layout.
+See README.md for the two commands that set up and run it, and docs/explanation/developing.md for the layout.
 """
 
 from __future__ import annotations

@@ -214,7 +214,7 @@ class Interlock(RunDocument):
 @dataclass(frozen=True, kw_only=True)
 class StopFailed(RunDocument):
     """A STOP could not be delivered to these motors (port gone, controller silent): the rotor
-    may still turn, and the person at the rig must cut the motor's power (docs/safety.md)."""
+    may still turn, and the person at the rig must cut the motor's power (docs/explanation/safety.md)."""
 
     type: ClassVar[str] = "stop_failed"
     #: role -> why the STOP did not arrive ("port gone ...")

@@ -1,5 +1,5 @@
 """Errors meant for people: each names what failed, where, and why
-(docs/design/architecture.md#errors-are-for-people).
+(docs/explanation/architecture.md#errors-are-for-people).
 
 The CLI prints ``str(error)`` of any :class:`LabkitError` as one line and exits non-zero;
 no traceback reaches a user for an expected fault.

@@ -1,4 +1,4 @@
-"""User protocols and drivers from installed packages (entry points; docs/plugins.md).
+"""User protocols and drivers from installed packages (entry points; docs/how-to/add-a-protocol.md).
 
 A package declares, in its pyproject.toml::
 

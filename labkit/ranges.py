@@ -1,5 +1,5 @@
 """One range syntax for every option that takes a list of numbers (``--set``, ``--map``,
-``--ratios``, ``--k``; docs/ranges.md):
+``--ratios``, ``--k``; docs/reference/command-grammar.md):
 
 * ``START:STOP:step=S``  START, START+S, ... up to STOP (STOP included when a step lands on it)
 * ``START:STOP:n=N``     N evenly spaced values, both ends included

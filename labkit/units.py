@@ -4,7 +4,7 @@ One definition each, so a rig file, a data table, a driver, an emulator and a pl
 the last bit. :data:`UNIT_SUFFIXES` is the one table of unit suffixes in names: rig-file keys
 (``max_speed_rpm``, via :mod:`labkit.rig.checks`) and the columns of fit tables (``speed_rpm``,
 ``force_gf``, via :func:`column_to_si`) are read with it. ``_g`` is grams of *mass* and
-``_gf`` grams-*force* (docs/rig-files.md, docs/fitting.md).
+``_gf`` grams-*force* (docs/reference/rig-files.md, docs/reference/fitting.md).
 """
 
 from __future__ import annotations

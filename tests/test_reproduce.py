@@ -1,7 +1,7 @@
 """``labkit reproduce``: regression rows against the paper's printed values, and the CLI contract.
 
 Each numeric assertion states the paper value and the tolerance; the reasons are in the row
-notes (printed digits, the paper's quadrature error) and in docs/model.md.
+notes (printed digits, the paper's quadrature error) and in docs/reference/model.md.
 """
 
 import json

@@ -1,4 +1,4 @@
-"""docs/scripting.md runs: every ```python block, in order, in one namespace, from a folder
+"""docs/how-to/script-labkit.md runs: every ```python block, in order, in one namespace, from a folder
 holding the repository's rigs/ and recordings/ (sessions go to a temporary folder), and what
 each prints matches the ```text block after it (words exactly, numbers to a relative 1e-2)."""
 
@@ -12,7 +12,7 @@ import pytest
 from labkit.testing.doc_pages import page_cells, run_page, same_output
 
 REPO = Path(__file__).resolve().parents[1]
-PAGE = REPO / "docs" / "scripting.md"
+PAGE = REPO / "docs" / "how-to" / "script-labkit.md"
 
 
 def snippets() -> list[tuple[str, str | None]]:

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Regenerate the screenshots of the real rerun viewer shown in docs/streams.md and the report
-# figures shown in docs/reports.md. Docs only (not CI). Needs, once, on Debian:
+# Regenerate the screenshots of the real rerun viewer shown in docs/reference/streams.md and the report
+# figures shown in docs/reference/reports.md. Docs only (not CI). Needs, once, on Debian:
 #   apt-get update && apt-get install -y xvfb mesa-vulkan-drivers
 # and the project's venv active (the rerun binary comes with rerun-sdk). Run from the repo root.
 set -euo pipefail

@@ -1,5 +1,5 @@
 // labkit_esc_bridge.ino - drive a hobby ESC from labkit's Pololu SMC driver
-// (protocol: docs/devices-tach-motor.md, PROTOCOLS 3.3)
+// (protocol: docs/reference/devices-tach-motor.md, PROTOCOLS 3.3)
 //
 // USB serial 115200 8N1 in, RC servo pulses out (pin 9, 50 Hz, 1000-2000 us). The sketch
 // speaks a subset of the Pololu Simple Motor Controller compact protocol, so labkit's

@@ -1,4 +1,4 @@
-// labkit_strobe.ino - a stroboscope locked to the rotor (protocol: docs/devices-strobe.md)
+// labkit_strobe.ino - a stroboscope locked to the rotor (protocol: docs/reference/devices-strobe.md)
 //
 // ATmega328P (Uno/Nano, 16 MHz). The rotor's once-per-revolution pulse (active low, e.g. an
 // optical sensor with a pull-up) goes to pin 8 (ICP1, PB0); the LED gate driver to pin 9

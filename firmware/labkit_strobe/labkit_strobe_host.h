@@ -1,5 +1,5 @@
 // labkit_strobe_host.h - the host side of labkit_strobe.ino: commands, status lines, the
-// uptime clock (protocol: docs/devices-strobe.md). Included once, by the sketch, after the
+// uptime clock (protocol: docs/reference/devices-strobe.md). Included once, by the sketch, after the
 // timing code whose variables it reads; kept apart so each file stays readable.
 
 uint32_t incForPeriod = 0;             // the period the increment was computed for

@@ -1,4 +1,4 @@
-// labkit_tach.ino - labkit pulse tachometer (protocol: docs/devices-tach-motor.md, PROTOCOLS 2.3)
+// labkit_tach.ino - labkit pulse tachometer (protocol: docs/reference/devices-tach-motor.md, PROTOCOLS 2.3)
 //
 // An optical (reflective patch) or Hall sensor gives PPR pulses per revolution on pin 2
 // (INT0 on an Uno/Nano). The interrupt time-stamps every pulse with micros(); once per

@@ -123,10 +123,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     strobe = kinds.add_parser(
         "strobe", help="tilt, lateral amplitude and RC offset from strobe video",
-        description="Phase model (docs/vision.md): --rotor-hz with --strobe-hz is a lamp flashing at "
-                    "its own rate, any number of flashes per exposure, filmed at the file's frame rate "
-                    "(or --camera-fps); --rotor-hz alone means no lamp, the camera's short exposure is "
-                    "the strobe; --apparent-hz gives the apparent frequency; nothing: from the footage.")
+        description="Phase model (docs/explanation/strobe-analysis.md): --rotor-hz with --strobe-hz is a "
+                    "lamp flashing at its own rate, any number of flashes per exposure, filmed at the file's "
+                    "frame rate (or --camera-fps); --rotor-hz alone means no lamp, the camera's short "
+                    "exposure is the strobe; --apparent-hz gives the apparent frequency; nothing: from the "
+                    "footage.")
     strobe.add_argument("path", help="stroboscope video")
     strobe.add_argument("--rotor-hz", type=_positive,
                         help="rotor frequency; alone: the camera's exposure is the strobe (Fig. 6.20)")

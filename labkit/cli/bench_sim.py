@@ -98,7 +98,7 @@ def _kernel_section(quick: bool) -> dict:
     # a map-sized batch: numpy's per-call overhead is spread over 1000+ trajectories
     big, _ = stability_map.batch_spec(stability_map.map_points([0.05 * k for k in range(13)] * 8))
     out["large_batch"] = kernels.kernel_timings(big, 1 if quick else 4, 64, repeats=1)
-    # docs/design/numerics-notes.md#targets (T5): a 1e4-point map x 1e3 cycles at 64 steps per period, on
+    # docs/explanation/numerics-notes.md#targets (T5): a 1e4-point map x 1e3 cycles at 64 steps per period, on
     # one core
     out["projected_1e4_points_1e3_cycles_min"] = (
         1e4 * 1e3 * 64 * out["large_batch"]["numba_ns_per_trajectory_step"] * 1e-9 / 60.0
@@ -344,13 +344,13 @@ def _print_kernels(k: dict) -> None:
     print(
         f"projected stability map of 1e4 points x 1e3 cycles (64 steps per period) with it: "
         f"{k['projected_1e4_points_1e3_cycles_min']:.1f} min "
-        "(target T5: 15 min, docs/design/numerics-notes.md#targets)"
+        "(target T5: 15 min, docs/explanation/numerics-notes.md#targets)"
     )
 
 
 def _write_json(path, reports, headline, notes, targets, verdicts, peers, kernel_info, compile_info,
                 quick) -> None:
-    """The ``--json`` document (schema in docs/numerics.md)."""
+    """The ``--json`` document (schema in docs/reference/bench-sim.md)."""
     from labkit.numerics.report import machine
 
     doc = {

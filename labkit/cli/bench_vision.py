@@ -13,7 +13,7 @@ apart, so the ratio for longer clips can be read off.
 renderer :mod:`labkit.footage` (never labkit.synth), rendered on demand into a cache folder,
 analysed by ``labkit.vision`` and scored against their truth; it prints the pass rate per family
 and difficulty, a confusion table of pattern kinds and the cases outside tolerance with verdict
-ok (docs/vision.md, *Independent footage and the robustness suite*).
+ok (docs/explanation/robustness-suite.md, *Independent footage and the robustness suite*).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""A confirmation above a documented size (docs/ranges.md): a plan of more than
+"""A confirmation above a documented size (docs/reference/command-grammar.md): a plan of more than
 :data:`CONFIRM_STEPS` run steps, a ``predict --map`` of more than :data:`CONFIRM_POINTS` points
 (about 1 s each) or a ``sweep`` of more than :data:`CONFIRM_SWEEP_POINTS` (about 10 ms each) asks
 first, so a range typed with the wrong meaning (a step for a count) is seen before it runs.

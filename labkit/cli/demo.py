@@ -2,7 +2,7 @@
 
 Runs the bundled ``emulated-fig525`` rig (motor, tachometer and balance emulated on one
 model plant: the balance force is the PFR the model derives from the rig's magnets and
-geometry, with seeded imperfections; docs/twin.md) through ``speed-sweep``, saves the session
+geometry, with seeded imperfections; docs/explanation/twin.md) through ``speed-sweep``, saves the session
 and prints which plant ran, the measured force against the model's, the fitted exponent and
 how to look at it.
 """
@@ -103,7 +103,7 @@ def print_measured_vs_model(rig: Any, points: list[dict]) -> str:
     from labkit.protocols.quickfit import quick_fit_power_law
     params = params_from_rig(rig)
     print(f"plant: {plant} (model of the rig's magnets: m_R m_F = {params.moment_product:.3g} A^2 m^4, "
-          f"gap {params.gap_m * 1e3:g} mm; docs/twin.md)")
+          f"gap {params.gap_m * 1e3:g} mm; docs/explanation/twin.md)")
     rows = [(p["speed_rpm"], p["speed_rad_s"], p["force_g"]) for p in points if p.get("force_g")]
     print("  speed_rpm  measured_g   model_g   diff")
     model = []

@@ -39,7 +39,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--model", choices=list(FIT_MODELS),
                    help="model to fit (default: the one a session's protocol declares, e.g. "
                    "power-law for a speed sweep, spin-critical for a spin-critical series)")
-    p.add_argument("--x", help="x column (default per model, see docs/fitting.md)")
+    p.add_argument("--x", help="x column (default per model, see docs/reference/fitting.md)")
     p.add_argument("--y", help="y column")
     p.add_argument("--sigma", help="column of y uncertainties (default: <y>_stderr if present)")
     p.add_argument("--series", help="column that splits the data into series (default: 'series')")

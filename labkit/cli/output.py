@@ -112,7 +112,7 @@ def kernel_cache_present() -> bool:
 
 def note_first_compile(command: str) -> None:
     """One line on stderr before the simulator kernels are compiled for the first time (about
-    7-10 s of CPU per kind of scene, measured; numba caches them on disk, docs/simulator.md)."""
+    7-10 s of CPU per kind of scene, measured; numba caches them on disk, docs/reference/simulator.md)."""
     if not kernel_cache_present():
         print(f"labkit {command}: compiling simulator kernels once; cached afterwards "
               "(about 10 s per kind of scene; later runs start at once)", file=sys.stderr, flush=True)

@@ -4,7 +4,7 @@ For each port: device path, description, USB VID:PID, serial number, location, a
 ``hwgrep://`` URL that finds the same adapter again after it re-enumerates (ttyUSB0 today,
 ttyUSB1 tomorrow); put that URL in the rig file's ``port`` key. Cameras (``/dev/video*``,
 with the name the kernel gives them) are listed with a ``v4l2://`` URL asking for MJPEG
-(docs/camera.md).
+(docs/reference/camera.md).
 """
 
 from __future__ import annotations

@@ -183,19 +183,20 @@ def probe(args: argparse.Namespace, out=None, err=None, clock: Clock | None = No
 
 
 def watchdog_note(cls: Any, options: dict[str, Any]) -> str:
-    """What the motor controller's own command timeout is and how to switch it on (docs/safety.md)."""
+    """What the motor controller's own command timeout is and how to switch it on
+    (docs/explanation/safety.md)."""
     builtin = getattr(cls, "builtin_watchdog_ms", None)
     option = getattr(cls, "watchdog_option", None)
     advice = getattr(cls, "watchdog_advice", "")
     if builtin is not None:
         return f"watchdog: built in, the motor stops {builtin:.0f} ms after the last command ({advice})"
     if option is None:
-        return "watchdog: this controller has none labkit knows of; see docs/safety.md"
+        return "watchdog: this controller has none labkit knows of; see docs/explanation/safety.md"
     if option in options:
         return (f"watchdog: declared {option} = {options[option]} ms; labkit cannot read it back over "
                 f"serial, so make sure it is set: {advice}")
     return (f"watchdog: to enable it, {advice}; then add options = {{ {option} = 500 }} to the "
-            "rig file (required for real hardware, docs/safety.md)")
+            "rig file (required for real hardware, docs/explanation/safety.md)")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -1,4 +1,4 @@
-"""Progress lines for jobs that may run longer than about 2 s (docs/vision.md, *Commands*).
+"""Progress lines for jobs that may run longer than about 2 s (docs/reference/vision.md, *Commands*).
 
 :class:`ProgressLines` prints nothing for a short job. Once ``after_s`` has passed it prints one
 line on stderr at most every ``every_s``: ``labkit analyse laser: clip.mp4: 450 of 900 frames

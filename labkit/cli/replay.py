@@ -1,6 +1,6 @@
 """``labkit replay SESSION``: re-run a session's protocol against its own serial cassettes.
 
-Three levels (docs/replay.md): **exact** for a session recorded on the virtual clock (what
+Three levels (docs/explanation/replay.md): **exact** for a session recorded on the virtual clock (what
 the drivers send must match the recording byte for byte; results identical), **faithful**
 for one recorded on the real clock (device bytes at their recorded times, writes matched by
 content; the same decisions and the points within tolerance), chosen from run.json's clock,

@@ -20,7 +20,7 @@ from labkit.protocols.events import FlagTally
 from labkit.protocols.launch import execute, prepare_run
 from labkit.stream import add_rerun_argument
 
-#: exit status when a STOP could not be delivered to a motor controller (docs/safety.md)
+#: exit status when a STOP could not be delivered to a motor controller (docs/explanation/safety.md)
 EXIT_STOP_FAILED = 3
 
 

@@ -68,7 +68,7 @@ def largest_change(before: list[dict[str, Any]], after: list[dict[str, Any]]) ->
 
 def _rewrite_point_events(events: Path, points: list[dict[str, Any]]) -> None:
     """The shrunk session's ``point`` events carry the points its shrunk bytes give (an exact
-    replay holds events.jsonl against the cassettes, docs/replay.md)."""
+    replay holds events.jsonl against the cassettes, docs/explanation/replay.md)."""
     by_step = {p.get("step"): p for p in points}
     lines = []
     for line in events.read_text(encoding="utf-8").splitlines():

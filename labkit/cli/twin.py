@@ -1,6 +1,6 @@
 """``labkit twin RIG``: the virtual twin of a rig file, measured with labkit's own instruments.
 
-Builds the model plant from RIG's magnets and geometry (docs/twin.md), runs the Fig. 5.25 speed
+Builds the model plant from RIG's magnets and geometry (docs/explanation/twin.md), runs the Fig. 5.25 speed
 sweep and the Fig. 6.18 spin-critical protocol on it through the emulated devices, renders
 laser-trace and stroboscope clips of the model's floator motion (labkit.footage) and analyses
 them (labkit.vision), fits, and writes OUT/twin-report.md and OUT/twin-report.json: every

@@ -9,7 +9,7 @@ the motor on :meth:`stop`, at the end of a ``with`` block (also on an exception)
 the rig closes.
 
 The driver itself is still there for tests and bring-up, explicitly and without any of the
-above: ``handle.raw_driver`` (docs/safety.md).
+above: ``handle.raw_driver`` (docs/explanation/safety.md).
 """
 
 from __future__ import annotations

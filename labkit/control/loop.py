@@ -312,7 +312,7 @@ class SpeedControl:
 def duty_cap(max_duty: float, max_speed_rad_s: float, full_speed_rad_s: float) -> float:
     """The highest duty a loop may command: the rig's ``max_duty``, and no more than the duty
     whose feed-forward speed ``duty * full_speed`` is the rig's ``max_speed``, so a tachometer
-    that reads low cannot drive the rotor past the limit (docs/safety.md, "Sensor faults")."""
+    that reads low cannot drive the rotor past the limit (docs/explanation/safety.md, "Sensor faults")."""
     if full_speed_rad_s <= 0:
         return max_duty
     return min(max_duty, max_speed_rad_s / full_speed_rad_s)
@@ -327,7 +327,7 @@ def unreachable_target(rig: Any, target_rad_s: float) -> str | None:
 
 
 def plausibility_settings(control: Any) -> plaus.PlausibilitySettings:
-    """The rig's ``[control]`` plausibility keys (docs/rig-files.md)."""
+    """The rig's ``[control]`` plausibility keys (docs/reference/rig-files.md)."""
     return plaus.PlausibilitySettings(
         full_speed_rad_s=control.full_speed_rad_s, motor_tau_s=control.motor_tau_s,
         ratio=control.plausible_ratio, slack_rad_s=control.plausible_slack_rad_s,

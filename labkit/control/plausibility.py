@@ -45,7 +45,7 @@ from labkit.units import rad_s_to_rpm
 
 @dataclass(frozen=True)
 class PlausibilitySettings:
-    """The band a reading must stay in (rig file ``[control]``, docs/rig-files.md)."""
+    """The band a reading must stay in (rig file ``[control]``, docs/reference/rig-files.md)."""
 
     full_speed_rad_s: float               # feed-forward: the speed at duty 1
     motor_tau_s: float = 0.4              # the motor's mechanical time constant

@@ -1,4 +1,4 @@
-"""Stopping one motor, the step every safe-state path repeats (docs/safety.md)."""
+"""Stopping one motor, the step every safe-state path repeats (docs/explanation/safety.md)."""
 
 from __future__ import annotations
 

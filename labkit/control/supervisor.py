@@ -20,7 +20,7 @@ on a rig with a real motor port forks (docs/decisions/0012-safe-exit-supervisor-
   as a stop request, which it passes on like SIGTERM;
 * below both, the controller's own command timeout (``options.command_timeout_ms`` /
   ``timeout_ms``, required for real hardware by the rig file) stops the motor if the whole
-  machine goes (docs/safety.md).
+  machine goes (docs/explanation/safety.md).
 """
 
 from __future__ import annotations

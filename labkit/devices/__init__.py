@@ -1,5 +1,5 @@
-"""labkit.devices: one small driver class per real protocol (docs/devices-balance.md,
-docs/devices-tach-motor.md).
+"""labkit.devices: one small driver class per real protocol (docs/reference/devices-balance.md,
+docs/reference/devices-tach-motor.md).
 
 A driver takes an *open* port (:func:`labkit.io.open_port`) and a clock and returns
 :class:`Reading` s (SI inside; ``flags`` say what else the driver noticed, ``raw`` the bytes).

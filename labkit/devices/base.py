@@ -37,7 +37,7 @@ READING_FLAGS: dict[str, tuple[bool, str]] = {
 
 @dataclass(frozen=True)
 class Reading:
-    """One measurement, SI inside (docs/design/architecture.md#si-inside).
+    """One measurement, SI inside (docs/explanation/architecture.md#si-inside).
 
     ``t`` is the clock time (s) at which the bytes were received; ``quantity`` is e.g.
     ``"force"``, ``"mass"``, ``"angular_speed"``; ``value`` is in ``unit`` (SI: N, kg,

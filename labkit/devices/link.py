@@ -1,4 +1,4 @@
-"""The one transport layer between a serial port and the drivers (issue 12, docs/DEVELOPING.md).
+"""The one transport layer between a serial port and the drivers (issue 12, docs/explanation/developing.md).
 
 Disconnect, timeout and resync are handled here once, with the messages drivers have always
 given (tests/devices pins them):

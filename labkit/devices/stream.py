@@ -4,7 +4,7 @@ A :class:`StreamReader` owns one port's input. ``pump()`` reads whatever bytes a
 (never waiting), cuts them into frames with a framer and hands each frame with its
 receive time to a callback. On a real clock a periodic job (its own thread) pumps
 continuously, so a slow motor write never blocks a fast sensor
-(docs/design/architecture.md#streaming-devices); on a
+(docs/explanation/architecture.md#streaming-devices); on a
 virtual clock the clock runs the same job while time advances, so replay is deterministic.
 """
 

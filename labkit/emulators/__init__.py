@@ -1,4 +1,4 @@
-"""labkit.emulators: byte-level stand-ins for the devices, on seeded plants (docs/io.md).
+"""labkit.emulators: byte-level stand-ins for the devices, on seeded plants (docs/reference/io.md).
 
 Importing this package registers the ``sim://`` URL handler with pyserial
 (``serial.protocol_handler_packages``), so :func:`labkit.io.open_port` opens

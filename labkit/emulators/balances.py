@@ -15,7 +15,7 @@ Options (sim:// query or rig file): ``unit`` (g, or N where the device can), ``d
 A&D also ``mode=stream``, ``ack=0|1``; HX711 ``preset``, ``calibration`` (counts/g for
 ``unit=raw``), ``startup_s``, ``tare_s``.
 
-Fault knobs besides the common ones (docs/design/device-rules.md#emulator-faults): ``overload`` /
+Fault knobs besides the common ones (docs/explanation/device-rules.md#emulator-faults): ``overload`` /
 ``underload``
 (probability per weight reply), ``unstable`` (probability a reply is forced dynamic),
 ``error_reply`` (probability a command gets ``EL`` / ``EC,E02``), ``reset_at`` (s after

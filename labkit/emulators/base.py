@@ -4,9 +4,9 @@ An :class:`Emulator` sees the host's bytes (``receive``) and produces the device
 (``emit``) as a function of clock time, so the same object can sit behind a ``sim://``
 port (virtual or real clock) or a pseudo-terminal (``labkit emulate``). Emulators carry
 their *own* formatting code: they must not share parsing code with the drivers in a way
-that would hide a protocol bug (docs/design/architecture.md#emulators-speak-the-bytes).
+that would hide a protocol bug (docs/explanation/architecture.md#emulators-speak-the-bytes).
 
-Faults are switchable and seeded (docs/design/device-rules.md#emulator-faults), given as
+Faults are switchable and seeded (docs/explanation/device-rules.md#emulator-faults), given as
 ``faults=name:value,...`` in
 the ``sim://`` URL and parsed by :func:`parse_faults`. Every emulator understands the common
 ones handled here; protocol-specific ones are documented on each emulator.
@@ -22,7 +22,7 @@ from typing import Any, ClassVar
 from labkit.emulators.plant import RigPlant
 
 #: pyserial's POSIX message when a USB adapter is unplugged mid-read
-#: (docs/design/device-rules.md#unplugged-adapters)
+#: (docs/explanation/device-rules.md#unplugged-adapters)
 DISCONNECT_MESSAGE = (
     "device reports readiness to read but returned no data "
     "(device disconnected or multiple access on port?)"

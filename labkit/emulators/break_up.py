@@ -15,7 +15,7 @@ C of Eq. 6.37 is ``(tau_C cos phi + tau_S sin phi) / (I sin phi)`` at the break-
 Without spin (k = -1) that is Eq. 5.69 = Eq. 5.35: ``C = omega_0^2`` up to the lateral circle.
 Eq. 6.37's empirical factor ``(1 - omega/w_ref)`` then has to hold at the first point of the
 series (v = 0 at omega_0), so the law's C is ``C_def / (1 - omega_0 / w_ref)``: the plant traps
-from the model's own omega_0. docs/twin.md compares this with the model's whole critical-spin
+from the model's own omega_0. docs/explanation/twin.md compares this with the model's whole critical-spin
 curve.
 
 A rig file may fix the cone angle instead (``[geometry] break_phi_rad``, the earlier plant

@@ -3,7 +3,7 @@
 Presets ``model-fig525`` (balance force of the Fig. 5.25 set-up) and ``model-fig618``
 (spin-up and drop of Fig. 6.18) derive what the emulated instruments see from the rig file's
 magnets and geometry (:mod:`labkit.emulators.twin_model`), where the presets ``fig525`` and
-``fig618`` type in the paper's fitted laws. Seeded imperfection knobs (docs/twin.md):
+``fig618`` type in the paper's fitted laws. Seeded imperfection knobs (docs/explanation/twin.md):
 
 * ``vibration_g`` - the rotor's unbalance shakes the balance: a force ``vibration_g *
   (w / w_vib_ref)^2 * sin(w t + phase)`` on top of the PFR, sampled by the load cell (it

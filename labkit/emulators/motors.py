@@ -4,7 +4,8 @@ motor emulator shares (the VESC is in :mod:`labkit.emulators.vesc_emulator`).
 Each turns the host's commands into duty on the shared plant
 (``plant.set_duty(duty, t, name=<option motor, default "rotor">)``) and answers queries
 from the plant's state. They parse and format bytes with their own code, independent of
-the drivers (docs/devices-tach-motor.md#protocols, docs/design/device-rules.md#emulator-faults).
+the drivers (docs/reference/devices-tach-motor.md#protocols,
+docs/explanation/device-rules.md#emulator-faults).
 
 Fault knobs besides the common ones (garbage, split, drop_reply, delay, disconnect_at,
 reconnect_after, wrong_baud):

@@ -9,7 +9,7 @@ Plain plants (presets ``fig525``, ``fig618`` and any other name) type in the pap
 laws: the balance force of Fig. 5.25, ``grams = 224e6 * rpm**-1.9`` (a PFR force falling
 roughly as omega^-2, Eq. 5.81). The shipped emulated rigs use the model plant instead
 (presets ``model-fig525``, ``model-fig618``; :mod:`labkit.emulators.model_plant`,
-docs/twin.md), which derives both from the rig file's magnets.
+docs/explanation/twin.md), which derives both from the rig file's magnets.
 
 The spin-critical plant of Fig. 6.18 (:class:`FloatorPlant`, preset ``fig618``): a floator
 held in the bound state spins up about its dipole axis and drops when its spin reaches the

@@ -1,5 +1,5 @@
 """The labkit stroboscope's emulator (``sim://labkit_strobe``, ``firmware/labkit_strobe``,
-docs/devices-strobe.md): status lines about the plant's rotor, written with its own
+docs/reference/devices-strobe.md): status lines about the plant's rotor, written with its own
 formatting code (none shared with the driver).
 
 It follows ``plant.tach_reading(t, source)`` (``source=rotor`` by default, any motor of the
@@ -14,7 +14,7 @@ over T/4, ``R`` offset over 1/4 revolution per flash, ``N`` (fault ``noisy``).
 Options: ``rate_hz`` (1), ``offset_hz`` (0.5), ``width_us`` (20), ``divider`` (1): the
 power-on settings; ``boot_s`` (0.2: bootloader after the DTR reset of opening the port),
 ``version`` (1.0), ``source`` (rotor). Faults besides the common ones
-(docs/design/device-rules.md#emulator-faults): ``noisy`` (probability per line of a
+(docs/explanation/device-rules.md#emulator-faults): ``noisy`` (probability per line of a
 rejected noise pulse), ``error_reply``, ``reset_at``, ``stop_at``, ``mid_frame``.
 """
 

@@ -6,7 +6,7 @@ Both read the shared plant: ``source=rotor`` (default; any motor name of the pla
 bytes with their own formatting code (no code shared with the drivers).
 
 Fault knobs besides the common ones of :mod:`labkit.emulators.base`
-(docs/design/device-rules.md#emulator-faults):
+(docs/explanation/device-rules.md#emulator-faults):
 
 * ``overload`` - Lutron: over-range frames; labkit-tach: every line flagged ``O``.
 * ``mid_frame`` - the first bytes after open are the tail of a frame/line.
@@ -139,10 +139,10 @@ class _StreamingTachEmulator(Emulator):
 @register_emulator
 class Lutron16Emulator(_StreamingTachEmulator):
     """A Lutron-format tachometer display streaming 16-byte frames
-    (docs/devices-tach-motor.md#lutron16-lutron-16-byte-stream).
+    (docs/reference/devices-tach-motor.md#lutron16-lutron-16-byte-stream).
 
     Options: ``rate_hz`` (1), ``annunciator`` (two digits, default ``00``: the real RPM code
-    is model-specific, docs/design/device-rules.md#open-on-real-hardware), ``display`` (``1``),
+    is model-specific, docs/explanation/device-rules.md#open-on-real-hardware), ``display`` (``1``),
     ``noise_rpm`` (Gaussian, 0),
     ``no_target`` (``zero`` or ``hold``: what the meter shows when the beam sees nothing).
     Resolution follows the DT-2236 class: 0.1 RPM below 10 000, 1 RPM up to 99 999, then
@@ -179,7 +179,7 @@ class Lutron16Emulator(_StreamingTachEmulator):
 @register_emulator
 class LabkitTachEmulator(SketchLines, _StreamingTachEmulator):
     """The labkit Arduino pulse tachometer
-    (docs/devices-tach-motor.md#labkit_tach-the-labkit-pulse-tachometer-labkit-defined,
+    (docs/reference/devices-tach-motor.md#labkit_tach-the-labkit-pulse-tachometer-labkit-defined,
     ``firmware/labkit_tach``).
 
     Emulates the firmware's period method: pulse edges at ``ppr`` per revolution are
@@ -333,7 +333,7 @@ class LabkitTachEmulator(SketchLines, _StreamingTachEmulator):
 @register_emulator
 class MonarchEmulator(_StreamingTachEmulator):
     """A Monarch panel tachometer (ACT-3X class) answering ``@`` commands
-    (docs/devices-tach-motor.md#monarch_at-monarch--commands-act-1b-act-3x-f2a1x-tier-2).
+    (docs/reference/devices-tach-motor.md#monarch_at-monarch--commands-act-1b-act-3x-f2a1x-tier-2).
 
     ``@PI`` -> product and firmware lines, ``@D0`` -> one value line, ``@D1``/``@D2`` ->
     ``OK`` and start/stop continuous display data (``rate_hz``, default 2: the display

@@ -8,11 +8,11 @@
   steady state of :func:`labkit.model.floator_equilibrium.steady_state` - the floator's cone
   (Eq. 5.7) plus its lateral circle (Sec. 5.2), z held as by the balance - i.e. the
   cycle-averaged force of the converged periodic motion the simulator settles into
-  (docs/model.md). The balance carries the rotator and is tared with the rotor at rest, so it
+  (docs/reference/model.md). The balance carries the rotator and is tared with the rotor at rest, so it
   reads the repulsive PFR part (Eq. 5.84's cyclic term); the static attraction of a tilted
   rotator (Eq. 5.85) does not depend on speed and goes into the tare. Between table nodes the
   force is interpolated (cubic Hermite in log-log); :func:`table_error` measures that error against fresh
-  steady-state solves (docs/twin.md quotes it).
+  steady-state solves (docs/explanation/twin.md quotes it).
 * C of Eq. 6.37 for the Fig. 6.18 floator: :func:`labkit.emulators.break_up.break_up` derives
   the break-up (speed, height, cone angle) from the same magnets through Eq. 6.33-6.34.
 """

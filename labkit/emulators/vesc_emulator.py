@@ -1,6 +1,6 @@
 """The VESC emulator (``sim://vesc``): UART packets, GET_VALUES in the layout of the
 firmware version it announces, SET_* commands driving the shared plant, the 1 s
-communication timeout (docs/devices-tach-motor.md#vesc-vesc-uart-packets; fault knobs in
+communication timeout (docs/reference/devices-tach-motor.md#vesc-vesc-uart-packets; fault knobs in
 :mod:`labkit.emulators.motors`).
 """
 

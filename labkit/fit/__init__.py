@@ -1,4 +1,4 @@
-"""Fitting measurements against the PFR model, with uncertainties (see docs/fitting.md).
+"""Fitting measurements against the PFR model, with uncertainties (see docs/reference/fitting.md).
 
 Public entry points:
 

@@ -2,7 +2,7 @@
 
 Plain frozen data; :meth:`FitResult.to_json` gives the per-series object of the
 ``labkit fit --json`` schema ``{"params": {P: {"value", "stderr", "ci95"}}, "n",
-"rms_residual", "warnings"}`` (plus a few extra keys documented in docs/fitting.md).
+"rms_residual", "warnings"}`` (plus a few extra keys documented in docs/reference/fitting.md).
 """
 
 from __future__ import annotations

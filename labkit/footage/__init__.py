@@ -1,6 +1,6 @@
 """An independent camera-model renderer of test footage (laser traces and stroboscope clips) with
-exact ground truth, for the robustness suite (docs/vision.md, *Independent footage and the
-robustness suite*). It shares no code with :mod:`labkit.synth` and never imports
+exact ground truth, for the robustness suite (docs/explanation/robustness-suite.md, *Independent footage and
+the robustness suite*). It shares no code with :mod:`labkit.synth` and never imports
 :mod:`labkit.vision`: the geometry comes from the motion (:mod:`labkit.sim`, or a kinematic
 precession + nutation model and Eq. 5.97's swing), the mirror law and a camera model.
 """

@@ -8,7 +8,7 @@ The screen may be tilted by ``tilt_deg`` about its x axis (its normal leaning to
 circular cone of reflected rays draws an exact ellipse (a conic section). The camera looks at the
 screen square on: screen millimetres map to pixels by a similarity (scale ``1 / mm_per_px``,
 rotation ``roll_deg``, the hole at ``hole_px``), which keeps circles, ellipses and trochoids what
-they are. See docs/vision.md, *Independent footage and the robustness suite*.
+they are. See docs/explanation/robustness-suite.md, *Independent footage and the robustness suite*.
 """
 
 from __future__ import annotations

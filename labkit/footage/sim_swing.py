@@ -1,5 +1,5 @@
-"""The stroboscope's body motion as :mod:`labkit.sim` integrates it (docs/vision.md, *What the
-renderer models*).
+"""The stroboscope's body motion as :mod:`labkit.sim` integrates it (docs/explanation/robustness-suite.md,
+*What the renderer models*).
 
 :class:`SimulatedSwing` stands in for the kinematic :class:`~labkit.footage.strobe_scene.Swing`
 (Eq. 5.97 with a sinusoidal tilt). It takes a free floator bound beneath a spinning rotator (point

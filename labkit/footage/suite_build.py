@@ -1,5 +1,5 @@
 """Turn a suite :class:`~labkit.footage.suite.CaseSpec` into a renderer shot: every parameter not
-in the spec is drawn from its seed, in ranges set by its difficulty (see docs/vision.md,
+in the spec is drawn from its seed, in ranges set by its difficulty (see docs/explanation/robustness-suite.md,
 *Independent footage and the robustness suite*, for the table)."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""labkit.io: time and transport (docs/io.md). It knows no emulator and no driver.
+"""labkit.io: time and transport (docs/reference/io.md). It knows no emulator and no driver.
 
 * :mod:`labkit.io.clock` - ``Clock``, ``RealClock``, ``VirtualClock``, ``current_clock``, ``use_clock``.
 * :mod:`labkit.io.ports` - ``open_port(url, *, clock=None, **serial_settings)``; registers the

@@ -1,5 +1,5 @@
 """Cassettes: what went over one serial port, byte-exact, as JSON lines
-(docs/design/architecture.md#cassettes).
+(docs/explanation/architecture.md#cassettes).
 
 Line 1 is a header::
 

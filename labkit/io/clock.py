@@ -1,4 +1,4 @@
-"""Injected time (docs/design/architecture.md#injected-time): every wait, settle, ramp and timeout goes
+"""Injected time (docs/explanation/architecture.md#injected-time): every wait, settle, ramp and timeout goes
 through a Clock.
 
 * :class:`RealClock` is ``time.monotonic`` and real sleeps; periodic jobs run on threads.

@@ -1,5 +1,5 @@
 """Opening ports from URLs: the one seam between drivers and wires
-(docs/design/architecture.md#the-port-url-is-the-seam).
+(docs/explanation/architecture.md#the-port-url-is-the-seam).
 
 ``open_port(url, clock=..., baudrate=..., timeout=...)`` accepts everything
 ``serial.serial_for_url`` does (device paths, ``socket://``, ``loop://``, ``hwgrep://``, pty

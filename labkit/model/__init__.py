@@ -7,7 +7,7 @@ Modules: :mod:`dipole` (Eq. 4.1-4.5), :mod:`cone` (Eq. 5.5-5.35, 5.58, 5.62-5.68
 linear stability), :mod:`planar` (Eq. 5.56 periodic orbits), :mod:`one_dof` (Eq. 5.484),
 :mod:`tilted_cone` (off-axis orbits of Fig. 5.4/5.6), :mod:`floator_equilibrium` (floator over
 a tilted rotating dipole: co-rotating steady state and the Eq. 5.85 force parts).
-See docs/model.md.
+See docs/reference/model.md.
 """
 
 from labkit.model.cone import cone_angle, cone_angle_spin, cone_angles_axisymmetric

@@ -5,7 +5,7 @@ Public interface::
     from labkit.numerics import work_precision, reference, run_stress_cases, Ladder
     report = work_precision("conical_5_1", cycles=20, ladder=Ladder.quick())
     verdicts = run_stress_cases(quick=True)          # S1-S11, each met / not met
-    # (the stress cases: docs/numerics.md#stress-cases)
+    # (the stress cases: docs/reference/bench-sim.md#stress-cases)
 
 Sweeps (stability maps) live in :mod:`labkit.numerics.sweep`; the batch kernels in
 :mod:`labkit.numerics.kernels`. ``labkit bench sim`` and ``labkit sweep`` are the commands.

@@ -3,7 +3,7 @@
 For each candidate composition (order 4, 6 and 8; all symplectic, so the invariant stays
 bounded whichever is chosen) a short pilot run estimates the error constant: the run at ``N``
 and at ``2N`` steps per period over a few cycles give ``e(N) ~ |y_N - y_2N| 2^p / (2^p - 1)``
-(Richardson) in the stroboscopic error of docs/numerics.md. A splitting's phase error grows
+(Richardson) in the stroboscopic error of docs/reference/bench-sim.md. A splitting's phase error grows
 linearly with time, so over ``C`` cycles ``e ~ K C N^-p``; the step count that reaches the
 target is ``N = N_pilot (e_C(N_pilot) / target)^(1/p)`` with a safety factor, and the method
 with the fewest force evaluations (stages x N) is chosen. The estimate is printed with the run;
@@ -24,7 +24,7 @@ from labkit.sim.integrators.splitting import COMPOSITIONS
 CANDIDATES = ("splitting4", "kahanli6", "kahanli8")
 PILOT_CYCLES = 4.0
 SAFETY = 2.0  # aim this much below the target
-ROUND_OFF = 1e-15  # per step (~1e-10 after 50 cycles of 2048 steps, docs/numerics.md)
+ROUND_OFF = 1e-15  # per step (~1e-10 after 50 cycles of 2048 steps, docs/reference/bench-sim.md)
 
 
 @dataclass

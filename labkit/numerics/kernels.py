@@ -3,7 +3,7 @@
 The scene family is the paper's Sec. 5.1-5.1.6 problem: an axisymmetric body (radial moment
 ``I_R``, axial ``I_A``, dipole on the symmetry axis) turning about its fixed CM in the uniform
 field ``B = B_C [-sin th, cos th, 0] + B_S z``, ``th = omega t + phase`` (Eq. 5.21). It is
-integrated **nondimensionally** (docs/design/numerics-notes.md#scaling): time ``s = omega t``, angular
+integrated **nondimensionally** (docs/explanation/numerics-notes.md#scaling): time ``s = omega t``, angular
 momentum
 ``l = L / (I_R omega)``, torque coefficients ``j_C = tau_C / (I_R omega^2)`` and
 ``j_S = tau_S / (I_R omega^2)`` (Eq. 5.22), inertia ratio ``a = I_A / I_R``. So a 5 mg fragment
@@ -21,7 +21,7 @@ Two implementations of the same arithmetic, measured against each other by
 * :func:`run_batch_numpy`: vectorised numpy over the batch (structure of arrays, lock-step).
 
 Both return the stroboscopic zenith angle of the dipole (Eq. 5.7's ``phi``) and the
-Jacobi-type invariant ``K = T + U - omega J_z`` (docs/design/numerics-notes.md#the-jacobi-constant) in
+Jacobi-type invariant ``K = T + U - omega J_z`` (docs/explanation/numerics-notes.md#the-jacobi-constant) in
 units of ``I_R omega^2``.
 """
 

@@ -1,9 +1,9 @@
-"""Error metrics of a run against a reference (docs/numerics.md#error-metrics), as pure functions.
+"""Error metrics of a run against a reference (docs/reference/bench-sim.md#error-metrics), as pure functions.
 
 Errors are taken on stroboscopic samples only, at exact multiples of the drive period T
-(docs/design/numerics-notes.md#unequal-moments-and-the-fig-57-artefact: anything else aliases). The state
+(docs/explanation/numerics-notes.md#unequal-moments-and-the-fig-57-artefact: anything else aliases). The state
 is made dimensionless per component so that
-one number compares tiny fast bodies and big slow ones (docs/design/numerics-notes.md#scaling): each
+one number compares tiny fast bodies and big slow ones (docs/explanation/numerics-notes.md#scaling): each
 body's dipole
 direction (a unit vector; the body z axis if it has no dipole), its angular velocity over the
 drive's omega, position over the scene's length scale and velocity over length scale * omega.
@@ -112,7 +112,7 @@ def drift_growth(values: np.ndarray, split: float = 0.1) -> float:
     """max |dK| over the whole run over max |dK| over its first ``split`` fraction.
 
     Bounded (non-secular) error gives ~1; linear drift gives ~1/split
-    (docs/design/numerics-notes.md#targets, T1: <= 3).
+    (docs/explanation/numerics-notes.md#targets, T1: <= 3).
     """
     v = np.asarray(values, dtype=float)
     if len(v) < 10 or not np.all(np.isfinite(v)):
@@ -127,7 +127,7 @@ def drift_growth(values: np.ndarray, split: float = 0.1) -> float:
 def observed_order(steps: list[float], errors: list[float], lo: float = 1e-13, hi: float = 1e-2) -> float:
     """Observed order from a step sweep: median of the pairwise slopes ``log(e_i/e_j)/log(N_j/N_i)``
     of consecutive points whose errors lie in the asymptotic window [lo, hi]
-    (docs/design/numerics-notes.md#error-metrics)."""
+    (docs/explanation/numerics-notes.md#error-metrics)."""
     pts = sorted((n, e) for n, e in zip(steps, errors, strict=True) if math.isfinite(e) and lo <= e <= hi)
     slopes = [
         math.log(e0 / e1) / math.log(n1 / n0)

@@ -3,7 +3,7 @@
 The peer is CyRK's C++ DOP853 with a numba right-hand side (``cyrk-dop853``,
 :mod:`labkit.sim.integrators.compiled_reference`); scipy's DOP853 runs the same compiled
 right-hand side from Python. Both are measured in the same work-precision sweep as labkit's
-splittings (same reference, same stroboscopic error, docs/numerics.md), and compared:
+splittings (same reference, same stroboscopic error, docs/explanation/numerics.md), and compared:
 
 * **cost at equal error**: peer wall time / labkit wall time at every error target 1e-4 ... 1e-10
   that both reach (labkit: its cheapest splitting at that target; Pareto interpolation);

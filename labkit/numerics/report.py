@@ -62,7 +62,7 @@ def scene_lines(rep: SceneReport) -> list[str]:
 
 
 def verdict_lines(verdicts: list[Verdict]) -> list[str]:
-    lines = ["stress cases (docs/numerics.md#stress-cases):"]
+    lines = ["stress cases (docs/reference/bench-sim.md#stress-cases):"]
     for v in verdicts:
         label = f"{v.name} ({v.id})" if v.name else v.id
         lines.append(f"  {label:<36} {'met    ' if v.met else 'NOT MET'}  {v.case}")

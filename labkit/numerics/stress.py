@@ -1,9 +1,9 @@
-"""Stress cases of docs/numerics.md, each run with the simulator's default integrator
+"""Stress cases of docs/reference/bench-sim.md, each run with the simulator's default integrator
 (splitting4, automatic step) and judged by its pass criterion, printed as met or not met.
 
 Every case has a descriptive name (``conical-exact``, ``two-body-bound-state``, ...) and keeps
-its number from docs/numerics.md#stress-cases (``S1`` ... ``S11``) as an alias: both are printed, and
-``labkit bench sim --stress`` takes either. The cases live in :mod:`labkit.numerics.stress_cases`.
+its number from docs/reference/bench-sim.md#stress-cases (``S1`` ... ``S11``) as an alias: both are printed,
+and ``labkit bench sim --stress`` takes either. The cases live in :mod:`labkit.numerics.stress_cases`.
 
 A case that raises is a verdict with ``met = False`` and the error as its detail: a failing
 case is shown, never dropped. Horizons are shorter with ``quick`` (and ``smoke``); where a criterion is stated

@@ -9,7 +9,7 @@ on disk (a torn last line is ignored and its points are run again).
 Where the chunks run:
 
 * by default in this process, one chunk after the other
-(docs/design/numerics-notes.md#one-process-by-default: on a 2-core machine a
+(docs/explanation/numerics-notes.md#one-process-by-default: on a 2-core machine a
   process pool buys ~1.0x; the batch kernel is what makes a sweep fast);
 * ``workers > 1``: a local process pool;
 * ``scheduler="tcp://host:8786"``: a ``dask.distributed`` cluster (optional dependency
@@ -23,7 +23,7 @@ so that the slots finish together, and at least ``MIN_CHUNK`` points, so that a 
 scheduling round trip is small against its work. Dask queues root tasks on its scheduler and
 hands a worker about one at a time: with 16-point tasks of ~45 ms its workers waited for a
 round trip between tasks and a 16-worker cluster ran at half the speed of a local pool
-(docs/numerics.md, *Sweeps on a cluster*).
+(docs/how-to/run-a-stability-sweep.md, *Sweeps on a cluster*).
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Work-precision: error against run time for every integrator of :mod:`labkit.sim`.
 
-Follows DiffEqDevTools / CyRK practice (docs/design/numerics-notes.md#work-precision-reports):
+Follows DiffEqDevTools / CyRK practice (docs/explanation/numerics-notes.md#work-precision-reports):
 
 * a **cross-checked reference**: the default splitting at a large step count and scipy DOP853
   at a tight tolerance must agree (T8: to 1e-10) before any error is published; their
@@ -29,7 +29,7 @@ from labkit.sim.integrators.splitting import COMPOSITIONS
 from labkit.sim.result import SimResult
 
 TARGETS = (1e-4, 1e-6, 1e-8, 1e-10)
-REFERENCE_AGREEMENT = 1e-10  # docs/design/numerics-notes.md#targets (T8)
+REFERENCE_AGREEMENT = 1e-10  # docs/explanation/numerics-notes.md#targets (T8)
 REFERENCE_STEPS = 512
 REFERENCE_RTOL = 1e-12
 REPEAT_BELOW_S = 0.3  # runs shorter than this are repeated and the minimum kept
@@ -100,7 +100,7 @@ class Point:
 @dataclass
 class Reference:
     """The reference run and how well independent methods agree with it
-    (docs/design/numerics-notes.md#targets, T8)."""
+    (docs/explanation/numerics-notes.md#targets, T8)."""
 
     result: SimResult
     other: SimResult

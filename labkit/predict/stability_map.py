@@ -25,7 +25,8 @@ class MapSpecError(ValueError):
     """A ``--map`` axis that cannot be read."""
 
 
-#: values per --map axis (the product of the axes is confirmed above CONFIRM_POINTS, docs/ranges.md)
+#: values per --map axis (the product of the axes is confirmed above CONFIRM_POINTS,
+#: docs/reference/command-grammar.md)
 MAX_AXIS_VALUES = 10_000
 
 

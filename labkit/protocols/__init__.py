@@ -1,4 +1,4 @@
-"""Measurement protocols and their runner (see runner.py, events.py, docs/protocols.md)."""
+"""Measurement protocols and their runner (see runner.py, events.py, docs/reference/protocols.md)."""
 
 from __future__ import annotations
 

@@ -3,8 +3,8 @@ its step, its quick fit and what it declares about its data) and the :class:`Ste
 
 The runner (:mod:`labkit.protocols.runner`) runs one; its declarations (``bounds``, ``row``,
 ``hints``: :mod:`labkit.hints`, :mod:`labkit.protocols.declaration`) go into the run's start
-document, where the live view and the report read them (docs/protocols.md, docs/plugins.md,
-ADR 0021).
+document, where the live view and the report read them (docs/reference/protocols.md,
+docs/how-to/add-a-protocol.md, ADR 0021).
 """
 
 from __future__ import annotations

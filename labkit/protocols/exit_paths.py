@@ -1,5 +1,5 @@
 """The run's exit paths beyond the protocol's own code: stop signals, a session that cannot
-be written, a STOP that could not be delivered (docs/safety.md).
+be written, a STOP that could not be delivered (docs/explanation/safety.md).
 """
 
 from __future__ import annotations

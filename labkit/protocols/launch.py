@@ -226,7 +226,8 @@ def replay_url(session: Path, role: str) -> str:
 #: Derived numbers (fits) may differ between CPUs in their last digits: BLAS and LAPACK pick
 #: different kernels per instruction set, and a fit sums in a different order. Recorded bytes,
 #: readings and points are compared exactly; values under a derived key (``fit``) are equal when
-#: ``|a - b| <= REPLAY_FIT_RTOL * max(|a|, |b|) + REPLAY_FIT_ATOL`` (documented in docs/protocols.md).
+#: ``|a - b| <= REPLAY_FIT_RTOL * max(|a|, |b|) + REPLAY_FIT_ATOL`` (documented in
+#: docs/reference/protocols.md).
 REPLAY_FIT_RTOL = 1e-6
 REPLAY_FIT_ATOL = 1e-12
 DERIVED_KEYS = frozenset({"fit"})

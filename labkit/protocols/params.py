@@ -7,7 +7,7 @@ Keys keep their unit suffix (``speeds_rpm``); protocols convert to SI.
 Every number must be finite (``nan``/``inf`` are refused); a speed (``*_rpm``) is at most
 :data:`MAX_SPEED_RPM`, a time (``*_s``) between 0 and :data:`MAX_DURATION_S`, and a list or
 range at most :data:`MAX_LIST_VALUES` values (the count is computed before any list is
-built). Limits are documented in docs/protocols.md.
+built). Limits are documented in docs/reference/protocols.md.
 """
 
 from __future__ import annotations

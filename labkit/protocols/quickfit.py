@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 
-#: what each quick fit minimises, and what ``labkit fit`` minimises instead (docs/fitting.md)
+#: what each quick fit minimises, and what ``labkit fit`` minimises instead (docs/reference/fitting.md)
 RESIDUALS = {
     "power-law": ("least squares in y (grams)", "labkit fit --model power-law fits ln y"),
     "eq6.37": ("least squares in w^2 - v w", "labkit fit --model spin-critical fits the spin v"),
@@ -26,9 +26,9 @@ RESIDUALS = {
 
 def quick_fit_label(model: str) -> str:
     """The words ``labkit run`` prints beside a quick fit, so it is not mistaken for
-    ``labkit fit``'s (same model, other residuals: the digits differ, docs/fitting.md)."""
+    ``labkit fit``'s (same model, other residuals: the digits differ, docs/reference/fitting.md)."""
     mine, theirs = RESIDUALS.get(model, ("least squares", "labkit fit may differ"))
-    return f"{model}, {mine}; {theirs}, see docs/fitting.md"
+    return f"{model}, {mine}; {theirs}, see docs/reference/fitting.md"
 
 
 def _param(value: float, stderr: float) -> dict[str, float]:

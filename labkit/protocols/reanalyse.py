@@ -1,5 +1,5 @@
 """``labkit replay --analysis-only``: a session's numbers again, from its recorded bytes, with no
-protocol run (docs/replay.md). Works for any session, also one recorded by an older labkit or on
+protocol run (docs/explanation/replay.md). Works for any session, also one recorded by an older labkit or on
 a rig whose timing cannot be replayed.
 
 1. Every reading a session kept (``readings/ROLE.jsonl``: its time and the raw bytes it was

@@ -1,5 +1,5 @@
 """``labkit replay``: a session's serial traffic through the same protocol code, at three levels
-(docs/replay.md, docs/decisions/0019-faithful-replay.md).
+(docs/explanation/replay.md, docs/decisions/0019-faithful-replay.md).
 
 * **exact** (sessions recorded on the virtual clock): every port is ``replay://...?mode=timed``,
   what the drivers send must match the recording byte for byte, and the results must equal

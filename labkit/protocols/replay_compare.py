@@ -1,4 +1,4 @@
-"""How a faithful replay is judged (docs/replay.md, docs/decisions/0019-faithful-replay.md).
+"""How a faithful replay is judged (docs/explanation/replay.md, docs/decisions/0019-faithful-replay.md).
 
 A session recorded on the real clock replays through the same protocol, control and driver
 code, but its keep-alives and polls are not the recorded ones one for one, so its results are

@@ -1,4 +1,5 @@
-"""What ``labkit run --resume SESSION`` checks before it trusts a session (docs/protocols.md, Resume).
+"""What ``labkit run --resume SESSION`` checks before it trusts a session (docs/reference/protocols.md,
+Resume).
 
 * :func:`check_carried_points`: every recorded point belongs to the plan (an integer step in
   range, recorded once, with the step's planned parameters); a point that does not is dropped

@@ -11,9 +11,9 @@ parameters, then runs each with plain Python using the :class:`RunContext` verbs
 * on the first Ctrl-C - or SIGTERM (``kill``), SIGHUP (terminal closed), SIGQUIT (Ctrl-\\),
   SIGTSTP (Ctrl-Z: a run with a turning rotor does not pause) -
   commands every motor to zero at the next control tick and stops at the next checkpoint;
-  on a second Ctrl-C trips the interlock at once (docs/design/architecture.md#two-ctrl-c); ``run.json``
+  on a second Ctrl-C trips the interlock at once (docs/explanation/architecture.md#two-ctrl-c); ``run.json``
   names the
-  signal (docs/safety.md);
+  signal (docs/explanation/safety.md);
 * whatever happens (interlock, exception, Ctrl-C, normal end) stops the loops, zeroes
   every motor, closes the ports and writes ``results.json`` and the exit status.
 """

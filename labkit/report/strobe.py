@@ -1,5 +1,5 @@
 """The strobe report's phase figure: tilt and lateral position of the body against the
-rotation phase, with the fitted sinusoids of Eq. 5.97 (docs/reports.md).
+rotation phase, with the fitted sinusoids of Eq. 5.97 (docs/reference/reports.md).
 
 A strobe analysis (``labkit analyse strobe --json``) records each frame's phase
 (``phase_per_frame``) and the fitted amplitudes: cone angle phi (``tilt_amplitude_rad``),

@@ -1,4 +1,5 @@
-"""``twin/...``: labkit's measurement chain recovers what went into the model plant (docs/twin.md).
+"""``twin/...``: labkit's measurement chain recovers what went into the model plant
+(docs/explanation/twin.md).
 
 The bundled ``emulated-fig525`` rig's magnets go into the model plant; the Fig. 5.25 sweep,
 the Fig. 6.18 spin-critical protocol and the footage analyses run on it (seed 0, virtual

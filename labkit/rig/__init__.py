@@ -7,7 +7,7 @@
 * caps, role names and the table reader: :mod:`labkit.rig.checks`; the unit-suffix table:
   :data:`labkit.units.UNIT_SUFFIXES`.
 
-Keys are documented in docs/rig-files.md. The names of ``against_drivers`` and ``open`` load
+Keys are documented in docs/reference/rig-files.md. The names of ``against_drivers`` and ``open`` load
 on first use, so ``import labkit.rig.config`` (predict, report) pulls in no device code.
 """
 

@@ -30,7 +30,7 @@ class DriverCheck:
             raise sec.error("protocol", str(exc.args[0])) from None
 
     def port(self, sec: _Section, url: str) -> None:
-        if is_camera_url(url):  # cameras: the URL's settings are checked whole (docs/camera.md)
+        if is_camera_url(url):  # cameras: the URL's settings are checked whole (docs/reference/camera.md)
             try:
                 parse_camera_url(url)
             except PortURLError as exc:

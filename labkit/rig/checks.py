@@ -2,7 +2,7 @@
 role names, bounded reading, and :class:`_Section`, which reads one TOML table.
 
 Imports no device code except to check an emulated port URL. Caps and role names are
-documented in docs/rig-files.md ("Finite values and caps", ``[devices.ROLE]``).
+documented in docs/reference/rig-files.md ("Finite values and caps", ``[devices.ROLE]``).
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from labkit.units import UNIT_SUFFIXES as _UNIT_SUFFIXES
 #: key suffix -> (SI unit, factor to SI): the one table, in labkit/units.py
 UNIT_SUFFIXES = _UNIT_SUFFIXES
 
-#: Absolute sanity caps, whatever a rig file says (docs/rig-files.md, "Caps"). A value beyond
+#: Absolute sanity caps, whatever a rig file says (docs/reference/rig-files.md, "Caps"). A value beyond
 #: one is a typo or a unit mistake, never a setting: the fastest rotor of the paper turns at
 #: 100 000 RPM, and an interlock that waits an hour is no interlock.
 MAX_SPEED_RPM = 150_000.0             # every speed (limits, control, ...)

@@ -5,7 +5,7 @@
 :data:`labkit.units.UNIT_SUFFIXES`). Every problem raises :class:`labkit.errors.RigFileError`
 as ``file:key: reason``. This module imports no device, emulator or port code: checking a
 rig against the driver registry and the emulators is :mod:`labkit.rig.against_drivers`,
-opening it :mod:`labkit.rig.open`. Keys are documented in ``docs/rig-files.md``; caps, role
+opening it :mod:`labkit.rig.open`. Keys are documented in ``docs/reference/rig-files.md``; caps, role
 names and the table reader live in :mod:`labkit.rig.checks`.
 """
 
@@ -293,7 +293,7 @@ def _control(file: str, table: Any, devices: dict[str, DeviceConfig]) -> Control
 
 
 def _plausibility(sec: _Section, d: ControlSettings) -> dict[str, float]:
-    """The ``[control]`` keys of the plausibility interlocks (docs/rig-files.md)."""
+    """The ``[control]`` keys of the plausibility interlocks (docs/reference/rig-files.md)."""
     cap = (MAX_TACH_TIMEOUT_S, f"{MAX_TACH_TIMEOUT_S:g} s")
     values = {
         "motor_tau_s": sec.quantity("motor_tau", "s", default=d.motor_tau_s, cap=cap),

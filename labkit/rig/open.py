@@ -75,7 +75,7 @@ class OpenRig:
         return self._of_kind(role, "tach")
 
     def strobe(self, role: str) -> Strobe:
-        """The stroboscope driver ``role`` (device kind ``strobe``, docs/devices-strobe.md)."""
+        """The stroboscope driver ``role`` (device kind ``strobe``, docs/reference/devices-strobe.md)."""
         return self._of_kind(role, "strobe")
 
     def motor(self, role: str) -> RigMotor:

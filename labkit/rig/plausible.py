@@ -5,7 +5,7 @@ be a unit slip: ``gap_mm = 0.025`` (metres typed), ``full_speed_rpm = 400`` (rev
 second typed), ``mass_g = 0.0059`` (kilograms typed). :func:`check_plausible` runs after the
 schema (:mod:`labkit.rig.config`) and raises :class:`labkit.errors.RigFileError` as
 ``file:key: reason`` naming the likely slip, before anything is opened. The bounds, and why
-each is where it is, are in docs/rig-files.md ("Plausibility").
+each is where it is, are in docs/reference/rig-files.md ("Plausibility").
 """
 
 from __future__ import annotations
@@ -113,8 +113,8 @@ def _check_body(keys: _Keys, name: str, body: BodySpec) -> None:
     if tilt_deg > MAX_TILT_DEG:
         raise keys.error(section, "tilt", (
             f"{tilt_deg:g} deg out of the rotation plane: the tilt is measured from the plane the "
-            f"dipole turns in, not from the spin axis (docs/model.md, Eq. 5.25; the paper's rotators: "
-            f"4-6 deg); did you mean {90 - tilt_deg:g} deg? Above {MAX_TILT_DEG:g} deg is refused"))
+            f"dipole turns in, not from the spin axis (docs/reference/model.md, Eq. 5.25; the paper's "
+            f"rotators: 4-6 deg); did you mean {90 - tilt_deg:g} deg? Above {MAX_TILT_DEG:g} deg is refused"))
     sizes = body_sizes(body)
     if sizes is None:
         return

@@ -1,4 +1,5 @@
-"""A session as pandas DataFrames: ``labkit.load_session(PATH)`` (docs/scripting.md, docs/notebook.md).
+"""A session as pandas DataFrames: ``labkit.load_session(PATH)`` (docs/how-to/script-labkit.md,
+docs/tutorials/notebook.md).
 
 Built on :func:`labkit.session.reader.load_session` (same bounds, same damaged-line reports).
 Units are in the column names, always in the last ``_`` part:

@@ -1,4 +1,4 @@
-"""Close the session of a run whose process died without closing it (docs/safety.md).
+"""Close the session of a run whose process died without closing it (docs/explanation/safety.md).
 
 When the worker of a supervised ``labkit run`` is killed (SIGKILL, the OOM killer, a crashed
 interpreter), its ``run.json`` still says ``"status": "running"``. The supervisor, after it has

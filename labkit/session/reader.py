@@ -10,7 +10,7 @@ with a size bound, and never raises anything but :class:`SessionError` naming th
   UTF-8, not JSON, not an object, longer than :data:`MAX_LINE_BYTES`) is skipped and reported as
   ``file:line: damaged line skipped (reason)`` in :attr:`SessionRecord.problems`. A skipped
   event is never guessed at: a point it held is missing, so ``--resume`` measures that step
-  again. Documented in docs/protocols.md (Resume).
+  again. Documented in docs/reference/protocols.md (Resume).
 """
 
 from __future__ import annotations

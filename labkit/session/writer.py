@@ -1,6 +1,6 @@
 """A run directory, written append-only as the run goes, readable after any crash.
 
-Layout (documented in docs/protocols.md)::
+Layout (documented in docs/reference/session-format.md)::
 
     SESSION/
       run.json            metadata: protocol, params, rig name, versions, git commit, clock,

@@ -2,7 +2,7 @@
 
 An axisymmetric body (inertia ``a 1 + b u u^T``, dipole moment and dipole offset along ``u``) is
 described by its axis ``u`` in the lab and its angular momentum: the turn about ``u`` changes
-neither its energy nor any force or torque on it (docs/simulator.md, *Long runs*). A run keeps
+neither its energy nor any force or torque on it (docs/reference/simulator.md, *Long runs*). A run keeps
 that unit vector (3 floats per sample) for such a body and the full rotation matrix (9 floats)
 for any other body, or for every body when asked (``attitude="matrix"``).
 

@@ -44,7 +44,7 @@ def simulate(
 
     ``steps_per_period`` applies to splittings (automatic if None), ``rtol`` to scipy references.
     ``decimate`` keeps every ``decimate``-th of the ``samples_per_period`` samples (and the last):
-    memory then grows as ``cycles * samples_per_period / decimate`` (long runs, docs/simulator.md).
+    memory then grows as ``cycles * samples_per_period / decimate`` (long runs, docs/reference/simulator.md).
     ``attitude`` "axis" keeps an axisymmetric body's axis and any other body's rotation matrix;
     "matrix" keeps every body's rotation matrix (:mod:`labkit.sim.attitude`).
     """

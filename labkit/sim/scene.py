@@ -404,7 +404,7 @@ def _initial(body: SceneBody, t: _Table, scene: Scene) -> None:
 
 
 def scene_from_dict(data: dict, source: str = "<dict>") -> Scene:
-    """Build and validate a scene from a parsed TOML document (see docs/simulator.md)."""
+    """Build and validate a scene from a parsed TOML document (see docs/reference/simulator.md)."""
     from labkit.sim.scene_checks import validate_bodies, validate_scene  # they import this module
 
     top = _Table(data, "", source)

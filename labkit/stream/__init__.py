@@ -1,7 +1,7 @@
-"""Every rerun call of labkit lives in this package (docs/design/architecture.md#one-package-for-rerun).
+"""Every rerun call of labkit lives in this package (docs/explanation/architecture.md#one-package-for-rerun).
 
 Only the CLI and sinks import it; the library never does. Entity paths and timelines are
-documented in docs/streams.md. The rerun API churns, so this is the one place to change
+documented in docs/reference/streams.md. The rerun API churns, so this is the one place to change
 when it moves (rerun-sdk is pinned to 0.41.x in pyproject.toml).
 """
 

@@ -8,8 +8,8 @@
 * ``spawn`` starts a viewer listening on 127.0.0.1 only (``spawn:ADDRESS``, e.g.
   ``spawn:0.0.0.0``, to let other machines connect; see labkit.stream.viewer). With no
   display (no ``DISPLAY``/``WAYLAND_DISPLAY``) a viewer
-  cannot start (docs/design/rerun-notes.md#no-display: it dies and ``spawn`` still blocks ~11 s), so labkit
-  says so and saves to a fallback file instead, which ``rerun FILE`` opens later.
+  cannot start (docs/explanation/rerun-notes.md#no-display: it dies and ``spawn`` still blocks ~11 s), so
+  labkit says so and saves to a fallback file instead, which ``rerun FILE`` opens later.
 """
 
 from __future__ import annotations

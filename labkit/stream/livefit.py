@@ -1,6 +1,6 @@
 """The fits the live view redraws at every point (pure functions, no rerun).
 
-They are the fits ``labkit fit`` makes, in the same residual space (docs/fitting.md), found
+They are the fits ``labkit fit`` makes, in the same residual space (docs/reference/fitting.md), found
 by the model name a protocol's hints give (:data:`LIVE_FITS`):
 
 * :func:`power_law_fit`: Fig. 5.25, ``F = a x^b`` fitted as a straight line in ln F against
@@ -10,7 +10,7 @@ by the model name a protocol's hints give (:data:`LIVE_FITS`):
   spin-critical`` with w_c = 3000 rad/s), with its 95 % band.
 
 The quick fit written to results.json (:mod:`labkit.protocols.quickfit`) is a different
-least-squares problem; docs/fitting.md says why the digits differ.
+least-squares problem; docs/reference/fitting.md says why the digits differ.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Reading an .rrd back (tests, reports): entity paths and columns, via ``rerun.chunk.RrdReader``.
 
-docs/design/rerun-notes.md#reading-a-recording-back: the old ``rerun.dataframe`` module is gone in 0.41.
+docs/explanation/rerun-notes.md#reading-a-recording-back: the old ``rerun.dataframe`` module is gone in 0.41.
 """
 
 from __future__ import annotations

@@ -15,7 +15,7 @@ entity                            content
 ===============================  ================================================================
 
 Everything is sent with ``send_columns`` (one chunk per entity: ~160x cheaper than a loop,
-docs/design/rerun-notes.md#cost-of-logging); ``stride`` thins long runs.
+docs/explanation/rerun-notes.md#cost-of-logging); ``stride`` thins long runs.
 """
 
 from __future__ import annotations

@@ -16,7 +16,7 @@ entity                     content
 ``/video/trace/fit``       the fitted curve over the accumulated trace
 ========================  =========================================================================
 
-OpenCV puts pixel centres at integers, rerun at +0.5 (docs/design/rerun-notes.md#pixel-centres), so every
+OpenCV puts pixel centres at integers, rerun at +0.5 (docs/explanation/rerun-notes.md#pixel-centres), so every
 pixel coordinate is shifted by +0.5 when logged.
 """
 

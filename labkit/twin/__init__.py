@@ -1,2 +1,2 @@
 """The virtual twin of a rig file: run its protocols on the model plant, fit, and compare what
-comes back with what went in (docs/twin.md). Entry point: :func:`labkit.twin.run.run_twin`."""
+comes back with what went in (docs/explanation/twin.md). Entry point: :func:`labkit.twin.run.run_twin`."""

@@ -14,7 +14,7 @@ def markdown(result: dict) -> str:
     """The report as markdown: the rig, then one row per recovered parameter."""
     lines = [f"# labkit twin: {result['rig']}", "",
              f"seed {result['seed']}; model plant built from the rig file's magnets and geometry "
-             "(docs/twin.md).", ""]
+             "(docs/explanation/twin.md).", ""]
     if result["defaults_used_for"]:
         lines += [f"The rig file lacks {', '.join(result['defaults_used_for'])}: the shipped emulated "
                   "rig's values stand in.", ""]

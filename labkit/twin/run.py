@@ -1,5 +1,5 @@
 """``labkit twin``: the Fig. 5.25 and Fig. 6.18 protocols on the model plant of a rig file,
-then the fits, compared with what went in (docs/twin.md)."""
+then the fits, compared with what went in (docs/explanation/twin.md)."""
 
 from __future__ import annotations
 

@@ -18,7 +18,7 @@ import numpy as np
 from labkit.vision.trace import brightness, contrast_to_noise
 
 # Luma is used when its CNR is ample on its own, or when it keeps most of the colour path's CNR
-# and still clears the detection threshold with margin. Measured (docs/vision.md, "Luma or
+# and still clears the detection threshold with margin. Measured (docs/explanation/laser-analysis.md, "Luma or
 # colour"; 8 probe frames, mp4v): the red laser of the acceptance set on neutral screens keeps
 # 0.59-1.5 of the colour CNR in luma at luma CNR 64-263 and fits as well as colour. A pure-red
 # faint trace on a warm bright screen keeps 0.36-0.56: at luma CNR 7.2 luma loses the trace

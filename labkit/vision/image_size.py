@@ -3,7 +3,7 @@
 A PNG of a few kB can declare 100 000 x 100 000 pixels; decoding it asks for 30 GB.
 :func:`check_image_pixels` reads only the header (Pillow's lazy ``Image.open``) and refuses an
 image above :data:`MAX_IMAGE_PIXELS` with a :class:`VideoError` naming the file, so OpenCV
-never sees it. Documented in docs/protocols.md (Size limits).
+never sees it. Documented in docs/reference/protocols.md (Size limits).
 """
 
 from __future__ import annotations

@@ -76,7 +76,7 @@ class LaserQuality:
     chunk_s: float = 0.5
     # long clips get longer chunks: trace extraction costs ~14 ms per 720p chunk. With the drift
     # fitted and the centre reported at the middle, 12 chunks follow a 7 px/s drift over 30 s to
-    # 0.2 px; 16 cost 0.08 CPU-s more per clip for no measurable gain (docs/vision.md)
+    # 0.2 px; 16 cost 0.08 CPU-s more per clip for no measurable gain (docs/explanation/laser-analysis.md)
     max_chunks: int = 12
     luma: bool | None = None
 

@@ -1,4 +1,4 @@
-"""Evidence about a laser-pattern fit, and the quality verdict it supports (docs/vision.md,
+"""Evidence about a laser-pattern fit, and the quality verdict it supports (docs/reference/vision-verdicts.md,
 "Quality verdict"). Every measure is one a reviewer would read off an overlay of the fitted
 curve on the trace, expressed in units that do not depend on the footage: the trace's own line
 width, fractions of the curve and of the light, the frame's size.

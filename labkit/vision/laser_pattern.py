@@ -5,8 +5,8 @@ the checks and verdict (:mod:`labkit.vision.laser_checks`) and second readings
 
 Kept apart from the frame side so that ``labkit analyse laser`` starts decoding before these
 modules load: :func:`labkit.vision.laser.analyse_laser` imports this module in its worker thread
-while the first frames decode (docs/vision.md, *The whole command*). Tilt amplitudes and the
-trochoid parameters follow Sec. 5.2.3 and Eq. 6.38 (see :mod:`labkit.vision.curves`).
+while the first frames decode (docs/explanation/vision-throughput.md, *The whole command*). Tilt amplitudes
+and the trochoid parameters follow Sec. 5.2.3 and Eq. 6.38 (see :mod:`labkit.vision.curves`).
 """
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""Are a trochoid's small loops seen? (docs/vision.md, "Quality verdict", check *loops seen*.)
+"""Are a trochoid's small loops seen? (docs/reference/vision-verdicts.md, "Quality verdict", check *loops
+seen*.)
 
 A trochoid of Eq. 6.38 forms its small loops when ``|k| b > 1`` (Sec. 6.5). Just past that
 point the loops are long and thin: a hypotrochoid with 3 loops and ``b = 0.54`` (``|k| b =

@@ -1,5 +1,5 @@
-"""Nearest-neighbour queries of the laser analysis, in one place (docs/vision.md, *The whole
-command*).
+"""Nearest-neighbour queries of the laser analysis, in one place (docs/explanation/vision-throughput.md, *The
+whole command*).
 
 :class:`PointTree` is an exact kd-tree over 2-D points (``pykdtree``). It replaces
 ``scipy.spatial.cKDTree``: the same neighbours and distances (tested), but importing pykdtree

@@ -4,7 +4,7 @@ Every analysis (laser, strobe) turns its evidence into :class:`Finding` objects,
 reviewer would check (residual against line width, coverage, size against the frame ...); each
 finding says ``ok``, ``doubtful`` or ``failed`` and, when not ``ok``, why. The verdict of the
 result is the worst finding, and its reasons are those of the findings that are not ``ok``
-(docs/vision.md, "Quality verdict"). The JSON shape is
+(docs/reference/vision-verdicts.md, "Quality verdict"). The JSON shape is
 
     "quality": {"verdict": "ok" | "doubtful" | "failed", "reasons": [...], ...evidence...}
 

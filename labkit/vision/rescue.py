@@ -1,4 +1,5 @@
-"""Second readings of a laser trace whose first fit is not ``ok`` (docs/vision.md, steps 4-5).
+"""Second readings of a laser trace whose first fit is not ``ok`` (docs/explanation/laser-analysis.md, steps
+4-5).
 
 The first fit takes all the light of the whole clip at once. Three things mislead it by design
 rather than by degree, and each has a second reading that the analysis tries only when the

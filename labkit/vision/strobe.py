@@ -1,5 +1,6 @@
-"""Stroboscope analysis (Sec. 5.4.3, Fig. 5.19, 6.14, 6.20; docs/vision.md, *Stroboscope*):
-measure the floating body in every frame (:mod:`labkit.vision.strobe_body`), map frames to rotor
+"""Stroboscope analysis (Sec. 5.4.3, Fig. 5.19, 6.14, 6.20; docs/explanation/strobe-analysis.md,
+*Stroboscope*): measure the floating body in every frame (:mod:`labkit.vision.strobe_body`), map frames to
+rotor
 phase (:mod:`labkit.vision.strobe_phase`), fit the tilt amplitude phi, the lateral amplitude beta
 and the offset of the rotation centre from the centre of mass ``delta = beta / tan(phi)`` (Eq.
 5.97) with standard errors (:mod:`labkit.vision.strobe_fit`), and judge the result
@@ -183,7 +184,8 @@ def _without_room_light(light: ClipLight, first: _Measured, model: PhaseModel) -
         before, now = now.motion.phi, _measure(poses, model)
         change = abs(now.motion.phi - before) / max(now.motion.phi, 1e-12)
         rounds += 1
-    return now, {"method": "ghost of the revolution taken out in linear light (docs/vision.md, Room light)",
+    return now, {"method": "ghost of the revolution taken out in linear light "
+                           "(docs/explanation/strobe-analysis.md, Room light)",
                  "fraction_of_light": alpha, "rounds": rounds, "settled": change <= ROOM_LIGHT_SETTLED,
                  "last_change": change if math.isfinite(change) else None,
                  "tilt_amplitude_uncorrected_rad": first.motion.phi,

@@ -1,5 +1,5 @@
-"""The floating body in one stroboscope frame, and its orientation over a clip (docs/vision.md,
-*Stroboscope*).
+"""The floating body in one stroboscope frame, and its orientation over a clip
+(docs/explanation/strobe-analysis.md, *Stroboscope*).
 
 Per frame (:func:`measure_body`): the lamp's banding and gradients are evened out by row and
 column medians; the body is the largest blob of Otsu's dark or bright class that does not touch

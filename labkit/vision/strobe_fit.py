@@ -1,5 +1,5 @@
 """Fit of Eq. 5.97 to per-frame tilt and lateral position with known phase, with standard errors
-(docs/vision.md, *Fit and uncertainties*).
+(docs/explanation/strobe-analysis.md, *Fit and uncertainties*).
 
 Model: ``theta_k = phi sin(psi_k - psi_0)`` and ``p_k = p_0 - delta tan(theta_k)`` (p across the
 rest axis), so the lateral amplitude is ``beta = delta tan(phi)`` (Eq. 5.97). Both are fitted by

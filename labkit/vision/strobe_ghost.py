@@ -1,5 +1,5 @@
-"""Room light in a stroboscope clip, taken out in linear light (docs/vision.md, *Room light: the
-ghost of the revolution*).
+"""Room light in a stroboscope clip, taken out in linear light (docs/explanation/strobe-analysis.md, *Room
+light: the ghost of the revolution*).
 
 Light adds in the sensor, not in the 8-bit grey levels a camera writes. The frames are taken back
 to linear light (the sRGB-like encoding curve, exponent ``ENCODING_GAMMA``), evened out by rows and

@@ -1,5 +1,5 @@
 """``labkit analyse strobe --overlay OUT.png``: the measured body over a frame of the clip
-(docs/vision.md, *Overlay*).
+(docs/explanation/strobe-analysis.md, *Overlay*).
 
 Drawn over the first frame with a body: the rest axis (grey, through the body's centroid), the
 body axis measured in that frame (green, its measured half length either side of the centroid,

@@ -1,4 +1,4 @@
-"""Phase models of stroboscope footage (docs/vision.md, *Phase models*).
+"""Phase models of stroboscope footage (docs/explanation/strobe-analysis.md, *Phase models*).
 
 The rotor turns at ``f_rot``; what a frame shows is the body at the rotor phase of the light that
 exposed it. With flash times ``t_j = t_0 + j / f_s`` the phase of flash j is

@@ -1,4 +1,5 @@
-"""The quality verdict of a stroboscope analysis (docs/vision.md, *Strobe quality verdict*).
+"""The quality verdict of a stroboscope analysis (docs/reference/vision-verdicts.md, *Strobe quality
+verdict*).
 
 ``strobe_quality(evidence)`` returns the ``"quality"`` object of ``labkit analyse strobe``:
 ``{"verdict": "ok" | "doubtful" | "failed", "reasons": [...], **evidence}``. Each rule names the

@@ -1,5 +1,5 @@
-"""The camera as the strobe under a rolling shutter: a per-row phase model (docs/vision.md,
-*Rolling shutter with the camera as the strobe*).
+"""The camera as the strobe under a rolling shutter: a per-row phase model
+(docs/explanation/strobe-analysis.md, *Rolling shutter with the camera as the strobe*).
 
 Without a lamp the camera's short exposure is the strobe (Fig. 6.20). A rolling shutter starts
 row ``r`` of frame ``k`` a line time ``L`` after row ``r - 1``, so each row samples the motion at

@@ -2,7 +2,7 @@
 
 The design documents labkit was planned from live outside the repository; citing them
 ("PROTOCOLS 5.3", "NUMERICS.md 2.2", "ANCHORS 9.2.4", ...) leaves a reader with nothing to
-open. Their relevant parts are summarised in docs/design/ and the devices/numerics pages.
+open. Their relevant parts are summarised in docs/explanation/ and docs/reference/.
 """
 
 from __future__ import annotations

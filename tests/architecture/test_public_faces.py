@@ -1,5 +1,5 @@
 """The public faces: each package a script uses has a curated ``__all__`` whose names resolve,
-and docs/scripting.md imports nothing but those names."""
+and docs/how-to/script-labkit.md imports nothing but those names."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import pytest
 
 FACES = ("labkit.devices", "labkit.io", "labkit.emulators", "labkit.model", "labkit.vision", "labkit.report",
          "labkit.protocols", "labkit.fit", "labkit.rig")
-PAGE = Path(__file__).resolve().parents[2] / "docs" / "scripting.md"
+PAGE = Path(__file__).resolve().parents[2] / "docs" / "how-to" / "script-labkit.md"
 
 
 @pytest.mark.parametrize("name", FACES)

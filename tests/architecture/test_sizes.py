@@ -1,5 +1,5 @@
 """Small modules with one job: no module in labkit/ over 500 lines, no function over 100 lines
-(issue 12's acceptance; docs/DEVELOPING.md, Rules)."""
+(issue 12's acceptance; docs/explanation/developing.md, Rules)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""docs/notebook.md runs: every ```python cell, in order, in one namespace, from a folder
+"""docs/tutorials/notebook.md runs: every ```python cell, in order, in one namespace, from a folder
 holding the repository's rigs/, and what each prints matches the ```text block after it
 (words exactly, numbers to a relative 1e-2); the figure it writes is a PNG."""
 
@@ -12,7 +12,7 @@ import pytest
 from labkit.testing.doc_pages import page_cells, run_page, same_output
 
 REPO = Path(__file__).resolve().parents[2]
-PAGE = REPO / "docs" / "notebook.md"
+PAGE = REPO / "docs" / "tutorials" / "notebook.md"
 
 
 def cells() -> list[tuple[str, str | None]]:

@@ -1,4 +1,4 @@
-"""The labkit strobe's status line, banner and commands (docs/devices-strobe.md): documented
+"""The labkit strobe's status line, banner and commands (docs/reference/devices-strobe.md): documented
 lines decode, any well-formed line round-trips, garbage never becomes a status."""
 
 from __future__ import annotations
@@ -120,6 +120,6 @@ def test_banner_and_commands():
 
 
 def test_width_for_a_given_angular_blur():
-    # 1 degree at 2 kHz: 1/(360*2000) s = 1.39 us; at 100 Hz 27.8 us (docs/devices-strobe.md)
+    # 1 degree at 2 kHz: 1/(360*2000) s = 1.39 us; at 100 Hz 27.8 us (docs/reference/devices-strobe.md)
     assert width_for_blur(2000.0, 1.0) == pytest.approx(1.389, abs=1e-3)
     assert width_for_blur(100.0, 1.0) == pytest.approx(27.78, abs=1e-2)

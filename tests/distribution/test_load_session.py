@@ -58,7 +58,8 @@ def test_not_a_session_is_one_session_error(tmp_path: Path) -> None:
 def test_fit_data_gives_the_fit_of_labkit_fit(sweep: Path) -> None:
     report = labkit.fit_data(sweep, "power-law")
     b = report.to_json()["series"]["all"]["params"]["b"]["value"]
-    # the emulated rig's model plant (docs/twin.md): the force of its magnets falls as about rpm^-2.0
+    # the emulated rig's model plant (docs/explanation/twin.md): the force of its magnets falls as about
+    # rpm^-2.0
     assert b == pytest.approx(-2.0, abs=0.05)
 
 

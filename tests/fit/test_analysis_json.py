@@ -22,7 +22,7 @@ I_KG_M2, TAU_C, TAU_S = 1e-7, 5e-3, 2e-2
 
 def laser_doc(speed_rpm: float | None, major: float | None, minor: float | None = None,
               spin_rad_s: float | None = None, pattern: str = "ellipse") -> dict:
-    """The documented layout of `labkit analyse laser --json` (docs/vision.md), trimmed."""
+    """The documented layout of `labkit analyse laser --json` (docs/reference/vision-json.md), trimmed."""
     tilt = None if major is None else {"major": major, "minor": major * 0.9 if minor is None else minor}
     pat = ({"type": "none", "reason": "no light above the background noise"} if pattern == "none"
            else {"type": pattern, "center_px": [160.0, 120.0], "semi_axes_px": [50.0, 45.0]})

@@ -1,4 +1,4 @@
-"""The parts of a faithful replay (docs/replay.md): its URL options, the clock that runs jobs when
+"""The parts of a faithful replay (docs/explanation/replay.md): its URL options, the clock that runs jobs when
 the recording ran them, the recorded ticks and stalls, and a real-clock recording of a balance
 served back at its recorded times with its polls matched by content."""
 

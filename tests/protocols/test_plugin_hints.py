@@ -1,6 +1,6 @@
 """A protocol from another package, installed through its entry point, gets a live figure, a
 live fit and a report figure from the hints it declares, with no line of labkit naming it
-(ADR 0021, docs/plugins.md). The package is a real dist-info directory on PYTHONPATH, so
+(ADR 0021, docs/how-to/add-a-protocol.md). The package is a real dist-info directory on PYTHONPATH, so
 importlib.metadata finds it as it finds a pip-installed one; the run is ``labkit run`` on the
 emulated Fig. 5.25 rig in its own process."""
 
@@ -19,12 +19,12 @@ from labkit.stream.readback import column, entity_paths
 
 WORKTREE = Path(__file__).resolve().parents[2]
 
-#: the example in docs/plugins.md, word for word (the test reads it from there)
-DOC = WORKTREE / "docs" / "plugins.md"
+#: the example in docs/how-to/add-a-protocol.md, word for word (the test reads it from there)
+DOC = WORKTREE / "docs" / "how-to" / "add-a-protocol.md"
 
 
 def plugin_source() -> str:
-    """The ``thrust_plugin`` module of docs/plugins.md (the python block after its marker)."""
+    """The ``thrust_plugin`` module of docs/how-to/add-a-protocol.md (the python block after its marker)."""
     text = DOC.read_text()
     start = text.index("<!-- thrust_plugin.py -->")
     block = text[text.index("```python\n", start) + len("```python\n"):]

@@ -40,7 +40,7 @@ def test_eq637_c_exact_on_pairs_on_the_curve():
 
 def test_run_labels_its_quick_fit_as_another_least_squares_than_labkit_fit(tmp_path, capsys):
     """`labkit run` prints which residuals its quick fit minimises and which `labkit fit` does
-    (the digits differ on purpose: docs/fitting.md)."""
+    (the digits differ on purpose: docs/reference/fitting.md)."""
     from labkit.cli import main
 
     code = main(["run", "rigs/emulated-fig618.toml", "spin-critical", "--sessions", str(tmp_path),
@@ -49,4 +49,4 @@ def test_run_labels_its_quick_fit_as_another_least_squares_than_labkit_fit(tmp_p
     out = capsys.readouterr().out
     assert code == 0
     assert ("quick fit (eq6.37, least squares in w^2 - v w; labkit fit --model spin-critical fits the "
-            "spin v, see docs/fitting.md): C = ") in out
+            "spin v, see docs/reference/fitting.md): C = ") in out

@@ -14,7 +14,7 @@ DRIFT_G_PER_S = 0.05   # a badly drifting balance: ~1 g over the run, a quarter 
 
 
 def law_g(rpm: float) -> float:
-    """The model plant's balance force (docs/twin.md): grams force at ``rpm``."""
+    """The model plant's balance force (docs/explanation/twin.md): grams force at ``rpm``."""
     return force_g(TwinParams(), rpm * math.pi / 30.0)
 
 

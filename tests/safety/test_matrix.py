@@ -4,7 +4,7 @@ The shipped emulated Fig. 5.25 rig is served by `labkit emulate` in its own proc
 emulated controller keeps doing what it was last told when labkit dies, as a real one does;
 `labkit run` drives it over its pseudo-terminals at 12 000 RPM, as a user starts it (with the
 supervisor it starts for real ports). After each way of ending the run the rotor, read from
-its own tachometer, must be below 300 RPM 3 s later, with no traceback (docs/safety.md).
+its own tachometer, must be below 300 RPM 3 s later, with no traceback (docs/explanation/safety.md).
 """
 
 from __future__ import annotations

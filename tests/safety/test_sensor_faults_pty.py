@@ -5,7 +5,7 @@ pseudo-terminals with the limit lowered to 12 000 RPM, recording at 8 000 RPM. O
 has settled, SIGUSR2 to `labkit emulate` starts the fault. The emulator's own log of the true
 rotor speed and duty (``--truth``) says what the rotor did, whatever its tachometer said.
 
-Acceptance (docs/safety.md, "Sensor faults"): the interlock within 2 s of the fault (a
+Acceptance (docs/explanation/safety.md, "Sensor faults"): the interlock within 2 s of the fault (a
 stalled motor: within 3 s of the duty saturating), a message naming the device and the
 numbers, the true rotor never above the limit, no point recorded, exit non-zero.
 """

@@ -29,7 +29,7 @@ def test_real_hardware_templates_declare_the_watchdog_and_are_refused_without_it
         parse_rig(without, template)
     message = str(err.value)
     assert message.startswith(f"{template}:devices.rotor_motor.options.{key}: required for real hardware")
-    assert "docs/safety.md" in message and "500" in message
+    assert "docs/explanation/safety.md" in message and "500" in message
 
 
 @pytest.mark.parametrize("value,ok", [(500, True), (1000, True), (0, False), (50, False), (5000, False),

@@ -195,7 +195,7 @@ CASES["set-nan-duration"] = argv_case(
 )
 
 
-#: Damaged lines of an event log are skipped (docs/protocols.md, Resume): exit 0, and every
+#: Damaged lines of an event log are skipped (docs/reference/protocols.md, Resume): exit 0, and every
 #: stderr line is a warning naming ``events.jsonl:LINE``.
 WARN_CASES = {
     f"events.jsonl-{label}-{command}": session_file_case("events.jsonl", data, command, "events.jsonl:")

@@ -1,4 +1,4 @@
-"""Sessions recorded on the real clock replay faithfully (docs/replay.md): the shipped real-clock
+"""Sessions recorded on the real clock replay faithfully (docs/explanation/replay.md): the shipped real-clock
 recordings (recordings/sessions/real-*, made by analysis/record_real_sessions.py with
 `labkit run --clock real` on the ptys of `labkit emulate`) replay through the real protocol,
 control and driver code with the recorded decisions and points within tolerance; every shipped

@@ -87,8 +87,9 @@ def test_six_loop_epitrochoid_in_short_arcs_is_not_read_as_a_hypotrochoid(tmp_pa
 
 def test_seven_loop_epitrochoid_under_a_rolling_shutter(tmp_path):
     """1280x720, a 30 ms rolling-shutter readout, 0.5 of a cycle per frame: read as a 6-loop
-    hypotrochoid before. The halo fills the tiny loops, so b may read high (docs/vision.md, What
-    labkit cannot see): beyond the issue's 0.05 the verdict must not be ok."""
+    hypotrochoid before. The halo fills the tiny loops, so b may read high
+    (docs/explanation/laser-analysis.md, What labkit cannot see): beyond the issue's 0.05 the verdict must not
+    be ok."""
     result, want = _synth(tmp_path, (1280, 720), "hard", 513, "epitrochoid", 7, 0.25, 0.5,
                           rolling_shutter_s=0.03)
     _judge(result, want)

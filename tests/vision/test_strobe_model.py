@@ -1,5 +1,5 @@
-"""The strobe phase models (P1 of docs/vision.md), the standard errors of the Eq. 5.97 fit, and
-``labkit analyse strobe`` as a user runs it: verdict in words, overlay PNG, failed exits 1."""
+"""The strobe phase models (P1 of docs/explanation/strobe-analysis.md), the standard errors of the Eq. 5.97
+fit, and ``labkit analyse strobe`` as a user runs it: verdict in words, overlay PNG, failed exits 1."""
 
 from __future__ import annotations
 

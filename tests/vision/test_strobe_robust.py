@@ -121,7 +121,7 @@ def test_ambient_ghost_is_measured_and_taken_out(tmp_path):
     assert r["quality"]["ghost_fraction"] > 0.08
     assert r["room_light"]["settled"] and r["room_light"]["fraction_of_light"] > 0.2
     # this scene mixes its light in grey levels, as a linear camera would: said with --gamma 1
-    # (docs/vision.md, What labkit cannot see: the encoding curve)
+    # (docs/explanation/strobe-analysis.md, What labkit cannot see: the encoding curve)
     linear = analyse_strobe(write(s, tmp_path / "ghost.avi"), **_given(s), encoding_gamma=1.0)
     assert linear["room_light"]["fraction_of_light"] == pytest.approx(s.ghost, abs=0.08)
     assert tilt_ok(linear["tilt_amplitude_rad"], s.phi_rad)

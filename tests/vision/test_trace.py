@@ -81,8 +81,8 @@ def _ring_with_a_faint_half(noise_sigma: float = 7.0, seed: int = 2):
 
 
 def test_faint_light_is_kept_where_it_continues_the_line_and_only_there():
-    """Hysteresis (docs/vision.md, trace): the faint half of the ring continues the bright half
-    and is found; a faint disc apart from it and a stroke much thinner than the line are not."""
+    """Hysteresis (docs/explanation/laser-analysis.md, trace): the faint half of the ring continues the
+    bright half and is found; a faint disc apart from it and a stroke much thinner than the line are not."""
     tp = trace_points(_ring_with_a_faint_half())
     x, y = tp.points[:, 0], tp.points[:, 1]
     r = np.hypot(x - 160, y - 120)

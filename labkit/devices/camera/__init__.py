@@ -1,5 +1,5 @@
 """Cameras (kind ``camera``): a webcam over V4L2, a phone's MJPEG stream, the emulated camera,
-frame cassettes (docs/camera.md, docs/decisions/0023-camera-device.md).
+frame cassettes (docs/reference/camera.md, docs/decisions/0023-camera-device.md).
 
 * :func:`open_camera` - a :class:`Camera` from a port URL (:mod:`labkit.devices.camera.urls`);
 * :class:`Frame`, :class:`CameraSettings` - what a camera delivers and what it accepted;

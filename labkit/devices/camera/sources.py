@@ -2,7 +2,7 @@
 (OpenCV's FFmpeg client in raw mode, which hands over each JPEG exactly as the server sent it).
 
 This layer is kept thin on purpose: the V4L2 ioctl path cannot run in CI (no camera and no
-v4l2loopback in a container, docs/camera.md); everything above it (grab thread, timeouts, drop
+v4l2loopback in a container, docs/how-to/film-a-rig.md); everything above it (grab thread, timeouts, drop
 counting, cassettes) is shared with the sources CI does exercise (``http://`` on a loopback
 server, ``sim://camera``, ``replay://``).
 
@@ -117,7 +117,7 @@ class V4l2Source:
     only with OPENCV_VIDEOIO_V4L_RANGE_NORMALIZED) and ``CAP_PROP_EXPOSURE`` in the driver's
     ``exposure_absolute`` unit of 100 us. Timestamps: ``CAP_PROP_POS_MSEC`` is the kernel's buffer
     timestamp (CLOCK_MONOTONIC for most UVC drivers); it is trusted when it lies within a second of
-    ``time.monotonic()``, else frames carry arrival times. Not testable in CI (docs/camera.md)."""
+    ``time.monotonic()``, else frames carry arrival times. Not testable in CI (docs/how-to/film-a-rig.md)."""
 
     live = True
 

@@ -1,4 +1,4 @@
-"""Balance and load-cell drivers (docs/devices-balance.md): importing this registers them.
+"""Balance and load-cell drivers (docs/reference/devices-balance.md): importing this registers them.
 
 * :mod:`.mtsics`: Mettler Toledo MT-SICS (and the labkit HX711 sketch).
 * :mod:`.and_std`: A&D standard format (2400 7E1, ``N`` unit for force).

@@ -1,5 +1,5 @@
 """A&D standard format (EK-i, FX-i/FZ-i, GX/GF, EJ, GC;
-docs/devices-balance.md#and_std-ad-standard-format): parse/format + driver.
+docs/reference/devices-balance.md#and_std-ad-standard-format): parse/format + driver.
 
 Data lines are 17 bytes: ``ST,+00012.34  g`` CR LF (``ST`` stable, ``US`` unstable, ``QT``
 count, ``OL`` out of range with *filler* digits that are never a reading). The manuals' own
@@ -158,7 +158,7 @@ class AndStdBalance(ContinuousMixin, LinkTailMixin, Balance):
     zero/tare wait ``settle_s``), ``mode`` (``"command"`` or ``"stream"`` for a balance
     set to stream output), ``command_timeout_s`` (2), ``settle_s`` (3).
     On open (command mode): flush, send ``C`` (cancel ``S``/``SIR``;
-    docs/design/device-rules.md#driver-rules).
+    docs/explanation/device-rules.md#driver-rules).
     ``start_continuous()`` sends ``SIR`` (command mode) and reads the stream on a reader;
     ``stop_continuous()`` sends ``C``.
     """

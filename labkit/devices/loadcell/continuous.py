@@ -2,7 +2,7 @@
 one :class:`~labkit.devices.stream.StreamReader` per balance into a timestamped buffer.
 
 On a real clock the reader is a thread, so a slow motor write never blocks the balance
-(docs/design/architecture.md#streaming-devices); on a virtual clock the clock pumps it while time
+(docs/explanation/architecture.md#streaming-devices); on a virtual clock the clock pumps it while time
 advances, so replay is
 deterministic. While the stream runs, ``read()`` returns the next new reading from the
 buffer; commands that need the port (zero, tare, identify) pause the stream around them.

@@ -1,5 +1,5 @@
 """Configurable line reader for third-party HX711 + Arduino sketches
-(docs/devices-balance.md#line_regex-hx711--arduino-sketches).
+(docs/reference/devices-balance.md#line_regex-hx711--arduino-sketches).
 
 There is no HX711 serial standard: each sketch prints its own lines. A *preset* names a
 known sketch (its line pattern, baud rate and tare command); any option can be overridden
@@ -48,7 +48,8 @@ from labkit.io.clock import Clock
 
 FLOAT = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d{1,3})?"
 
-#: HX711 24-bit two's complement saturation codes (docs/devices-balance.md#line_regex-hx711--arduino-sketches)
+#: HX711 24-bit two's complement saturation codes
+#: (docs/reference/devices-balance.md#line_regex-hx711--arduino-sketches)
 HX711_MAX = 0x7FFFFF
 HX711_MIN = -0x800000
 
@@ -284,7 +285,7 @@ class LineRegexBalance(ContinuousMixin, LinkTailMixin, Balance):
         shown = (parsed.value - self.offset) * self.scale
         unit = parsed.unit or self.unit
         # a printed saturation code is overload whatever the calibration
-        # (docs/design/device-rules.md#driver-rules, rule 4)
+        # (docs/explanation/device-rules.md#driver-rules, rule 4)
         overload = parsed.value >= HX711_MAX or parsed.value <= HX711_MIN
         overload = overload or (self.capacity is not None and abs(shown) > self.capacity)
         if unit == "raw":

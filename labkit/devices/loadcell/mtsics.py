@@ -1,4 +1,4 @@
-"""Mettler Toledo MT-SICS (docs/devices-balance.md#mtsics-mettler-toledo-mt-sics): pure parse/format
+"""Mettler Toledo MT-SICS (docs/reference/devices-balance.md#mtsics-mettler-toledo-mt-sics): pure parse/format
 functions + the driver.
 
 Also the protocol of the labkit HX711 sketch (MT-SICS level-0 subset), so one driver
@@ -126,7 +126,7 @@ def parse_weight(line: bytes) -> MtWeight:
 def format_weight(command: str, status: str, value: float | None, unit: str = "g",
                   decimals: int = 2) -> bytes:
     """Format a weight reply: value right-aligned in 10 characters
-    (docs/devices-balance.md#mtsics-mettler-toledo-mt-sics)."""
+    (docs/reference/devices-balance.md#mtsics-mettler-toledo-mt-sics)."""
     if value is None or status in "+-IL":
         return f"{command} {status}".encode("ascii") + b"\r\n"
     return f"{command} {status} {value:>10.{decimals}f} {unit}".encode("ascii") + b"\r\n"
@@ -156,7 +156,7 @@ class MtSicsBalance(ContinuousMixin, LinkTailMixin, Balance):
     Options (rig file ``[devices.balance.options]``): ``eol`` (``"CRLF"`` default, ``"CR"``,
     ``"LF"``), ``command_timeout_s`` (2, for immediate commands).
     On open: flush input, send ``@`` (reset to a known state, cancels ``SIR``), wait for
-    the ``I4`` reply (docs/design/device-rules.md#driver-rules, rule 3). ``start_continuous()`` sends
+    the ``I4`` reply (docs/explanation/device-rules.md#driver-rules, rule 3). ``start_continuous()`` sends
     ``SIR`` and reads
     the stream on a reader (``latest()``, ``readings_since(t)``); ``stop_continuous()``
     sends ``@``.

@@ -1,5 +1,5 @@
 """The labkit hobby-ESC bridge
-(docs/devices-tach-motor.md#esc_bridge-hobby-esc-through-the-labkit-arduino-bridge,
+(docs/reference/devices-tach-motor.md#esc_bridge-hobby-esc-through-the-labkit-arduino-bridge,
 ``firmware/labkit_esc_bridge``).
 
 An Arduino turns a Pololu-SMC compact-protocol subset into RC servo pulses for an ESC:

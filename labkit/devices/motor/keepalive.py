@@ -1,7 +1,7 @@
 """What every motor driver shares: guarded writes, clocked reads, the >= 20 Hz keep-alive.
 
-Safety rules (docs/design/architecture.md#safe-state-on-every-exit-path,
-docs/design/device-rules.md#driver-rules rule 5): a driver never moves the motor on
+Safety rules (docs/explanation/architecture.md#safe-state-on-every-exit-path,
+docs/explanation/device-rules.md#driver-rules rule 5): a driver never moves the motor on
 open; once ``enable()`` is called a clock job (``clock.every(0.05, ...)``, a thread on a
 real clock) re-sends the setpoint at 20 Hz so the controller's own command timeout never
 fires while we are alive and always fires when we are not; ``stop()`` cancels the job and
@@ -9,7 +9,7 @@ commands zero without ever raising; ``close()`` and any exception leaving a ``wi
 call ``stop()``.
 
 The controller's own watchdog (its command timeout) is what stops the motor when nothing
-in labkit is left to do it (SIGKILL, the OOM killer, a crash: docs/safety.md). A driver
+in labkit is left to do it (SIGKILL, the OOM killer, a crash: docs/explanation/safety.md). A driver
 names the option that declares it (``watchdog_option``) and says how to switch it on
 (``watchdog_advice``); :func:`watchdog_problem` refuses a real-hardware rig without it.
 A duty or speed that is not a finite number never reaches the wire: the motor is commanded
@@ -80,7 +80,7 @@ class KeepAliveMotor(LinkTailMixin, MotorController):
             return key, (f"required for real hardware: the {cls.protocol} controller's own command "
                          f"timeout stops the motor when labkit dies (SIGKILL, crash, power cut of the "
                          f"PC); {cls.watchdog_advice}, then declare it here, e.g. "
-                         f"options = {{ {cls.watchdog_option} = 500 }} (docs/safety.md)")
+                         f"options = {{ {cls.watchdog_option} = 500 }} (docs/explanation/safety.md)")
         try:
             ms = float(value)
         except (TypeError, ValueError):

@@ -1,5 +1,6 @@
 """Pololu Simple Motor Controller G2
-(docs/devices-tach-motor.md#pololu_smc-pololu-simple-motor-controller-g2): brushed DC, open-loop duty cycle.
+(docs/reference/devices-tach-motor.md#pololu_smc-pololu-simple-motor-controller-g2): brushed DC, open-loop
+duty cycle.
 
 Binary commands, no terminator; every command byte has its MSB set and every data byte is
 7-bit. Two packet forms:

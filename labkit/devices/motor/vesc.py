@@ -1,4 +1,4 @@
-"""VESC UART packets (docs/devices-tach-motor.md#vesc-vesc-uart-packets): BLDC controllers with
+"""VESC UART packets (docs/reference/devices-tach-motor.md#vesc-vesc-uart-packets): BLDC controllers with
 closed-loop ERPM.
 
 Framing: ``02 LEN payload CRChi CRClo 03`` (payload <= 255 bytes), ``03 LENhi LENlo ...``
@@ -13,8 +13,8 @@ Speeds are electrical: ERPM = mechanical RPM x pole pairs, so a 100 000 RPM rig 
 
 GET_VALUES replies are decoded in the layout of the firmware version that FW_VERSION reports
 (1.x-3.06 old, 3.07-7.x current; others refused: :mod:`labkit.devices.motor.vesc_values`,
-docs/devices-tach-motor.md). Payloads over 512 bytes are refused, and set commands round like
-VESC Tool (half away from zero); docs/hardware-fidelity.md lists the sources.
+docs/reference/devices-tach-motor.md). Payloads over 512 bytes are refused, and set commands round like
+VESC Tool (half away from zero); docs/explanation/hardware-fidelity.md lists the sources.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """VESC ``COMM_GET_VALUES`` replies: the two layouts firmware has sent, and fault names.
 
 The layout depends on the firmware version the controller announces in ``COMM_FW_VERSION``
-(docs/devices-tach-motor.md, "VESC firmware versions"):
+(docs/reference/devices-tach-motor.md, "VESC firmware versions"):
 
 * ``legacy`` - firmware 1.x to 3.06: six MOSFET temperatures and a PCB temperature
   (int16 x10 each), motor and input current (int32 x100), duty (int16 x1000), ERPM

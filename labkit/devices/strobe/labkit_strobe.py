@@ -1,5 +1,5 @@
 """Driver of the labkit stroboscope locked to the rotor (``firmware/labkit_strobe``,
-docs/devices-strobe.md): device kind ``strobe``, protocol ``labkit_strobe``.
+docs/reference/devices-strobe.md): device kind ``strobe``, protocol ``labkit_strobe``.
 
 The strobe talks on its own (a status line every 1/RATE s): one
 :class:`~labkit.devices.stream.StreamReader` cuts lines, status lines go into a buffer that

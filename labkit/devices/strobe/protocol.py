@@ -1,4 +1,4 @@
-"""The labkit strobe's line protocol as pure functions (docs/devices-strobe.md,
+"""The labkit strobe's line protocol as pure functions (docs/reference/devices-strobe.md,
 ``firmware/labkit_strobe``): parsing its status lines and banner, formatting its commands.
 
 The strobe (115200 8N1, LF) prints one status line every 1/RATE s::
@@ -160,7 +160,7 @@ def is_reply(line: bytes) -> bool:
 
 def width_for_blur(rotor_hz: float, blur_deg: float) -> float:
     """Flash width (us) that smears a point of the rotor over ``blur_deg``: the angle swept
-    in the flash is 2 pi f_rot w, so w = blur / (360 f_rot) (docs/devices-strobe.md)."""
+    in the flash is 2 pi f_rot w, so w = blur / (360 f_rot) (docs/reference/devices-strobe.md)."""
     if rotor_hz <= 0 or blur_deg <= 0:
         raise ValueError("rotor frequency and blur must be positive")
     return blur_deg / (360.0 * rotor_hz) * 1e6

@@ -1,5 +1,5 @@
 """The labkit pulse-counter tachometer line protocol
-(docs/devices-tach-motor.md#labkit_tach-the-labkit-pulse-tachometer-labkit-defined).
+(docs/reference/devices-tach-motor.md#labkit_tach-the-labkit-pulse-tachometer-labkit-defined).
 
 An Arduino (``firmware/labkit_tach``) times pulses from an optical or Hall sensor with the
 period method, averaging over every pulse of an output window, and prints one line per

@@ -1,5 +1,5 @@
-"""Lutron 16-byte RS-232 stream (docs/devices-tach-motor.md#lutron16-lutron-16-byte-stream): hand-held
-and panel tachometers.
+"""Lutron 16-byte RS-232 stream (docs/reference/devices-tach-motor.md#lutron16-lutron-16-byte-stream):
+hand-held and panel tachometers.
 
 The meter streams continuously at 9600 8N1; the host never writes. One frame is exactly
 16 bytes, D15 first::
@@ -14,7 +14,7 @@ The meter streams continuously at 9600 8N1; the host never writes. One frame is 
     D8..D1  reading, 8 digits, most significant first
     D0   CR (0x0D)
 
-Resync (docs/design/device-rules.md#driver-rules, rule 2): scan for 0x02 and accept only when the 16th
+Resync (docs/explanation/device-rules.md#driver-rules, rule 2): scan for 0x02 and accept only when the 16th
 byte is 0x0D;
 otherwise drop that 0x02 and scan again. Over-range ("no signal", "OL") frames carry
 non-digit characters in D8..D1; they become readings flagged ``overload`` with value NaN,

@@ -1,5 +1,6 @@
 """Monarch Instrument "@" command protocol
-(docs/devices-tach-motor.md#monarch_at-monarch--commands-act-1b-act-3x-f2a1x-tier-2): ACT-1B, ACT-3X, F2A1X.
+(docs/reference/devices-tach-motor.md#monarch_at-monarch--commands-act-1b-act-3x-f2a1x-tier-2): ACT-1B,
+ACT-3X, F2A1X.
 
 9600 8N1 through Monarch's USB programming cable. Commands are ``@`` + name + CR:
 ``@PI`` product and firmware (two lines), ``@D0`` the display value once, ``@D1``/``@D2``

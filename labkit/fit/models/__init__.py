@@ -1,4 +1,4 @@
-"""The models ``labkit fit`` knows, with their default columns (see docs/fitting.md)."""
+"""The models ``labkit fit`` knows, with their default columns (see docs/reference/fitting.md)."""
 
 from __future__ import annotations
 

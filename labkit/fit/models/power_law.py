@@ -93,7 +93,7 @@ def _factor(log_span: float) -> str:
     return f"{math.exp(log_span):.3g}" if log_span < 700 else f"10^{log_span / math.log(10):.0f}"
 
 
-#: the two least-squares problems :func:`least_squares_power_law` solves (docs/fitting.md)
+#: the two least-squares problems :func:`least_squares_power_law` solves (docs/reference/fitting.md)
 RESIDUALS = ("log", "linear")
 
 

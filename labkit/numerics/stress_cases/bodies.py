@@ -1,5 +1,5 @@
 """Stress cases with unequal inertia, off-axis equilibria and free bodies: Fig. 5.7, Fig. 5.4,
-the two-body bound state, contact and escape (S5-S9 of docs/numerics.md)."""
+the two-body bound state, contact and escape (S5-S9 of docs/reference/bench-sim.md)."""
 
 from __future__ import annotations
 
@@ -23,7 +23,8 @@ from labkit.sim.rotations import axis_angle
 
 def fig5_7_scene():
     """The bundled Fig. 5.7 ellipsoid scene (``fig5_7``: the caption's signs of phi0 and v0 read
-    in the convention of Eq. 5.21, docs/design/numerics-notes.md#unequal-moments-and-the-fig-57-artefact)."""
+    in the convention of Eq. 5.21,
+    docs/explanation/numerics-notes.md#unequal-moments-and-the-fig-57-artefact)."""
     return load_scene("fig5_7")
 
 

@@ -11,7 +11,7 @@ from labkit.numerics import metrics
 from labkit.sim import scene_from_dict, simulate
 from labkit.sim.result import SimResult
 
-# S1 (paper Sec. 5.1, docs/design/numerics-notes.md#exact-conical-motion)
+# S1 (paper Sec. 5.1, docs/explanation/numerics-notes.md#exact-conical-motion)
 I_S1, OMEGA_S1, TAU_C_S1, TAU_S_S1 = 1e-7, 80 * math.pi, 1e-3, 4.633e-3
 
 
@@ -130,7 +130,7 @@ def _run(scene, cycles: float, **kw) -> SimResult:
 def final_phase_error(res: SimResult) -> float:
     """|psi(t_end) - psi_exact(t_end)|: the dipole's azimuth at the last multiple of T against
     its start (Eq. 5.7: on the cone it is back there at every t = kT); the metric of
-    docs/design/numerics-notes.md#exact-conical-motion."""
+    docs/explanation/numerics-notes.md#exact-conical-motion."""
     idx = metrics.stroboscopic_indices(res.times_s, res.period_s)
     u = res.dipole_directions()[idx]
     az = np.unwrap(np.arctan2(u[:, 1], u[:, 0]))

@@ -1,5 +1,5 @@
 """Stress cases on one conical body: exact motion, units, singular and stiff torques, frequency
-sweep, damping (S1-S4, S10, S11 of docs/numerics.md)."""
+sweep, damping (S1-S4, S10, S11 of docs/reference/bench-sim.md)."""
 
 from __future__ import annotations
 
@@ -50,7 +50,7 @@ def s1(level: str) -> Verdict:
         "drift_growth": metrics.drift_growth(base.invariant_values),
     }
     detail = (
-        "psi error: final azimuth at t = 1e4 T (docs/design/numerics-notes.md#exact-conical-motion); "
+        "psi error: final azimuth at t = 1e4 T (docs/explanation/numerics-notes.md#exact-conical-motion); "
         "the dipole direction's max "
         "deviation over the run is a bounded offset reached in the first cycles, not a growth"
     )

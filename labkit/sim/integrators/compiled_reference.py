@@ -1,6 +1,6 @@
 """A compiled DOP853 peer: CyRK's C++ DOP853 with a numba-compiled right-hand side.
 
-The fair comparison for labkit's splittings (docs/numerics.md, "Against a compiled DOP853"):
+The fair comparison for labkit's splittings (docs/explanation/numerics.md, "Against a compiled DOP853"):
 the same equations, state and tolerances as the scipy reference (:mod:`.reference`), but
 neither the solver nor the right-hand side runs Python. The state per body is position,
 velocity, rotation matrix (9) and lab angular momentum, followed by the time integral of each

@@ -5,7 +5,7 @@ State per body: position, velocity, rotation matrix (9), lab angular momentum;
 body's magnetic force (3 per body, for the cycle-averaged force) and the damping's share of
 ``E - w J_z`` (1, for the energy or Jacobi budget). Absolute tolerances are ``rtol`` times
 a scale per component (length, length * omega, 1, I * omega), so tiny bodies at high speed are
-controlled as well as big slow ones (docs/design/numerics-notes.md#scaling). Contact and escape are
+controlled as well as big slow ones (docs/explanation/numerics-notes.md#scaling). Contact and escape are
 terminal events.
 These are validation paths: their invariants drift (no geometric structure), which the result
 reports.
@@ -60,7 +60,7 @@ def sample_times(t0: float, t_end: float, n: int, dt: float, decimate: int = 1) 
 
 def tolerance_scale(system: CompiledSystem) -> np.ndarray:
     """Scale per state component (length, length * omega, 1, I * omega; inf for the extras, which
-    are outputs, not steered): absolute tolerances are ``rtol`` times this (docs/numerics.md)."""
+    are outputs, not steered): absolute tolerances are ``rtol`` times this (docs/reference/bench-sim.md)."""
     nb = system.bf.shape[0]
     i_max = system.bf[:, 1:4].max(axis=1, keepdims=True)
     length = system.length_scale

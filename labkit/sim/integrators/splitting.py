@@ -15,7 +15,7 @@ Symmetric compositions raise the order: Yoshida's triple jump and Suzuki's 5-sta
 Yoshida's 7-stage and Kahan-Li's 9-stage (order 6), Yoshida's 15-stage and Kahan-Li's 17-stage
 (order 8; Kahan and Li 1997, the coefficients tabulated in Hairer, Lubich and Wanner, Geometric
 Numerical Integration, V.3.2). With ``h = T/N`` the Jacobi-type invariant of a uniformly driven
-scene has no secular drift (docs/design/numerics-notes.md#the-jacobi-constant). Force evaluations are
+scene has no secular drift (docs/explanation/numerics-notes.md#the-jacobi-constant). Force evaluations are
 shared between adjacent
 kicks (first-same-as-last), so a step of an s-stage method costs s force evaluations.
 
