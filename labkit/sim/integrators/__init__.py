@@ -75,7 +75,7 @@ def auto_composition(body_pairs: bool) -> tuple[str, str]:
     Interacting free bodies (``mbs_fig6_1``) take Kahan and Li's order-8 composition: over 1e4
     cycles its energy drift is 4.3e-13 at 32 steps per period (544 force evaluations per period)
     where ``splitting4`` at 128 steps (640 evaluations) drifts 4.3e-11 (``labkit bench sim``,
-    docs/simulator.md). A driven body keeps ``splitting4``, whose drift there is already ~1e-13."""
+    docs/reference/simulator.md). A driven body keeps ``splitting4``, whose drift there is already ~1e-13."""
     return ("kahanli8", "kahanli8") if body_pairs else ("suzuki4", "splitting4")
 
 
