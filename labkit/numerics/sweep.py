@@ -223,9 +223,12 @@ def _execute(chunks, evaluate: Evaluate, workers: int, client):
         from distributed import as_completed as dask_completed
 
         shared = client.scatter(evaluate, broadcast=True, hash=False)
-        futures = [client.submit(_evaluate_keyed, shared, c, pure=False) for c in chunks]
-        for fut in dask_completed(futures, loop=client.loop):
-            yield fut.result()
+        futures = client.map(_evaluate_keyed, [shared] * len(chunks), chunks, pure=False)
+        # results travel with the completion notice (one gather per batch of finished tasks, not
+        # one round trip per task), and each future is dropped once its rows are out
+        for fut, rows in dask_completed(futures, with_results=True, loop=client.loop):
+            fut.release()
+            yield rows
         return
     if workers > 1:
         with ProcessPoolExecutor(max_workers=workers) as pool:
