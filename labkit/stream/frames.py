@@ -43,12 +43,10 @@ class CameraStep:
 
     device: str
     tick: int | None
-    t: float
     pattern: dict[str, Any] | None
     pattern_at_y: dict[str, Any] | None
     last_payload: bytes
     fmt: str
-    measured_y: float | None = None
 
 
 def image_entity(device: str) -> str:
@@ -108,8 +106,9 @@ class CameraOverlays:
             self.rec.log(entity, self.rr.EncodedImage(contents=payload, media_type=media))
         self.rec.log(f"{entity}/fit", self.rr.Clear(recursive=True))   # the last step's prediction
         self._trace(entity, e.pattern, e.verdict, None)
-        self.steps[(e.device, e.index)] = CameraStep(e.device, tick, float(e.t) - t0, e.pattern,
-                                                     e.pattern_at_y, e.payloads[-1], e.fmt)
+        # a retake replaces the step's first burst: the point is the retake's
+        self.steps[(e.device, e.index)] = CameraStep(e.device, tick, e.pattern, e.pattern_at_y,
+                                                     e.payloads[-1], e.fmt)
         return new
 
     def _trace(self, entity: str, pattern: dict[str, Any] | None, verdict: str, y: float | None) -> None:
@@ -145,7 +144,6 @@ class CameraOverlays:
             step = self.steps.get((device, index))
             if step is None or step.tick is None:
                 continue
-            step.measured_y = y
             entity = image_entity(device)
             self._at_tick(step.tick)
             self.rec.log(entity, self.rr.EncodedImage(contents=step.last_payload,
