@@ -203,9 +203,14 @@ class RerunRunSink:
         xy = self.hints.point_xy(e.point) if self.hints is not None else None
         if xy is None or self.figure is None:
             return
+        verdict = e.point.get("verdict")
         if e.point.get("consistent") is False:  # its trials disagreed: drawn, not fitted (labkit fit too)
             self._text(f"point {xy[0]:.6g}, {xy[1]:.6g} left out of the live fit: its trials did not "
                        "agree (consistent: false)", "WARN")
+        elif isinstance(verdict, str) and verdict != "ok":   # an analysis that doubts its own number
+            why = "; ".join(map(str, e.point.get("reasons") or [])) or "no reason given"
+            self._text(f"point {xy[0]:.6g}, {xy[1]:.6g} left out of the live fit: its analysis's verdict "
+                       f"is {verdict} ({why})", "WARN")
         else:
             self.points.append(xy)
         fig = self.figure
@@ -216,7 +221,6 @@ class RerunRunSink:
         self.rec.disable_timeline(fig.timeline)
         self.point_x[e.index] = xy[0]
         fit = self._log_fit()
-        verdict = e.point.get("verdict")
         self.camera.point(e.index, xy[1], verdict if isinstance(verdict, str) else "")
         if fit is not None:
             self.camera.refit(fit, self.point_x, float(e.t) - (self.t0 or 0.0))
