@@ -19,6 +19,9 @@ reading        ReadingEvent      device (the rig role), reading (the driver's
                                  :class:`~labkit.devices.base.Reading`, flags and raw bytes included)
 zero           Zeroed            device, value (balance reading at rest before zeroing), unit
 point          PointDone         index, point (one result row, as written to results.json)
+frames         FramesTaken       device, index, take, seqs, times, size, fmt, verdict, pattern,
+                                 pattern_at_y (a camera burst a step analysed; the frames' bytes
+                                 go to live sinks only, the frame cassette keeps them)
 drop           Drop              index, trial, rotor_rad_s, spin_rad_s, cause
                                  ("balance"|"spin_loss"|"key"), hold_s
 checkpoint     Checkpoint        index
@@ -164,6 +167,35 @@ class PointDone(RunDocument):
 
 
 @dataclass(frozen=True, kw_only=True)
+class FramesTaken(RunDocument):
+    """Step ``index`` analysed a burst of ``device`` (a camera role; ``take`` 1 for a retake):
+    the frames' sequence numbers and times on the run's clock, their ``size`` [w, h], the
+    analysis's ``verdict`` and ``pattern`` (the fitted trace in pixels, as ``labkit analyse``
+    writes it) and ``pattern_at_y`` (``{"y": [...], "semi_axes_px": [[a, b], ...]}``: the
+    pattern's semi-axes for values of the figure's y, so a sink can draw a fitted y on the frame
+    without knowing the geometry). ``payloads``, the frames' bytes as stored, reach the live sinks
+    only: events.jsonl keeps the rest, the frame cassette the bytes."""
+
+    type: ClassVar[str] = "frames"
+    device: str
+    index: int
+    take: int = 0
+    seqs: list[int] = field(default_factory=list)
+    times: list[float] = field(default_factory=list)
+    size: list[int] = field(default_factory=list)
+    fmt: str = "jpeg"
+    verdict: str = ""
+    pattern: dict[str, Any] | None = None
+    pattern_at_y: dict[str, Any] | None = None
+    payloads: tuple[bytes, ...] = field(default=(), repr=False)
+
+    def to_json(self) -> dict[str, Any]:
+        out = super().to_json()
+        del out["payloads"]
+        return out
+
+
+@dataclass(frozen=True, kw_only=True)
 class Drop(RunDocument):
     """spin-critical: the floator of trial ``trial`` dropped (``cause``: balance, spin_loss, key)."""
 
@@ -248,8 +280,8 @@ class RunStop(RunDocument):
 
 DOCUMENT_TYPES: dict[str, type[RunDocument]] = {
     cls.type: cls for cls in (RunStart, StepStart, Setpoint, Settled, ControlSnapshot, ReadingEvent,
-                              Zeroed, PointDone, Drop, Checkpoint, StopRequest, Interlock, StopFailed, Fault,
-                              Results, RunStop)
+                              Zeroed, PointDone, FramesTaken, Drop, Checkpoint, StopRequest, Interlock,
+                              StopFailed, Fault, Results, RunStop)
 }
 
 

@@ -29,6 +29,8 @@ python -m labkit run rigs/emulated-fig618.toml spin-critical --sessions "$work/s
 python -m labkit analyse laser recordings/videos/laser-ellipse-medium.mp4 --json "$work/laser.json" \
     --rerun "save:$work/laser.rrd" > /dev/null
 python -m labkit replay recordings/sessions/spin-critical-clean --rerun "save:$work/replay.rrd" > /dev/null
+python -m labkit run rigs/emulated-camera.toml cone-sweep --sessions "$work/s3" --no-progress \
+    --rerun "save:$work/cone.rrd" > /dev/null
 python - "$work/rig.rbl" <<'PY'
 import sys
 import rerun.blueprint as rrb
@@ -40,6 +42,7 @@ shot "$work/sweep.rrd" "$img/live-sweep.png" 1400x900
 shot "$work/spin.rrd" "$img/live-spin-critical.png" 1400x900
 shot "$work/laser.rrd" "$img/live-laser.png" 1400x800
 shot "$work/replay.rrd" "$img/live-rig-over-time.png" 1400x900 "$work/rig.rbl"
+shot "$work/cone.rrd" "$img/live-cone-sweep.png" 1400x900
 
 python -m labkit report "$work"/s/*-speed-sweep --out "$work/rep-sweep" > /dev/null
 python -m labkit analyse strobe recordings/videos/strobe-medium.mp4 --json "$work/strobe.json" > /dev/null

@@ -5,8 +5,13 @@ For bursts of one second at 320x240 and 640x480, 30 and 60 fps, the emulated cam
 trace on a virtual clock; the burst's JPEG bytes are wrapped in an AVI (no re-encoding) and
 :func:`labkit.vision.laser.analyse_laser` runs on it, as ``cone-sweep`` does at every step.
 Printed per case: the analysis wall time over the burst's duration (goal: at most 1.0, so
-analysis in a worker keeps up with the camera), the rendering time per frame (the emulator's
-cost, not a camera's) and the stored bytes per frame.
+analysis in a worker keeps up with the camera), the same for the process's CPU time (all its
+threads: what the analysis costs whatever else the machine runs; wall time on a loaded machine
+waits for the cores), the rendering time per frame (the emulator's cost, not a camera's) and the
+stored bytes per frame. The header gives the load average: ratios measured at a load above the
+core count are the machine's, not the analysis's. ``--halves`` times what a ``cone-sweep`` step
+does with its default ``halves=true``: the burst, then its odd and its even frames (the
+stderr), about twice the work.
 The first analysis of a process pays about a second of imports; it runs once before timing.
 """
 
@@ -14,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import time
 from typing import Any
 
@@ -24,6 +30,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("camera", help="laser analysis time / burst duration (goal <= 1.0) per size and rate")
     p.add_argument("--rpm", type=float, default=7000.0, help="rotor speed of the model plant (default 7000)")
     p.add_argument("--seconds", type=float, default=1.0, help="burst duration (default 1 s)")
+    p.add_argument("--halves", action="store_true",
+                   help="also analyse the odd and even frames apart, as cone-sweep does by default")
     p.add_argument("--json", action="store_true", help="one JSON object per case instead of a table")
     p.set_defaults(func=main)
 
@@ -52,12 +60,17 @@ def burst(size: tuple[int, int], fps: float, rpm: float, seconds: float) -> tupl
     return frames, render
 
 
-def analyse(frames: list[Any], fps: float, size: tuple[int, int], mm_per_px: float) -> tuple[float, dict]:
+def analyse(frames: list[Any], fps: float, size: tuple[int, int], mm_per_px: float,
+            halves: bool = False) -> tuple[float, float, dict]:
+    """(wall s, CPU s, result) of a burst's analysis (and of its halves' with ``halves``)."""
     from labkit.protocols.cone_sweep import burst_cone_angle
 
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     result = burst_cone_angle(frames, fps, size, 500.0, mm_per_px)
-    return time.perf_counter() - start, result
+    if halves:
+        for k in (0, 1):
+            burst_cone_angle(frames[k::2], fps / 2, size, 500.0, mm_per_px)
+    return time.perf_counter() - start, time.process_time() - cpu, result
 
 
 def main(args: argparse.Namespace) -> int:
@@ -67,9 +80,11 @@ def main(args: argparse.Namespace) -> int:
     for size, fps in CASES:
         frames, render = burst(size, fps, args.rpm, args.seconds)
         duration = len(frames) / fps
-        wall, result = analyse(frames, fps, size, 2.0 * 320 / size[0])
-        rows.append({"size": f"{size[0]}x{size[1]}", "fps": fps, "frames": len(frames),
+        wall, cpu, result = analyse(frames, fps, size, 2.0 * 320 / size[0], args.halves)
+        rows.append({"size": f"{size[0]}x{size[1]}", "fps": fps, "frames": len(frames), "halves": args.halves,
                      "analysis_s": round(wall, 3), "ratio": round(wall / duration, 3),
+                     "cpu_s": round(cpu, 3), "cpu_ratio": round(cpu / duration, 3),
+                     "load_average": round(os.getloadavg()[0], 2),
                      "render_ms_per_frame": round(render * 1e3, 1),
                      "bytes_per_frame": round(sum(len(f.payload) for f in frames) / len(frames)),
                      "verdict": result["verdict"]})
@@ -77,13 +92,18 @@ def main(args: argparse.Namespace) -> int:
         for row in rows:
             print(json.dumps(row))
         return 0
-    print(f"laser analysis of 1 s bursts from sim://camera at {args.rpm:.0f} RPM "
+    what = "whole burst + odd + even frames (cone-sweep's halves)" if args.halves else "whole burst"
+    print(f"laser analysis ({what}) of {args.seconds:g} s bursts from sim://camera at {args.rpm:.0f} RPM "
           "(ratio = analysis time / burst duration; goal <= 1.0)")
-    print(f"{'size':>8} {'fps':>4} {'frames':>6} {'analysis s':>10} {'ratio':>6} {'render ms/f':>11} "
-          f"{'bytes/f':>8} verdict")
+    print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores"
+          + (" (loaded: wall-time ratios wait for the cores; see the CPU ratio)"
+             if os.getloadavg()[0] > (os.cpu_count() or 1) else ""))
+    print(f"{'size':>8} {'fps':>4} {'frames':>6} {'analysis s':>10} {'ratio':>6} {'CPU s':>6} "
+          f"{'CPU ratio':>9} {'render ms/f':>11} {'bytes/f':>8} verdict")
     for r in rows:
         print(f"{r['size']:>8} {r['fps']:>4.0f} {r['frames']:>6} {r['analysis_s']:>10.3f} {r['ratio']:>6.2f} "
-              f"{r['render_ms_per_frame']:>11.1f} {r['bytes_per_frame']:>8} {r['verdict']}")
+              f"{r['cpu_s']:>6.2f} {r['cpu_ratio']:>9.2f} {r['render_ms_per_frame']:>11.1f} "
+              f"{r['bytes_per_frame']:>8} {r['verdict']}")
     return 0
 
 

@@ -3,9 +3,10 @@
 Builds the model plant from RIG's magnets and geometry (docs/explanation/twin.md), runs the Fig. 5.25 speed
 sweep and the Fig. 6.18 spin-critical protocol on it through the emulated devices, renders
 laser-trace and stroboscope clips of the model's floator motion (labkit.footage) and analyses
-them (labkit.vision), fits, and writes OUT/twin-report.md and OUT/twin-report.json: every
-recovered parameter beside the value that went in, its 95 % interval and the residual. Exit
-status 1 when a put-in value lies outside its interval (the rig file and the model disagree).
+them (labkit.vision), films a cone-sweep with the emulated camera (sim://camera), fits, and
+writes OUT/twin-report.md and OUT/twin-report.json: every recovered parameter beside the value
+that went in, its 95 % interval and the residual. Exit status 1 when a put-in value lies
+outside its interval (the rig file and the model disagree).
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("rig", help="rig file (or a bundled rig name, e.g. emulated-fig525)")
     p.add_argument("--out", type=Path, default=Path("twin"), help="report folder (default ./twin)")
     p.add_argument("--seed", type=int, default=0, help="seed of the plant's imperfections (default 0)")
-    p.add_argument("--only", choices=("balance", "spin", "footage"), action="append",
+    p.add_argument("--only", choices=("balance", "spin", "footage", "camera"), action="append",
                    help="run only these parts (repeatable; default: all)")
     p.set_defaults(func=main)
 
@@ -28,7 +29,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def main(args: argparse.Namespace) -> int:
     from labkit.twin.report import markdown, write_report
     from labkit.twin.run import run_twin
-    parts = tuple(args.only or ("balance", "spin", "footage"))
+    parts = tuple(args.only or ("balance", "spin", "footage", "camera"))
     result = run_twin(args.rig, args.out, seed=args.seed, parts=parts)
     md, js = write_report(result, args.out)
     print(markdown(result), end="")

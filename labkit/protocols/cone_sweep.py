@@ -27,6 +27,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+from labkit.documents import FramesTaken
 from labkit.protocols.paper_figures import CONE_SWEEP_ROW, EQ_5_24
 from labkit.protocols.params import ParamError
 from labkit.protocols.runner import ProtocolDef, RunContext, Step
@@ -47,7 +48,24 @@ def burst_cone_angle(frames: list[Any], fps: float, size: tuple[int, int], scree
     quality = result.get("quality", {})
     angle = 0.5 * (tilt["major"] + tilt["minor"]) if tilt else None
     return {"cone_angle_rad": angle, "verdict": quality.get("verdict", "failed"),
-            "reasons": list(quality.get("reasons") or [])}
+            "reasons": list(quality.get("reasons") or []), "pattern": result.get("pattern")}
+
+
+def pattern_at_angles(pattern: dict[str, Any] | None, angle_rad: float | None, screen_mm: float,
+                      mm_per_px: float, samples: int = 41) -> dict[str, Any] | None:
+    """The trace's semi-axes (px) for cone angles from half to twice the measured one (in deg,
+    the figure's y): each semi-axis keeps its tilt's offset from the mean and turns the beam by
+    twice the tilt (Sec. 5.2.3, ``r = L tan(2 tilt)``). The live view draws a fitted angle on the
+    frame with it. None for a pattern that is no ellipse or circle, or without an angle."""
+    if angle_rad is None or not pattern or pattern.get("type") not in ("ellipse", "circle"):
+        return None
+    tilts = [0.5 * math.atan(r * mm_per_px / screen_mm) for r in pattern["semi_axes_px"]]
+    angles = [angle_rad * (0.5 + 1.5 * k / (samples - 1)) for k in range(samples)]
+    axes = []
+    for phi in angles:
+        turned = [min(2.0 * (t + phi - angle_rad), 0.49 * math.pi) for t in tilts]
+        axes.append([screen_mm / mm_per_px * math.tan(max(a, 0.0)) for a in turned])
+    return {"y": [math.degrees(phi) for phi in angles], "semi_axes_px": axes}
 
 
 class ConeSweep(ProtocolDef):
@@ -97,6 +115,13 @@ class ConeSweep(ProtocolDef):
         fps = camera.settings.fps or (len(frames) - 1) / max(frames[-1].t - frames[0].t, 1e-9)
         geometry = (camera.settings.size, float(p["screen_distance_mm"]), float(p["mm_per_px"]))
         result = burst_cone_angle(frames, fps, *geometry)
+        pattern = result.pop("pattern")
+        ctx.emit(FramesTaken(
+            t=frames[-1].t, device="camera", index=step.index, take=take, seqs=[f.seq for f in frames],
+            times=[f.t for f in frames], size=list(camera.settings.size), fmt=frames[-1].fmt,
+            verdict=result["verdict"], pattern=pattern,
+            pattern_at_y=pattern_at_angles(pattern, result["cone_angle_rad"], *geometry[1:]),
+            payloads=tuple(f.payload for f in frames)))
         result["cone_angle_stderr_rad"] = None
         if p["halves"] and result["cone_angle_rad"] is not None and len(frames) >= 8:
             halves = [burst_cone_angle(frames[k::2], fps / 2, *geometry)["cone_angle_rad"] for k in (0, 1)]

@@ -87,7 +87,7 @@ SPIN_CRITICAL_ROW = (
 EQ_5_24 = Hints(
     x="speed_rpm", y="cone_angle_deg", x_name="rotor speed", x_unit="RPM", y_name="cone angle",
     y_unit="deg", figure="Eq. 5.24", title="cone angle [deg] against rotor speed [RPM]", root="/eq5_24",
-    fit="", residual="difference",
+    fit="cone-angle", residual="difference",
     report_title="Cone angle vs rotor speed (Eq. 5.24)",
     report_fits=(
         ReportFit("cone-angle", "Eq. 5.24 / 5.68: tau_C and tau_S", "cone-angle",

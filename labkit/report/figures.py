@@ -71,7 +71,11 @@ def fit_figure(report: FitReport, path: str | Path, *, overlays: Sequence[Overla
         grid = np.geomspace(lo, hi, 200) if loglog and lo > 0 else np.linspace(lo, hi, 200)
         ax.plot(grid, res.predict(grid), "-", color=c, lw=2.2, alpha=0.8, zorder=2,
                 label=f"fit: {_param_text(res)}")
-        axr.plot(res.x, res.residuals, "o", color=c, ms=4)
+        r_err = residual_error(res, yerr)
+        drawn_r = axr.errorbar(res.x, res.residuals, yerr=r_err, fmt="o", color=c, ms=4,
+                               capsize=3 if r_err is not None else 0, elinewidth=1)
+        if r_err is not None:   # the bars are the data's, in the residual's space (visible where the
+            _bar_collections(drawn_r, None, r_err)[1].set_gid(f"errorbar-residual-{name}")  # data's hide)
     first = next(iter(report.series.values()))
     for ov in overlays:   # on top of the fit, dashed and dark: visible where they coincide
         if ov.fits(first.x_name, first.y_name):
@@ -92,6 +96,19 @@ def fit_figure(report: FitReport, path: str | Path, *, overlays: Sequence[Overla
     ax.legend(fontsize=8, loc="best")
     ax.set_title(title or f"{report.model} fit", fontsize=11)
     return save(fig, path, svg=svg)  # fixed margins: "tight" would draw the figure twice
+
+
+def residual_error(res, yerr) -> np.ndarray | None:
+    """The data's y errors in the fit's residual space: as they are when the residuals are in y,
+    relative (``yerr / y``) when they are in ``ln(y)``; None for another space or no errors."""
+    if yerr is None:
+        return None
+    yerr = np.asarray(yerr, dtype=float)
+    if res.residual_space == res.y_name:
+        return yerr
+    if res.residual_space == f"ln({res.y_name})":
+        return yerr / np.abs(np.asarray(res.y, dtype=float))
+    return None
 
 
 def _bar_collections(drawn, xerr, yerr) -> tuple:

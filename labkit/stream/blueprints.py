@@ -8,8 +8,9 @@ integer sequences at 1 RPM or 1 rad/s resolution). Everything about the figure c
 run's hints (:class:`labkit.hints.Hints`, ADR 0021); no protocol is named here.
 The blueprint opens on that timeline, in a tab with the figure, its residuals and the events;
 the rig's speed, duty and readings over the ``time`` timeline are a second tab (select the
-``time`` timeline to see them). No spatial view draws results: a 2-D spatial view has image
-coordinates, y down, and no axes.
+``time`` timeline to see them). No spatial view draws results (a 2-D spatial view has image
+coordinates, y down, and no axes); a run that films gets one beside the figure per camera,
+with the frames and the traces drawn on them.
 """
 
 from __future__ import annotations
@@ -77,18 +78,35 @@ def rig_views(loops: list[str], devices: list[str]) -> list[Any]:
     return views
 
 
-def run_blueprint(figure: FigureSpec | None, loops: list[str], devices: list[str]) -> Any:
-    """The blueprint of a run: its figure's tab first (when the run has a figure), the rig over
-    time next."""
+def camera_views(cameras: list[str]) -> list[Any]:
+    """One 2-D view per camera: its frames, the trace the analysis fitted (green) and the trace
+    at the live fit's y (red) (:mod:`labkit.stream.frames`)."""
+    import rerun.blueprint as rrb
+
+    return [rrb.Spatial2DView(origin=f"/camera/{cam}", name=f"{cam}: fitted trace (green), live fit (red)")
+            for cam in cameras]
+
+
+def run_blueprint(figure: FigureSpec | None, loops: list[str], devices: list[str],
+                  cameras: list[str] | None = None) -> Any:
+    """The blueprint of a run: its figure's tab first (when the run has a figure; the cameras'
+    frames beside it), the rig over time next."""
     import rerun.blueprint as rrb
 
     events = rrb.TextLogView(origin="/events", name="events")
     rig = rrb.Vertical(*rig_views(loops, devices), name="rig over time (timeline: time)")
+    films = camera_views(list(cameras or []))
     if figure is None:
-        return rrb.Blueprint(rrb.Vertical(rig, events, row_shares=[3, 1]), rrb.TimePanel(timeline="time"),
+        body = rrb.Horizontal(rig, *films, column_shares=[3] + [2] * len(films)) if films else rig
+        return rrb.Blueprint(rrb.Vertical(body, events, row_shares=[3, 1]), rrb.TimePanel(timeline="time"),
                              collapse_panels=True)
     plot, residual = figure_views(figure)
-    tab = rrb.Vertical(plot, residual, events, row_shares=[5, 2, 2], name=figure.tab or figure.title)
+    if films:
+        charts = rrb.Vertical(plot, residual, row_shares=[5, 2])
+        top = rrb.Horizontal(charts, rrb.Vertical(*films), column_shares=[3, 2])
+        tab = rrb.Vertical(top, events, row_shares=[7, 2], name=figure.tab or figure.title)
+    else:
+        tab = rrb.Vertical(plot, residual, events, row_shares=[5, 2, 2], name=figure.tab or figure.title)
     return rrb.Blueprint(rrb.Tabs(tab, rig, active_tab=0),
                          rrb.TimePanel(timeline=figure.timeline, play_state="paused"),
                          collapse_panels=True)

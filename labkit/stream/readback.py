@@ -40,8 +40,10 @@ def column(path: str | Path, entity: str, component: str, timeline: str) -> tupl
 
     chunks = list(RrdReader(str(path)).stream().filter(content=entity, is_static=False))
     batches = [c.to_record_batch() for c in chunks]
-    batches = [b for b in batches if timeline in b.schema.names and component in b.schema.names]
+    batches = [b.select([timeline, component]) for b in batches
+               if timeline in b.schema.names and component in b.schema.names]
     if not batches:
         return [], []
+    # rows logged on other timelines too have more columns: keep the two asked for
     table = pa.Table.from_batches(batches).sort_by(timeline)
     return table.column(timeline).to_pylist(), table.column(component).to_pylist()

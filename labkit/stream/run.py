@@ -32,6 +32,8 @@ entity                                  content
                                        every point; earlier fits are cleared (static Clear)
 ``<fig>/residual/after_NN``            data minus fit of that fit, beneath the figure
 ``/events``                            text log: start, steps, settle, drops, interlocks, stop
+``/camera/<device>/image``             a filmed burst's frames, the fitted trace and the trace
+                                       at the live fit's y (:mod:`labkit.stream.frames`)
 =====================================  ======================================================
 
 ``<fig>`` is the hints' root: ``/fig5_25`` (speed sweep) or ``/fig6_18`` (spin-critical). The
@@ -51,7 +53,8 @@ from labkit.devices.base import READING_FLAGS
 from labkit.hints import Hints
 from labkit.stream.blueprints import FigureSpec, figure_of, run_blueprint
 from labkit.stream.core import RerunSpec, open_stream
-from labkit.stream.livefit import LIVE_FITS, LiveFit
+from labkit.stream.frames import CameraOverlays
+from labkit.stream.livefit import LIVE_FITS, LiveFit, live_fit
 from labkit.units import G0, RAD_S_PER_RPM
 
 FIT_COLOURS = [[220, 40, 40], [240, 150, 150], [240, 150, 150]]
@@ -82,6 +85,8 @@ class RerunRunSink:
         self.figure: FigureSpec | None = None
         self.points: list[tuple[float, float]] = []  # what the live fit uses
         self.fits: list[LiveFit] = []
+        self.point_x: dict[int, float] = {}   # step -> the point's x (the camera overlays' fit)
+        self.camera = CameraOverlays(rec, rr)
         self._styled: set[str] = set()
         self.flush_error: str | None = None
 
@@ -126,6 +131,8 @@ class RerunRunSink:
         self.protocol = e.protocol
         self.hints = Hints.from_json(e.hints) if e.hints else None
         self.figure = figure_of(self.hints)
+        if self.figure is not None:
+            self.camera.timeline, self.camera.y_label = self.figure.timeline, self.figure.y_label
         self.rec.send_blueprint(run_blueprint(self.figure, self.loops, self.devices))
         self._text(f"start {self.protocol} on {e.rig} ({e.n_steps} steps)")
         if self.hints is not None and self.hints.fit and self.hints.fit not in LIVE_FITS:
@@ -165,6 +172,12 @@ class RerunRunSink:
         if suspect:   # informational flags (zero_speed, stability_unknown) stay in the frame only
             self._text(f"{e.device}: {', '.join(suspect)} (raw {r.raw!r})", "WARN")
 
+    def _on_frames(self, e: doc.FramesTaken) -> None:
+        """A burst's frames with the fitted trace (a camera seen first gets its view)."""
+        tick = int(round(self.step_x)) if self.step_x is not None and self.figure is not None else None
+        if self.camera.frames(e, self.t0 or 0.0, tick):
+            self.rec.send_blueprint(run_blueprint(self.figure, self.loops, self.devices, self.camera.devices))
+
     def _on_settled(self, e: doc.Settled) -> None:
         self._text(f"settled in {e.settle_time_s:.2f} s")
 
@@ -190,9 +203,14 @@ class RerunRunSink:
         xy = self.hints.point_xy(e.point) if self.hints is not None else None
         if xy is None or self.figure is None:
             return
+        verdict = e.point.get("verdict")
         if e.point.get("consistent") is False:  # its trials disagreed: drawn, not fitted (labkit fit too)
             self._text(f"point {xy[0]:.6g}, {xy[1]:.6g} left out of the live fit: its trials did not "
                        "agree (consistent: false)", "WARN")
+        elif isinstance(verdict, str) and verdict != "ok":   # an analysis that doubts its own number
+            why = "; ".join(map(str, e.point.get("reasons") or [])) or "no reason given"
+            self._text(f"point {xy[0]:.6g}, {xy[1]:.6g} left out of the live fit: its analysis's verdict "
+                       f"is {verdict} ({why})", "WARN")
         else:
             self.points.append(xy)
         fig = self.figure
@@ -201,26 +219,30 @@ class RerunRunSink:
         self.rec.set_time(fig.timeline, sequence=int(round(xy[0])))
         self.rec.log(f"{fig.root}/plot/data", self.rr.Scalars(xy[1]))
         self.rec.disable_timeline(fig.timeline)
-        self._log_fit()
+        self.point_x[e.index] = xy[0]
+        fit = self._log_fit()
+        self.camera.point(e.index, xy[1], verdict if isinstance(verdict, str) else "")
+        if fit is not None:
+            self.camera.refit(fit, self.point_x, float(e.t) - (self.t0 or 0.0))
 
-    def _log_fit(self) -> None:
+    def _log_fit(self) -> LiveFit | None:
+        """The live fit of the points so far, drawn with its band and residuals (None: none)."""
         fig, hints = self.figure, self.hints
         assert fig is not None and hints is not None
         xs, ys = [p[0] for p in self.points], [p[1] for p in self.points]
-        live_fit = LIVE_FITS.get(hints.fit)
-        fit = live_fit(xs, ys) if live_fit is not None else None
+        fit = live_fit(hints.fit, xs, ys, hints.x_unit, hints.y_unit) if xs else None
         if fit is None:
-            return
+            return None
         grid = np.unique(np.round(np.linspace(min(xs), max(xs), CURVE_SAMPLES)).astype(np.int64))
         if len(grid) < 2:
-            return
+            return None
         if self.fits:   # only the newest fit is drawn: a static value shadows the temporal ones
             previous = f"after_{self.fits[-1].n:02d}"
             self.rec.log(f"{fig.root}/plot/fit/{previous}", self.rr.Scalars([np.nan] * 3), static=True)
             self.rec.log(f"{fig.root}/residual/{previous}", self.rr.Scalars([np.nan]), static=True)
         self.fits.append(fit)
         name = f"after_{fit.n:02d}"
-        label = fit_label(fit)
+        label = fit.label
         self.rec.log(f"{fig.root}/plot/fit/{name}", self.rr.SeriesLines(
             names=[label, "95 % band", "95 % band"], colors=FIT_COLOURS, widths=[2.5, 1, 1]), static=True)
         y, lo, hi = fit.curve(grid.astype(float))
@@ -243,6 +265,7 @@ class RerunRunSink:
         self.rec.send_columns(f"{fig.root}/residual/{name}",
                               indexes=[self.rr.TimeColumn(fig.timeline, sequence=ticks)],
                               columns=self.rr.Scalars.columns(scalars=residual))
+        return fit
 
     def close(self) -> None:
         """Flush (at most ``FLUSH_TIMEOUT_S``) and disconnect. A viewer that cannot be
@@ -254,15 +277,6 @@ class RerunRunSink:
             self.flush_error = str(exc)
         finally:
             self.rec.disconnect()
-
-
-def fit_label(fit: LiveFit) -> str:
-    """The legend of a fit: its parameters with standard errors and n."""
-    if fit.model == "power-law":
-        (a, sa), (b, sb) = fit.params["a"], fit.params["b"]
-        return f"fit (ln F): a = {a:.3g} +/- {sa:.1g}, b = {b:.3f} +/- {sb:.3f}, n = {fit.n}"
-    c, sc = fit.params["C"]
-    return f"Eq. 6.37 fit (in v): C = {c:.4g} +/- {sc:.2g}, n = {fit.n}"
 
 
 def reading_series(device: str, quantity: str, unit: str, value: float,

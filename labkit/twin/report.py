@@ -32,6 +32,9 @@ def markdown(result: dict) -> str:
     for name, run in result["runs"].items():
         if isinstance(run, dict) and run.get("session"):
             lines.append(f"- {name} session: {run['session']}")
+        if isinstance(run, dict) and run.get("largest_point_rel_diff") is not None:
+            lines.append(f"- {name}: every ok point's cone angle within "
+                         f"{run['largest_point_rel_diff']:.2e} of the model's at its speed")
     return "\n".join(lines) + "\n"
 
 

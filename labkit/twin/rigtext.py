@@ -43,7 +43,8 @@ def _strip_sections(text: str, prefixes: tuple[str, ...]) -> str:
 
 
 def twin_rig_text(user_rig: Path, setup: str) -> str:
-    """The twin rig for ``setup`` (``fig525`` or ``fig618``) with ``user_rig``'s magnets."""
+    """The twin rig for ``setup`` (``fig525``, ``fig618`` or ``camera``: the Fig. 5.25 rig plus
+    the emulated camera) with ``user_rig``'s magnets."""
     base = read_rig_text(bundled_rig_path(f"emulated-{setup}"))  # type: ignore[arg-type]
     user = tomllib.loads(read_rig_text(user_rig))
     text = _strip_sections(base, ("bodies", "geometry"))

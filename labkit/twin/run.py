@@ -1,5 +1,5 @@
-"""``labkit twin``: the Fig. 5.25 and Fig. 6.18 protocols on the model plant of a rig file,
-then the fits, compared with what went in (docs/explanation/twin.md)."""
+"""``labkit twin``: the Fig. 5.25, Fig. 6.18 and cone-sweep protocols on the model plant of a
+rig file, rendered footage, then the fits, compared with what went in (docs/explanation/twin.md)."""
 
 from __future__ import annotations
 
@@ -75,7 +75,7 @@ def spin_rows(user_rig: Path, params: TwinParams, work: Path, seed: int) -> tupl
 
 
 def run_twin(rig_path: str | Path, work: Path, seed: int = 0,
-             parts: tuple[str, ...] = ("balance", "spin", "footage")) -> dict:
+             parts: tuple[str, ...] = ("balance", "spin", "footage", "camera")) -> dict:
     """Every twin row for the rig file ``rig_path``; sessions and rigs go under ``work``."""
     from labkit.rig import load_rig
     rig = load_rig(rig_path)
@@ -92,6 +92,10 @@ def run_twin(rig_path: str | Path, work: Path, seed: int = 0,
     if "footage" in parts:
         from labkit.twin.footage import footage_rows
         r, runs["footage"] = footage_rows(params, work, seed)
+        rows += r
+    if "camera" in parts:
+        from labkit.twin.camera import camera_rows
+        r, runs["camera"] = camera_rows(user_rig, params, work, seed)
         rows += r
     return {"rig": str(user_rig), "seed": seed, "params": params.__dict__,
             "defaults_used_for": missing_from_rig(rig), "rows": rows, "runs": runs}

@@ -27,8 +27,10 @@ def numbered_jpeg(k: int, size: tuple[int, int] = (320, 240)) -> bytes:
 
 
 class LoopbackMjpeg:
-    def __init__(self, fps: float = 30.0, stall_after: int | None = None, size: tuple[int, int] = (320, 240)):
+    def __init__(self, fps: float = 30.0, stall_after: int | None = None, size: tuple[int, int] = (320, 240),
+                 skip: frozenset[int] = frozenset()):
         self.fps, self.stall_after, self.size = fps, stall_after, size
+        self.skip = skip  # frame numbers not sent: their time slot passes (a phone app's drop)
         self.frames: list[bytes] = []
         self.stop = threading.Event()
         self.stall = threading.Event()  # set: stop sending now (the connection stays open)
@@ -48,6 +50,9 @@ class LoopbackMjpeg:
                         owner.stop.wait(MAX_STALL_S)
                         return
                     jpeg = numbered_jpeg(k, owner.size)
+                    if k in owner.skip:
+                        time.sleep(1.0 / owner.fps)
+                        continue
                     owner.frames.append(jpeg)
                     try:
                         self.wfile.write(b"--frame\r\nContent-Type: image/jpeg\r\nContent-Length: %d\r\n\r\n"

@@ -40,3 +40,4 @@ def test_bench_camera_prints_one_row_per_size_and_rate():
     assert [(r["size"], r["fps"]) for r in rows] == [("320x240", 30.0), ("320x240", 60.0),
                                                     ("640x480", 30.0), ("640x480", 60.0)]
     assert all(r["ratio"] > 0 and r["bytes_per_frame"] > 0 and r["frames"] >= 3 for r in rows)
+    assert all(r["cpu_s"] > 0 and r["cpu_ratio"] > 0 and r["load_average"] >= 0 for r in rows)

@@ -41,6 +41,25 @@ def test_burst_delivers_the_servers_jpeg_bytes_with_arrival_times():
     assert newest is not None and newest.seq > frames[-1].seq and discarded >= 3
 
 
+def test_drops_of_a_stream_are_counted_from_arrival_gaps_only_against_a_declared_rate():
+    """The server leaves out frames 30-32 (their time passes): with ``nominal_fps=30`` the frame
+    after the gap says 3 were lost; without it the stream's drops are not counted (0)."""
+    from .loopback import numbered_jpeg
+
+    for query, expected in (("?timeout_s=3&nominal_fps=30", 3), ("?timeout_s=3", 0)):
+        with LoopbackMjpeg(fps=30, skip=frozenset({30, 31, 32})) as server:
+            camera = open_camera(server.url + query, RealClock(), name="phone")
+            try:
+                frames = camera.burst(45)   # from about frame 5 (opening takes a moment)
+            finally:
+                camera.close()
+        after = [f for f in frames if f.payload == numbered_jpeg(33)]
+        assert len(after) == 1, query
+        assert after[0].dropped_before == expected, (query, [f.dropped_before for f in frames])
+        assert camera.settings.fps is None   # the declared rate is not what the camera accepted
+        assert camera.settings.requested.get("nominal_fps") == (30.0 if expected else None)
+
+
 def test_a_stream_that_stops_mid_burst_ends_with_one_line_within_the_timeout():
     with LoopbackMjpeg(fps=30, stall_after=8) as server:
         url = server.url + "?timeout_s=1"

@@ -27,6 +27,10 @@ SAMPLES = [
                                            flags=frozenset({"device_reset", "tare_lost"}))),
     doc.Zeroed(t=0.5, device="balance", value=0.001, unit="kg"),
     doc.PointDone(t=3.0, index=0, point={"step": 0, "force_g": 4.0}),
+    doc.FramesTaken(t=3.05, device="camera", index=0, take=1, seqs=[7, 8], times=[3.0, 3.033],
+                    size=[320, 240], verdict="ok",
+                    pattern={"type": "ellipse", "center_px": [160.0, 120.0], "semi_axes_px": [40, 30]},
+                    pattern_at_y={"y": [1.0, 2.0], "semi_axes_px": [[20, 15], [40, 30]]}),
     doc.Drop(t=3.1, index=0, trial=1, rotor_rad_s=900.0, spin_rad_s=1200.0, cause="key", hold_s=2.0),
     doc.Checkpoint(t=3.2, index=0),
     doc.StopRequest(t=3.3, count=1, signal="SIGTERM"),
@@ -39,13 +43,22 @@ SAMPLES = [
 
 
 def test_there_is_one_sample_per_document_type():
-    assert {type(d) for d in SAMPLES} == set(doc.DOCUMENT_TYPES.values()) and len(doc.DOCUMENT_TYPES) == 16
+    assert {type(d) for d in SAMPLES} == set(doc.DOCUMENT_TYPES.values()) and len(doc.DOCUMENT_TYPES) == 17
 
 
 def test_every_document_round_trips_through_its_json_line():
     for d in SAMPLES:
         line = dumps(d.to_json())
         assert doc.document_from_json(json.loads(line)) == d, line
+
+
+def test_a_frames_document_keeps_the_frames_bytes_out_of_its_json_line():
+    shot = doc.FramesTaken(t=1.0, device="camera", index=2, seqs=[1], times=[0.9], size=[8, 8],
+                           payloads=(b"\xff\xd8 jpeg bytes",))
+    line = shot.to_json()
+    assert "payloads" not in line and line["seqs"] == [1] and line["device"] == "camera"
+    back = doc.document_from_json(json.loads(dumps(line)))
+    assert back.payloads == () and back.seqs == [1] and back.index == 2
 
 
 def test_a_reading_document_is_the_readings_own_json():

@@ -74,3 +74,14 @@ def test_strobe_report_shows_standard_errors_the_analysis_wrote(tmp_path: Path, 
     text = build_report(result, tmp_path / "r").read_text()
     assert "| 0.0012 | rad |" in text and "| 0.034 | px |" in text and "| 0.56 | px |" in text
     assert "no uncertainty" not in text
+
+
+def test_cone_sweep_report_draws_the_cone_angle_with_error_bars_on_data_and_residuals(tmp_path: Path):
+    """The committed cone-sweep session: its Eq. 5.24 figure has the odd/even halves' spread as
+    error bars, on the residuals too (where they are visible: the data's are under the markers)."""
+    report = build_report(Path("recordings/sessions/cone-sweep-clean"), tmp_path / "r")
+    svg = (report.parent / "fig-cone-angle.svg").read_text()
+    assert (report.parent / "fig-cone-angle.png").read_bytes()[:8] == PNG
+    assert 'id="errorbar-y-all"' in svg and 'id="errorbar-residual-all"' in svg
+    assert "cone angle" in svg and "bars: recorded spread" in svg
+    assert "fig-cone-angle.png" in report.read_text()

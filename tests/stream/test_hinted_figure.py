@@ -8,6 +8,7 @@ import rerun as rr
 import labkit.stream.run as stream_run
 from labkit import documents as doc
 from labkit.hints import Hints
+from labkit.stream.livefit import LIVE_FITS
 from labkit.stream.readback import column, entity_paths
 
 
@@ -43,7 +44,9 @@ def test_a_hinted_model_without_a_live_fit_is_named_in_the_events(tmp_path):
     entities = entity_paths(tmp_path / "r.rrd")
     assert "/gap/plot/data" in entities and not any(e.startswith("/gap/plot/fit") for e in entities)
     warned = [t for t in event_texts(tmp_path / "r.rrd") if "no live fit" in t]
-    assert warned == ["my-protocol: no live fit for model 'powerlaw' (known: power-law, spin-critical); "
+    known = ", ".join(sorted(LIVE_FITS))   # the registry is open: other protocols add theirs
+    assert "power-law, spin-critical" in known
+    assert warned == [f"my-protocol: no live fit for model 'powerlaw' (known: {known}); "
                       "points are drawn without a fit"]
 
 
@@ -67,3 +70,18 @@ def test_a_point_marked_inconsistent_is_drawn_but_left_out_of_the_live_fit(tmp_p
     assert x == [100, 200, 300, 400, 500]
     assert "/gap/plot/fit/after_04" in entities and "/gap/plot/fit/after_05" not in entities
     assert any("left out of the live fit" in t for t in event_texts(tmp_path / "r.rrd"))
+
+
+def test_a_point_whose_analysis_is_not_ok_is_drawn_but_left_out_of_the_live_fit(tmp_path):
+    """A row's ``verdict`` (cone-sweep: the burst analysis's) other than ok keeps the point out of
+    the live fit, as the protocol's own fit leaves it out, and the events say why."""
+    hints = Hints("w_rad_s", "gap_um", "rotor speed", "rad/s", "gap", "um", figure="Gap", fit="power-law")
+    points = [{"w_rad_s": 100.0 * k, "gap_um": 50.0 / k, "verdict": "doubtful" if k == 2 else "ok",
+               "reasons": ["trace touches the frame's edge"] if k == 2 else []} for k in range(1, 6)]
+    stream_points(tmp_path / "r.rrd", hints, points)
+    x, _ = column(tmp_path / "r.rrd", "/gap/plot/data", "Scalars:scalars", "rotor speed [rad/s]")
+    assert x == [100, 200, 300, 400, 500]
+    entities = entity_paths(tmp_path / "r.rrd")
+    assert "/gap/plot/fit/after_04" in entities and "/gap/plot/fit/after_05" not in entities
+    assert any("verdict is doubtful (trace touches the frame's edge)" in t
+               for t in event_texts(tmp_path / "r.rrd"))

@@ -51,6 +51,9 @@ class Camera(Device):
         self.url = url
         self.timeout_s = timeout_s
         self.settings: CameraSettings = source.open(clock)
+        #: the rate drops are counted against when frames have no sequence numbers: the accepted
+        #: one, else what the URL declares for a stream (``nominal_fps``), else None (not counted)
+        self.nominal_fps: float | None = self.settings.fps or getattr(source, "nominal_fps", None)
         self.recorder = FrameCassetteWriter(recorder_path, url, self.settings) if recorder_path else None
         self.received = self.dropped = self.discarded = 0
         self._seq = -1
@@ -72,7 +75,7 @@ class Camera(Device):
         dropped = raw.dropped_before
         if dropped is None:
             dropped = max(0, seq - self._seq - 1) if self._seq >= 0 else 0
-            fps = self.settings.fps
+            fps = self.nominal_fps
             if raw.seq is None and fps and self._last is not None:  # no sequence: gaps in time
                 t_new = raw.t_device if raw.t_device is not None else t_host
                 dropped = max(0, round((t_new - self._last.t) * fps) - 1) \

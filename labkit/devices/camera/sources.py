@@ -79,6 +79,10 @@ class HttpMjpegSource:
     def __init__(self, request: CameraRequest) -> None:
         self.request = request
         self.cap: Any = None
+        nominal = request.options.get("nominal_fps")
+        #: the rate set in the phone's app (URL ``nominal_fps``): the camera counts arrival gaps
+        #: against it (an estimate, docs/reference/camera.md); None: a stream's drops are not counted
+        self.nominal_fps = float(nominal) if nominal else None
 
     def open(self, clock: Any) -> CameraSettings:
         import cv2
@@ -94,8 +98,10 @@ class HttpMjpegSource:
         raw = bool(self.cap.set(cv2.CAP_PROP_FORMAT, -1))
         self.raw = raw
         size = (int(self.cap.get(cv2.CAP_PROP_FRAME_WIDTH)), int(self.cap.get(cv2.CAP_PROP_FRAME_HEIGHT)))
-        return CameraSettings(size, None, "MJPG" if raw else "BGR3", None, "host", "opencv-ffmpeg",
-                              _asked(self.request))
+        asked = _asked(self.request)
+        if self.nominal_fps is not None:
+            asked["nominal_fps"] = self.nominal_fps
+        return CameraSettings(size, None, "MJPG" if raw else "BGR3", None, "host", "opencv-ffmpeg", asked)
 
     def read(self, timeout_s: float) -> RawFrame:
         ok, data = self.cap.read()

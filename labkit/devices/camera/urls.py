@@ -3,6 +3,8 @@
 * ``/dev/videoN`` or ``v4l2:///dev/videoN?size=640x480&fps=60&fourcc=MJPG&exposure_s=0.002`` -
   a UVC camera through OpenCV's V4L2 backend;
 * ``http://HOST:PORT/PATH`` (``https://`` too) - an MJPEG stream (phones, IP cameras);
+  ``nominal_fps=30`` declares the rate set in the phone's app (drops are then counted from
+  gaps in the arrival times; without it a stream's drops are not counted);
 * ``sim://camera?seed=N&plant=NAME&size=320x240&fps=30&exposure_s=0.004`` - the emulated camera;
 * ``record://<inner>?cassette=PATH&port=ROLE`` and ``replay://<cassette>?mode=strict|timed``:
   frame cassettes (:mod:`labkit.devices.camera.cassette`).
@@ -20,6 +22,8 @@ from labkit.io.urls import split_query, split_scheme
 
 SETTING_KEYS = ("size", "fps", "fourcc", "exposure_s", "timeout_s")
 SIM_KEYS = ("seed", "plant", "role", "screen_mm", "mm_per_px")
+#: an MJPEG stream's keys besides timeout_s: the rate set in the phone's app, to count drops by
+HTTP_KEYS = ("nominal_fps",)
 MAX_SIDE_PX = 8192
 MAX_FPS = 1000.0
 #: a camera that sends nothing for this long ends the wait (``timeout_s`` in the URL changes it)
@@ -111,14 +115,19 @@ def parse_camera_url(url: str) -> CameraRequest:
         # the stream's own query (e.g. ?action=stream) stays with it; labkit's keys are taken out
         base, _, query_text = url.partition("?")
         query = parse_qsl(query_text, keep_blank_values=True)
-        own = [(k, v) for k, v in query if k in SETTING_KEYS]
-        kept = "&".join(f"{k}={v}" for k, v in query if k not in SETTING_KEYS)
-        fixed = [k for k, _ in own if k != "timeout_s"]
+        ours = SETTING_KEYS + HTTP_KEYS
+        own = [(k, v) for k, v in query if k in ours]
+        kept = "&".join(f"{k}={v}" for k, v in query if k not in ours)
+        fixed = [k for k, _ in own if k not in ("timeout_s", *HTTP_KEYS)]
         if fixed:  # OpenCV cannot change a stream's settings: asking would be ignored silently
             raise PortURLError(url, f"{', '.join(fixed)}: an MJPEG stream's settings are set in the "
                                     "camera or its app (IP Webcam: Video preferences), not in the URL; "
-                                    "only timeout_s")
-        return CameraRequest("http", base + (f"?{kept}" if kept else ""), **_settings(url, own, ()))
+                                    "only timeout_s and nominal_fps (the rate set in the app, to count "
+                                    "drops by)")
+        for key, value in own:
+            if key == "nominal_fps":
+                _positive(url, key, value, MAX_FPS)
+        return CameraRequest("http", base + (f"?{kept}" if kept else ""), **_settings(url, own, HTTP_KEYS))
     if scheme == "sim":
         scene, query = split_query(rest)
         if scene.strip("/") != "camera":
