@@ -19,7 +19,7 @@ from labkit.errors import PortURLError
 from labkit.io.urls import split_query, split_scheme
 
 SETTING_KEYS = ("size", "fps", "fourcc", "exposure_s", "timeout_s")
-SIM_KEYS = ("seed", "plant", "role", "screen_mm", "mm_per_px")
+SIM_KEYS = ("seed", "plant", "role", "screen_mm", "mm_per_px", "scene", "strobe", "body_mm", "ambient")
 MAX_SIDE_PX = 8192
 MAX_FPS = 1000.0
 #: a camera that sends nothing for this long ends the wait (``timeout_s`` in the URL changes it)
