@@ -12,7 +12,8 @@ Frames are pulled, not pushed: reading frame ``k`` waits on the clock until its 
 ended (a virtual clock jumps there, running the speed loop on the way), so a burst takes the
 time a real camera's would; it holds the last ``QUEUE_FRAMES`` exposed frames for a reader
 that is late (the oldest first), and skips older slots. Options (URL query): ``seed``,
-``plant``, ``size`` (320x240), ``fps`` (30), ``exposure_s`` (0.004), ``screen_mm`` (500), ``mm_per_px`` (2.0), ``scene``
+``plant``, ``size`` (320x240), ``fps`` (30), ``exposure_s`` (0.004), ``screen_mm`` (500),
+``mm_per_px`` (2.0), ``scene``
 (``laser``; ``strobe``: the floator side on, lit by the plant's strobe:
 :mod:`labkit.emulators.camera_strobe`, with its own options).
 """

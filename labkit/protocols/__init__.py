@@ -11,7 +11,8 @@ from labkit.protocols.speed_sweep import SpeedSweep
 from labkit.protocols.spin_critical import SpinCritical
 from labkit.protocols.strobe_sweep import StrobeSweep
 
-PROTOCOLS: dict[str, type[ProtocolDef]] = {p.name: p for p in (SpeedSweep, SpinCritical, ConeSweep, StrobeSweep)}
+PROTOCOLS: dict[str, type[ProtocolDef]] = {
+    p.name: p for p in (SpeedSweep, SpinCritical, ConeSweep, StrobeSweep)}
 
 
 def get_protocol(name: str) -> ProtocolDef:

@@ -127,7 +127,8 @@ EQ_5_97 = Hints(
         ReportFit("beta-power-law", "Power law beta = a x^b", "power-law",
                   "Lateral amplitude beta vs rotor speed (strobe, Eq. 5.97)", x="speed_rpm", y="beta_mm"),
         ReportFit("delta-power-law", "Power law delta = a x^b (b near 0: delta does not depend on speed)",
-                  "power-law", "RC offset delta vs rotor speed (strobe, Eq. 5.97)", x="speed_rpm", y="delta_mm"),
+                  "power-law", "RC offset delta vs rotor speed (strobe, Eq. 5.97)", x="speed_rpm",
+                  y="delta_mm"),
     ),
     notes=("phi, beta and delta = beta / tan(phi) (Eq. 5.97) from the strobe analysis of each burst, the "
            "rotor and strobe frequencies from the strobe's status lines; error bars are the analysis's "
@@ -163,7 +164,8 @@ STROBE_SWEEP_ROW = (
     Column("dropped", "", "frames the camera dropped during the burst"),
     Column("retaken", "", "the burst was taken again after a doubtful or failed one"),
     Column("clip", "", "the recorded clip analysed (rigs without a camera)"),
-    Column("model_phi_rad", "rad", "the emulated camera's model plant phi at the burst's speed (null on hardware)"),
+    Column("model_phi_rad", "rad", "the emulated camera's model plant phi at the burst's speed "
+                                   "(null on hardware)"),
     Column("model_beta_mm", "mm", "the model's beta (null on hardware)"),
     Column("model_delta_mm", "mm", "the model's delta (null on hardware)"),
 )

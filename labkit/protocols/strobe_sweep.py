@@ -132,7 +132,8 @@ class StrobeSweep(ProtocolDef):
         elif rig.devices["camera"].kind != "camera":
             raise ParamError(f"strobe-sweep: the rig's device 'camera' is a {rig.devices['camera'].kind}")
         if not params["mm_per_px"] and not self._camera_scale(rig):
-            raise ParamError("--set mm_per_px: the camera's scale (mm per pixel) is needed for beta and delta")
+            raise ParamError("--set mm_per_px: the camera's scale (mm per pixel) is needed for beta and "
+                             "delta")
         ramp = rig.limits.max_ramp_rad_s2
         return [Step(i, f"{rpm:.0f} RPM", {"rotor": rpm_to_rad_s(rpm)}, {"target_rpm": rpm},
                      est_duration_s=2 * rpm_to_rad_s(rpm) / ramp + rig.control.settle_hold_s + 5.0)
@@ -170,8 +171,9 @@ class StrobeSweep(ProtocolDef):
 
         mm = float(params["mm_per_px"])
         if not mm and scale != 1.0:
-            raise LabkitError("shrink: this session took its scale from the camera's URL; scaling its frames "
-                              "needs mm_per_px given to the run (--set mm_per_px=...), or shrink with --crop only")
+            raise LabkitError("shrink: this session took its scale from the camera's URL; scaling its "
+                              "frames needs mm_per_px given to the run (--set mm_per_px=...), or shrink "
+                              "with --crop only")
         return {**params, "burst_frames": how.kept(int(params["burst_frames"])), "mm_per_px": mm / scale}
 
     # ---- one step ----------------------------------------------------------------------
@@ -228,11 +230,13 @@ class StrobeSweep(ProtocolDef):
                 fps = _frames_fps(frames, camera.settings.fps)
                 video = write_mjpeg_avi(Path(work) / "burst.avi", [f.payload for f in frames], fps or 30.0,
                                         camera.settings.size)
-                result = analyse_burst(str(video), freqs, fps, camera.settings.exposure_s, self._mm_per_px(ctx))
+                result = analyse_burst(str(video), freqs, fps, camera.settings.exposure_s,
+                                       self._mm_per_px(ctx))
             shot["model"] = _model_truth(frames)
         else:
             clip = _clip_of(Path(str(p["clips"])), step.index)
-            result = analyse_burst(str(clip), freqs, None, float(p["exposure_s"]) or None, self._mm_per_px(ctx))
+            result = analyse_burst(str(clip), freqs, None, float(p["exposure_s"]) or None,
+                                   self._mm_per_px(ctx))
             shot["clip"] = str(clip)
         if problem and result["verdict"] == "ok":
             result["verdict"] = "doubtful"
@@ -256,9 +260,10 @@ class StrobeSweep(ProtocolDef):
         model = shot.pop("model", None)
         speed = statistics.fmean(speeds) if speeds else math.nan
         spread = rad_s_to_rpm(statistics.stdev(speeds)) if len(speeds) > 1 else math.nan
-        point = {"target_rpm": step.data["target_rpm"], "speed_rad_s": speed, "speed_rpm": rad_s_to_rpm(speed),
-                 "speed_std_rpm": spread, "offset_hz": float(ctx.params["offset_hz"]),
-                 "divider": int(ctx.params["divider"]), **shot, "retaken": retaken}
+        point = {"target_rpm": step.data["target_rpm"], "speed_rad_s": speed,
+                 "speed_rpm": rad_s_to_rpm(speed), "speed_std_rpm": spread,
+                 "offset_hz": float(ctx.params["offset_hz"]), "divider": int(ctx.params["divider"]),
+                 **shot, "retaken": retaken}
         if model:
             point.update(model)
         return point
@@ -280,8 +285,9 @@ class StrobeSweep(ProtocolDef):
         except FitError as exc:
             return {**out, "note": str(exc)}
         predicted = res.predict([pt["speed_rad_s"] for pt in usable])
-        return {**out, "equation": "phi = atan(tau_C / (I omega^2 - tau_S)) (Eq. 5.24, on the tilt amplitude)",
-                "params": {k: {"value": v.value, "stderr": v.stderr, "unit": v.unit} for k, v in res.params.items()},
+        return {**out, "equation": "phi = atan(tau_C / (I omega^2 - tau_S)) (Eq. 5.24, on the tilt)",
+                "params": {k: {"value": v.value, "stderr": v.stderr, "unit": v.unit}
+                           for k, v in res.params.items()},
                 "steps": [pt["step"] for pt in usable] if all("step" in pt for pt in usable) else None,
                 "predicted_rad": [float(x) for x in predicted], "rms_residual_rad": res.rms_residual,
                 "warnings": list(res.warnings)}
