@@ -176,6 +176,10 @@ class StrobeSweep(ProtocolDef):
                               "with --crop only")
         return {**params, "burst_frames": how.kept(int(params["burst_frames"])), "mm_per_px": mm / scale}
 
+    def setup(self, ctx: RunContext) -> None:
+        """The lamp on (a rig file may power the strobe up dark: ``lamp = false``)."""
+        ctx.devices["strobe"].lamp(True)
+
     # ---- one step ----------------------------------------------------------------------
     def _mm_per_px(self, ctx: RunContext) -> float:
         return float(ctx.params["mm_per_px"]) or float(self._camera_scale(ctx.rig) or 0.0)
