@@ -11,7 +11,7 @@ sensor noise is seed ``1000 seed + k``). Frames are JPEG bytes, as from an MJPEG
 Frames are pulled, not pushed: reading frame ``k`` waits on the clock until its exposure has
 ended (a virtual clock jumps there, running the speed loop on the way), so a burst takes the
 time a real camera's would; it holds the last ``QUEUE_FRAMES`` exposed frames for a reader
-that is late (the oldest first), and skips older slots. Options (URL query): ``seed``,
+that is a little late, and skips to the next slot when the one due has left that queue. Options (URL query): ``seed``,
 ``plant``, ``size`` (320x240), ``fps`` (30), ``exposure_s`` (0.004), ``screen_mm`` (500),
 ``mm_per_px`` (2.0), ``scene``
 (``laser``; ``strobe``: the floator side on, lit by the plant's strobe:
@@ -100,12 +100,14 @@ class SimCameraSource:
         return model_cone_angle(self.params, int(round(w * 30.0 / math.pi))), w
 
     def read(self, timeout_s: float) -> RawFrame:
-        # the next frame slot still in the camera's queue (QUEUE_FRAMES deep, as a V4L2 driver's
-        # buffers): a reader a little late (a control tick's serial traffic on a virtual clock)
-        # gets every frame; one that fell further behind skips slots (drops)
+        # the next frame slot if it is still in the camera's queue (QUEUE_FRAMES deep, as a V4L2
+        # driver's buffers): a reader a little late (a control tick's serial traffic on a virtual
+        # clock) gets every frame; one that fell further behind, or was idle, goes on from the
+        # next slot not yet started (the slots between: drops, or discarded between bursts)
         period = 1.0 / self.fps
         now = self.clock.now()
-        self.k = max(self.k, math.floor((now - self.t0 - self.exposure_s) / period + 1e-9) - QUEUE_FRAMES + 1)
+        if self.k < math.floor((now - self.t0 - self.exposure_s) / period + 1e-9) - QUEUE_FRAMES + 1:
+            self.k = math.ceil((now - self.t0) / period - 1e-9)
         start = self.t0 + self.k * period
         self.clock.sleep_until(start + self.exposure_s)
         image = self.frame_image(start, self.k)
