@@ -11,9 +11,9 @@ sensor noise is seed ``1000 seed + k``). Frames are JPEG bytes, as from an MJPEG
 Frames are pulled, not pushed: reading frame ``k`` waits on the clock until its exposure has
 ended (a virtual clock jumps there, running the speed loop on the way), so a burst takes the
 time a real camera's would; it holds the last ``QUEUE_FRAMES`` exposed frames for a reader
-that is a little late, and skips to the next slot when the one due has left that queue. Options (URL query): ``seed``,
-``plant``, ``size`` (320x240), ``fps`` (30), ``exposure_s`` (0.004), ``screen_mm`` (500),
-``mm_per_px`` (2.0), ``scene``
+that is a little late, and skips to the next slot when the one due has left that queue.
+Options (URL query): ``seed``, ``plant``, ``size`` (320x240), ``fps`` (30), ``exposure_s``
+(0.004), ``screen_mm`` (500), ``mm_per_px`` (2.0), ``scene``
 (``laser``; ``strobe``: the floator side on, lit by the plant's strobe:
 :mod:`labkit.emulators.camera_strobe`, with its own options).
 """

@@ -45,6 +45,8 @@ from labkit.units import rad_s_to_rpm, rpm_to_rad_s
 #: wrong makes the burst doubtful; the lock wait gives up after this many seconds
 LOCK_TIMEOUT_S = 5.0
 CLIP_SUFFIXES = (".avi", ".mp4", ".mkv", ".mov")
+#: the row's leading columns after the speed
+LEADING = ("phi_rad", "phi_stderr_rad", "beta_mm", "beta_stderr_mm", "delta_mm", "delta_stderr_mm", "verdict")
 
 
 def analyse_burst(video: str, freqs: dict[str, Any], fps: float | None, exposure_s: float | None,
@@ -264,10 +266,11 @@ class StrobeSweep(ProtocolDef):
         model = shot.pop("model", None)
         speed = statistics.fmean(speeds) if speeds else math.nan
         spread = rad_s_to_rpm(statistics.stdev(speeds)) if len(speeds) > 1 else math.nan
-        point = {"target_rpm": step.data["target_rpm"], "speed_rad_s": speed,
-                 "speed_rpm": rad_s_to_rpm(speed), "speed_std_rpm": spread,
-                 "offset_hz": float(ctx.params["offset_hz"]), "divider": int(ctx.params["divider"]),
-                 **shot, "retaken": retaken}
+        # phi, beta, delta and the verdict first: the report's table shows the first columns
+        first = {k: shot.pop(k, None) for k in LEADING}
+        point = {"target_rpm": step.data["target_rpm"], "speed_rpm": rad_s_to_rpm(speed), **first,
+                 "speed_rad_s": speed, "speed_std_rpm": spread, "offset_hz": float(ctx.params["offset_hz"]),
+                 "divider": int(ctx.params["divider"]), **shot, "retaken": retaken}
         if model:
             point.update(model)
         return point

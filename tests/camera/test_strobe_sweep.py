@@ -45,7 +45,8 @@ def test_strobe_sweep_on_the_emulated_rig_measures_the_model_and_replays(tmp_pat
             assert p[key] == pytest.approx(p[model], rel=0.05), (key, p)
             assert 0 < p[se] < 0.05 * p[key], (se, p)
         assert p["delta_mm"] == pytest.approx(p["beta_mm"] / math.tan(p["phi_rad"]), rel=1e-6)  # Eq. 5.97
-    assert out["results"]["fit"]["model"] == "cone-angle" and len(out["results"]["fit"]["predicted_rad"]) == len(ok)
+    fit = out["results"]["fit"]
+    assert fit["model"] == "cone-angle" and len(fit["predicted_rad"]) == len(ok)
     replay = _run(["replay", out["session"]], timeout=180)
     assert replay.returncode == 0, replay.stderr
     assert "results identical" in replay.stdout + replay.stderr
