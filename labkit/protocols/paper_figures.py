@@ -10,7 +10,7 @@ sessions recorded before the start document carried hints.
 
 from __future__ import annotations
 
-from labkit.hints import Column, Curve, Hints, ReportFit
+from labkit.hints import Column, Curve, Hints, ReportFit, Series
 
 #: the paper's Fig. 5.25: y [g] = 224e6 x [RPM]^-1.9
 PAPER_FIG525 = Curve("paper", "y = 224e6 x^-1.9", "power-law", {"a": 224e6, "b": -1.9}, figure="Fig. 5.25")
@@ -132,7 +132,8 @@ EQ_5_97 = Hints(
     ),
     notes=("phi, beta and delta = beta / tan(phi) (Eq. 5.97) from the strobe analysis of each burst, the "
            "rotor and strobe frequencies from the strobe's status lines; error bars are the analysis's "
-           "1-sigma from the residuals.",))
+           "1-sigma from the residuals.",),
+    also=(Series("beta_mm", "lateral amplitude beta", "mm"), Series("delta_mm", "RC offset delta", "mm")))
 
 STROBE_SWEEP_ROW = (
     Column("step", "", "index of the step in the plan"),

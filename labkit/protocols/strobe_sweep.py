@@ -35,6 +35,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+from labkit.errors import LabkitError
 from labkit.protocols.paper_figures import EQ_5_97, STROBE_SWEEP_ROW
 from labkit.protocols.params import ParamError
 from labkit.protocols.runner import ProtocolDef, RunContext, Step
@@ -45,8 +46,6 @@ from labkit.units import rad_s_to_rpm, rpm_to_rad_s
 #: wrong makes the burst doubtful; the lock wait gives up after this many seconds
 LOCK_TIMEOUT_S = 5.0
 CLIP_SUFFIXES = (".avi", ".mp4", ".mkv", ".mov")
-#: the row's leading columns after the speed
-LEADING = ("phi_rad", "phi_stderr_rad", "beta_mm", "beta_stderr_mm", "delta_mm", "delta_stderr_mm", "verdict")
 
 
 def analyse_burst(video: str, freqs: dict[str, Any], fps: float | None, exposure_s: float | None,
@@ -169,8 +168,6 @@ class StrobeSweep(ProtocolDef):
 
     def shrunk_params(self, params: dict[str, Any], how: Any, scale: float) -> dict[str, Any]:
         """Parameters of a session whose frames ``labkit shrink`` thinned (``how.kept``) and scaled."""
-        from labkit.errors import LabkitError
-
         mm = float(params["mm_per_px"])
         if not mm and scale != 1.0:
             raise LabkitError("shrink: this session took its scale from the camera's URL; scaling its "
@@ -266,14 +263,15 @@ class StrobeSweep(ProtocolDef):
         model = shot.pop("model", None)
         speed = statistics.fmean(speeds) if speeds else math.nan
         spread = rad_s_to_rpm(statistics.stdev(speeds)) if len(speeds) > 1 else math.nan
-        # phi, beta, delta and the verdict first: the report's table shows the first columns
-        first = {k: shot.pop(k, None) for k in LEADING}
-        point = {"target_rpm": step.data["target_rpm"], "speed_rpm": rad_s_to_rpm(speed), **first,
+        point = {"target_rpm": step.data["target_rpm"], "speed_rpm": rad_s_to_rpm(speed),
                  "speed_rad_s": speed, "speed_std_rpm": spread, "offset_hz": float(ctx.params["offset_hz"]),
-                 "divider": int(ctx.params["divider"]), **shot, "retaken": retaken}
-        if model:
-            point.update(model)
-        return point
+                 "divider": int(ctx.params["divider"]), **shot, **(model or {}), "retaken": retaken}
+        # every declared column, in the declared order (phi, beta, delta and the verdict lead: the
+        # report's table shows the first ones); null where this step has none (no clip, no model)
+        columns = [c.name for c in STROBE_SWEEP_ROW if c.name != "step"]
+        if undeclared := set(point) - set(columns):
+            raise LabkitError(f"strobe-sweep: row keys {sorted(undeclared)} not declared in STROBE_SWEEP_ROW")
+        return {name: point.get(name) for name in columns}
 
     def fit(self, points: list[dict[str, Any]]) -> dict[str, Any]:
         from labkit.errors import FitError

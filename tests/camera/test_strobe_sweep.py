@@ -93,7 +93,7 @@ def test_without_a_camera_a_recorded_clip_per_step_is_analysed(tmp_path):
         assert p["verdict"] == "ok", p["reasons"]
         assert p["phi_rad"] == pytest.approx(phis[p["step"]], rel=0.05)
         assert p["delta_mm"] == pytest.approx(13.0 * 0.2, rel=0.05)
-        assert "model_phi_rad" not in p  # no emulated camera: no model values
+        assert p["model_phi_rad"] is None and p["frames"] == 0  # no emulated camera: no model values
 
 
 def test_without_a_camera_or_clips_the_plan_is_refused_before_anything_opens(tmp_path):
@@ -104,3 +104,17 @@ def test_without_a_camera_or_clips_the_plan_is_refused_before_anything_opens(tmp
     assert run.returncode != 0
     assert "clips" in run.stderr and "no camera" in run.stderr
     assert not (tmp_path / "s").exists() or not any((tmp_path / "s").iterdir())
+
+
+def test_the_hints_draw_phi_beta_and_delta_and_survive_the_start_document():
+    from labkit.hints import Hints
+    from labkit.protocols import PROTOCOLS
+    from labkit.stream.blueprints import figure_of, run_blueprint, view_kinds
+
+    hints = PROTOCOLS["strobe-sweep"].hints
+    assert Hints.from_json(json.loads(json.dumps(hints.to_json(), allow_nan=False))) == hints
+    assert (hints.x, hints.y) == ("speed_rpm", "phi_deg")
+    assert [s.y for s in hints.also] == ["beta_mm", "delta_mm"]
+    assert {f.y for f in hints.fits_for_report()} == {"phi_rad", "beta_mm", "delta_mm"}
+    origins = [origin for _, origin in view_kinds(run_blueprint(figure_of(hints), ["rotor"], []))]
+    assert "/eq5_97/also/beta_mm" in origins and "/eq5_97/also/delta_mm" in origins
