@@ -31,7 +31,9 @@ from typing import Any
 
 from labkit.devices.camera.sources import SourceStopped
 
-STROBE_DEFAULTS = {"strobe": "strobe", "body_mm": "15x7.5", "mm_per_px": 0.2, "ambient": 0.0}
+#: the URL options of the strobe scene and their defaults (as the URL would give them)
+STROBE_DEFAULTS: dict[str, str] = {"strobe": "strobe", "body_mm": "15x7.5", "mm_per_px": "0.2",
+                                   "ambient": "0"}
 
 
 @lru_cache(maxsize=512)
