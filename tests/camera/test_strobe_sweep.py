@@ -118,3 +118,14 @@ def test_the_hints_draw_phi_beta_and_delta_and_survive_the_start_document():
     assert {f.y for f in hints.fits_for_report()} == {"phi_rad", "beta_mm", "delta_mm"}
     origins = [origin for _, origin in view_kinds(run_blueprint(figure_of(hints), ["rotor"], []))]
     assert "/eq5_97/also/beta_mm" in origins and "/eq5_97/also/delta_mm" in origins
+
+
+def test_shrink_crops_the_strobe_fixture_keeping_its_scale_and_refuses_to_guess_a_new_one(tmp_path):
+    session = REPO / "recordings" / "sessions" / "strobe-sweep-clean"
+    done = _run(["shrink", str(session), str(tmp_path / "cropped"), "--crop", "40,0,240,240"], timeout=180)
+    assert done.returncode == 0, done.stderr
+    assert json.loads((tmp_path / "cropped" / "run.json").read_text())["params"]["mm_per_px"] == 0.0
+    for p in json.loads((tmp_path / "cropped" / "results.json").read_text())["points"]:
+        assert p["beta_mm"] == pytest.approx(p["model_beta_mm"], rel=0.05)  # mm per pixel as recorded
+    scaled = _run(["shrink", str(session), str(tmp_path / "scaled"), "--scale", "0.5"], timeout=60)
+    assert scaled.returncode != 0 and "mm_per_px" in scaled.stderr and not (tmp_path / "scaled").exists()
