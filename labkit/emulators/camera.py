@@ -21,12 +21,12 @@ Options (URL query): ``seed``, ``plant``, ``size`` (320x240), ``fps`` (30), ``ex
 from __future__ import annotations
 
 import math
-from functools import lru_cache
 from typing import Any
 
 from labkit.devices.camera.frames import CameraSettings
 from labkit.devices.camera.sources import RawFrame, SourceStopped, encode_jpeg
 from labkit.devices.camera.urls import CameraRequest
+from labkit.emulators.camera_strobe import StrobeScene, model_swing
 from labkit.emulators.plant import shared_plant
 from labkit.emulators.twin_model import TwinParams
 
@@ -36,21 +36,11 @@ SIM_JPEG_QUALITY = 75
 QUEUE_FRAMES = 3
 
 
-@lru_cache(maxsize=512)
 def model_cone_angle(params: Any, rpm: int) -> float:
     """The model's cone angle (rad) at ``rpm`` (whole RPM: cached); 0 where there is no steady
-    cone (rotor at rest or too slow for the floator to follow)."""
-    if rpm < 500:
-        return 0.0
-    from labkit.model.floator_equilibrium import FloatorSetup, steady_state
-
-    setup = FloatorSetup(params.m_rotator, params.m_floator, params.mass_kg, params.i_radial,
-                         params.i_axial, rpm * math.pi / 30.0, params.tilt_rad)
-    try:
-        phi = float(steady_state(setup, params.gap_m).phi)
-    except Exception:  # noqa: BLE001 - no steady state: the floator does not follow; no cone to film
-        return 0.0
-    return phi if math.isfinite(phi) and 0 < phi < math.pi / 4 else 0.0
+    cone (rotor at rest or too slow for the floator to follow). The phi of
+    :func:`labkit.emulators.camera_strobe.model_swing`: one solve for both scenes."""
+    return model_swing(params, rpm)[0]
 
 
 class SimCameraSource:
@@ -75,8 +65,6 @@ class SimCameraSource:
             raise SourceStopped(f"scene={self.scene_name!r}: expected laser or strobe")
         self.strobe_scene: Any = None
         if self.scene_name == "strobe":
-            from labkit.emulators.camera_strobe import StrobeScene
-
             self.strobe_scene = StrobeScene(self, opts)
         self.k = 0
         self.t0 = 0.0
