@@ -103,8 +103,8 @@ class StrobeScene:
         plan = strobe.flash_plan(start) if strobe is not None else None
         w = abs(cam.plant.speed(start))
         phi, _, delta = model_swing(cam.params, int(round(w * 30.0 / math.pi)))
-        if plan is None:  # dark: a lamp whose first flash is long after this exposure
-            lamp, swing = Lamp(1e-3, 1e6), Swing(0.0, 0.0, 1.0, 0.0)
+        if plan is None:  # dark: a lamp flashing every 1000 s, half a period (500 s) from this exposure
+            lamp, swing = Lamp(1e-3, 500.0), Swing(0.0, 0.0, 1.0, 0.0)
         else:
             f_rot, offset, divider, width_s = plan
             f_strobe = (f_rot - offset) / divider

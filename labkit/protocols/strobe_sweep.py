@@ -238,6 +238,10 @@ class StrobeSweep(ProtocolDef):
                 result = analyse_burst(str(video), freqs, fps, camera.settings.exposure_s,
                                        self._mm_per_px(ctx))
             shot["model"] = _model_truth(frames)
+            dark = sum(1 for f in frames if (f.meta or {}).get("lit") is False)
+            if dark:  # the emulated camera says which frames no flash lit
+                problem = "; ".join(x for x in (problem, f"{dark} of {len(frames)} frames lit by no flash "
+                                                "(the emulated camera's strobe was dark)") if x)
         else:
             clip = _clip_of(Path(str(p["clips"])), step.index)
             result = analyse_burst(str(clip), freqs, None, float(p["exposure_s"]) or None,

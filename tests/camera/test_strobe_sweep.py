@@ -129,3 +129,15 @@ def test_shrink_crops_the_strobe_fixture_keeping_its_scale_and_refuses_to_guess_
         assert p["beta_mm"] == pytest.approx(p["model_beta_mm"], rel=0.05)  # mm per pixel as recorded
     scaled = _run(["shrink", str(session), str(tmp_path / "scaled"), "--scale", "0.5"], timeout=60)
     assert scaled.returncode != 0 and "mm_per_px" in scaled.stderr and not (tmp_path / "scaled").exists()
+
+
+def test_a_camera_no_strobe_lights_films_dark_frames_and_the_point_fails_saying_so(tmp_path):
+    rig = tmp_path / "dark.toml"
+    rig.write_text(RIG.read_text().replace("&strobe=strobe&", "&strobe=lamp_elsewhere&"))
+    run = _run(["run", str(rig), "strobe-sweep", "--json", "-", "--sessions", str(tmp_path / "s"),
+                "--no-progress", "--set", "speeds_rpm=5000", "--set", "burst_frames=12"])
+    assert run.returncode == 0, run.stderr
+    (point,) = json.loads(run.stdout)["results"]["points"]
+    assert point["verdict"] == "failed" and point["retaken"] is True and point["phi_rad"] is None
+    assert point["strobe_flags"] == [] and "no body found" in point["reasons"][0]
+    assert point["reasons"][1] == "12 of 12 frames lit by no flash (the emulated camera's strobe was dark)"
