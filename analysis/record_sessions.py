@@ -11,6 +11,10 @@ file's magnets; the fault recordings add their faults on top).
 * spin-critical-garbage    garbage bursts on the balance and the spin tachometer
 * cone-sweep-clean         the filmed cone angle at 6 speeds (rigs/emulated-camera.toml, issue 25):
                            its camera cassette holds the emulated camera's JPEG frames
+* strobe-sweep-clean       phi, beta and delta at 4 speeds under the locked strobe
+                           (rigs/emulated-strobe.toml, issue 26): strobe status lines and the
+                           strobe-lit frames (0.8 MB as recorded: a crop to the floator saved
+                           a third of the frames' bytes and moved phi by 1-2 %, so it is not shrunk)
 
 Each is replayed bit-for-bit by tests/session/test_recorded_sessions.py. The runs use the
 virtual clock, so the recordings are deterministic apart from run.json's dates and versions.
@@ -44,6 +48,7 @@ RECORDINGS = {
                                "role=balance": "role=balance&faults=garbage:0.03"},
                               "spin-critical", SPIN),
     "cone-sweep-clean": ("emulated-camera.toml", {}, "cone-sweep", ["burst_frames=20"]),
+    "strobe-sweep-clean": ("emulated-strobe.toml", {}, "strobe-sweep", ["speeds_rpm=4000:7000:1000"]),
 }
 
 

@@ -100,12 +100,27 @@ class ReportFit:
 
 
 @dataclass(frozen=True)
+class Series:
+    """One more quantity of the row drawn against the figure's x, in its own panel beneath it
+    (no fit): ``y`` the column, ``name`` and ``unit`` its axis label (``beta [mm]``)."""
+
+    y: str
+    name: str
+    unit: str = ""
+
+    @property
+    def label(self) -> str:
+        return f"{self.name} [{self.unit}]" if self.unit else self.name
+
+
+@dataclass(frozen=True)
 class Hints:
     """How a protocol's rows are drawn and fitted: the figure is ``y`` against ``x`` (row
     columns), named ``<name> [<unit>]``; ``fit`` is the ``labkit fit`` model the live view
     redraws at every point ("" for none); ``report_fits`` the report's fits (empty: ``fit``
     alone); ``residual`` ``ratio`` or ``difference``; ``root`` the rerun entity of the figure
-    (derived from ``figure`` when empty)."""
+    (derived from ``figure`` when empty); ``also`` more columns drawn against the same x, each
+    in its own panel (:class:`Series`; the strobe sweep's beta and delta beside phi)."""
 
     x: str
     y: str
@@ -123,6 +138,7 @@ class Hints:
     report_fits: tuple[ReportFit, ...] = ()
     report_title: str = ""
     notes: tuple[str, ...] = ()
+    also: tuple[Series, ...] = ()
 
     def __post_init__(self) -> None:
         if self.residual not in RESIDUALS:
@@ -160,9 +176,10 @@ class Hints:
         factor = TARGET_UNITS.get(self.x_unit)
         return None if factor is None else target_rad_s * factor
 
-    def point_xy(self, point: dict[str, Any]) -> tuple[float, float] | None:
-        """``(x, y)`` of a result row, None when either is missing or not a finite number."""
-        x, y = point.get(self.x), point.get(self.y)
+    def point_xy(self, point: dict[str, Any], y_key: str | None = None) -> tuple[float, float] | None:
+        """``(x, y)`` of a result row (``y_key``: another column than ``y``), None when either is
+        missing or not a finite number."""
+        x, y = point.get(self.x), point.get(y_key or self.y)
         if not isinstance(x, int | float) or not isinstance(y, int | float):
             return None
         if not (math.isfinite(x) and math.isfinite(y)):
@@ -181,6 +198,7 @@ class Hints:
         out = asdict(self)
         out["report_fits"] = [asdict(f) for f in self.report_fits]
         out["notes"] = list(self.notes)
+        out["also"] = [asdict(s) for s in self.also]
         return out
 
     @classmethod
@@ -193,6 +211,7 @@ class Hints:
             data["reference"] = Curve(**curve) if curve else None
             data["report_fits"] = tuple(ReportFit(**f) for f in data.get("report_fits") or ())
             data["notes"] = tuple(data.get("notes") or ())
+            data["also"] = tuple(Series(**s) for s in data.get("also") or ())
             return cls(**data)
         except (TypeError, KeyError) as exc:
             raise HintsError(f"start document hints cannot be read: {exc}") from None

@@ -52,7 +52,7 @@ def add_set_argument(p: argparse.ArgumentParser, help: str) -> None:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "run",
-        help="run a measurement protocol on a rig (speed-sweep, spin-critical)",
+        help="run a measurement protocol on a rig (speed-sweep, spin-critical, cone-sweep, strobe-sweep)",
         description=__doc__.split("\n\n")[1] if __doc__ else None,
     )
     p.add_argument("rig", nargs="?", help="rig file (rigs/*.toml) or a bundled rig name")

@@ -115,7 +115,10 @@ def run(args: argparse.Namespace) -> int:
             before = json.loads(cassette.open(encoding="utf-8").readline())["settings"]["size"]
             report.append(shrink_cassette(cassette, how))
             after = json.loads(cassette.open(encoding="utf-8").readline())["settings"]["size"]
-            scale = int(after.split("x")[0]) / int(before.split("x")[0])
+            # pixels per recorded pixel: the scaled width over the width before scaling (the crop's,
+            # when cropped: a crop alone leaves millimetres per pixel as they were)
+            scaled_from = how.crop[2] if how.crop is not None else int(before.split("x")[0])
+            scale = int(after.split("x")[0]) / scaled_from
         if not report:
             raise LabkitError(f"{src}: no frame cassette to shrink")
         run_doc["params"] = hook(dict(run_doc["params"]), how, scale)

@@ -10,41 +10,37 @@ sensor noise is seed ``1000 seed + k``). Frames are JPEG bytes, as from an MJPEG
 
 Frames are pulled, not pushed: reading frame ``k`` waits on the clock until its exposure has
 ended (a virtual clock jumps there, running the speed loop on the way), so a burst takes the
-time a real camera's would. Options (URL query): ``seed``, ``plant``, ``size`` (320x240),
-``fps`` (30), ``exposure_s`` (0.004), ``screen_mm`` (500), ``mm_per_px`` (2.0).
+time a real camera's would; it holds the last ``QUEUE_FRAMES`` exposed frames for a reader
+that is a little late, and skips to the next slot when the one due has left that queue.
+Options (URL query): ``seed``, ``plant``, ``size`` (320x240), ``fps`` (30), ``exposure_s``
+(0.004), ``screen_mm`` (500), ``mm_per_px`` (2.0), ``scene``
+(``laser``; ``strobe``: the floator side on, lit by the plant's strobe:
+:mod:`labkit.emulators.camera_strobe`, with its own options).
 """
 
 from __future__ import annotations
 
 import math
-from functools import lru_cache
 from typing import Any
 
 from labkit.devices.camera.frames import CameraSettings
 from labkit.devices.camera.sources import RawFrame, SourceStopped, encode_jpeg
 from labkit.devices.camera.urls import CameraRequest
+from labkit.emulators.camera_strobe import StrobeScene, model_swing
 from labkit.emulators.plant import shared_plant
 from labkit.emulators.twin_model import TwinParams
 
 DEFAULTS = {"size": (320, 240), "fps": 30.0, "exposure_s": 0.004, "screen_mm": 500.0, "mm_per_px": 2.0}
 SIM_JPEG_QUALITY = 75
+#: frames the emulated camera holds for a late reader (a webcam driver queues 2-4)
+QUEUE_FRAMES = 3
 
 
-@lru_cache(maxsize=512)
 def model_cone_angle(params: Any, rpm: int) -> float:
     """The model's cone angle (rad) at ``rpm`` (whole RPM: cached); 0 where there is no steady
-    cone (rotor at rest or too slow for the floator to follow)."""
-    if rpm < 500:
-        return 0.0
-    from labkit.model.floator_equilibrium import FloatorSetup, steady_state
-
-    setup = FloatorSetup(params.m_rotator, params.m_floator, params.mass_kg, params.i_radial,
-                         params.i_axial, rpm * math.pi / 30.0, params.tilt_rad)
-    try:
-        phi = float(steady_state(setup, params.gap_m).phi)
-    except Exception:  # noqa: BLE001 - no steady state: the floator does not follow; no cone to film
-        return 0.0
-    return phi if math.isfinite(phi) and 0 < phi < math.pi / 4 else 0.0
+    cone (rotor at rest or too slow for the floator to follow). The phi of
+    :func:`labkit.emulators.camera_strobe.model_swing`: one solve for both scenes."""
+    return model_swing(params, rpm)[0]
 
 
 class SimCameraSource:
@@ -64,6 +60,12 @@ class SimCameraSource:
         self.mm_per_px = float(opts.get("mm_per_px", DEFAULTS["mm_per_px"]))
         if self.exposure_s > 1.0 / self.fps:
             raise SourceStopped(f"exposure_s={self.exposure_s:g} is longer than a frame at {self.fps:g} fps")
+        self.scene_name = opts.get("scene", "laser")
+        if self.scene_name not in ("laser", "strobe"):
+            raise SourceStopped(f"scene={self.scene_name!r}: expected laser or strobe")
+        self.strobe_scene: Any = None
+        if self.scene_name == "strobe":
+            self.strobe_scene = StrobeScene(self, opts)
         self.k = 0
         self.t0 = 0.0
         self.clock: Any = None
@@ -74,7 +76,7 @@ class SimCameraSource:
         self.params = getattr(self.plant, "params", None)
         if self.params is None:
             self.params = TwinParams()
-        self.render(clock.now(), 0)  # warm up (imports, the model's first solve): no slot is lost to it
+        self.frame_image(clock.now(), 0)  # warm up (imports, the model's first solve): no slot is lost to it
         self.t0 = clock.now()
         asked = {"size": f"{self.size[0]}x{self.size[1]}", "fps": self.fps, "exposure_s": self.exposure_s}
         return CameraSettings(tuple(self.size), self.fps, "MJPG", self.exposure_s, "device", "sim-footage",
@@ -86,18 +88,31 @@ class SimCameraSource:
         return model_cone_angle(self.params, int(round(w * 30.0 / math.pi))), w
 
     def read(self, timeout_s: float) -> RawFrame:
-        # the next frame slot not already past (a reader that fell behind skips slots: drops)
+        # the next frame slot if it is still in the camera's queue (QUEUE_FRAMES deep, as a V4L2
+        # driver's buffers): a reader a little late (a control tick's serial traffic on a virtual
+        # clock) gets every frame; one that fell further behind, or was idle, goes on from the
+        # next slot not yet started (the slots between: drops, or discarded between bursts)
         period = 1.0 / self.fps
         now = self.clock.now()
-        self.k = max(self.k, math.ceil((now - self.t0) / period - 1e-9))
+        if self.k < math.floor((now - self.t0 - self.exposure_s) / period + 1e-9) - QUEUE_FRAMES + 1:
+            self.k = math.ceil((now - self.t0) / period - 1e-9)
         start = self.t0 + self.k * period
         self.clock.sleep_until(start + self.exposure_s)
-        image = self.render(start, self.k)
+        image = self.frame_image(start, self.k)
         seq = self.k
         self.k += 1
-        phi, w = self.cone_angle(start)
-        return RawFrame(encode_jpeg(image, SIM_JPEG_QUALITY), t_device=start, seq=seq,
-                        meta={"model_cone_angle_rad": phi, "model_speed_rad_s": w})
+        if self.strobe_scene is not None:
+            meta = self.strobe_scene.truth(start)
+        else:
+            phi, w = self.cone_angle(start)
+            meta = {"model_cone_angle_rad": phi, "model_speed_rad_s": w}
+        return RawFrame(encode_jpeg(image, SIM_JPEG_QUALITY), t_device=start, seq=seq, meta=meta)
+
+    def frame_image(self, start: float, k: int):
+        """Frame ``k`` of the scene the URL asks for (the laser trace, or the strobe-lit floator)."""
+        if self.strobe_scene is not None:
+            return self.strobe_scene.render(start, k)
+        return self.render(start, k)
 
     def render(self, start: float, k: int):
         from labkit.footage import (

@@ -200,6 +200,9 @@ class RigPlant:
     floator_present: bool = True
     #: the spin-critical floator (Fig. 6.18); None: constant spin, force from ``force_law``
     floator: FloatorPlant | None = None
+    #: strobe emulators on this plant by role: the emulated camera lights the floator with
+    #: their flashes (``sim://camera?scene=strobe``, :mod:`labkit.emulators.camera_strobe`)
+    strobes: dict[str, Any] = field(default_factory=dict)
     _lock: threading.RLock = field(default_factory=threading.RLock, repr=False)
 
     def motor(self, name: str = "rotor") -> MotorPlant:

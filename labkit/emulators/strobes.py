@@ -47,6 +47,7 @@ class LabkitStrobeEmulator(SketchLines, Emulator):
         self._reset_done = False
         self._started_mid_frame = False
         self._next_t: float | None = None
+        self.plant.strobes[self.role or "strobe"] = self  # the emulated camera's lamp
 
     # ---- power / time -------------------------------------------------------------------
     def power_on(self, t: float) -> None:
@@ -144,6 +145,25 @@ class LabkitStrobeEmulator(SketchLines, Emulator):
                 f"{phase_deg:.1f},{flags or '0'}\n")
         self.seq += 1
         return line.encode("ascii")
+
+    # ---- the flashes, for the emulated camera --------------------------------------------
+    def flash_plan(self, t: float) -> tuple[float, float, int, float] | None:
+        """What the lamp does at ``t``: (true rotor frequency Hz, offset Hz, divider, flash
+        width s), or None while it is dark (off, rotor out of range, offset too large, or not
+        yet locked: the first 5 revolutions after the rotor came into range). The true speed,
+        not a reading: the flashes follow the rotor's own pulse."""
+        if self._next_t is None or not self.lamp_on or t < self._boot_end:
+            return None
+        w = self.plant.floator_spin(t) if self.source == "floator" else self.plant.speed(t, self.source)
+        f_rot = abs(w) / TWO_PI
+        if not MIN_HZ <= f_rot <= MAX_HZ or self._in_range_since is None:
+            return None
+        if t - self._in_range_since < LOCK_REVOLUTIONS / f_rot:
+            return None
+        period = 1.0 / f_rot
+        if abs(self.offset_hz * self.divider * period / (1.0 - self.offset_hz * period)) > 0.25:
+            return None
+        return f_rot, self.offset_hz, self.divider, min(self.width_us * 1e-6, period / 4)
 
     # ---- commands -----------------------------------------------------------------------
     def _command(self, text: str, t: float) -> None:

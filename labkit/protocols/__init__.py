@@ -9,8 +9,10 @@ from labkit.protocols.events import EventBus, ListSink, ProgressSink, Sink
 from labkit.protocols.runner import ProtocolDef, RunContext, Runner, RunOutcome, Step, StopRequested
 from labkit.protocols.speed_sweep import SpeedSweep
 from labkit.protocols.spin_critical import SpinCritical
+from labkit.protocols.strobe_sweep import StrobeSweep
 
-PROTOCOLS: dict[str, type[ProtocolDef]] = {p.name: p for p in (SpeedSweep, SpinCritical, ConeSweep)}
+PROTOCOLS: dict[str, type[ProtocolDef]] = {
+    p.name: p for p in (SpeedSweep, SpinCritical, ConeSweep, StrobeSweep)}
 
 
 def get_protocol(name: str) -> ProtocolDef:

@@ -1,6 +1,7 @@
 """What the built-in protocols declare about their data: the row each step produces, and
 the paper's figure it is drawn as (Fig. 5.25 for ``speed-sweep``, Fig. 6.18 for
-``spin-critical``), with the fits the live view and the report make (ADR 0021).
+``spin-critical``, Eq. 5.24 for ``cone-sweep``, Eq. 5.97 for ``strobe-sweep``), with the fits the
+live view and the report make (ADR 0021).
 
 The types are :mod:`labkit.hints`'; the protocols point at these declarations
 (``SpeedSweep.hints = FIG_5_25``), and :mod:`labkit.protocols.legacy_hints` gives them to
@@ -9,7 +10,7 @@ sessions recorded before the start document carried hints.
 
 from __future__ import annotations
 
-from labkit.hints import Column, Curve, Hints, ReportFit
+from labkit.hints import Column, Curve, Hints, ReportFit, Series
 
 #: the paper's Fig. 5.25: y [g] = 224e6 x [RPM]^-1.9
 PAPER_FIG525 = Curve("paper", "y = 224e6 x^-1.9", "power-law", {"a": 224e6, "b": -1.9}, figure="Fig. 5.25")
@@ -112,4 +113,60 @@ CONE_SWEEP_ROW = (
     Column("dropped", "", "frames the camera dropped during the burst"),
     Column("retaken", "", "the burst was taken again after a doubtful or failed one"),
     Column("model_cone_angle_rad", "rad", "the emulated camera's model plant angle (null on hardware)"),
+)
+
+
+EQ_5_97 = Hints(
+    x="speed_rpm", y="phi_deg", x_name="rotor speed", x_unit="RPM", y_name="tilt amplitude phi",
+    y_unit="deg", figure="Eq. 5.97", title="tilt amplitude phi [deg] against rotor speed [RPM] (strobe)",
+    root="/eq5_97", fit="", residual="difference",
+    report_title="Tilt amplitude, lateral amplitude and RC offset vs rotor speed (Eq. 5.97)",
+    report_fits=(
+        ReportFit("phi-cone-angle", "Eq. 5.24 on the tilt amplitude phi: tau_C and tau_S", "cone-angle",
+                  "Tilt amplitude phi vs rotor speed (strobe, Eq. 5.97 / 5.24)", inertia=True, y="phi_rad"),
+        ReportFit("beta-power-law", "Power law beta = a x^b", "power-law",
+                  "Lateral amplitude beta vs rotor speed (strobe, Eq. 5.97)", x="speed_rpm", y="beta_mm"),
+        ReportFit("delta-power-law", "Power law delta = a x^b (b near 0: delta does not depend on speed)",
+                  "power-law", "RC offset delta vs rotor speed (strobe, Eq. 5.97)", x="speed_rpm",
+                  y="delta_mm"),
+    ),
+    notes=("phi, beta and delta = beta / tan(phi) (Eq. 5.97) from the strobe analysis of each burst, the "
+           "rotor and strobe frequencies from the strobe's status lines; error bars are the analysis's "
+           "1-sigma from the residuals.",),
+    also=(Series("beta_mm", "lateral amplitude beta", "mm"), Series("delta_mm", "RC offset delta", "mm")))
+
+STROBE_SWEEP_ROW = (
+    Column("step", "", "index of the step in the plan"),
+    Column("target_rpm", "RPM", "the step's target speed"),
+    Column("speed_rpm", "RPM", "mean measured rotor speed during the burst (tachometer)"),
+    Column("phi_rad", "rad", "tilt amplitude phi (Eq. 5.97)"),
+    Column("phi_stderr_rad", "rad", "its 1-sigma from the fit's residuals"),
+    Column("beta_mm", "mm", "lateral amplitude beta of the centre of mass across the magnet axis"),
+    Column("beta_stderr_mm", "mm", "its 1-sigma"),
+    Column("delta_mm", "mm", "RC offset delta = beta / tan(phi) (Eq. 5.97)"),
+    Column("delta_stderr_mm", "mm", "its 1-sigma"),
+    Column("verdict", "", "the analysis's verdict (ok, doubtful, failed), doubtful on a strobe flag"),
+    Column("speed_rad_s", "rad/s", "the same in rad/s"),
+    Column("speed_std_rpm", "RPM", "standard deviation of the measured speed"),
+    Column("offset_hz", "Hz", "the offset the strobe was set to (the apparent frequency)"),
+    Column("divider", "", "flashes every divider-th revolution"),
+    Column("rotor_hz", "Hz", "rotor frequency: mean of the strobe's locked status lines over the burst"),
+    Column("strobe_hz", "Hz", "strobe frequency: the same lines' mean"),
+    Column("apparent_hz", "Hz", "f_rot - m f_strobe of those lines"),
+    Column("strobe_lines", "", "status lines read over the burst"),
+    Column("strobe_flags", "", "flags in those lines (docs/reference/devices-strobe.md)"),
+    Column("phi_deg", "deg", "phi in degrees"),
+    Column("phi_stderr_deg", "deg", "its 1-sigma in degrees"),
+    Column("beta_px", "px", "beta in pixels (beta_mm = beta_px mm_per_px)"),
+    Column("rc_offset_direction", "", "towards the body's top or bottom"),
+    Column("analysed_apparent_hz", "Hz", "the apparent frequency the analysis used"),
+    Column("reasons", "", "why the verdict is not ok"),
+    Column("frames", "", "frames analysed (0: a recorded clip)"),
+    Column("dropped", "", "frames the camera dropped during the burst"),
+    Column("retaken", "", "the burst was taken again after a doubtful or failed one"),
+    Column("clip", "", "the recorded clip analysed (rigs without a camera)"),
+    Column("model_phi_rad", "rad", "the emulated camera's model plant phi at the burst's speed "
+                                   "(null on hardware)"),
+    Column("model_beta_mm", "mm", "the model's beta (null on hardware)"),
+    Column("model_delta_mm", "mm", "the model's delta (null on hardware)"),
 )

@@ -26,6 +26,8 @@ from labkit.report.labels import axis_label, residual_label
 DPI = 150
 
 LOG_LOG = {"power-law", "pfr-force", "mbs-distance"}
+#: a log axis spanning less than this factor holds few ticks of mantissa 2, 3, 5 or 7: all are labelled
+NARROW_LOG_SPAN = 2.0
 
 
 def save(fig: Figure, path: str | Path, svg: bool = True, **kwargs) -> Path:
@@ -87,6 +89,9 @@ def fit_figure(report: FitReport, path: str | Path, *, overlays: Sequence[Overla
         for axis in (ax.xaxis, ax.yaxis, axr.xaxis):
             axis.set_major_formatter(FuncFormatter(_plain))
             axis.set_minor_formatter(FuncFormatter(_plain_minor))
+        for axis, (low, high) in ((ax.yaxis, ax.get_ylim()), (axr.xaxis, ax.get_xlim())):
+            if 0 < low and high < NARROW_LOG_SPAN * low:   # few of 2, 3, 5, 7 inside: label every tick
+                axis.set_minor_formatter(FuncFormatter(_four_digits))
     ax.set_ylabel(axis_label(first.y_name))
     axr.set_xlabel(axis_label(first.x_name))
     axr.set_ylabel(f"residual in\n{residual_label(first.residual_space)}", fontsize=9)
@@ -121,6 +126,10 @@ def _bar_collections(drawn, xerr, yerr) -> tuple:
 
 def _plain(v: float, _pos=None) -> str:
     return f"{v:g}"
+
+
+def _four_digits(v: float, _pos=None) -> str:
+    return f"{v:.4g}"
 
 
 def _plain_minor(v: float, _pos=None) -> str:

@@ -30,14 +30,18 @@ class FigureSpec:
     residual_label: str
     legend_corner: str = "RightTop"
     tab: str = ""
+    #: more quantities against the same x: (entity, panel title) each (the hints' ``also``)
+    also: tuple[tuple[str, str], ...] = ()
 
 
 def figure_of(hints: Any) -> FigureSpec | None:
     """The figure a run's hints (:class:`labkit.hints.Hints`) describe; None without."""
     if hints is None:
         return None
+    also = tuple((f"{hints.entity_root}/also/{s.y}", f"{s.label} against {hints.x_label}")
+                 for s in getattr(hints, "also", ()))
     return FigureSpec(hints.figure_title, hints.x_label, hints.entity_root, hints.y_label,
-                      hints.residual_label, hints.legend_corner, hints.figure or hints.figure_title)
+                      hints.residual_label, hints.legend_corner, hints.figure or hints.figure_title, also)
 
 
 def _whole_x_axis() -> Any:
@@ -101,12 +105,15 @@ def run_blueprint(figure: FigureSpec | None, loops: list[str], devices: list[str
         return rrb.Blueprint(rrb.Vertical(body, events, row_shares=[3, 1]), rrb.TimePanel(timeline="time"),
                              collapse_panels=True)
     plot, residual = figure_views(figure)
+    more = [rrb.TimeSeriesView(origin=origin, name=title, axis_x=_whole_x_axis(),
+                               plot_legend=rrb.PlotLegend(visible=False)) for origin, title in figure.also]
     if films:
-        charts = rrb.Vertical(plot, residual, row_shares=[5, 2])
+        charts = rrb.Vertical(plot, residual, *more, row_shares=[5, 2, *([3] * len(more))])
         top = rrb.Horizontal(charts, rrb.Vertical(*films), column_shares=[3, 2])
         tab = rrb.Vertical(top, events, row_shares=[7, 2], name=figure.tab or figure.title)
     else:
-        tab = rrb.Vertical(plot, residual, events, row_shares=[5, 2, 2], name=figure.tab or figure.title)
+        tab = rrb.Vertical(plot, residual, *more, events, row_shares=[5, 2, *([3] * len(more)), 2],
+                           name=figure.tab or figure.title)
     return rrb.Blueprint(rrb.Tabs(tab, rig, active_tab=0),
                          rrb.TimePanel(timeline=figure.timeline, play_state="paused"),
                          collapse_panels=True)

@@ -31,6 +31,7 @@ entity                                  content
 ``<fig>/plot/fit/after_NN``            the fit after NN points with its 95 % band, logged at
                                        every point; earlier fits are cleared (static Clear)
 ``<fig>/residual/after_NN``            data minus fit of that fit, beneath the figure
+``<fig>/also/<column>``                the hints' ``also`` columns against the same x, one panel each
 ``/events``                            text log: start, steps, settle, drops, interlocks, stop
 ``/camera/<device>/image``             a filmed burst's frames, the fitted trace and the trace
                                        at the live fit's y (:mod:`labkit.stream.frames`)
@@ -218,6 +219,13 @@ class RerunRunSink:
             names=fig.y_label, colors=[30, 110, 220], markers="circle", marker_sizes=5))
         self.rec.set_time(fig.timeline, sequence=int(round(xy[0])))
         self.rec.log(f"{fig.root}/plot/data", self.rr.Scalars(xy[1]))
+        assert self.hints is not None
+        for series, (path, _) in zip(self.hints.also, fig.also, strict=True):  # beside the figure
+            more = self.hints.point_xy(e.point, series.y)
+            if more is not None:
+                self._style(path, self.rr.SeriesPoints(names=series.label, colors=[30, 110, 220],
+                                                       markers="circle", marker_sizes=5))
+                self.rec.log(path, self.rr.Scalars(more[1]))
         self.rec.disable_timeline(fig.timeline)
         self.point_x[e.index] = xy[0]
         fit = self._log_fit()

@@ -23,7 +23,7 @@ def run_cli(argv, capsys):
     (["run", FIG525, "speed-sweep", "--set", "speeds_rpm=20000:26000:2000"],
      "above the rig's limit of 24000 RPM"),
     (["run", FIG525, "sweep-faster"],
-     "unknown protocol 'sweep-faster'; known: cone-sweep, speed-sweep, spin-critical"),
+     "unknown protocol 'sweep-faster'; known: cone-sweep, speed-sweep, spin-critical, strobe-sweep"),
     (["run", "no-such-rig.toml", "speed-sweep"], "no-such-rig.toml:(file): no such rig file"),
 ])
 def test_bad_input_is_one_line_and_exit_2_before_motion(argv, expected, capsys, tmp_path):

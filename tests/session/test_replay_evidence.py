@@ -47,6 +47,7 @@ def test_an_edited_point_event_is_named(tmp_path, capsys):
     assert named in err, err
 
 
-@pytest.mark.parametrize("name", ["speed-sweep-clean", "spin-critical-clean", "cone-sweep-clean"])
+@pytest.mark.parametrize("name", ["speed-sweep-clean", "spin-critical-clean", "cone-sweep-clean",
+                                  "strobe-sweep-clean"])
 def test_untouched_recordings_replay(tmp_path, name, capsys):
     assert main(["replay", str(SESSIONS / name)]) == 0, capsys.readouterr().err

@@ -85,3 +85,17 @@ def test_a_point_whose_analysis_is_not_ok_is_drawn_but_left_out_of_the_live_fit(
     assert "/gap/plot/fit/after_04" in entities and "/gap/plot/fit/after_05" not in entities
     assert any("verdict is doubtful (trace touches the frame's edge)" in t
                for t in event_texts(tmp_path / "r.rrd"))
+
+
+def test_also_columns_are_drawn_against_the_same_x_and_a_missing_value_is_skipped(tmp_path):
+    from labkit.hints import Series
+
+    hints = Hints("speed_rpm", "phi_deg", "rotor speed", "RPM", "phi", "deg", figure="Eq. 5.97",
+                  also=(Series("beta_mm", "beta", "mm"), Series("delta_mm", "delta", "mm")))
+    points = [{"speed_rpm": 4000.0 + 1000 * k, "phi_deg": 12.0 / (k + 1), "beta_mm": 0.6 / (k + 1),
+               "delta_mm": 2.6 if k != 2 else None} for k in range(4)]
+    stream_points(tmp_path / "r.rrd", hints, points)
+    x, y = column(tmp_path / "r.rrd", "/eq_5_97/also/beta_mm", "Scalars:scalars", "rotor speed [RPM]")
+    assert x == [4000, 5000, 6000, 7000] and [v[0] for v in y] == [0.6 / (k + 1) for k in range(4)]
+    x, y = column(tmp_path / "r.rrd", "/eq_5_97/also/delta_mm", "Scalars:scalars", "rotor speed [RPM]")
+    assert x == [4000, 5000, 7000] and [v[0] for v in y] == [2.6, 2.6, 2.6]
