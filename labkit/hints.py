@@ -39,11 +39,21 @@ class HintsError(LabkitError, ValueError):
 
 @dataclass(frozen=True)
 class Column:
-    """One key of a result row, its unit (``""`` for a count or a word) and what it is."""
+    """One key of a result row, its unit (``""`` for a count or a word) and what it is.
+
+    ``analysis``: the value comes out of an image analysis (OpenCV, least squares) whose last
+    digits depend on the CPU's floating-point path (SIMD kernels, BLAS), so a replay compares it
+    within a relative 1e-6 instead of exactly (:func:`analysis_keys`)."""
 
     name: str
     unit: str = ""
     doc: str = ""
+    analysis: bool = False
+
+
+def analysis_keys(row: tuple[Column, ...]) -> frozenset[str]:
+    """The keys of a row whose values a replay compares within tolerance (``Column.analysis``)."""
+    return frozenset(c.name for c in row if c.analysis)
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,7 @@ from labkit.io.clock import Clock, RealClock, VirtualClock, use_clock
 from labkit.protocols import get_protocol
 from labkit.protocols.events import Sink
 from labkit.protocols.params import resolve_params
-from labkit.protocols.replay_compare import ADDED_KEYS
+from labkit.protocols.replay_compare import ADDED_KEYS, DERIVED_KEYS, REPLAY_FIT_RTOL, close_enough
 from labkit.protocols.resume import ResumeLock, check_carried_points, rig_differences
 from labkit.protocols.runner import ProtocolDef, Runner, RunOutcome
 from labkit.rig import Rig, load_rig
@@ -228,26 +228,17 @@ def replay_url(session: Path, role: str) -> str:
 #: readings and points are compared exactly; values under a derived key (``fit``) are equal when
 #: ``|a - b| <= REPLAY_FIT_RTOL * max(|a|, |b|) + REPLAY_FIT_ATOL`` (documented in
 #: docs/reference/protocols.md).
-REPLAY_FIT_RTOL = 1e-6
-REPLAY_FIT_ATOL = 1e-12
-DERIVED_KEYS = frozenset({"fit"})
-
-
-def _close(a: float, b: float) -> bool:
-    if math.isnan(a) and math.isnan(b):
-        return True
-    return abs(a - b) <= REPLAY_FIT_RTOL * max(abs(a), abs(b)) + REPLAY_FIT_ATOL
-
-
-def diff_results(a: Any, b: Any, path: str = "results", derived: bool = False) -> list[str]:
+def diff_results(a: Any, b: Any, path: str = "results", derived: bool = False,
+                 derived_keys: frozenset[str] = DERIVED_KEYS) -> list[str]:
     """Human-readable differences between two JSON values, both values printed.
 
-    Everything is compared exactly except numbers below a key in :data:`DERIVED_KEYS`, which
-    are compared within :data:`REPLAY_FIT_RTOL` (a fit's last digits depend on the CPU).
+    Everything is compared exactly except numbers below a key in ``derived_keys`` (by default
+    :data:`DERIVED_KEYS`; a replay adds the protocol's image-analysis columns, ``Column.analysis``),
+    which are compared within :data:`REPLAY_FIT_RTOL` (their last digits depend on the CPU).
     """
     if derived and isinstance(a, int | float) and isinstance(b, int | float) \
             and not isinstance(a, bool) and not isinstance(b, bool):
-        if _close(float(a), float(b)):
+        if close_enough(float(a), float(b)):
             return []
         return [f"{path}: replay {a!r} != recording {b!r} (beyond relative tolerance {REPLAY_FIT_RTOL:g})"]
     if type(a) is not type(b):
@@ -260,13 +251,13 @@ def diff_results(a: Any, b: Any, path: str = "results", derived: bool = False) -
             if k not in a or k not in b:
                 out.append(f"{path}.{k}: only in {'replay' if k in a else 'recording'}")
             else:
-                out += diff_results(a[k], b[k], f"{path}.{k}", derived or k in DERIVED_KEYS)
+                out += diff_results(a[k], b[k], f"{path}.{k}", derived or k in derived_keys, derived_keys)
         return out
     if isinstance(a, list):
         if len(a) != len(b):
             return [f"{path}: {len(a)} entries != {len(b)}"]
         pairs = enumerate(zip(a, b, strict=True))
-        return [d for i, (x, y) in pairs for d in diff_results(x, y, f"{path}[{i}]", derived)]
+        return [d for i, (x, y) in pairs for d in diff_results(x, y, f"{path}[{i}]", derived, derived_keys)]
     if a == b or (isinstance(a, float) and math.isnan(a) and math.isnan(b)):
         return []
     return [f"{path}: replay {a!r} != recording {b!r}"]

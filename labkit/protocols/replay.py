@@ -22,12 +22,19 @@ from pathlib import Path
 from typing import Any
 
 from labkit.errors import CassetteError, LabkitError
+from labkit.hints import analysis_keys
 from labkit.io.clock import ReplayClock, VirtualClock, recorded_ticks, use_clock
 from labkit.protocols import get_protocol
 from labkit.protocols.events import Sink
 from labkit.protocols.launch import diff_results, recorded_points, replay_url
 from labkit.protocols.params import resolve_params
-from labkit.protocols.replay_compare import decisions, diff_decisions, diff_within, offline_wording
+from labkit.protocols.replay_compare import (
+    DERIVED_KEYS,
+    decisions,
+    diff_decisions,
+    diff_within,
+    offline_wording,
+)
 from labkit.protocols.replay_evidence import Evidence, diff_points, diff_readings
 from labkit.protocols.resume import check_carried_points
 from labkit.protocols.runner import Runner, RunOutcome, normalise
@@ -173,11 +180,11 @@ def faithful_schedules(record: SessionRecord, rig: Any) -> dict[str, list[float]
     return schedules
 
 
-def _evidence_diffs(record: Any, evidence: Evidence, resumed: bool) -> list[str]:
+def _evidence_diffs(record: Any, evidence: Evidence, resumed: bool, tolerant: frozenset[str]) -> list[str]:
     """The session's point events and readings files against what the replay parsed
     (:mod:`labkit.protocols.replay_evidence`); readings only for a session that was not resumed
     (a resumed session's files also hold the first run's readings)."""
-    diffs = diff_points(evidence.points, record.point_events())
+    diffs = diff_points(evidence.points, record.point_events(), tolerant)
     if resumed:
         return diffs
     for role in sorted(set(evidence.readings) | {p.stem for p in (record.path / "readings").glob("*.jsonl")}):
@@ -228,8 +235,10 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
     recorded = record.results
     warnings = record.problems + dropped
     if not faithful:
-        diffs = diff_results(replayed, recorded) if recorded is not None else ["no results.json recorded"]
-        diffs += _evidence_diffs(record, evidence, resumed=bool(points))
+        tolerant = DERIVED_KEYS | analysis_keys(protocol.row)  # their last digits follow the CPU
+        diffs = (diff_results(replayed, recorded, derived_keys=tolerant) if recorded is not None
+                 else ["no results.json recorded"])
+        diffs += _evidence_diffs(record, evidence, resumed=bool(points), tolerant=tolerant)
         return ReplayOutcome(outcome, recorded, not diffs, diffs, warnings, "exact")
     replay_decisions = decisions(collect.events)
     diffs = diff_decisions(replay_decisions, decisions(record.events))

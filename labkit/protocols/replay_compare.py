@@ -20,6 +20,19 @@ import math
 import re
 from typing import Any
 
+#: an exact replay compares a fit (and a protocol's image-analysis columns) within this
+REPLAY_FIT_RTOL = 1e-6
+REPLAY_FIT_ATOL = 1e-12
+DERIVED_KEYS = frozenset({"fit"})
+
+
+def close_enough(a: float, b: float) -> bool:
+    """Equal within :data:`REPLAY_FIT_RTOL` (and :data:`REPLAY_FIT_ATOL`); two NaNs are equal."""
+    if math.isnan(a) and math.isnan(b):
+        return True
+    return abs(a - b) <= REPLAY_FIT_RTOL * max(abs(a), abs(b)) + REPLAY_FIT_ATOL
+
+
 #: key -> ("rel" | "abs" | "count", tolerance); "count": relative, but one more or fewer always
 #: passes; keys not listed compare within DEFAULT_RTOL
 POINT_TOLERANCES: dict[str, tuple[str, float]] = {

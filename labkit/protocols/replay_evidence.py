@@ -15,7 +15,7 @@ from __future__ import annotations
 import json
 from typing import Any
 
-from labkit.protocols.replay_compare import ADDED_KEYS
+from labkit.protocols.replay_compare import ADDED_KEYS, close_enough
 
 #: the reading keys compared (the time, the number and the bytes it came from)
 READING_KEYS = ("t", "value", "raw")
@@ -38,21 +38,28 @@ class Evidence:
             self.readings.setdefault(str(event.get("device")), []).append(event.to_json())
 
 
-def _same(a: Any, b: Any) -> bool:
+def _same(a: Any, b: Any, tolerant: bool = False) -> bool:
+    if tolerant and isinstance(a, int | float) and isinstance(b, int | float) \
+            and not isinstance(a, bool) and not isinstance(b, bool):
+        return close_enough(float(a), float(b))
     return json.dumps(a, sort_keys=True) == json.dumps(b, sort_keys=True)
 
 
-def diff_points(replayed: list[dict[str, Any]], recorded: list[tuple[str, Any]]) -> list[str]:
+def diff_points(replayed: list[dict[str, Any]], recorded: list[tuple[str, Any]],
+                tolerant: frozenset[str] = frozenset()) -> list[str]:
     """Each recorded point event (``events.jsonl:LINE``) against the replay's point of the same
-    step. A point line that is damaged or missing is the session reader's warning already; a
-    step the replay makes and the events do not hold is results.json's difference."""
+    step; keys in ``tolerant`` (a protocol's image-analysis columns) compared within
+    :data:`~labkit.protocols.replay_compare.REPLAY_FIT_RTOL`. A point line that is damaged or
+    missing is the session reader's warning already; a step the replay makes and the events do
+    not hold is results.json's difference."""
     out = []
     by_step = {p.get("step"): p for p in replayed}
     for where, point in recorded:
         if not isinstance(point, dict) or point.get("step") not in by_step:
             continue
         again = by_step[point["step"]]
-        keys = sorted(k for k in set(point) | set(again) if not _same(point.get(k), again.get(k))
+        keys = sorted(k for k in set(point) | set(again)
+                      if not _same(point.get(k), again.get(k), k in tolerant)
                       and not (k not in point and k in ADDED_KEYS))  # a key newer than the recording
         if not keys:
             continue
