@@ -26,6 +26,7 @@ from labkit.protocols.events import Sink
 from labkit.protocols.params import resolve_params
 from labkit.protocols.replay_compare import ADDED_KEYS
 from labkit.protocols.resume import ResumeLock, check_carried_points, rig_differences
+from labkit.protocols.resume_evidence import check_points_against_cassettes
 from labkit.protocols.runner import ProtocolDef, Runner, RunOutcome
 from labkit.rig import Rig, load_rig
 from labkit.session import Session, SessionRecord, check_writable, load_session
@@ -142,8 +143,10 @@ def _prepare(rig_path: str | Path | None, protocol_name: str | None, sets: list[
     the_clock = make_clock(clock, rig)
     points: list[dict[str, Any]] = []
     if record is not None:
-        points, dropped = check_carried_points(recorded_points(record), protocol.plan(rig, params))
-        warnings += dropped
+        unconfirmed, notes = check_points_against_cassettes(record, resume)
+        sources = [(where, p) for where, p in recorded_points(record) if where not in unconfirmed]
+        points, dropped = check_carried_points(sources, protocol.plan(rig, params))
+        warnings += notes + dropped
     done = {int(p["step"]) for p in points}
     runner = Runner(protocol, rig, params, clock=the_clock, sinks=sinks, previous_points=points,
                     done_steps=done)
