@@ -28,6 +28,7 @@ from labkit.protocols.events import Sink
 from labkit.protocols.launch import diff_results, recorded_points, replay_url
 from labkit.protocols.params import resolve_params
 from labkit.protocols.replay_compare import decisions, diff_decisions, diff_within, offline_wording
+from labkit.protocols.reading_evidence import faithful_reading_diffs
 from labkit.protocols.replay_evidence import Evidence, diff_points, diff_readings
 from labkit.protocols.resume import check_carried_points
 from labkit.protocols.runner import Runner, RunOutcome, normalise
@@ -237,5 +238,7 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
         diffs.append("recording has no results.json")
     else:
         diffs += diff_within(replayed, recorded)
+    if not points:  # a resumed session's readings files also hold the first run's readings
+        diffs += faithful_reading_diffs(record, rig, evidence.readings)
     ports = [port.report() for port in runner.ports.values() if hasattr(port, "report")]
     return ReplayOutcome(outcome, recorded, not diffs, diffs, warnings, "faithful", ports, replay_decisions)
