@@ -82,7 +82,8 @@ def _same_number(a: Any, b: Any) -> bool:
     return a == b
 
 
-def _expected(rec: dict[str, Any], parsed: dict[str, tuple[Any, Any]], reparse: Any) -> tuple[Any, Any] | None:
+def _expected(rec: dict[str, Any], parsed: dict[str, tuple[Any, Any]],
+              reparse: Any) -> tuple[Any, Any] | None:
     raw = str(rec.get("raw", ""))
     if raw in parsed:
         return parsed[raw]
@@ -137,5 +138,6 @@ def faithful_reading_diffs(record: Any, rig: Any, replayed: dict[str, list[dict[
         file = record.path / "readings" / f"{role}.jsonl"
         cassette = record.path / "cassettes" / f"{role}.jsonl"
         if file.is_file() and cassette.is_file():
-            out += diff_readings_faithful(dev, replayed.get(role, []), record.readings(role), cassette, str(file))
+            out += diff_readings_faithful(dev, replayed.get(role, []), record.readings(role), cassette,
+                                          str(file))
     return out

@@ -27,8 +27,8 @@ from labkit.protocols import get_protocol
 from labkit.protocols.events import Sink
 from labkit.protocols.launch import diff_results, recorded_points, replay_url
 from labkit.protocols.params import resolve_params
-from labkit.protocols.replay_compare import decisions, diff_decisions, diff_within, offline_wording
 from labkit.protocols.reading_evidence import faithful_reading_diffs
+from labkit.protocols.replay_compare import decisions, diff_decisions, diff_within, offline_wording
 from labkit.protocols.replay_evidence import Evidence, diff_points, diff_readings
 from labkit.protocols.resume import check_carried_points
 from labkit.protocols.runner import Runner, RunOutcome, normalise
