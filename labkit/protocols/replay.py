@@ -34,6 +34,7 @@ from labkit.protocols.resume import check_carried_points
 from labkit.protocols.runner import Runner, RunOutcome, normalise
 from labkit.rig import load_rig
 from labkit.session import SessionRecord, load_session
+from labkit.session.integrity import integrity_problems
 
 LEVELS = ("auto", "exact", "faithful", "analysis")
 LEVEL_WORDS = {
@@ -192,10 +193,13 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
     real-clock one) and compare it with the recording."""
     record = load_session(path)
     chosen = choose_level(record, level)
+    tampered = integrity_problems(record.path, record.meta)  # digests, cassette time lines
     if chosen == "analysis":
         from labkit.protocols.reanalyse import reanalyse_session
 
         result = reanalyse_session(record)
+        result.differences[:0] = tampered
+        result.identical = result.identical and not tampered
         if level == "auto":
             result.warnings.insert(0, f"{record.path}: a real-clock session from a labkit that did not "
                                       "record its clock origin and threads: re-analysed, not replayed")
@@ -229,11 +233,12 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
     recorded = record.results
     warnings = record.problems + dropped
     if not faithful:
-        diffs = diff_results(replayed, recorded) if recorded is not None else ["no results.json recorded"]
+        diffs = tampered + (diff_results(replayed, recorded) if recorded is not None
+                            else ["no results.json recorded"])
         diffs += _evidence_diffs(record, evidence, resumed=bool(points))
         return ReplayOutcome(outcome, recorded, not diffs, diffs, warnings, "exact")
     replay_decisions = decisions(collect.events)
-    diffs = diff_decisions(replay_decisions, decisions(record.events))
+    diffs = tampered + diff_decisions(replay_decisions, decisions(record.events))
     if recorded is None:
         diffs.append("recording has no results.json")
     else:

@@ -14,6 +14,8 @@ interrupted session's replay ends where its cassettes end; the points before tha
   its step is measured again, with a warning naming file and line.
 * A session without cassettes, or whose cassettes cannot be read, is carried unchecked with a
   warning saying why.
+* A file whose digest differs from the one run.json recorded, or a cassette whose times run
+  backwards (:mod:`labkit.session.integrity`), refuses the resume.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from labkit.errors import LabkitError
 from labkit.protocols.replay_compare import diff_within
 from labkit.protocols.replay_evidence import Evidence, diff_points
 from labkit.session import SessionRecord
+from labkit.session.integrity import integrity_problems
 
 
 def replayed_points(record: SessionRecord) -> tuple[str, list[dict[str, Any]]]:
@@ -59,6 +62,10 @@ def check_points_against_cassettes(record: SessionRecord, resume: Any) -> tuple[
     """Where (``events.jsonl:LINE``) the points are that the cassettes could not confirm (not to
     carry) and a warning per such point; raises LabkitError naming each point that contradicts
     them."""
+    tampered = integrity_problems(record.path, record.meta)
+    if tampered:
+        raise LabkitError(f"--resume {resume}: refused, the session was changed after it was recorded: "
+                          + "; ".join(tampered[:5]))
     recorded = [(w, p) for w, p in record.point_events() if isinstance(p, dict)]
     if not recorded:
         return set(), []

@@ -231,4 +231,10 @@ class Session:
                 readings_to_parquet(role_file, role_file.with_suffix(".parquet"))
         except Exception:  # noqa: BLE001 - the JSONL files stay the primary record
             pass
-        self.update_meta(ended=utc_now(), status=status, reason=reason)
+        from labkit.session.integrity import file_digests
+
+        try:
+            digests: dict[str, str] | None = file_digests(self.path)  # labkit/session/integrity.py
+        except OSError:
+            digests = None  # a file that cannot be read back: the session ends without digests
+        self.update_meta(ended=utc_now(), status=status, reason=reason, digests=digests)

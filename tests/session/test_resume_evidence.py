@@ -60,3 +60,14 @@ def test_an_untouched_interrupted_session_resumes_with_its_points_carried(tmp_pa
     meta = json.loads((new / "run.json").read_text())
     assert [p["step"] for p in meta["carried_points"]] == [0, 1, 2]
     assert meta["resume_warnings"] == []
+
+
+def test_a_cassette_with_a_negative_time_refuses_the_resume(tmp_path, capsys):
+    session = _interrupted(tmp_path, "speed-sweep-clean", 86)
+    cassette = session / "cassettes" / "balance.jsonl"
+    lines = cassette.read_text().splitlines()
+    lines[9] = json.dumps({**json.loads(lines[9]), "t": -1.0})
+    cassette.write_text("\n".join(lines) + "\n")
+    assert main(["run", "--resume", str(session), "--dry-run"]) == 2
+    err = capsys.readouterr().err
+    assert f"{cassette}:10: negative time -1.0" in err, err
