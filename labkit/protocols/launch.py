@@ -151,7 +151,10 @@ def _prepare(rig_path: str | Path | None, protocol_name: str | None, sets: list[
     runner = Runner(protocol, rig, params, clock=the_clock, sinks=sinks, previous_points=points,
                     done_steps=done)
     if record is not None and len(done) >= len(runner.steps):
-        raise LabkitError(f"--resume {resume}: all {len(runner.steps)} steps are already done")
+        lost = "" if record.results is not None else (
+            f"; only its results.json is missing (deleted, or the run was killed after its last point): "
+            f"`labkit report {resume}` and `labkit fit {resume}` take the results from events.jsonl")
+        raise LabkitError(f"--resume {resume}: all {len(runner.steps)} steps are already done{lost}")
     if session_root is not None:
         check_writable(session_root)
     return PreparedRun(rig, protocol, params, the_clock, runner, record, points, warnings)
