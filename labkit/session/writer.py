@@ -147,6 +147,8 @@ class Session:
     def create(cls, root: str | Path, *, protocol: str, params: dict[str, Any], rig_name: str,
                rig_text: str, clock: str, notes: str = "", resumed_from: str | None = None,
                argv: list[str] | None = None) -> Session:
+        from labkit.session.orphans import process_identity
+
         path = new_session_dir(root, protocol)
         meta = {
             "schema": 1,
@@ -166,6 +168,7 @@ class Session:
             "git_commit": _git_commit(),
             "host": platform.node(),
             "pid": os.getpid(),  # lets a supervisor find and close the session of a killed run
+            "pid_start": process_identity(os.getpid()),  # ... and not one whose PID was reused
         }
         try:
             (path / "rig.toml").write_text(rig_text, encoding="utf-8")
