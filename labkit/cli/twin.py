@@ -6,12 +6,17 @@ laser-trace and stroboscope clips of the model's floator motion (labkit.footage)
 them (labkit.vision), fits, and writes OUT/twin-report.md and OUT/twin-report.json: every
 recovered parameter beside the value that went in, its 95 % interval and the residual. Exit
 status 1 when a put-in value lies outside its interval (the rig file and the model disagree).
+``--json PATH|-`` writes that JSON document to PATH too, or alone on stdout. Each part's session
+can be watched in rerun afterwards: ``labkit replay SESSION --rerun save:FILE.rrd``.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 from pathlib import Path
+
+from labkit.cli.output import add_json_argument, write_json
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -22,6 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of the plant's imperfections (default 0)")
     p.add_argument("--only", choices=("balance", "spin", "footage"), action="append",
                    help="run only these parts (repeatable; default: all)")
+    add_json_argument(p, "the report (twin-report.json's document)")
     p.set_defaults(func=main)
 
 
@@ -33,4 +39,5 @@ def main(args: argparse.Namespace) -> int:
     md, js = write_report(result, args.out)
     print(markdown(result), end="")
     print(f"report: {md}\n        {js}")
+    write_json(json.loads(js.read_text()), args.json, "twin")
     return 0 if all(r["ok"] for r in result["rows"]) else 1
