@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 from labkit.cli.output import add_json_argument, write_json
@@ -35,7 +36,10 @@ def main(args: argparse.Namespace) -> int:
     from labkit.twin.report import markdown, write_report
     from labkit.twin.run import run_twin
     parts = tuple(args.only or ("balance", "spin", "footage"))
-    result = run_twin(args.rig, args.out, seed=args.seed, parts=parts)
+    print("labkit twin: about 14 s of CPU for all three parts (docs/twin.md); a line as each starts",
+          file=sys.stderr, flush=True)
+    result = run_twin(args.rig, args.out, seed=args.seed, parts=parts,
+                      say=lambda what: print(f"labkit twin: {what}", file=sys.stderr, flush=True))
     md, js = write_report(result, args.out)
     print(markdown(result), end="")
     print(f"report: {md}\n        {js}")

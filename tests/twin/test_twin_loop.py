@@ -19,6 +19,7 @@ def test_labkit_twin_recovers_the_put_in_values_inside_their_intervals(tmp_path,
     out = captured.err  # with --json - the markdown goes to stderr, the JSON alone to stdout
     report = json.loads((tmp_path / "twin-report.json").read_text())
     assert json.loads(captured.out) == report
+    assert "labkit twin: part 1 of 2, Fig. 5.25: the speed sweep" in out and "part 2 of 2, Fig. 6.18" in out
     names = [r["name"] for r in report["rows"]]
     assert names == ["twin/fig5.25/moment_product", "twin/fig5.25/gap", "twin/fig6.18/C",
                      "twin/fig6.18/break_phi"]
