@@ -102,8 +102,8 @@ def _session_without_results(path: Path) -> Table:
     import sys
 
     from labkit.errors import LabkitError
-    from labkit.protocols.recover import results_from_events
     from labkit.session import load_session
+    from labkit.session.recover import results_from_events
 
     if not _inside(path, "run.json").exists():
         raise DataFileError(str(path), "", "not a session directory: no results.json inside (nor run.json), "
