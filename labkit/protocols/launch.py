@@ -143,10 +143,9 @@ def _prepare(rig_path: str | Path | None, protocol_name: str | None, sets: list[
     the_clock = make_clock(clock, rig)
     points: list[dict[str, Any]] = []
     if record is not None:
-        unconfirmed, notes = check_points_against_cassettes(record, resume)
-        sources = [(where, p) for where, p in recorded_points(record) if where not in unconfirmed]
-        points, dropped = check_carried_points(sources, protocol.plan(rig, params))
-        warnings += notes + dropped
+        points, dropped = check_carried_points(recorded_points(record), protocol.plan(rig, params))
+        points, notes = check_points_against_cassettes(record, resume, points)
+        warnings += dropped + notes
     done = {int(p["step"]) for p in points}
     runner = Runner(protocol, rig, params, clock=the_clock, sinks=sinks, previous_points=points,
                     done_steps=done)

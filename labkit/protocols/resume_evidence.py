@@ -58,25 +58,27 @@ def _diff_within(level: str, replayed: list[dict[str, Any]], recorded: list[tupl
     return out
 
 
-def check_points_against_cassettes(record: SessionRecord, resume: Any) -> tuple[set[str], list[str]]:
-    """Where (``events.jsonl:LINE``) the points are that the cassettes could not confirm (not to
-    carry) and a warning per such point; raises LabkitError naming each point that contradicts
-    them."""
+def check_points_against_cassettes(record: SessionRecord, resume: Any,
+                                   carried: list[dict[str, Any]]) -> tuple[list[dict[str, Any]], list[str]]:
+    """``carried`` (the points the plan check kept) without those the cassettes could not
+    confirm, and a warning per such point; raises LabkitError naming each point that contradicts
+    them, or a file changed since the session ended."""
     tampered = integrity_problems(record.path, record.meta)
     if tampered:
         raise LabkitError(f"--resume {resume}: refused, the session was changed after it was recorded: "
                           + "; ".join(tampered[:5]))
-    recorded = [(w, p) for w, p in record.point_events() if isinstance(p, dict)]
+    kept = {id(p) for p in carried}
+    recorded = [(w, p) for w, p in record.point_events() if isinstance(p, dict) and id(p) in kept]
     if not recorded:
-        return set(), []
+        return carried, []
     if not (record.path / "cassettes").is_dir():
-        return set(), [f"{record.path}: no cassettes: the {len(recorded)} recorded points are carried "
-                       "unchecked"]
+        return carried, [f"{record.path}: no cassettes: the {len(recorded)} recorded points are carried "
+                         "unchecked"]
     try:
         level, replayed = replayed_points(record)
     except LabkitError as exc:
-        return set(), [f"{record.path}: the recorded points are carried unchecked: the cassettes "
-                       f"cannot be replayed ({exc})"]
+        return carried, [f"{record.path}: the recorded points are carried unchecked: the cassettes "
+                         f"cannot be replayed ({exc})"]
     edited = (diff_points(replayed, recorded) if level == "exact"
               else _diff_within(level, replayed, recorded))
     if edited:
@@ -87,4 +89,5 @@ def check_points_against_cassettes(record: SessionRecord, resume: Any) -> tuple[
     warnings = [f"{w}: point of step {p.get('step')} is not in the cassettes' bytes (the {level} replay "
                 f"ended before it); not carried, step {p.get('step')} is measured again"
                 for w, p in unreached]
-    return {w for w, _ in unreached}, warnings
+    dropped = {id(p) for _, p in unreached}
+    return [p for p in carried if id(p) not in dropped], warnings
