@@ -108,6 +108,8 @@ def test_probe_motor_reads_status_and_never_starts_it(capsys):
     assert code == 0, err
     statuses = [json.loads(line) for line in out]
     assert all(s["value"] == 0 for s in statuses)
+    # at rest the SMC reports its safe-start bit: listed, but no overload (issue 27)
+    assert all(s["overload"] is False and "safe_start_violation" in s["errors"] for s in statuses), statuses
     from labkit.emulators.plant import shared_plant
 
     assert shared_plant("probe-motor").motor("rotor").duty == 0.0

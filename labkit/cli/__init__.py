@@ -53,6 +53,7 @@ def main(argv: list[str] | None = None) -> int:
     """Run one command; ``argv`` None means the program's own (``labkit ...``, ``python -m labkit``),
     which then also ends quickly (:func:`end_quickly`) and quietly when its reader goes away."""
     if argv is None:
+        _escape_unencodable()
         try:
             code = _run(sys.argv[1:])
             sys.stdout.flush()  # a closed pipe shows here, not in the interpreter's exit
@@ -63,6 +64,16 @@ def main(argv: list[str] | None = None) -> int:
         finally:
             end_quickly()
     return _run(list(argv))
+
+
+def _escape_unencodable() -> None:
+    """Print a character the terminal cannot take (a lone surrogate: a Latin-1 byte in a
+    folder name or ``--notes``) as an escape such as ``\\udce9``, not a UnicodeEncodeError."""
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.reconfigure(errors="backslashreplace")  # type: ignore[union-attr]
+        except (AttributeError, ValueError):  # replaced by a caller, or closed
+            pass
 
 
 def _silence_stdout() -> None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from collections.abc import Iterator
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -22,6 +23,17 @@ from labkit.errors import VideoError
 
 if TYPE_CHECKING:  # numpy loads when a clip is written, not for --help
     import numpy as np
+
+
+def _progress(frames: Iterator[np.ndarray], out: str | Path, total: int) -> Iterator[np.ndarray]:
+    """``frames`` passed through, with a progress line on stderr every 2 s once rendering has
+    taken 2 s (a long clip: ``labkit synth: z.mp4: 120 of 600 frames (2 s so far)``)."""
+    from labkit.cli.progress import ProgressLines
+
+    progress = ProgressLines(f"labkit synth: {out}", "frames")
+    for done, frame in enumerate(frames, start=1):
+        yield frame
+        progress(done, total)
 
 
 def _written(path: Path, truth: dict | None) -> dict:
@@ -184,7 +196,8 @@ def run_laser(args: argparse.Namespace) -> int:
             "pattern": None,
         }
     truth = truth or laser_truth(spec)
-    path = write_clip(args.out, render_laser(spec, position), spec.fps, spec.codec, truth)
+    path = write_clip(args.out, _progress(render_laser(spec, position), args.out, spec.frames), spec.fps,
+                      spec.codec, truth)
     w, h = spec.size
     print(f"wrote {path} ({spec.frames} frames {w}x{h}, {args.level}) and {_written(path, None)['truth']}")
     write_json(_written(path, truth), args.json, "synth")
@@ -212,7 +225,8 @@ def run_strobe(args: argparse.Namespace) -> int:
     if problem is not None:  # written (a clip to test poor coverage is a use), but said
         print(f"labkit synth: warning: {args.out}: {problem}", file=sys.stderr)
     truth = strobe_truth(spec)
-    path = write_clip(args.out, render_strobe(spec), spec.strobe_hz, spec.codec, truth)
+    path = write_clip(args.out, _progress(render_strobe(spec), args.out, spec.frames), spec.strobe_hz,
+                      spec.codec, truth)
     print(f"wrote {path} ({spec.frames} frames, apparent {abs(spec.apparent_hz):.3f} Hz) and "
           f"{_written(path, None)['truth']}")
     write_json(_written(path, truth), args.json, "synth")
@@ -264,9 +278,9 @@ def run_testset(args: argparse.Namespace) -> int:
 
     written = []
     for name, spec in laser_test_set():
-        path = write_clip(
-            Path(args.folder) / f"{name}.mp4", render_laser(spec), spec.fps, spec.codec, laser_truth(spec)
-        )
+        out = Path(args.folder) / f"{name}.mp4"
+        path = write_clip(out, _progress(render_laser(spec), out, spec.frames), spec.fps, spec.codec,
+                          laser_truth(spec))
         written.append(_written(path, None))
         print(f"wrote {path} and {written[-1]['truth']}")
     write_json({"clips": written}, args.json, "synth")

@@ -62,6 +62,10 @@ class Frozen:
         self.silent_s, self.status = silent_s, status
 
 
+#: worker PID -> (its process identity, when it was forked), to close only its own sessions
+_workers: dict[int, tuple[str | None, float]] = {}
+
+
 def worker_heartbeat() -> Heartbeat | None:
     """The heartbeat this process must beat (it is a supervised worker), else None."""
     return _worker_heartbeat
@@ -114,6 +118,7 @@ def supervised(rig: Any, work: Callable[[], int], err: Any = None,
     sys.stdout.flush()
     sys.stderr.flush()
     heartbeat = Heartbeat()
+    forked_at = time.time()
     worker = os.fork()
     if worker == 0:
         global _worker_heartbeat
@@ -122,6 +127,9 @@ def supervised(rig: Any, work: Callable[[], int], err: Any = None,
         signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)
         _die_with_parent(parent)
         return work()
+    from labkit.session.orphans import process_identity
+
+    _workers[worker] = (process_identity(worker), forked_at)  # which sessions are its: orphans.py
     try:
         status = _watch(worker, sigset, HeartbeatWatch(heartbeat))
     finally:
@@ -244,7 +252,9 @@ def _close_sessions(sessions: str | Path, worker: int, how: str, failed: dict[st
     stop = "the supervisor stopped the motors"
     if failed:
         stop = "the supervisor could not stop " + ", ".join(failed)
-    for session in close_killed_sessions(sessions, worker, f"the run process (PID {worker}) {how}; {stop}"):
+    identity, forked_at = _workers.get(worker, (None, None))
+    reason = f"the run process (PID {worker}) {how}; {stop}"
+    for session in close_killed_sessions(sessions, worker, reason, identity, forked_at):
         hint = "" if failed else f"; resume with: labkit run --resume {session}"
         print(f"labkit run: session {session} recorded as killed{hint}", file=err)
 

@@ -82,6 +82,16 @@ class Reading:
                    flags=frozenset(obj.get("flags") or ()))
 
 
+#: controller errors that mean the motor was driven past the controller's range (current,
+#: temperature, speed): a status's ``overload``. Others (a Pololu SMC's safe-start at rest, a
+#: command timeout, a low supply) are listed in ``errors`` but are no overload (issue 27: a
+#: motor at rest reported ``"overload": true`` for its safe-start bit).
+OVERLOAD_ERRORS = frozenset({
+    "over_temperature", "motor_driver_error",                  # Pololu SMC (bits 7, 8)
+    "abs_over_current", "over_temp_fet", "over_temp_motor", "drv", "overspeed", "abs_overspeed",  # VESC
+})
+
+
 @dataclass(frozen=True)
 class MotorStatus:
     """Controller telemetry. ``duty`` in -1..1; ``speed_rad_s`` when the controller measures it."""
@@ -101,7 +111,7 @@ class MotorStatus:
             "value": self.duty,
             "unit": "1",
             "stable": not self.errors,
-            "overload": bool(self.errors),
+            "overload": bool(self.errors & OVERLOAD_ERRORS),
             "speed_rad_s": self.speed_rad_s,
             "input_voltage_v": self.input_voltage_v,
             "temperature_c": self.temperature_c,

@@ -24,6 +24,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -80,10 +81,9 @@ def load_table(path: str | Path) -> Table:
             analyses = _analysis_files(path)
             if analyses:
                 return _load_analysis_folder(path, analyses)
-            raise DataFileError(str(path), "", "not a session directory: no results.json inside "
-                                "(did the run finish? `labkit run --resume` completes it), and no "
-                                "`labkit analyse --json` files either")
-        table = _load_json(results)
+            table = _session_without_results(path)
+        else:
+            table = _load_json(results)
         run = _inside(path, "run.json")
         if run.exists():
             table.meta["run"] = _read_json(run)
@@ -94,6 +94,33 @@ def load_table(path: str | Path) -> Table:
     if path.suffix.lower() == ".json":
         return _load_json(path)
     return _load_csv(path)
+
+
+def _session_without_results(path: Path) -> Table:
+    """A session folder without results.json: its results from events.jsonl
+    (:mod:`labkit.protocols.recover`), said on stderr; refused when there are none."""
+    import sys
+
+    from labkit.errors import LabkitError
+    from labkit.session import load_session
+    from labkit.session.recover import results_from_events
+
+    if not _inside(path, "run.json").exists():
+        raise DataFileError(str(path), "", "not a session directory: no results.json inside (nor run.json), "
+                            "and no `labkit analyse --json` files either")
+    try:
+        record = load_session(path)
+        found = results_from_events(record)
+    except LabkitError as exc:
+        raise DataFileError(str(path), "results.json", f"missing, and the session cannot be read: {exc}") \
+            from None
+    if found is None:
+        raise DataFileError(str(path), "results.json", "missing, and events.jsonl holds no point: the run "
+                            "ended before its first step was measured (`labkit run --resume` measures them)")
+    results, where = found
+    print(f"labkit: {path}: results.json is missing (deleted, or the run was killed after its last point); "
+          f"using {where}", file=sys.stderr)
+    return _table_from_doc(results, str(path / "events.jsonl"))
 
 
 def _inside(session: Path, name: str) -> Path:
@@ -173,31 +200,35 @@ def _try_json(path: Path):
 
 
 def _load_json(path: Path) -> Table:
-    doc = _read_json(path)
+    return _table_from_doc(_read_json(path), str(path))
+
+
+def _table_from_doc(doc: Any, source: str) -> Table:
+    """A table from a results document (results.json's, or one recovered from events.jsonl)."""
     meta: dict = {}
     if analysis_kind(doc):
-        row = analysis_row(doc, str(path))
-        return _columns_to_table(str(path), {k: [v] for k, v in row.items()},
+        row = analysis_row(doc, source)
+        return _columns_to_table(source, {k: [v] for k, v in row.items()},
                                  {"analysis": row["kind"], "video": doc.get("source")})
     if isinstance(doc, dict):
         points = doc.get("points")
         if not isinstance(points, list):
-            raise DataFileError(str(path), "points", "expected a list of point objects "
+            raise DataFileError(source, "points", "expected a list of point objects "
                                 '({"protocol", "points": [...], "fit": {...}})')
         meta = {k: v for k, v in doc.items() if k != "points"}
     elif isinstance(doc, list):
         points = doc
     else:
-        raise DataFileError(str(path), "", "expected an object with 'points' or a list of points")
+        raise DataFileError(source, "", "expected an object with 'points' or a list of points")
     names: list[str] = []
     for i, p in enumerate(points):
         if not isinstance(p, dict):
-            raise DataFileError(str(path), f"points[{i}]", "each point must be an object")
+            raise DataFileError(source, f"points[{i}]", "each point must be an object")
         for k in p:
             if k not in names:
                 names.append(k)
     cols = {k: [p.get(k) for p in points] for k in names}
-    return _columns_to_table(str(path), cols, meta)
+    return _columns_to_table(source, cols, meta)
 
 
 def _columns_to_table(source: str, cols: dict[str, list], meta: dict) -> Table:

@@ -26,6 +26,7 @@ from labkit.protocols.events import Sink
 from labkit.protocols.params import resolve_params
 from labkit.protocols.replay_compare import ADDED_KEYS, DERIVED_KEYS, REPLAY_FIT_RTOL, close_enough
 from labkit.protocols.resume import ResumeLock, check_carried_points, rig_differences
+from labkit.protocols.resume_evidence import check_points_against_cassettes
 from labkit.protocols.runner import ProtocolDef, Runner, RunOutcome
 from labkit.rig import Rig, load_rig
 from labkit.session import Session, SessionRecord, check_writable, load_session
@@ -143,12 +144,16 @@ def _prepare(rig_path: str | Path | None, protocol_name: str | None, sets: list[
     points: list[dict[str, Any]] = []
     if record is not None:
         points, dropped = check_carried_points(recorded_points(record), protocol.plan(rig, params))
-        warnings += dropped
+        points, notes = check_points_against_cassettes(record, resume, points)
+        warnings += dropped + notes
     done = {int(p["step"]) for p in points}
     runner = Runner(protocol, rig, params, clock=the_clock, sinks=sinks, previous_points=points,
                     done_steps=done)
     if record is not None and len(done) >= len(runner.steps):
-        raise LabkitError(f"--resume {resume}: all {len(runner.steps)} steps are already done")
+        lost = "" if record.results is not None else (
+            f"; only its results.json is missing (deleted, or the run was killed after its last point): "
+            f"`labkit report {resume}` and `labkit fit {resume}` take the results from events.jsonl")
+        raise LabkitError(f"--resume {resume}: all {len(runner.steps)} steps are already done{lost}")
     if session_root is not None:
         check_writable(session_root)
     return PreparedRun(rig, protocol, params, the_clock, runner, record, points, warnings)

@@ -28,6 +28,7 @@ from labkit.protocols import get_protocol
 from labkit.protocols.events import Sink
 from labkit.protocols.launch import diff_results, recorded_points, replay_url
 from labkit.protocols.params import resolve_params
+from labkit.protocols.reading_evidence import faithful_reading_diffs
 from labkit.protocols.replay_compare import (
     DERIVED_KEYS,
     decisions,
@@ -40,6 +41,7 @@ from labkit.protocols.resume import check_carried_points
 from labkit.protocols.runner import Runner, RunOutcome, normalise
 from labkit.rig import load_rig
 from labkit.session import SessionRecord, load_session
+from labkit.session.integrity import integrity_problems
 
 LEVELS = ("auto", "exact", "faithful", "analysis")
 LEVEL_WORDS = {
@@ -198,10 +200,13 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
     real-clock one) and compare it with the recording."""
     record = load_session(path)
     chosen = choose_level(record, level)
+    tampered = integrity_problems(record.path, record.meta)  # digests, cassette time lines
     if chosen == "analysis":
         from labkit.protocols.reanalyse import reanalyse_session
 
         result = reanalyse_session(record)
+        result.differences[:0] = tampered
+        result.identical = result.identical and not tampered
         if level == "auto":
             result.warnings.insert(0, f"{record.path}: a real-clock session from a labkit that did not "
                                       "record its clock origin and threads: re-analysed, not replayed")
@@ -236,15 +241,17 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
     warnings = record.problems + dropped
     if not faithful:
         tolerant = DERIVED_KEYS | analysis_keys(protocol.row)  # their last digits follow the CPU
-        diffs = (diff_results(replayed, recorded, derived_keys=tolerant) if recorded is not None
-                 else ["no results.json recorded"])
+        diffs = tampered + (diff_results(replayed, recorded, derived_keys=tolerant) if recorded is not None
+                            else ["no results.json recorded"])
         diffs += _evidence_diffs(record, evidence, resumed=bool(points), tolerant=tolerant)
         return ReplayOutcome(outcome, recorded, not diffs, diffs, warnings, "exact")
     replay_decisions = decisions(collect.events)
-    diffs = diff_decisions(replay_decisions, decisions(record.events))
+    diffs = tampered + diff_decisions(replay_decisions, decisions(record.events))
     if recorded is None:
         diffs.append("recording has no results.json")
     else:
         diffs += diff_within(replayed, recorded)
+    if not points:  # a resumed session's readings files also hold the first run's readings
+        diffs += faithful_reading_diffs(record, rig, evidence.readings)
     ports = [port.report() for port in runner.ports.values() if hasattr(port, "report")]
     return ReplayOutcome(outcome, recorded, not diffs, diffs, warnings, "faithful", ports, replay_decisions)

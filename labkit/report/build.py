@@ -111,7 +111,7 @@ def build_report(source: str | Path, out: str | Path | None = None, *, model: st
         lines += flags_section(source)
     lines += _data_section(table, out)
     lines += _fit_sections(table, plan, out, overlays)
-    (out / "report.md").write_text("\n".join(lines) + "\n")
+    (out / "report.md").write_text(md.writable("\n".join(lines) + "\n"), encoding="utf-8")
     return out / "report.md"
 
 
@@ -408,5 +408,5 @@ def _video_report(source: Path, doc: dict, out: Path) -> Path:
                       "", f"![contact sheet]({sheet.name})", ""]
         except LabkitError as exc:
             lines += ["## Contact sheet", "", f"**Not drawn:** {exc}", ""]
-    (out / "report.md").write_text("\n".join(lines) + "\n")
+    (out / "report.md").write_text(md.writable("\n".join(lines) + "\n"), encoding="utf-8")
     return out / "report.md"

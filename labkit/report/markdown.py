@@ -3,8 +3,23 @@
 from __future__ import annotations
 
 import math
+import re
 
 from labkit.fit.result import FitResult
+
+_SURROGATE = re.compile("[\ud800-\udfff]")
+
+
+def _escaped(match: re.Match[str]) -> str:
+    code = ord(match[0])
+    return f"\\x{code - 0xDC00:02x}" if 0xDC80 <= code <= 0xDCFF else f"\\u{code:04x}"
+
+
+def writable(text: str) -> str:
+    """``text`` with every lone surrogate written out: ``\\xe9`` for a byte that was not UTF-8
+    (Python's surrogateescape of a Latin-1 ``--notes`` or folder name), ``\\ud800`` for another
+    (a JSON ``\\ud800`` escape); a report in UTF-8 cannot hold them as they are."""
+    return _SURROGATE.sub(_escaped, text)
 
 
 def num(v, digits: int = 5) -> str:

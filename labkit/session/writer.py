@@ -147,6 +147,8 @@ class Session:
     def create(cls, root: str | Path, *, protocol: str, params: dict[str, Any], rig_name: str,
                rig_text: str, clock: str, notes: str = "", resumed_from: str | None = None,
                argv: list[str] | None = None) -> Session:
+        from labkit.session.orphans import process_identity
+
         path = new_session_dir(root, protocol)
         meta = {
             "schema": 1,
@@ -166,6 +168,7 @@ class Session:
             "git_commit": _git_commit(),
             "host": platform.node(),
             "pid": os.getpid(),  # lets a supervisor find and close the session of a killed run
+            "pid_start": process_identity(os.getpid()),  # ... and not one whose PID was reused
         }
         try:
             (path / "rig.toml").write_text(rig_text, encoding="utf-8")
@@ -231,4 +234,10 @@ class Session:
                 readings_to_parquet(role_file, role_file.with_suffix(".parquet"))
         except Exception:  # noqa: BLE001 - the JSONL files stay the primary record
             pass
-        self.update_meta(ended=utc_now(), status=status, reason=reason)
+        from labkit.session.integrity import file_digests
+
+        try:
+            digests: dict[str, str] | None = file_digests(self.path)  # labkit/session/integrity.py
+        except OSError:
+            digests = None  # a file that cannot be read back: the session ends without digests
+        self.update_meta(ended=utc_now(), status=status, reason=reason, digests=digests)

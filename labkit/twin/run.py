@@ -4,6 +4,7 @@ rig file, rendered footage, then the fits, compared with what went in (docs/expl
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -74,28 +75,40 @@ def spin_rows(user_rig: Path, params: TwinParams, work: Path, seed: int) -> tupl
     return rows, {"session": str(outcome.session), "points": outcome.results["points"]}
 
 
+#: what each part does, said as it starts (``labkit twin`` prints them on stderr)
+PART_WORDS = {
+    "balance": "Fig. 5.25: the speed sweep (15 speeds) on the model plant, then the fits",
+    "spin": "Fig. 6.18: the spin-critical protocol on the model plant, then the Eq. 6.37 fit",
+    "footage": "footage: rendering and analysing 4 laser-trace and 4 stroboscope clips",
+    "camera": "cone-sweep: the emulated camera films the laser trace at 6 speeds, then the Eq. 5.24 fit",
+}
+
+
 def run_twin(rig_path: str | Path, work: Path, seed: int = 0,
-             parts: tuple[str, ...] = ("balance", "spin", "footage", "camera")) -> dict:
-    """Every twin row for the rig file ``rig_path``; sessions and rigs go under ``work``."""
+             parts: tuple[str, ...] = ("balance", "spin", "footage", "camera"),
+             say: Callable[[str], None] | None = None) -> dict:
+    """Every twin row for the rig file ``rig_path``; sessions and rigs go under ``work``;
+    ``say`` is told each part as it starts."""
     from labkit.rig import load_rig
     rig = load_rig(rig_path)
     user_rig = Path(rig.path)
     params = params_from_rig(rig)
     rows: list[dict] = []
     runs: dict[str, Any] = {}
-    if "balance" in parts:
-        r, runs["fig5.25"] = balance_rows(user_rig, params, work, seed)
-        rows += r
-    if "spin" in parts:
-        r, runs["fig6.18"] = spin_rows(user_rig, params, work, seed)
-        rows += r
-    if "footage" in parts:
-        from labkit.twin.footage import footage_rows
-        r, runs["footage"] = footage_rows(params, work, seed)
-        rows += r
-    if "camera" in parts:
-        from labkit.twin.camera import camera_rows
-        r, runs["camera"] = camera_rows(user_rig, params, work, seed)
+    chosen = [p for p in ("balance", "spin", "footage", "camera") if p in parts]
+    for n, part in enumerate(chosen, start=1):
+        if say is not None:
+            say(f"part {n} of {len(chosen)}, {PART_WORDS[part]}")
+        if part == "balance":
+            r, runs["fig5.25"] = balance_rows(user_rig, params, work, seed)
+        elif part == "spin":
+            r, runs["fig6.18"] = spin_rows(user_rig, params, work, seed)
+        elif part == "footage":
+            from labkit.twin.footage import footage_rows
+            r, runs["footage"] = footage_rows(params, work, seed)
+        else:
+            from labkit.twin.camera import camera_rows
+            r, runs["camera"] = camera_rows(user_rig, params, work, seed)
         rows += r
     return {"rig": str(user_rig), "seed": seed, "params": params.__dict__,
             "defaults_used_for": missing_from_rig(rig), "rows": rows, "runs": runs}

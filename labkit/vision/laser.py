@@ -30,6 +30,7 @@ from labkit.vision.framepath import (
 )
 from labkit.vision.frames import FrameSource, open_frames
 from labkit.vision.laser_gather import MAX_POINTS_PER_CHUNK, GatheredTrace, gather  # noqa: F401 (API)
+from labkit.vision.scene_kind import scene_measures, strobe_scene_verdict
 from labkit.vision.trace import TracePoints, trace_points
 
 if TYPE_CHECKING:
@@ -381,6 +382,7 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
                 qual = {**qual, "verdict": "failed" if qual["verdict"] == "failed" else "doubtful",
                         "reasons": [*qual["reasons"], doubt],
                         "checks": {**qual["checks"], "tilt_geometry": "doubtful"}}
+    qual = strobe_scene_verdict(qual, *scene_measures([c.image for c in chunks], source.levels[0]))
     qual["settings"] = asdict(quality)
     qual["elapsed_s"] = time.perf_counter() - t_start
     qual["fit_s"] = time.perf_counter() - t_frames  # work left after the last frame: mostly the fit

@@ -50,3 +50,20 @@ def test_laser_analysis_reports_its_frames_as_it_reads_them():
     done = [d for d, _ in seen]
     assert done == sorted(done) and done[-1] == result["quality"]["frames_analysed"]
     assert all(total == seen[0][1] > 0 for _, total in seen)
+
+
+def test_synth_says_how_far_a_long_clip_is(tmp_path, capsys):
+    """Issue 27: `labkit synth` of a long clip printed nothing until done. A clip rendered in
+    over 3 s shows `N of 600 frames (...)` lines; one under 2 s stays silent."""
+    import time
+
+    from labkit.cli import main
+
+    start = time.monotonic()
+    assert main(["synth", "laser", str(tmp_path / "long.mp4"), "--frames", "600"]) == 0
+    elapsed = time.monotonic() - start
+    lines = [line for line in capsys.readouterr().err.splitlines() if " of 600 frames (" in line]
+    if elapsed > 3.0:
+        assert lines and lines[0].startswith(f"labkit synth: {tmp_path / 'long.mp4'}: "), (elapsed, lines)
+    if elapsed < 2.0:
+        assert not lines, (elapsed, lines)

@@ -262,6 +262,7 @@ def test_vesc_fault_codes_stop_the_motor_and_are_reported(faults, name):
     clock.sleep(2.0)
     assert rotor_duty() == 0.0
     assert name in motor.status().errors
+    assert motor.status().as_json()["overload"] is True  # current or temperature: an overload
 
 
 def test_vesc_watchdog_reset_releases_the_motor_and_reports_fault_10():

@@ -59,7 +59,7 @@ def complete_session(tmp_path_factory) -> Path:
 
 def killed_copy(complete: Path, dest: Path, points: int = 2) -> Path:
     """A copy of ``complete`` as if killed after its ``points``-th point: events cut after that
-    point, no results.json, status still running."""
+    point, no results.json, status still running, no digests (a killed run writes none)."""
     import json
     import shutil
 
@@ -77,5 +77,6 @@ def killed_copy(complete: Path, dest: Path, points: int = 2) -> Path:
     (session / "results.json").unlink()
     meta = json.loads((session / "run.json").read_text())
     meta.update(status="running", ended=None, reason=None)
+    meta.pop("digests", None)
     (session / "run.json").write_text(json.dumps(meta))
     return session

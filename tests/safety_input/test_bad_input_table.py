@@ -244,6 +244,9 @@ def test_bad_input_is_one_line_naming_it(name, complete, tmp_path, capsys):
 def test_damaged_event_lines_are_warnings_naming_file_and_line(name, complete, tmp_path, capsys):
     session = tmp_path / "S"
     shutil.copytree(complete, session)
+    meta = json.loads((session / "run.json").read_text())  # damaged lines come from a crash: a killed
+    meta.pop("digests")                                     # run writes no digests (else: "changed")
+    (session / "run.json").write_text(json.dumps(meta))
     argv, needle = WARN_CASES[name](tmp_path, session)
     target = "readings/balance.jsonl" if "readings" in name else "events.jsonl"
     good, damage = (complete / target).read_bytes(), (session / target).read_bytes()

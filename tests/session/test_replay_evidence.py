@@ -51,3 +51,36 @@ def test_an_edited_point_event_is_named(tmp_path, capsys):
                                   "strobe-sweep-clean"])
 def test_untouched_recordings_replay(tmp_path, name, capsys):
     assert main(["replay", str(SESSIONS / name)]) == 0, capsys.readouterr().err
+
+
+def _faithful(tmp_path: Path, edit_line: int, edit) -> tuple[Path, int]:
+    """A real-clock recording (faithful replay) with one balance reading edited, replayed."""
+    session = _copy(tmp_path, "real-speed-sweep")
+    _edit_line(session / "readings" / "balance.jsonl", edit_line, edit)
+    return session, main(["replay", str(session)])
+
+
+def test_a_faithful_replay_names_a_doubled_reading(tmp_path, capsys):
+    session, code = _faithful(tmp_path, 40, lambda r: {**r, "value": r["value"] * 2})
+    err = capsys.readouterr().err
+    assert code == 1, err
+    assert f"{session / 'readings' / 'balance.jsonl'}:40: value" in err and "does not follow from its bytes" \
+        in err, err
+
+
+def test_a_faithful_replay_names_a_reading_whose_bytes_were_edited_too(tmp_path, capsys):
+    def both(r):
+        grams = r["value"] * 2e3
+        return {**r, "value": grams / 1e3, "raw": r["raw"][:4] + f"{grams:11.2f} g"}
+
+    session, code = _faithful(tmp_path, 40, both)
+    err = capsys.readouterr().err
+    assert code == 1, err
+    assert f"{session / 'readings' / 'balance.jsonl'}:40: this reading's bytes" in err, err
+
+
+def test_a_faithful_replay_names_a_reading_moved_in_time(tmp_path, capsys):
+    session, code = _faithful(tmp_path, 40, lambda r: {**r, "t": r["t"] - 3.0})
+    err = capsys.readouterr().err
+    assert code == 1, err
+    assert f"{session / 'readings' / 'balance.jsonl'}:40: this reading's bytes" in err, err

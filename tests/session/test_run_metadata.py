@@ -43,3 +43,26 @@ def test_a_failed_run_says_why_in_run_json(tmp_path):
     assert meta["status"] == "failed"
     assert "rotor_tach" in meta["reason"]
     assert meta["ended"] is not None
+
+
+def test_folder_names_are_utc_and_documented_so(tmp_path, monkeypatch):
+    """Issue 27: the folder's stamp is UTC (docs/reference/session-format.md, Layout), whatever TZ says."""
+    import datetime as dt
+    import time
+
+    from labkit.session import Session
+
+    monkeypatch.setenv("TZ", "Pacific/Kiritimati")  # UTC+14: a local-time stamp would differ by 14 h
+    time.tzset()
+    try:
+        session = Session.create(tmp_path, protocol="speed-sweep", params={}, rig_name="r", rig_text="",
+                                 clock="virtual")
+    finally:
+        monkeypatch.delenv("TZ")
+        time.tzset()
+    started = dt.datetime.fromisoformat(session.meta["started"])
+    assert started.utcoffset() == dt.timedelta(0)
+    assert session.path.name == started.strftime("%Y%m%d-%H%M%S") + "-speed-sweep"
+    layout = (REPO / "docs" / "reference" / "session-format.md").read_text()
+    assert "`YYYYmmdd-HHMMSS-PROTOCOL` from the moment it was created **in UTC**" in layout
+    assert "--web-viewer --bind 127.0.0.1" in (REPO / "docs" / "reference" / "streams.md").read_text()

@@ -14,9 +14,12 @@ RIGS = Path(__file__).resolve().parents[2] / "rigs"
 
 def test_labkit_twin_recovers_the_put_in_values_inside_their_intervals(tmp_path, capsys):
     code = main(["twin", str(RIGS / "emulated-fig525.toml"), "--out", str(tmp_path), "--seed", "3",
-                 "--only", "balance", "--only", "spin"])
-    out = capsys.readouterr().out
+                 "--only", "balance", "--only", "spin", "--json", "-"])
+    captured = capsys.readouterr()
+    out = captured.err  # with --json - the markdown goes to stderr, the JSON alone to stdout
     report = json.loads((tmp_path / "twin-report.json").read_text())
+    assert json.loads(captured.out) == report
+    assert "labkit twin: part 1 of 2, Fig. 5.25: the speed sweep" in out and "part 2 of 2, Fig. 6.18" in out
     names = [r["name"] for r in report["rows"]]
     assert names == ["twin/fig5.25/moment_product", "twin/fig5.25/gap", "twin/fig6.18/C",
                      "twin/fig6.18/break_phi"]

@@ -1,0 +1,81 @@
+"""Cassette tampering that keeps the protocol's bytes (issue 27): lines moved or swapped with
+their times, a negative time (the cassette's time line, named with file and line), and any
+change of a session that recorded its digests (data swapped between chunks, times kept)."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from labkit.cli import main
+
+REPO = Path(__file__).resolve().parents[2]
+SESSIONS = REPO / "recordings" / "sessions"
+
+
+def _lines(path: Path) -> list[str]:
+    return path.read_text().splitlines()
+
+
+def _write(path: Path, lines: list[str]) -> None:
+    path.write_text("\n".join(lines) + "\n")
+
+
+def _rx(lines: list[str]) -> list[int]:
+    return [i for i, line in enumerate(lines) if i and json.loads(line)["dir"] == "rx"]
+
+
+def _swap_rx(lines: list[str]) -> None:
+    """Two received chunks of a reply swapped, each with its time."""
+    i = _rx(lines)[len(_rx(lines)) // 2]
+    j = next(k for k in _rx(lines) if k > i and json.loads(lines[k])["t"] > json.loads(lines[i])["t"])
+    lines[i], lines[j] = lines[j], lines[i]
+
+
+def _negative(lines: list[str]) -> None:
+    i = _rx(lines)[5]
+    lines[i] = json.dumps({**json.loads(lines[i]), "t": -1.0})
+
+
+def _move_tx(lines: list[str]) -> None:
+    """A command moved three lines on (after its reply)."""
+    tx = [i for i, line in enumerate(lines) if i and json.loads(line)["dir"] == "tx"]
+    i = tx[len(tx) // 2]
+    lines.insert(i + 3, lines.pop(i))
+
+
+@pytest.mark.parametrize("tamper, words", [(_swap_rx, "goes back from"), (_negative, "negative time"),
+                                           (_move_tx, "goes back from")])
+def test_a_cassette_line_out_of_time_is_named(tmp_path, capsys, tamper, words):
+    session = tmp_path / "s"
+    shutil.copytree(SESSIONS / "speed-sweep-clean", session)
+    cassette = session / "cassettes" / "balance.jsonl"
+    lines = _lines(cassette)
+    tamper(lines)
+    _write(cassette, lines)
+    assert main(["replay", str(session)]) == 1
+    err = capsys.readouterr().err
+    assert f"{cassette}:" in err and words in err, err
+
+
+def test_a_session_with_digests_names_data_swapped_between_chunks(tmp_path, capsys):
+    rig = str(REPO / "rigs" / "emulated-fig525.toml")
+    assert main(["run", rig, "speed-sweep", "--sessions", str(tmp_path), "--set", "speeds_rpm=6000:8000:2000",
+                 "--set", "record_s=0.5", "--no-progress"]) == 0
+    (session,) = tmp_path.iterdir()
+    digests = json.loads((session / "run.json").read_text())["digests"]
+    assert {"events.jsonl", "cassettes/balance.jsonl", "readings/balance.jsonl"} <= set(digests)
+    assert main(["replay", str(session)]) == 0, capsys.readouterr().err
+    cassette = session / "cassettes" / "rotor_motor.jsonl"
+    lines = _lines(cassette)
+    j = _rx(lines)[0]
+    i = next(k for k in _rx(lines) if json.loads(lines[k])["data"] != json.loads(lines[j])["data"])
+    a, b = json.loads(lines[i]), json.loads(lines[j])
+    lines[i], lines[j] = json.dumps({**a, "data": b["data"]}), json.dumps({**b, "data": a["data"]})
+    _write(cassette, lines)
+    assert main(["replay", str(session)]) == 1
+    err = capsys.readouterr().err
+    assert f"{cassette}: changed after the session ended" in err, err
