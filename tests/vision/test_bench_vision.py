@@ -8,8 +8,8 @@ from labkit.cli.bench_vision import settings
 
 
 def test_bench_vision_reports_every_setting_with_ratio_and_accuracy(capsys, tmp_path):
-    rc = main(["bench", "vision", "--size", "320x240", "--frames", "64", "--level", "medium",
-               "--repeats", "2", "--keep", str(tmp_path)])
+    rc = main(["bench", "vision", "--strobe", "no", "--size", "320x240", "--frames", "64",
+               "--level", "medium", "--repeats", "2", "--keep", str(tmp_path)])
     out = capsys.readouterr().out
     assert rc == 0
     assert (tmp_path / "bench-ellipse-medium-320x240.mp4").exists()
