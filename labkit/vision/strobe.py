@@ -190,7 +190,7 @@ def _without_room_light(light: ClipLight, first: _Measured, model: PhaseModel) -
         tilt = now.motion.tilt
         swing = swing_of(now.found, now.orient.axis, now.orient.tilt_rad, now.orient.lateral_px,
                          tilt.at(now.psi), tilt.amplitude)
-        fit = fit_ghosts(light, now.poses, swing, None if fit is None else fit.covers)
+        fit = fit_ghosts(light, now.poses, swing, last=fit)
         poses = poses_without_ghost(light, now.poses, fit)
         if sum(p is not None for p in poses) < min(MIN_FRAMES, len(fitted)):
             break
@@ -419,7 +419,10 @@ def _evidence(source, poses, found, orient: ClipOrientation, model: PhaseModel, 
         "tilt_amplitude_se_rad": rolling["tilt_amplitude_se_rad"],
         "lateral_amplitude_px": rolling["lateral_amplitude_px"],
         "lateral_amplitude_se_px": rolling["lateral_amplitude_se_px"]}
+    room_model = (f"run: ghost fraction {ghost:.3f} above {GHOST_FLOOR}" if room is not None else
+                  f"not run: ghost fraction {ghost:.3f} at most {GHOST_FLOOR} (no room light's ghost seen)")
     return {"frames": len(poses), "frames_with_body": len(found), "ghost_fraction": ghost,
+            "room_light_model": room_model,
             "room_light_fraction": (room or {}).get("fraction_of_light"),
             "room_light_settled": (room or {}).get("settled"),
             "tilt_amplitude_uncorrected_rad": (room or {}).get("tilt_amplitude_uncorrected_rad"),

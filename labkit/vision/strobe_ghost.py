@@ -51,6 +51,7 @@ SILHOUETTE_LEVELS = (0.3, 0.5, 0.7, 0.9)
 ZONE_LEVEL = 0.02  # pixels with this much ghost, or within ZONE_PX of the body, enter the fit
 ZONE_PX = 8
 ROUNDS = 4  # rounds of ghost, room light and silhouette per swing
+WARM_ROUNDS = 2  # ... when the last swing's fit gives the first ghost
 FIT_FRAMES = 8  # frames (evenly spread over the clip) whose pixels fit the share and the blur mix
 
 
@@ -65,19 +66,29 @@ class ClipLight:
     origin: tuple[int, int]
 
 
-def linear_darkening(gray: np.ndarray, dark: bool,
-                     gamma: float = ENCODING_GAMMA) -> tuple[np.ndarray, np.ndarray]:
+def linear_darkening(gray: np.ndarray, dark: bool, gamma: float = ENCODING_GAMMA,
+                     box: tuple[int, int, int, int] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """A frame's linear-light darkening (a dark body; brightening for a bright one), evened out by
     row and column medians, and each row's light (its median, linear); ``gamma`` the camera's
-    encoding exponent."""
-    lin = (gray.astype(np.float32) * (1 / 255)) ** gamma
+    encoding exponent. ``box`` (x0, y0, x1, y1): only that part of both is returned (and only its
+    columns' medians are taken; a row's and a column's median still run over the whole frame)."""
+    if gray.dtype == np.uint8:  # the encoding curve as a table: the same numbers, no power per pixel
+        lin = _linear_table(gamma)[gray]
+    else:
+        lin = (gray.astype(np.float32) * (1 / 255)) ** gamma
     rows = np.median(lin, axis=1, keepdims=True)
+    x0, y0, x1, y1 = box or (0, 0, gray.shape[1], gray.shape[0])
     if dark:
-        lin = lin / np.maximum(rows, 1e-6)
+        lin = lin[:, x0:x1] / np.maximum(rows, 1e-6)
         lin = lin / np.maximum(np.median(lin, axis=0, keepdims=True), 1e-6)
-        return 1.0 - lin, rows[:, 0]
-    lin = lin - rows
-    return lin - np.median(lin, axis=0, keepdims=True), np.ones(len(rows), np.float32)
+        return 1.0 - lin[y0:y1], rows[y0:y1, 0]
+    lin = lin[:, x0:x1] - rows
+    return (lin - np.median(lin, axis=0, keepdims=True))[y0:y1], np.ones(y1 - y0, np.float32)
+
+
+def _linear_table(gamma: float) -> np.ndarray:
+    """Linear light of each grey level 0..255 (float32, as computed per pixel)."""
+    return (np.arange(256, dtype=np.float32) * np.float32(1 / 255)) ** np.float32(gamma)
 
 
 def remove_smooth_background(stack: np.ndarray, body_zone: np.ndarray) -> np.ndarray:
@@ -116,9 +127,8 @@ def read_clip_light(path: str, poses: list[BodyPose | None], dark: bool, size: t
         if len(rows) == len(poses):
             break
         gray = frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
-        d, light = linear_darkening(gray, dark, gamma)
-        frames[len(rows)] = d[y0:y1, x0:x1]
-        rows.append(light[y0:y1])
+        frames[len(rows)], light = linear_darkening(gray, dark, gamma, (x0, y0, x1, y1))
+        rows.append(light)
     zone = np.zeros((y1 - y0, x1 - x0), np.uint8)
     for p in found:
         c = p.crop
@@ -217,6 +227,7 @@ class GhostFit:
     alpha: float
     ghosts: dict[int, np.ndarray]
     covers: dict[int, np.ndarray]
+    mix: np.ndarray | None = None  # the lens's blur mix (columns of _blur_basis)
 
     def ghost_for(self, frame: int) -> np.ndarray:
         """The ghost of ``frame``, or of the nearest fitted frame (the ghost is the whole
@@ -225,21 +236,24 @@ class GhostFit:
 
 
 def fit_ghosts(light: ClipLight, poses: list[BodyPose | None], swing: Swing,
-               covers: dict[int, np.ndarray] | None = None) -> GhostFit:
+               covers: dict[int, np.ndarray] | None = None, last: GhostFit | None = None) -> GhostFit:
     """Fit the room light's share and the blur mix (module docstring) on ``FIT_FRAMES`` of the
     frames with a body, spread over the clip, their normal equations accumulated frame by frame
     (:class:`labkit.vision.strobe_ghost_fit.NormalSums`). The ghost is made first from the frames
     themselves, then from the fitted blurred silhouettes (noise in a frame would otherwise be in
     its ghost too and pull ``alpha`` up). ``swing`` holds one entry per pose that is not None;
-    ``covers``: the last fit's coverages, the starting edges."""
+    ``covers``: the last fit's coverages, the starting edges. ``last``: the previous swing's fit,
+    whose coverages and blur mix make the first ghost already (then ``WARM_ROUNDS`` rounds)."""
+    if last is not None:
+        covers = last.covers
     x0, y0 = light.origin
     slot = {k: j for j, k in enumerate(k for k, p in enumerate(poses) if p is not None)}  # swing's index
     fitted = _spread([k for k in slot if k < len(light.stack)], FIT_FRAMES)  # a second read may be shorter
     shape = light.stack.shape[1:]
     covers_now = {k: (covers or {}).get(k, light.stack[k]) for k in fitted}
     near = np.ones((2 * ZONE_PX + 1, 2 * ZONE_PX + 1), np.uint8)
-    mix, alpha, ghosts = None, 0.0, {}
-    for _ in range(ROUNDS):
+    mix, alpha, ghosts = (None if last is None else last.mix), 0.0, {}
+    for _ in range(ROUNDS if mix is None else WARM_ROUNDS):
         sums = NormalSums(len(SILHOUETTE_LEVELS) * len(BLUR_SIGMAS_PX))
         for k in fitted:
             j = slot[k]
@@ -254,7 +268,7 @@ def fit_ghosts(light: ClipLight, poses: list[BodyPose | None], swing: Swing,
         alpha, mix = sums.solve()
         for k in fitted:
             covers_now[k] = _without_ghost(light, k, alpha, ghosts[k])
-    return GhostFit(alpha, ghosts, covers_now)
+    return GhostFit(alpha, ghosts, covers_now, mix)
 
 
 def _without_ghost(light: ClipLight, frame: int, alpha: float, ghost: np.ndarray) -> np.ndarray:
