@@ -52,7 +52,7 @@ ZONE_LEVEL = 0.02  # pixels with this much ghost, or within ZONE_PX of the body,
 ZONE_PX = 8
 ROUNDS = 4  # rounds of ghost, room light and silhouette per swing
 WARM_ROUNDS = 2  # ... when the last swing's fit gives the first ghost
-FIT_FRAMES = 8  # frames (evenly spread over the clip) whose pixels fit the share and the blur mix
+FIT_FRAMES = 6  # frames (evenly spread over the clip) whose pixels fit the share and the blur mix
 
 
 @dataclass
