@@ -36,7 +36,7 @@ from labkit.vision.strobe_ghost import (
     ENCODING_GAMMA,
     FIT_FRAMES,
     ClipLight,
-    _spread,
+    spread_frames,
     fit_ghosts,
     poses_without_ghost,
     read_clip_light,
@@ -183,7 +183,7 @@ def _without_room_light(light: ClipLight, first: _Measured, model: PhaseModel) -
     less than ``ROOM_LIGHT_SETTLED`` of itself) or ``ROOM_LIGHT_ROUNDS`` have run. The rounds
     measure only the frames the room light is fitted on (``FIT_FRAMES``, spread over the clip);
     the last fit's ghosts then come out of every frame, which is measured once."""
-    fitted = set(_spread([k for k, p in enumerate(first.poses) if p is not None], FIT_FRAMES))
+    fitted = set(spread_frames([k for k, p in enumerate(first.poses) if p is not None], FIT_FRAMES))
     now = _measure([p if k in fitted else None for k, p in enumerate(first.poses)], model)
     fit, change, rounds = None, math.inf, 0
     while rounds < ROOM_LIGHT_ROUNDS and change > ROOM_LIGHT_SETTLED:

@@ -211,7 +211,7 @@ def _mixed(basis: np.ndarray, mix: np.ndarray) -> np.ndarray:
     return out
 
 
-def _spread(frames: list[int], count: int) -> list[int]:
+def spread_frames(frames: list[int], count: int) -> list[int]:
     """At most ``count`` of ``frames``, evenly spread from the first to the last."""
     if len(frames) <= count:
         return list(frames)
@@ -248,7 +248,7 @@ def fit_ghosts(light: ClipLight, poses: list[BodyPose | None], swing: Swing,
         covers = last.covers
     x0, y0 = light.origin
     slot = {k: j for j, k in enumerate(k for k, p in enumerate(poses) if p is not None)}  # swing's index
-    fitted = _spread([k for k in slot if k < len(light.stack)], FIT_FRAMES)  # a second read may be shorter
+    fitted = spread_frames([k for k in slot if k < len(light.stack)], FIT_FRAMES)  # a second read may be shorter
     shape = light.stack.shape[1:]
     covers_now = {k: (covers or {}).get(k, light.stack[k]) for k in fitted}
     near = np.ones((2 * ZONE_PX + 1, 2 * ZONE_PX + 1), np.uint8)
