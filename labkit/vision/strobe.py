@@ -36,10 +36,10 @@ from labkit.vision.strobe_ghost import (
     ENCODING_GAMMA,
     FIT_FRAMES,
     ClipLight,
-    spread_frames,
     fit_ghosts,
     poses_without_ghost,
     read_clip_light,
+    spread_frames,
     swing_of,
 )
 from labkit.vision.strobe_phase import (
