@@ -248,7 +248,7 @@ def fit_ghosts(light: ClipLight, poses: list[BodyPose | None], swing: Swing,
         covers = last.covers
     x0, y0 = light.origin
     slot = {k: j for j, k in enumerate(k for k, p in enumerate(poses) if p is not None)}  # swing's index
-    fitted = spread_frames([k for k in slot if k < len(light.stack)], FIT_FRAMES)  # a second read: maybe fewer
+    fitted = spread_frames([k for k in slot if k < len(light.stack)], FIT_FRAMES)  # a 2nd read: maybe fewer
     shape = light.stack.shape[1:]
     covers_now = {k: (covers or {}).get(k, light.stack[k]) for k in fitted}
     near = np.ones((2 * ZONE_PX + 1, 2 * ZONE_PX + 1), np.uint8)
