@@ -40,12 +40,13 @@ print(json.dumps({"cpu_s": cpu, "wall_s": wall, "tilt": r["tilt_amplitude_rad"],
 def analyse_in_child(path: str, rotor_hz: float, strobe_hz: float) -> dict:
     """Analyse ``path`` in a fresh Python; the child's numbers plus its peak RSS (MB)."""
     proc = subprocess.Popen([sys.executable, "-c", CHILD, path, repr(rotor_hz), repr(strobe_hz)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    out, err = proc.stdout.read(), proc.stderr.read()
-    _, status, usage = os.wait4(proc.pid, 0)
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    assert proc.stdout is not None
+    out = proc.stdout.read()  # warnings and the JSON line, in one pipe (no deadlock on a full one)
+    _, status, usage = os.wait4(proc.pid, 0)  # the child's own peak memory
     proc.returncode = os.waitstatus_to_exitcode(status)
     if proc.returncode != 0:
-        raise RuntimeError(f"analysis of {path} failed (exit {proc.returncode}): {err.strip()[-400:]}")
+        raise RuntimeError(f"analysis of {path} failed (exit {proc.returncode}): {out.strip()[-400:]}")
     result = json.loads(out.strip().splitlines()[-1])
     result["peak_mb"] = usage.ru_maxrss / 1024  # kB on Linux
     return result

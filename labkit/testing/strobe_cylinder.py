@@ -139,7 +139,7 @@ def frames(clip: CylinderClip):
         for t in flashes:
             cover += coverage(clip, _tilt(clip, t), box)
         flash_light = len(flashes) / per_exposure  # 3 or 4 flashes: the frame's brightness moves
-        lin = np.full((h, w), clip.background * (flash_light + clip.room_light), np.float32)
+        lin: np.ndarray = np.full((h, w), clip.background * (flash_light + clip.room_light), np.float32)
         lin[y0:y1, x0:x1] += contrast * (cover / per_exposure + clip.room_light * ghost)
         if clip.blur_px > 0:
             lin = cv2.GaussianBlur(lin, (0, 0), clip.blur_px)
