@@ -113,7 +113,8 @@ def _read_poses(path: str, on_frame, keep_frame: int | None = None, gamma: float
     None)."""
     source = open_frames(path)
     poses: list[BodyPose | None] = []
-    grays: list[np.ndarray] | None = []
+    w, h = source.size  # a clip too big to keep is read again (frame count 0: unknown, keep till full)
+    grays: list[np.ndarray] | None = [] if source.frame_count * w * h <= KEEP_GREY_BYTES else None
     lo, hi, kept = 255, 0, None
     brightest = darkest = None
     for index, frame in source.frames():
