@@ -14,6 +14,10 @@ renderer :mod:`labkit.footage` (never labkit.synth), rendered on demand into a c
 analysed by ``labkit.vision`` and scored against their truth; it prints the pass rate per family
 and difficulty, a confusion table of pattern kinds and the cases outside tolerance with verdict
 ok (docs/explanation/robustness-suite.md, *Independent footage and the robustness suite*).
+
+After the laser table comes the strobe table (``--strobe``, :mod:`labkit.cli.bench_vision_strobe`):
+analysis time / clip duration for strobe clips of small and large bodies, with and without room
+light, at 640x480 and 1080p, with each analysis's peak memory.
 """
 
 from __future__ import annotations
@@ -73,6 +77,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     parser.add_argument("--repeats", type=int, default=3,
                         help="interleaved rounds of every timing (default 3; the machine may be shared)")
     parser.add_argument("--keep", metavar="DIR", help="keep the rendered clip in DIR")
+    strobe = parser.add_argument_group("strobe clips (docs/explanation/strobe-speed.md)")
+    strobe.add_argument("--strobe", choices=["also", "only", "no"], default="also",
+                        help="the strobe table after the laser one (also), alone (only) or not (no)")
+    strobe.add_argument("--strobe-sizes", type=lambda t: [_size(v) for v in t.split(",")],
+                        default=[(640, 480), (1920, 1080)], help="WxH,... (default 640x480,1920x1080)")
+    strobe.add_argument("--strobe-frames", type=int, default=120,
+                        help="frames per strobe clip (default 120 = 4 s)")
     suite = parser.add_argument_group("robustness suite (independent footage)")
     suite.add_argument("--suite", action="store_true",
                        help="run the robustness suite instead of the timing bench")
@@ -154,6 +165,19 @@ def run_suite(args: argparse.Namespace) -> int:
 def run(args: argparse.Namespace) -> int:
     if args.suite:
         return run_suite(args)
+    from labkit.cli.bench_vision_strobe import run_strobe
+
+    if args.strobe == "only":
+        return run_strobe(args.strobe_sizes, args.strobe_frames, args.keep)
+    rc = run_laser(args)
+    if args.strobe == "also" and rc == 0:
+        print()
+        rc = run_strobe(args.strobe_sizes, args.strobe_frames, args.keep)
+    return rc
+
+
+def run_laser(args: argparse.Namespace) -> int:
+    """The laser table: accuracy and time per quality setting, ratio to decode-only."""
     from labkit.synth import laser_truth, render_laser, write_clip
     from labkit.synth.presets import laser_pattern, laser_preset
     from labkit.vision.frames import open_frames

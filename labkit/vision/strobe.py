@@ -35,9 +35,12 @@ from labkit.vision.strobe_body import (
 from labkit.vision.strobe_fit import MotionFit, fit_motion, sine_fit
 from labkit.vision.strobe_ghost import (
     ENCODING_GAMMA,
+    FIT_FRAMES,
     ClipLight,
-    ghost_free_poses,
+    fit_ghosts,
+    poses_without_ghost,
     read_clip_light,
+    spread_frames,
     swing_of,
 )
 from labkit.vision.strobe_phase import (
@@ -59,6 +62,7 @@ ROOM_LIGHT_SETTLED = 0.005  # the tilt amplitude has settled when a round change
 # ghost fraction below which a clip counts as ghost-free: the measure's spread on clips without
 # room light (|ghost| <= 0.008 on the 30 such clips of the robustness suite, noise and blur alone)
 GHOST_FLOOR = 0.01
+KEEP_GREY_BYTES = 96 * 2**20  # grey frames kept for the room light up to this (640x480: 320 frames)
 # pixels this close to the part of the body covered in every frame are left out of the ghost
 # measure: the blurred edge of that part darkens them in every frame (lens blur: core 1-2 px)
 BLUR_FRINGE_PX = 3
@@ -110,6 +114,8 @@ def _read_poses(path: str, on_frame, keep_frame: int | None = None, gamma: float
     None)."""
     source = open_frames(path)
     poses: list[BodyPose | None] = []
+    w, h = source.size  # a clip too big to keep is read again (frame count 0: unknown, keep till full)
+    grays: list[np.ndarray] | None = [] if source.frame_count * w * h <= KEEP_GREY_BYTES else None
     lo, hi, kept = 255, 0, None
     brightest = darkest = None
     for index, frame in source.frames():
@@ -117,6 +123,10 @@ def _read_poses(path: str, on_frame, keep_frame: int | None = None, gamma: float
             on_frame(index, index / source.fps if source.fps else 0.0, frame)
         lo, hi = min(lo, int(frame.min())), max(hi, int(frame.max()))
         gray = frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+        if grays is not None:  # kept for the room light's second look: the clip is decoded once
+            grays.append(gray.copy() if gray is frame else gray)
+            if len(grays) * gray.nbytes > KEEP_GREY_BYTES:
+                grays = None
         flat = flatten_illumination(gray)
         pose = measure_flat(flat)
         poses.append(pose)
@@ -136,7 +146,7 @@ def _read_poses(path: str, on_frame, keep_frame: int | None = None, gamma: float
         dark = sum(p.crop.dark for p in found) * 2 >= len(found)
         ghost = ghost_fraction(found, brightest if dark else darkest, dark)
         if ghost > GHOST_FLOOR:
-            light = read_clip_light(path, poses, dark, source.size, gamma)
+            light = read_clip_light(path, poses, dark, source.size, gamma, grays)
         else:  # no ghost: the axis from moments linear in intensity (blur-invariant)
             poses = [None if p is None else p.with_linear_angles() for p in poses]
         for p in poses:
@@ -172,22 +182,34 @@ def _measure(poses: list[BodyPose | None], model: PhaseModel) -> _Measured:
 def _without_room_light(light: ClipLight, first: _Measured, model: PhaseModel) -> tuple[_Measured, dict]:
     """Take the room light's ghost out (:mod:`labkit.vision.strobe_ghost`) with the swing of the
     previous measurement, measure again, and repeat until the tilt amplitude settles (changes by
-    less than ``ROOM_LIGHT_SETTLED`` of itself) or ``ROOM_LIGHT_ROUNDS`` have run."""
-    now, covers, alpha, change, rounds = first, None, 0.0, math.inf, 0
+    less than ``ROOM_LIGHT_SETTLED`` of itself) or ``ROOM_LIGHT_ROUNDS`` have run. The rounds
+    measure only the frames the room light is fitted on (``FIT_FRAMES``, spread over the clip);
+    the last fit's ghosts then come out of every frame, which is measured once."""
+    fitted = set(spread_frames([k for k, p in enumerate(first.poses) if p is not None], FIT_FRAMES))
+    now = _measure([p if k in fitted else None for k, p in enumerate(first.poses)], model)
+    fit, change, rounds = None, math.inf, 0
     while rounds < ROOM_LIGHT_ROUNDS and change > ROOM_LIGHT_SETTLED:
         tilt = now.motion.tilt
         swing = swing_of(now.found, now.orient.axis, now.orient.tilt_rad, now.orient.lateral_px,
                          tilt.at(now.psi), tilt.amplitude)
-        poses, alpha, covers = ghost_free_poses(light, now.poses, swing, covers)
-        if sum(p is not None for p in poses) < MIN_FRAMES:
+        fit = fit_ghosts(light, now.poses, swing, last=fit)
+        poses = poses_without_ghost(light, now.poses, fit)
+        if sum(p is not None for p in poses) < min(MIN_FRAMES, len(fitted)):
             break
         before, now = now.motion.phi, _measure(poses, model)
         change = abs(now.motion.phi - before) / max(now.motion.phi, 1e-12)
         rounds += 1
+    alpha = 0.0 if fit is None else fit.alpha
+    if fit is not None:
+        whole = _measure(poses_without_ghost(light, first.poses, fit), model)
+        if len(whole.idx) >= MIN_FRAMES:
+            now = whole
+    if len(now.idx) < MIN_FRAMES:
+        now = first
     return now, {"method": "ghost of the revolution taken out in linear light "
                            "(docs/explanation/strobe-analysis.md, Room light)",
                  "fraction_of_light": alpha, "rounds": rounds, "settled": change <= ROOM_LIGHT_SETTLED,
-                 "last_change": change if math.isfinite(change) else None,
+                 "last_change": change if math.isfinite(change) else None, "frames_fitted": len(fitted),
                  "tilt_amplitude_uncorrected_rad": first.motion.phi,
                  "lateral_amplitude_uncorrected_px": first.motion.beta}
 
@@ -400,7 +422,10 @@ def _evidence(source, poses, found, orient: ClipOrientation, model: PhaseModel, 
         "tilt_amplitude_se_rad": rolling["tilt_amplitude_se_rad"],
         "lateral_amplitude_px": rolling["lateral_amplitude_px"],
         "lateral_amplitude_se_px": rolling["lateral_amplitude_se_px"]}
+    room_model = (f"run: ghost fraction {ghost:.3f} above {GHOST_FLOOR}" if room is not None else
+                  f"not run: ghost fraction {ghost:.3f} at most {GHOST_FLOOR} (no room light's ghost seen)")
     return {"frames": len(poses), "frames_with_body": len(found), "ghost_fraction": ghost,
+            "room_light_model": room_model,
             "room_light_fraction": (room or {}).get("fraction_of_light"),
             "room_light_settled": (room or {}).get("settled"),
             "tilt_amplitude_uncorrected_rad": (room or {}).get("tilt_amplitude_uncorrected_rad"),

@@ -129,6 +129,38 @@ def explained_fraction(frames: np.ndarray, cycles_per_frame: float, series: list
     return _explained(2 * math.pi * cycles_per_frame * np.asarray(frames, float), series)
 
 
+GRID_CELLS = 2_000_000  # frequencies x frames evaluated at once by _explained_on_grid
+
+
+def _explained_on_grid(frames: np.ndarray, grid: np.ndarray, series: list[np.ndarray]) -> np.ndarray:
+    """:func:`explained_fraction` at every frequency of ``grid`` at once: the 3 x 3 normal
+    equations of ``[1, sin, cos]`` for all frequencies as one stack, solved by pseudo-inverse
+    (rank-deficient at 0.5 cycles per frame, where the sine vanishes, as lstsq's minimum norm)."""
+    psi = 2 * math.pi * grid[:, None] * frames[None, :]
+    s, c = np.sin(psi), np.cos(psi)
+    n = float(len(frames))
+    normal = np.empty((len(grid), 3, 3))
+    normal[:, 0, 0] = n
+    normal[:, 0, 1] = normal[:, 1, 0] = s.sum(axis=1)
+    normal[:, 0, 2] = normal[:, 2, 0] = c.sum(axis=1)
+    normal[:, 1, 1] = (s * s).sum(axis=1)
+    normal[:, 1, 2] = normal[:, 2, 1] = (s * c).sum(axis=1)
+    normal[:, 2, 2] = (c * c).sum(axis=1)
+    inverse = np.linalg.pinv(normal, rcond=1e-10)
+    total, count = np.zeros(len(grid)), 0
+    for y in series:
+        y = np.asarray(y, float)
+        var = float(np.var(y))
+        if var <= 0:
+            continue
+        right = np.stack([np.full(len(grid), y.sum()), (s * y).sum(axis=1), (c * y).sum(axis=1)], axis=1)
+        coef = np.einsum("gij,gj->gi", inverse, right)
+        rss = float(y @ y) - np.einsum("gi,gi->g", coef, right)
+        total += 1 - np.maximum(rss, 0.0) / n / var
+        count += 1
+    return total / count if count else total
+
+
 @dataclass
 class SignalFrequency:
     cycles_per_frame: float  # in (0, 0.5]
@@ -144,7 +176,9 @@ def estimate_cycles_per_frame(frames: np.ndarray, series: list[np.ndarray]) -> S
     k = np.asarray(frames, float)
     n = max(8, int(k.max() - k.min() + 1))
     grid = np.linspace(0.5 / n, 0.5, 8 * n)
-    power = np.array([explained_fraction(k, f, series) for f in grid])
+    chunk = max(1, GRID_CELLS // max(1, len(k)))  # bounded memory however long the clip
+    power = np.concatenate([_explained_on_grid(k, grid[i:i + chunk], series)
+                            for i in range(0, len(grid), chunk)])
     i = int(np.argmax(power))
     step = grid[1] - grid[0]
     a, b = max(1e-6, grid[i] - step), min(0.5, grid[i] + step)
