@@ -59,14 +59,13 @@ if TYPE_CHECKING:  # for type checkers and IDEs; at run time the names come from
     from collections.abc import Sequence
     from pathlib import Path
 
-    from labkit.errors import LabkitError
+    from labkit.errors import LabkitError, SessionError
     from labkit.fit.data import load_tables
     from labkit.fit.table_fit import FitOptions, FitReport, fit_table
     from labkit.protocols.launch import execute, prepare_run, replay_session
     from labkit.report.build import build_report
     from labkit.rig import load_rig, open_rig
     from labkit.session.frames import SessionFrames, load_session
-    from labkit.session.writer import SessionError
     from labkit.sim.run import simulate
     from labkit.sim.scene import load_scene
     from labkit.vision.laser import analyse_laser
