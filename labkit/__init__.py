@@ -67,7 +67,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs; at run time the names come from
     from labkit.rig import load_rig, open_rig
     from labkit.session.frames import SessionFrames, load_session
     from labkit.sim.run import simulate
-    from labkit.sim.scene import load_scene
+    from labkit.sim.scene_file import load_scene
     from labkit.vision.laser import analyse_laser
     from labkit.vision.strobe import analyse_strobe
 

@@ -27,8 +27,8 @@ _HOME = {
     "SimResult": "labkit.sim.result",
     "simulate": "labkit.sim.run",
     **{name: "labkit.sim.scene" for name in (
-        "Body", "Rotator", "Scene", "SceneBody", "SceneError", "Shape", "UniformField", "bundled_scenes",
-        "load_scene", "scene_from_dict")},
+        "Body", "Rotator", "Scene", "SceneBody", "SceneError", "Shape", "UniformField")},
+    **{name: "labkit.sim.scene_file" for name in ("bundled_scenes", "load_scene", "scene_from_dict")},
     "validate_scene": "labkit.sim.scene_checks",
 }
 
@@ -45,11 +45,9 @@ if TYPE_CHECKING:  # pragma: no cover
         SceneError,
         Shape,
         UniformField,
-        bundled_scenes,
-        load_scene,
-        scene_from_dict,
     )
     from labkit.sim.scene_checks import validate_scene
+    from labkit.sim.scene_file import bundled_scenes, load_scene, scene_from_dict
 
 
 __getattr__ = lazy_attributes(__name__, _HOME)
