@@ -23,7 +23,7 @@ _HOME = {
     "compile_scene": "labkit.sim.compile",
     "DEFAULT_INTEGRATOR": "labkit.sim.integrators",
     "INTEGRATORS": "labkit.sim.integrators",
-    "SimulationError": "labkit.sim.integrators",
+    "SimulationError": "labkit.sim.integrators.raw_run",
     "SimResult": "labkit.sim.result",
     "simulate": "labkit.sim.run",
     **{name: "labkit.sim.scene" for name in (
@@ -34,7 +34,8 @@ _HOME = {
 
 if TYPE_CHECKING:  # pragma: no cover
     from labkit.sim.compile import CompiledSystem, compile_scene
-    from labkit.sim.integrators import DEFAULT_INTEGRATOR, INTEGRATORS, SimulationError
+    from labkit.sim.integrators import DEFAULT_INTEGRATOR, INTEGRATORS
+    from labkit.sim.integrators.raw_run import SimulationError
     from labkit.sim.result import SimResult
     from labkit.sim.run import simulate
     from labkit.sim.scene import (

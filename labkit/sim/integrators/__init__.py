@@ -7,20 +7,13 @@
 * ``cyrk-dop853``: the same DOP853 compiled (CyRK's C++ solver with a numba right-hand side),
   the fair peer of ``labkit bench sim``.
 
-Every integrator returns a :class:`RawRun`; :func:`labkit.sim.run.simulate` turns it into a
-:class:`labkit.sim.result.SimResult` with invariants, status and quantities of interest.
+Every integrator returns a :class:`labkit.sim.integrators.raw_run.RawRun`; :func:`labkit.sim.run.simulate`
+turns it into a :class:`labkit.sim.result.SimResult` with invariants, status and quantities of interest.
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
-
-from labkit.errors import LabkitError
-
-if TYPE_CHECKING:  # annotations only: `labkit simulate --help` reads the names below without numpy
-    import numpy as np
+from labkit.sim.integrators.raw_run import SimulationError
 
 SPLITTINGS = {
     "splitting4": "suzuki4",
@@ -37,55 +30,6 @@ REFERENCES = {"dop853": "DOP853", "radau": "Radau", "lsoda": "LSODA"}
 COMPILED = {"cyrk-dop853": "DOP853"}
 INTEGRATORS = sorted(set(SPLITTINGS) | set(REFERENCES) | set(COMPILED))
 DEFAULT_INTEGRATOR = "splitting4"
-MAX_SAMPLE_BYTES = 1 << 30
-
-
-class SimulationError(LabkitError):
-    """A simulation cannot run as asked (unknown integrator, horizon too long for memory, ...)."""
-
-
-@dataclass
-class RawRun:
-    """What an integrator returns: samples of the (principal-frame) state and how it ended."""
-
-    integrator: str
-    setting: dict
-    status: int  # 0 ok, 1 nan, 2 blowup, 3 contact, 4 escape, 5 solver failed
-    event_time: float
-    n_force: int
-    t: np.ndarray
-    x: np.ndarray | None = None  # (n, nb, 3)
-    v: np.ndarray | None = None
-    R: np.ndarray | None = None  # (n, nb, 3, 3), principal frame -> lab
-    L: np.ndarray | None = None  # (n, nb, 3), lab angular momentum
-    y: np.ndarray | None = None  # reduced angle (n,)
-    yd: np.ndarray | None = None  # reduced rate (n,)
-    impulse: np.ndarray | None = None  # (nb, 3) time integral of magnetic force
-    budget: np.ndarray | None = None  # (n,) damping's accumulated change of E - wz J_z
-    message: str = ""
-    extra: dict = field(default_factory=dict)
-
-
-def auto_steps_per_period(omega: float, omega_max: float, order: int, multiple: int = 1,
-                          body_pairs: bool = False) -> int:
-    """Steps per drive period: ``N >= 64`` (order >= 4; 256 for Strang) and ``h omega_max <= 0.5``,
-    rounded up to a multiple of ``multiple`` (so samples fall on exact multiples of T/multiple).
-
-    Scenes with interacting free bodies take ``N >= 128``: at 64 the two-body energy error of
-    ``mbs_fig6_1`` is 7e-10 after 1e4 cycles (bounded), at 128 it is 4e-11, for 1.3x the cost
-    (``labkit bench sim``; issue 5's target is 1e-10)."""
-    n_min = (128 if body_pairs else 64) if order >= 4 else 256
-    n = max(n_min, math.ceil(2.0 * math.pi * omega_max / (0.5 * omega))) if omega > 0 else n_min
-    return int(math.ceil(n / multiple) * multiple)
-
-
-def check_memory(n_samples: int, nb: int) -> None:
-    size = n_samples * max(nb, 1) * 18 * 8
-    if size > MAX_SAMPLE_BYTES:
-        raise SimulationError(
-            f"{n_samples} samples of {nb} bodies need {size / 2**30:.1f} GiB: "
-            "lower --cycles or the samples per period"
-        )
 
 
 def get_integrator(name: str):
