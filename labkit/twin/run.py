@@ -3,28 +3,16 @@ then the fits, compared with what went in (docs/twin.md)."""
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Any
 
 from labkit.emulators.break_up import break_up
 from labkit.emulators.twin_model import TwinParams, missing_from_rig, params_from_rig
-from labkit.twin.fits import break_phi_from_c, fit_gap, fit_moment_product
+from labkit.twin.fits import break_phi_from_c, compare, fit_gap, fit_moment_product, interval_95
 from labkit.twin.rigtext import write_twin_rig
 
 #: speed-sweep plan of the twin (the demo's)
 SWEEP_SETS = ["speeds_rpm=6000:20000:1000", "record_s=2.0"]
-
-
-def compare(group: str, param: str, put_in: float, fit: dict, unit: str, scale: float = 1.0) -> dict:
-    """One row: put-in against recovered, ``ok`` when the put-in value lies in the 95 % interval."""
-    lo, hi = (x * scale for x in fit["ci95"])
-    value = fit["value"] * scale
-    put = put_in * scale
-    return {"name": f"twin/{group}/{param}", "group": group, "param": param, "unit": unit,
-            "put_in": put, "recovered": value, "stderr": fit["stderr"] * scale, "ci95": [lo, hi],
-            "residual": value - put, "rel_diff": (value - put) / put if put else math.nan,
-            "ok": bool(lo <= put <= hi), "n": fit.get("n")}
 
 
 def _run(rig_file: Path, protocol: str, sets: list[str], sessions: Path, seed: int) -> Any:
@@ -66,8 +54,7 @@ def spin_rows(user_rig: Path, params: TwinParams, work: Path, seed: int) -> tupl
     outcome = _run(rig_file, "spin-critical", spin_plan(params), work / "sessions", seed)
     c_fit = outcome.results["fit"]["params"]["C"]
     n = outcome.results["fit"].get("n", len(outcome.results["points"]))
-    from labkit.twin.fits import _interval
-    c = _interval(c_fit["value"], c_fit["stderr"], n)
+    c = interval_95(c_fit["value"], c_fit["stderr"], n)
     put_in = break_up(params)
     rows = [compare("fig6.18", "C", put_in.c, c, "rad^2/s^2"),
             compare("fig6.18", "break_phi", put_in.phi, break_phi_from_c(params, c), "rad")]
