@@ -392,13 +392,3 @@ class ReplaySerial(ClockedSerial):
         self._require_open()
         with self._lock:
             self._raise_if_dead()
-
-
-def serial_class_for_url(url: str) -> tuple[str, type[ClockedSerial]]:
-    """pyserial hook (``labkit.io.urlhandlers.protocol_replay``); ``mode=faithful`` is
-    :class:`labkit.io.faithful_port.FaithfulSerial`."""
-    if parse_replay_url(url).mode == "faithful":
-        from labkit.io.faithful_port import FaithfulSerial
-
-        return url, FaithfulSerial
-    return url, ReplaySerial
