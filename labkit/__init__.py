@@ -62,7 +62,8 @@ if TYPE_CHECKING:  # for type checkers and IDEs; at run time the names come from
     from labkit.errors import LabkitError, SessionError
     from labkit.fit.data import load_tables
     from labkit.fit.table_fit import FitOptions, FitReport, fit_table
-    from labkit.protocols.launch import execute, prepare_run, replay_session
+    from labkit.protocols.launch import execute, prepare_run
+    from labkit.protocols.replay import replay_session
     from labkit.report.build import build_report
     from labkit.rig import load_rig, open_rig
     from labkit.session.frames import SessionFrames, load_session

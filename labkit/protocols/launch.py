@@ -4,15 +4,13 @@
   checks the plan against the rig's limits and that sessions can be written: every bad
   input fails here, before any port is opened or any motor turns.
 * :func:`execute` runs a prepared plan into a new session directory.
-* :func:`replay_session` re-runs a session's protocol against its own cassettes on a
-  virtual clock and compares the results with the recorded ``results.json``
-  (:mod:`labkit.protocols.replay`).
+* :func:`recorded_points` and :func:`replay_url`: what a resumed run and a replay
+  (:mod:`labkit.protocols.replay`, which builds on this module) read of a session.
 """
 
 from __future__ import annotations
 
 import json
-import math
 import shutil
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -21,10 +19,9 @@ from typing import Any
 
 from labkit.errors import LabkitError
 from labkit.io.clock import Clock, RealClock, VirtualClock, use_clock
-from labkit.protocols import get_protocol
 from labkit.protocols.events import Sink
 from labkit.protocols.params import resolve_params
-from labkit.protocols.replay_compare import ADDED_KEYS
+from labkit.protocols.registry import get_protocol
 from labkit.protocols.resume import ResumeLock, check_carried_points, rig_differences
 from labkit.protocols.runner import ProtocolDef, Runner, RunOutcome
 from labkit.rig import Rig, load_rig
@@ -221,59 +218,3 @@ def _jsonable(params: dict[str, Any]) -> dict[str, Any]:
 def replay_url(session: Path, role: str) -> str:
     """The ``replay://`` URL of one device's cassette in a session (timed, strict)."""
     return f"replay://{(session / 'cassettes' / f'{role}.jsonl').resolve()}?mode=timed"
-
-
-#: Derived numbers (fits) may differ between CPUs in their last digits: BLAS and LAPACK pick
-#: different kernels per instruction set, and a fit sums in a different order. Recorded bytes,
-#: readings and points are compared exactly; values under a derived key (``fit``) are equal when
-#: ``|a - b| <= REPLAY_FIT_RTOL * max(|a|, |b|) + REPLAY_FIT_ATOL`` (documented in docs/protocols.md).
-REPLAY_FIT_RTOL = 1e-6
-REPLAY_FIT_ATOL = 1e-12
-DERIVED_KEYS = frozenset({"fit"})
-
-
-def _close(a: float, b: float) -> bool:
-    if math.isnan(a) and math.isnan(b):
-        return True
-    return abs(a - b) <= REPLAY_FIT_RTOL * max(abs(a), abs(b)) + REPLAY_FIT_ATOL
-
-
-def diff_results(a: Any, b: Any, path: str = "results", derived: bool = False) -> list[str]:
-    """Human-readable differences between two JSON values, both values printed.
-
-    Everything is compared exactly except numbers below a key in :data:`DERIVED_KEYS`, which
-    are compared within :data:`REPLAY_FIT_RTOL` (a fit's last digits depend on the CPU).
-    """
-    if derived and isinstance(a, int | float) and isinstance(b, int | float) \
-            and not isinstance(a, bool) and not isinstance(b, bool):
-        if _close(float(a), float(b)):
-            return []
-        return [f"{path}: replay {a!r} != recording {b!r} (beyond relative tolerance {REPLAY_FIT_RTOL:g})"]
-    if type(a) is not type(b):
-        return [f"{path}: replay {a!r} != recording {b!r}"]
-    if isinstance(a, dict):
-        out = []
-        for k in sorted(set(a) | set(b)):
-            if k not in b and k in ADDED_KEYS:
-                continue
-            if k not in a or k not in b:
-                out.append(f"{path}.{k}: only in {'replay' if k in a else 'recording'}")
-            else:
-                out += diff_results(a[k], b[k], f"{path}.{k}", derived or k in DERIVED_KEYS)
-        return out
-    if isinstance(a, list):
-        if len(a) != len(b):
-            return [f"{path}: {len(a)} entries != {len(b)}"]
-        pairs = enumerate(zip(a, b, strict=True))
-        return [d for i, (x, y) in pairs for d in diff_results(x, y, f"{path}[{i}]", derived)]
-    if a == b or (isinstance(a, float) and math.isnan(a) and math.isnan(b)):
-        return []
-    return [f"{path}: replay {a!r} != recording {b!r}"]
-
-
-def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str = "auto") -> Any:
-    """Replay a session against its cassettes and compare (:func:`labkit.protocols.replay.replay_session`:
-    exact for virtual-clock sessions, faithful for real-clock ones, or ``level="analysis"``)."""
-    from labkit.protocols.replay import replay_session as replay
-
-    return replay(path, sinks, level)

@@ -3,7 +3,7 @@
 
 * **exact** (sessions recorded on the virtual clock): every port is ``replay://...?mode=timed``,
   what the drivers send must match the recording byte for byte, and the results must equal
-  ``results.json`` (fits within :data:`~labkit.protocols.launch.REPLAY_FIT_RTOL`).
+  ``results.json`` (fits within :data:`~labkit.protocols.replay_compare.REPLAY_FIT_RTOL`).
 * **faithful** (sessions recorded on the real clock): every port is
   ``replay://...?mode=faithful`` on a virtual clock started at the recording's clock reading;
   device bytes arrive at their recorded times, writes are matched by content within a
@@ -17,20 +17,26 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from labkit.errors import CassetteError, LabkitError
 from labkit.io.clock import ReplayClock, VirtualClock, recorded_ticks, use_clock
-from labkit.protocols import get_protocol
 from labkit.protocols.events import Sink
-from labkit.protocols.launch import diff_results, recorded_points, replay_url
+from labkit.protocols.launch import recorded_points, replay_url
 from labkit.protocols.params import resolve_params
-from labkit.protocols.replay_compare import decisions, diff_decisions, diff_within, offline_wording
+from labkit.protocols.registry import get_protocol
+from labkit.protocols.replay_compare import (
+    ReplayOutcome,
+    decisions,
+    diff_decisions,
+    diff_results,
+    diff_within,
+    offline_wording,
+)
 from labkit.protocols.replay_evidence import Evidence, diff_points, diff_readings
 from labkit.protocols.resume import check_carried_points
-from labkit.protocols.runner import Runner, RunOutcome, normalise
+from labkit.protocols.runner import Runner, normalise
 from labkit.rig import load_rig
 from labkit.session import SessionRecord, load_session
 
@@ -41,21 +47,6 @@ LEVEL_WORDS = {
                 "by content; same decisions, points within tolerance)",
     "analysis": "analysis only (recorded bytes re-parsed by today's drivers; no protocol run)",
 }
-
-
-@dataclass
-class ReplayOutcome:
-    outcome: RunOutcome
-    recorded: dict[str, Any] | None
-    identical: bool
-    differences: list[str]
-    #: ``file:line: reason`` of damaged lines skipped while reading the session
-    warnings: list[str] = field(default_factory=list)
-    level: str = "exact"
-    #: faithful: per port, what its writes matched (labkit.io.faithful_port.FaithfulSerial.report)
-    ports: list[dict[str, Any]] = field(default_factory=list)
-    #: the replay's decisions (faithful), for reports
-    decisions: list[dict[str, Any]] = field(default_factory=list)
 
 
 class _Collect:

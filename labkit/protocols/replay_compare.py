@@ -12,13 +12,20 @@ the step of each) must be the same:
   :data:`SETTLE_TOL_S`).
 * :func:`offline_wording`: an offline replay moves no motor, so the words that tell a person
   at a rig what to do are taken out of what it prints.
+
+An exact replay (virtual clock) is compared by :func:`diff_results`: everything exactly but a
+fit's numbers (:data:`REPLAY_FIT_RTOL`). Every level returns a :class:`ReplayOutcome`.
 """
 
 from __future__ import annotations
 
 import math
 import re
-from typing import Any
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from labkit.protocols.runner import RunOutcome
 
 #: key -> ("rel" | "abs" | "count", tolerance); "count": relative, but one more or fewer always
 #: passes; keys not listed compare within DEFAULT_RTOL
@@ -187,3 +194,66 @@ def diff_decisions(replayed: list[dict[str, Any]], recorded: list[dict[str, Any]
         extra = longer[min(len(replayed), len(recorded))]
         out.append(f"only the {who} went on: {describe(extra, labels)}")
     return out
+
+
+#: Derived numbers (fits) may differ between CPUs in their last digits: BLAS and LAPACK pick
+#: different kernels per instruction set, and a fit sums in a different order. Recorded bytes,
+#: readings and points are compared exactly; values under a derived key (``fit``) are equal when
+#: ``|a - b| <= REPLAY_FIT_RTOL * max(|a|, |b|) + REPLAY_FIT_ATOL`` (documented in docs/protocols.md).
+REPLAY_FIT_RTOL = 1e-6
+REPLAY_FIT_ATOL = 1e-12
+DERIVED_KEYS = frozenset({"fit"})
+
+
+def _close(a: float, b: float) -> bool:
+    if math.isnan(a) and math.isnan(b):
+        return True
+    return abs(a - b) <= REPLAY_FIT_RTOL * max(abs(a), abs(b)) + REPLAY_FIT_ATOL
+
+
+def diff_results(a: Any, b: Any, path: str = "results", derived: bool = False) -> list[str]:
+    """Human-readable differences between two JSON values, both values printed.
+
+    Everything is compared exactly except numbers below a key in :data:`DERIVED_KEYS`, which
+    are compared within :data:`REPLAY_FIT_RTOL` (a fit's last digits depend on the CPU).
+    """
+    if derived and isinstance(a, int | float) and isinstance(b, int | float) \
+            and not isinstance(a, bool) and not isinstance(b, bool):
+        if _close(float(a), float(b)):
+            return []
+        return [f"{path}: replay {a!r} != recording {b!r} (beyond relative tolerance {REPLAY_FIT_RTOL:g})"]
+    if type(a) is not type(b):
+        return [f"{path}: replay {a!r} != recording {b!r}"]
+    if isinstance(a, dict):
+        out = []
+        for k in sorted(set(a) | set(b)):
+            if k not in b and k in ADDED_KEYS:
+                continue
+            if k not in a or k not in b:
+                out.append(f"{path}.{k}: only in {'replay' if k in a else 'recording'}")
+            else:
+                out += diff_results(a[k], b[k], f"{path}.{k}", derived or k in DERIVED_KEYS)
+        return out
+    if isinstance(a, list):
+        if len(a) != len(b):
+            return [f"{path}: {len(a)} entries != {len(b)}"]
+        pairs = enumerate(zip(a, b, strict=True))
+        return [d for i, (x, y) in pairs for d in diff_results(x, y, f"{path}[{i}]", derived)]
+    if a == b or (isinstance(a, float) and math.isnan(a) and math.isnan(b)):
+        return []
+    return [f"{path}: replay {a!r} != recording {b!r}"]
+
+
+@dataclass
+class ReplayOutcome:
+    outcome: RunOutcome
+    recorded: dict[str, Any] | None
+    identical: bool
+    differences: list[str]
+    #: ``file:line: reason`` of damaged lines skipped while reading the session
+    warnings: list[str] = field(default_factory=list)
+    level: str = "exact"
+    #: faithful: per port, what its writes matched (labkit.io.faithful_port.FaithfulSerial.report)
+    ports: list[dict[str, Any]] = field(default_factory=list)
+    #: the replay's decisions (faithful), for reports
+    decisions: list[dict[str, Any]] = field(default_factory=list)
