@@ -19,7 +19,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
-from labkit.emulators.plant import RigPlant
+from labkit.emulators.rig_plant import RigPlant
 
 #: pyserial's POSIX message when a USB adapter is unplugged mid-read
 #: (docs/design/device-rules.md#unplugged-adapters)

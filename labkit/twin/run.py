@@ -40,7 +40,7 @@ def balance_rows(user_rig: Path, params: TwinParams, work: Path, seed: int) -> t
 
 def spin_plan(params: TwinParams) -> list[str]:
     """spin-critical plan: from 5 % above the model's lowest trapping speed, +10 % per run."""
-    from labkit.emulators.plant import SpinCriticalLaw
+    from labkit.emulators.rig_plant import SpinCriticalLaw
     from labkit.units import rad_s_to_rpm
     w0 = SpinCriticalLaw(c=break_up(params).c).min_trap_speed()
     start = rad_s_to_rpm(1.05 * w0)

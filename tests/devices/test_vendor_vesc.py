@@ -34,7 +34,8 @@ from labkit.devices.motor.vesc import (
     parse_values,
     round_half_away,
 )
-from labkit.emulators.plant import RigPlant, reset_plants
+from labkit.emulators.plant import reset_plants
+from labkit.emulators.rig_plant import RigPlant
 from labkit.emulators.vesc_emulator import VescEmulator
 from labkit.errors import DeviceError
 from labkit.io.clock import RealClock
