@@ -251,8 +251,8 @@ def _close_sessions(sessions: str | Path, worker: int, how: str, failed: dict[st
 
 def stop_motors(rig: Any) -> dict[str, str]:
     """Open every motor port of ``rig`` and send STOP; ``{role: reason}`` of those that failed."""
-    from labkit.devices.base import driver_class
     from labkit.devices.motor.keepalive import stop_failure_text
+    from labkit.devices.registry import driver_class
     from labkit.io.clock import RealClock
     from labkit.io.ports import open_port
 

@@ -121,7 +121,7 @@ def faithful_ready(record: SessionRecord) -> bool:
 
 def streams_unasked(kind: str, protocol: str) -> bool:
     """Whether the driver of this device reads a stream the device sends unasked."""
-    from labkit.devices.base import driver_class
+    from labkit.devices.registry import driver_class
     from labkit.devices.tachometer.streaming import StreamingTachometer
 
     cls = driver_class(kind, protocol)

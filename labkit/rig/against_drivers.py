@@ -11,8 +11,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from labkit.devices.base import driver_class, unknown_options, unknown_options_message
+from labkit.devices.base import unknown_options, unknown_options_message
 from labkit.devices.camera.urls import is_camera_url, parse_camera_url
+from labkit.devices.registry import driver_class
 from labkit.emulators.base import emulator_class
 from labkit.emulators.urls import parse_sim_url
 from labkit.errors import PortURLError

@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from labkit.devices.base import driver_class
+from labkit.devices.registry import driver_class
 from labkit.emulators.balances import MtSicsEmulator
 from labkit.emulators.plant import shared_plant
 from labkit.emulators.rig_plant import RigPlant

@@ -8,7 +8,7 @@ import math
 
 import pytest
 
-from labkit.devices.base import driver_class
+from labkit.devices.registry import driver_class
 from labkit.emulators.balances import AndStdEmulator, MtSicsEmulator
 from labkit.emulators.hx711_sketch import Hx711SketchEmulator
 from labkit.emulators.plant import shared_plant

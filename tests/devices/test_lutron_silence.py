@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from labkit.devices.base import driver_class
+from labkit.devices.registry import driver_class
 from labkit.devices.tachometer.lutron16 import parse_lutron16
 from labkit.emulators.plant import shared_plant
 from labkit.emulators.sim_port import build_emulator

@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 from sim_driver import open_sim_driver
 
-from labkit.devices.base import driver_class
+from labkit.devices.registry import driver_class
 from labkit.emulators.plant import shared_plant
 from labkit.errors import DeviceDisconnected, DeviceError, DeviceTimeout, SafetyError
 from labkit.io.clock import VirtualClock

@@ -13,7 +13,7 @@ import math
 import pytest
 import serial
 
-from labkit.devices.base import driver_class
+from labkit.devices.registry import driver_class
 from labkit.emulators.plant import shared_plant
 from labkit.emulators.rig_plant import fig525_force_n
 from labkit.errors import DeviceDisconnected, DeviceError

@@ -8,7 +8,7 @@ import math
 import pytest
 from sim_driver import open_sim_driver
 
-from labkit.devices.base import driver_class
+from labkit.devices.registry import driver_class
 from labkit.emulators.plant import reset_plants, shared_plant
 from labkit.errors import DeviceDisconnected, DeviceReplyError, DeviceTimeout
 from labkit.io.clock import VirtualClock

@@ -162,7 +162,7 @@ def test_driver_names_an_unknown_firmware_instead_of_decoding(capsys):
 
 
 def test_firmware_option_overrides_the_announced_version():
-    from labkit.devices.base import driver_class
+    from labkit.devices.registry import driver_class
     from labkit.io.clock import VirtualClock
     from labkit.io.ports import open_port
 
