@@ -37,7 +37,7 @@ def _flag(options: dict[str, str], key: str, default: bool) -> bool:
     return value.strip().lower() in ("1", "true", "yes", "on")
 
 
-class _MotorEmulator(Emulator):
+class MotorEmulator(Emulator):
     kind = "motor"
 
     def __post_init__(self) -> None:
@@ -118,7 +118,7 @@ SERIAL_FORMAT, SERIAL_CRC = 1 << 4, 1 << 5
 
 
 @register_emulator
-class PololuSmcEmulator(_MotorEmulator):
+class PololuSmcEmulator(MotorEmulator):
     """Pololu SMC G2 (USB command port: baud does not matter).
 
     Options: ``device_number`` (13), ``crc`` (0/1: commands carry a CRC-7 byte),

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .import_rules import layer_violations
+from .import_rules import import_cycles, layer_violations, private_imports
 
 LABKIT = Path(__file__).resolve().parents[2] / "labkit"
 
@@ -34,6 +34,16 @@ LAYERS: list[set[str]] = [
     # 8. the command line
     {"cli", "__main__"},
 ]
+
+
+def test_no_import_cycle_inside_a_package():
+    found = import_cycles(LABKIT)
+    assert not found, f"{len(found)} import cycles inside labkit's packages:\n  " + "\n  ".join(found)
+
+
+def test_no_private_name_is_imported_across_modules():
+    found = private_imports(LABKIT)
+    assert not found, f"{len(found)} private names imported across modules:\n  " + "\n  ".join(found)
 
 
 def test_the_top_level_parts_import_only_downwards():
