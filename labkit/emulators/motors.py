@@ -78,7 +78,7 @@ class MotorEmulator(Emulator):
         """What happens up to the arrival of host bytes at ``t``. A pty host that found them
         waiting after a late wake sets ``arrived_since`` (when it last looked): the command
         timeout is judged at that earliest arrival, as the real UART would have received them."""
-        since = getattr(self, "arrived_since", None)
+        since = self.arrived_since
         self.check_events(t)
         self.check_timeout(t if since is None else min(t, since))
 

@@ -224,7 +224,9 @@ class FaithfulSerial(ClockedSerial):
                 f"{self._next_session + 1} times but the recording opened it {len(self.sessions)} time(s)")
         session = self.sessions[self._next_session]
         self._next_session += 1
-        opened_at = self.origin + float((session.open_event or {}).get("t", 0.0))
+        origin = self.origin
+        assert origin is not None  # set with the cassette on the first open, above
+        opened_at = origin + float((session.open_event or {}).get("t", 0.0))
         if clock.is_virtual and clock.now() < opened_at:
             clock.sleep_until(opened_at)  # the recording opened it then (imports, other ports)
         self._start_session(session)
@@ -318,7 +320,9 @@ class FaithfulSerial(ClockedSerial):
             index, how = self._match(data, now)
             if index is None:
                 raise ReplayMismatch(self._mismatch_text(data, now))
-            first = self._session.writes[index].state == "pending"
+            session = self._session
+            assert session is not None  # an open port is in one of the recording's sessions
+            first = session.writes[index].state == "pending"
             self._accept(index, how, now)
             stalled = self._stall(index) if first and not self.setpoints else 0.0
         if stalled > 0 and clock.is_virtual:
@@ -370,14 +374,16 @@ class FaithfulSerial(ClockedSerial):
         assert session is not None
         lo = bisect.bisect_left(self._times, now - self.window)
         hi = bisect.bisect_right(self._times, now + self.window)
-        same: tuple[float, int, int] | None = None
-        near: tuple[float, int, int] | None = None
+        # sort keys: (distance in time, served already, index) for a motor controller's write,
+        # (served already, time or distance, index) for an instrument's poll
+        same: tuple[float, float, int] | None = None
+        near: tuple[float, float, int] | None = None
         for i in range(lo, hi):
             write = session.writes[i]
             # a motor controller's write: the nearest; an instrument's poll: the earliest not
             # served yet (its replies keep the recording's order and pace)
             pending = write.state == "pending"
-            key = ((abs(write.t - now), not pending, i) if self.setpoints
+            key: tuple[float, float, int] = ((abs(write.t - now), not pending, i) if self.setpoints
                    else (not pending, write.t if pending else abs(write.t - now), i))
             if write.data == data:
                 same = key if same is None or key < same else same
@@ -399,7 +405,7 @@ class FaithfulSerial(ClockedSerial):
         else:
             self._repeats += 1
         if self.stream:  # bytes held back for this write come after it
-            for i in [i for i in self._held if self._session.device[i].gate == index]:
+            for i in [i for i in self._held if session.device[i].gate == index]:
                 self._held.remove(i)
                 heapq.heappush(self._due, (now + session.device[i].t - write.t, i))
         else:  # what the device said before this command was read before it

@@ -81,7 +81,7 @@ def split_sessions(cassette: Cassette) -> list[PortSession]:
             last = current.device[-1] if current.device else None
             attached = (last is not None and last.kind == "rx" and last.gate == gate
                         and event.get("got") == len(last.data) and "short" not in last.event)
-            if attached:
+            if attached and last is not None:
                 last.event = {**last.event, "short": True}
             elif not event.get("got"):
                 current.device.append(DeviceItem("empty", event["t"], gate, event))

@@ -13,7 +13,7 @@ import os
 import re
 import stat
 from pathlib import Path
-from typing import Any
+from typing import Any, overload
 
 from labkit.errors import RigFileError
 from labkit.units import RAD_S_PER_RPM
@@ -91,6 +91,16 @@ class TableSection:
         if isinstance(value, float) and not math.isfinite(value):
             raise self.error(name, f"must be a finite number, got {value!r}")
         return value
+
+    @overload
+    def quantity(self, base: str, si_unit: str, required: bool = False, *, default: float,
+                 positive: bool = True, allow_zero: bool = False,
+                 cap: tuple[float, str] | None = None) -> float: ...
+
+    @overload
+    def quantity(self, base: str, si_unit: str, required: bool = False, default: None = None,
+                 positive: bool = True, allow_zero: bool = False,
+                 cap: tuple[float, str] | None = None) -> float | None: ...
 
     def quantity(self, base: str, si_unit: str, required: bool = False, default: float | None = None,
                  positive: bool = True, allow_zero: bool = False,

@@ -307,7 +307,7 @@ def _plausibility(sec: TableSection, d: ControlSettings) -> dict[str, float]:
     if not 1.0 < ratio <= 10.0:
         raise sec.error("plausible_ratio", f"must be in (1, 10], got {ratio}")
     values["plausible_ratio"] = float(ratio)
-    return values  # type: ignore[return-value]
+    return values
 
 
 def parse_rig_config(text: str, file: str = "<rig>", check_device: DeviceCheck | None = None) -> Rig:
