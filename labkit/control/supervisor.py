@@ -131,7 +131,7 @@ def supervised(rig: Any, work: Callable[[], int], err: Any = None,
     return _after_worker(rig, worker, status, err, sessions)
 
 
-def _watch(worker: int, sigset: set[int], heartbeat: HeartbeatWatch | None = None) -> int | Frozen:
+def _watch(worker: int, sigset: set[signal.Signals], heartbeat: HeartbeatWatch | None = None) -> int | Frozen:
     """Pass ``kill``-sent stop signals on to the worker until it ends (its wait status) or its
     heartbeat stops (:class:`Frozen`: the worker was ended with SIGKILL)."""
     while True:
@@ -154,7 +154,7 @@ def _watch(worker: int, sigset: set[int], heartbeat: HeartbeatWatch | None = Non
             return Frozen(silent, _kill_and_reap(worker))
 
 
-def _next_signal(sigset: set[int], timeout_s: float) -> Any:
+def _next_signal(sigset: set[signal.Signals], timeout_s: float) -> Any:
     """The next of ``sigset`` (blocked) sent to this process, waiting up to ``timeout_s``; or None.
 
     Never blocks inside ``sigtimedwait``: CPython 3.11 retries one interrupted by SIGSTOP and
@@ -263,7 +263,7 @@ def stop_motors(rig: Any) -> dict[str, str]:
             continue
         port = None
         try:
-            cls = driver_class(dev.kind, dev.protocol)
+            cls = driver_class("motor", dev.protocol)
             port = open_port(dev.port, clock=clock, **{**getattr(cls, "default_serial", {}), **dev.serial})
             motor = cls(port, clock, name=role, **dev.options)
             motor.stop()

@@ -230,6 +230,9 @@ class MotorController(Device):
 
     kind = "motor"
     supports_speed_command: ClassVar[bool] = False
+    #: why the last ``stop()`` could not be delivered (a dead port); None when it was, or when
+    #: the driver cannot tell (labkit.devices.motor.keepalive sets it)
+    stop_error: str | None = None
 
     @abstractmethod
     def enable(self) -> None:

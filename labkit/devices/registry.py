@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import importlib
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Literal, overload
 
-from labkit.devices.base import Device
+from labkit.devices.base import Balance, Device, MotorController, Tachometer
 
 #: the packages whose import registers labkit's own drivers (loaded by :func:`driver_class`,
 #: :func:`known_drivers` and :func:`parser_benchmarks`)
@@ -41,8 +41,19 @@ def load_built_in_drivers() -> None:
         importlib.import_module(name)
 
 
+@overload
+def driver_class(kind: Literal["balance"], protocol: str) -> type[Balance]: ...
+@overload
+def driver_class(kind: Literal["tach"], protocol: str) -> type[Tachometer]: ...
+@overload
+def driver_class(kind: Literal["motor"], protocol: str) -> type[MotorController]: ...
+@overload
+def driver_class(kind: str, protocol: str) -> DriverClass: ...
+
+
 def driver_class(kind: str, protocol: str) -> DriverClass:
-    """Look up a driver; raises KeyError with the known names."""
+    """Look up a driver; raises KeyError with the known names. A literal kind gives the kind's
+    class (``driver_class("motor", ...)`` is a ``type[MotorController]``)."""
     load_built_in_drivers()
     if (kind, protocol) not in _DRIVERS:  # a user's driver (labkit.drivers entry point)?
         from labkit.plugins import load_driver_plugins, problems_note

@@ -240,7 +240,7 @@ class RunContext:
         """Balance readings for ``duration_s`` (at least ``min_n``), each a checkpoint."""
         device = self.devices[role]
         start = self.clock.now()
-        out = []
+        out: list[Any] = []
         while self.clock.now() - start < duration_s or len(out) < min_n:
             self.checkpoint()
             reading = device.read()
@@ -375,7 +375,8 @@ class Runner:
 
     # ---- the run ------------------------------------------------------------------------
     def run(self) -> RunOutcome:
-        status, reason, error = "completed", None, None
+        status, reason = "completed", None
+        error: BaseException | None = None
         new_points: list[dict[str, Any]] = []
         opened = None
         pulse = None
