@@ -113,7 +113,7 @@ class SpinCritical(ProtocolDef):
         return mass_kg * G0
 
     def setup(self, ctx: RunContext) -> None:
-        balance = ctx.devices["balance"]
+        balance = ctx.balance("balance")
         before = balance.read_stable()
         ctx.emit(doc.Zeroed(t=ctx.now(), device="balance", value=before.value, unit=before.unit))
         balance.zero()
@@ -147,12 +147,12 @@ class SpinCritical(ProtocolDef):
                 last_held = reading.t
             else:
                 cause = "balance"
-            spin = ctx.devices["floator_tach"].latest()
+            spin = ctx.tachometer("floator_tach").latest()
             if spin is not None and spin.t > held_at and spin.value > loss:
                 spin_seen = True
             if cause is None and spin_seen:
                 silent = spin is None or ctx.now() - spin.t > ctx.rig.control.tach_timeout_s
-                if silent or spin.value < loss:
+                if spin is None or silent or spin.value < loss:
                     cause = "spin_loss"
             if cause is None and ctx.operator_signalled():
                 cause = "key"
