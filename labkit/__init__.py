@@ -31,7 +31,7 @@ _FACE: dict[str, str] = {
     # runs and sessions
     "prepare_run": "labkit.protocols.launch",
     "execute": "labkit.protocols.launch",
-    "replay_session": "labkit.protocols.launch",
+    "replay_session": "labkit.protocols.replay",
     "load_session": "labkit.session.frames",
     "SessionFrames": "labkit.session.frames",
     # video analysis
@@ -42,11 +42,11 @@ _FACE: dict[str, str] = {
     "fit_table": "labkit.fit.table_fit",
     "FitOptions": "labkit.fit.table_fit",
     "build_report": "labkit.report.build",
-    "load_scene": "labkit.sim.scene",
+    "load_scene": "labkit.sim.scene_file",
     "simulate": "labkit.sim.run",
     # errors
     "LabkitError": "labkit.errors",
-    "SessionError": "labkit.session.writer",
+    "SessionError": "labkit.errors",
 }
 
 __all__ = [  # tests/distribution/test_public_face.py checks this equals the names above
