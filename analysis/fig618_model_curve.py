@@ -18,7 +18,7 @@ import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
 from labkit.emulators.break_up import W_REF_RAD_S, break_up
-from labkit.emulators.plant import SpinCriticalLaw
+from labkit.emulators.rig_plant import SpinCriticalLaw
 from labkit.emulators.twin_model import params_from_rig
 from labkit.model.floator_equilibrium import FloatorSetup, steady_state
 from labkit.reproduce.paper_data import FIG_6_18

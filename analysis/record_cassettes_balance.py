@@ -16,7 +16,8 @@ import json
 from pathlib import Path
 from typing import Any
 
-from labkit.devices.base import Reading, driver_class
+from labkit.devices.base import Reading
+from labkit.devices.registry import driver_class
 from labkit.emulators.plant import reset_plants, shared_plant
 from labkit.io.clock import VirtualClock
 from labkit.io.ports import open_port

@@ -23,7 +23,7 @@ import threading
 import time
 from pathlib import Path
 
-from labkit.devices.base import driver_class
+from labkit.devices.registry import driver_class
 from labkit.devices.strobe.scripted import run_strobe_script
 from labkit.emulators.plant import reset_plants, shared_plant
 from labkit.io.clock import RealClock, VirtualClock

@@ -17,12 +17,13 @@ import json
 import sys
 from pathlib import Path
 
-from labkit.devices.base import driver_class
 from labkit.devices.motor.scripted import run_motor_script
+from labkit.devices.registry import driver_class
 from labkit.devices.tachometer.scripted import run_tach_script
-from labkit.emulators.plant import RAD_S_PER_RPM, reset_plants, shared_plant
+from labkit.emulators.plant import reset_plants, shared_plant
 from labkit.io.clock import VirtualClock
 from labkit.io.ports import open_port
+from labkit.units import RAD_S_PER_RPM
 
 OUT = Path(__file__).resolve().parent.parent / "recordings" / "cassettes"
 

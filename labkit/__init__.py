@@ -31,7 +31,7 @@ _FACE: dict[str, str] = {
     # runs and sessions
     "prepare_run": "labkit.protocols.launch",
     "execute": "labkit.protocols.launch",
-    "replay_session": "labkit.protocols.launch",
+    "replay_session": "labkit.protocols.replay",
     "load_session": "labkit.session.frames",
     "SessionFrames": "labkit.session.frames",
     # video analysis
@@ -42,11 +42,11 @@ _FACE: dict[str, str] = {
     "fit_table": "labkit.fit.table_fit",
     "FitOptions": "labkit.fit.table_fit",
     "build_report": "labkit.report.build",
-    "load_scene": "labkit.sim.scene",
+    "load_scene": "labkit.sim.scene_file",
     "simulate": "labkit.sim.run",
     # errors
     "LabkitError": "labkit.errors",
-    "SessionError": "labkit.session.writer",
+    "SessionError": "labkit.errors",
 }
 
 __all__ = [  # tests/distribution/test_public_face.py checks this equals the names above
@@ -59,16 +59,16 @@ if TYPE_CHECKING:  # for type checkers and IDEs; at run time the names come from
     from collections.abc import Sequence
     from pathlib import Path
 
-    from labkit.errors import LabkitError
+    from labkit.errors import LabkitError, SessionError
     from labkit.fit.data import load_tables
     from labkit.fit.table_fit import FitOptions, FitReport, fit_table
-    from labkit.protocols.launch import execute, prepare_run, replay_session
+    from labkit.protocols.launch import execute, prepare_run
+    from labkit.protocols.replay import replay_session
     from labkit.report.build import build_report
     from labkit.rig import load_rig, open_rig
     from labkit.session.frames import SessionFrames, load_session
-    from labkit.session.writer import SessionError
     from labkit.sim.run import simulate
-    from labkit.sim.scene import load_scene
+    from labkit.sim.scene_file import load_scene
     from labkit.vision.laser import analyse_laser
     from labkit.vision.strobe import analyse_strobe
 

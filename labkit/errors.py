@@ -52,6 +52,10 @@ class RigFileError(LabkitError):
         super().__init__(f"{self.file}:{key}: {reason}")
 
 
+class SessionError(LabkitError):
+    """A session directory cannot be created, written or read. Names the path."""
+
+
 class VideoError(LabkitError):
     """A video or image cannot be analysed. Names the file and the problem."""
 

@@ -11,7 +11,7 @@ import pytest
 
 from labkit.cli import main
 from labkit.emulators.balances import MtSicsEmulator
-from labkit.emulators.plant import RigPlant
+from labkit.emulators.rig_plant import RigPlant
 from labkit.io.clock import RealClock, VirtualClock, use_clock
 from labkit.io.pty_host import PtyHost
 

@@ -24,7 +24,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from labkit.devices.base import Reading, driver_class, parser_benchmarks
+from labkit.devices.base import Reading
+from labkit.devices.registry import driver_class, parser_benchmarks
 from labkit.emulators import use_emulation
 from labkit.io.clock import Clock, VirtualClock
 from labkit.io.ports import open_port

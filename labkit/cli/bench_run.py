@@ -11,7 +11,8 @@ import time
 from pathlib import Path
 
 from labkit.protocols import ListSink
-from labkit.protocols.launch import execute, prepare_run, replay_session
+from labkit.protocols.launch import execute, prepare_run
+from labkit.protocols.replay import replay_session
 from labkit.rig import bundled_rig_path
 
 

@@ -166,23 +166,24 @@ def _peer_headline(peers: list, notes: dict) -> dict:
 def _cpu_seconds_1e4_cycles(scene, repeats: int = 2) -> float:
     """CPU seconds of 1e4 drive cycles with the default integrator, one sample per period, the
     smallest of ``repeats`` runs (CPU time: other jobs on a shared machine stretch wall time)."""
-    from labkit.numerics.stress import _run
+    from labkit.numerics.stress_cases.common import simulate_case
     from labkit.sim import compile_scene, load_scene
 
     scene = load_scene(scene) if isinstance(scene, str) else scene
     system = compile_scene(scene)
-    _run(scene, 1, system=system, samples_per_period=1)  # kernels compiled or loaded from the cache
+    simulate_case(scene, 1, system=system, samples_per_period=1)  # kernels compiled or loaded from the cache
     best = math.inf
     for _ in range(repeats):
         start = time.process_time()
-        _run(scene, 10_000, system=system, samples_per_period=1)
+        simulate_case(scene, 10_000, system=system, samples_per_period=1)
         best = min(best, time.process_time() - start)
     return best
 
 
 def _headline(reports, verdicts, quick: bool) -> tuple[dict, dict]:
     """The issue's headline keys and the notes that say how each was measured."""
-    from labkit.numerics.stress import I_S1, OMEGA_S1, _run, s1_like
+    from labkit.numerics.stress import I_S1, OMEGA_S1, s1_like
+    from labkit.numerics.stress_cases.common import simulate_case
     from labkit.numerics.workprecision import speedup_at_equal_error
 
     notes: dict = {}
@@ -191,7 +192,7 @@ def _headline(reports, verdicts, quick: bool) -> tuple[dict, dict]:
     if s1 is not None and "wall_s_1e4_cycles" in s1.measured:
         one_s, one_drift = s1.measured["wall_s_1e4_cycles"], s1.measured["invariant_drift"]
     else:
-        res = _run(s1_like(I_S1, OMEGA_S1), 10_000, samples_per_period=1)
+        res = simulate_case(s1_like(I_S1, OMEGA_S1), 10_000, samples_per_period=1)
         one_s, one_drift = res.wall_s, res.invariant_drift
     s7 = by_id.get("S7")
     if s7 is not None and "auto_wall_s" in s7.measured:
@@ -200,7 +201,7 @@ def _headline(reports, verdicts, quick: bool) -> tuple[dict, dict]:
         two_drift = max(s7.measured[f"auto_{k}_drift"] or 0.0 for k in "EPJ")
     else:
         cycles7 = 1000 if quick else 10_000
-        res = _run("mbs_fig6_1", cycles7)
+        res = simulate_case("mbs_fig6_1", cycles7)
         two_s = res.wall_s * 1e4 / cycles7
         two_drift = max(res.invariant_drift, res.momentum_drift or 0.0, res.angular_momentum_drift or 0.0)
     growth = [

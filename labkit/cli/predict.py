@@ -23,13 +23,13 @@ from typing import TYPE_CHECKING
 
 from labkit.cli.confirm import CONFIRM_POINTS, add_yes_argument, confirm_size
 from labkit.cli.output import add_json_argument, note_first_compile, write_json
-from labkit.cli.progress import ProgressLines
-from labkit.predict.inputs import (
+from labkit.cli.predict_inputs import (
     PredictInputError,
     check_remanence,
     magnet_option,
     magnets_from_rig,
 )
+from labkit.cli.progress import ProgressLines
 
 if TYPE_CHECKING:  # the modules behind these import scipy and numba: loaded when a command runs
     from labkit.predict.estimate import Estimate

@@ -21,7 +21,8 @@ from typing import Any
 
 import serial
 
-from labkit.devices.base import Device, driver_class, known_drivers
+from labkit.devices.base import Device
+from labkit.devices.registry import driver_class, known_drivers
 from labkit.errors import DeviceError, LabkitError
 from labkit.io.clock import Clock, current_clock
 

@@ -87,7 +87,7 @@ def _rewrite_point_events(events: Path, points: list[dict[str, Any]]) -> None:
 def run(args: argparse.Namespace) -> int:
     from labkit.devices.camera.shrink import Shrink, shrink_cassette
     from labkit.protocols import get_protocol
-    from labkit.protocols.launch import replay_session
+    from labkit.protocols.replay import replay_session
     from labkit.protocols.runner import normalise
     from labkit.session.writer import write_json_atomic
 

@@ -127,7 +127,7 @@ def supervised(rig: Any, work: Callable[[], int], err: Any = None,
         signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)
         _die_with_parent(parent)
         return work()
-    from labkit.session.orphans import process_identity
+    from labkit.session.process import process_identity
 
     _workers[worker] = (process_identity(worker), forked_at)  # which sessions are its: orphans.py
     try:
@@ -139,7 +139,7 @@ def supervised(rig: Any, work: Callable[[], int], err: Any = None,
     return _after_worker(rig, worker, status, err, sessions)
 
 
-def _watch(worker: int, sigset: set[int], heartbeat: HeartbeatWatch | None = None) -> int | Frozen:
+def _watch(worker: int, sigset: set[signal.Signals], heartbeat: HeartbeatWatch | None = None) -> int | Frozen:
     """Pass ``kill``-sent stop signals on to the worker until it ends (its wait status) or its
     heartbeat stops (:class:`Frozen`: the worker was ended with SIGKILL)."""
     while True:
@@ -162,7 +162,7 @@ def _watch(worker: int, sigset: set[int], heartbeat: HeartbeatWatch | None = Non
             return Frozen(silent, _kill_and_reap(worker))
 
 
-def _next_signal(sigset: set[int], timeout_s: float) -> Any:
+def _next_signal(sigset: set[signal.Signals], timeout_s: float) -> Any:
     """The next of ``sigset`` (blocked) sent to this process, waiting up to ``timeout_s``; or None.
 
     Never blocks inside ``sigtimedwait``: CPython 3.11 retries one interrupted by SIGSTOP and
@@ -261,8 +261,8 @@ def _close_sessions(sessions: str | Path, worker: int, how: str, failed: dict[st
 
 def stop_motors(rig: Any) -> dict[str, str]:
     """Open every motor port of ``rig`` and send STOP; ``{role: reason}`` of those that failed."""
-    from labkit.devices.base import driver_class
     from labkit.devices.motor.keepalive import stop_failure_text
+    from labkit.devices.registry import driver_class
     from labkit.io.clock import RealClock
     from labkit.io.ports import open_port
 
@@ -273,7 +273,7 @@ def stop_motors(rig: Any) -> dict[str, str]:
             continue
         port = None
         try:
-            cls = driver_class(dev.kind, dev.protocol)
+            cls = driver_class("motor", dev.protocol)
             port = open_port(dev.port, clock=clock, **{**getattr(cls, "default_serial", {}), **dev.serial})
             motor = cls(port, clock, name=role, **dev.options)
             motor.stop()

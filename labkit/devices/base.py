@@ -1,4 +1,5 @@
-"""What every driver shares: the Reading, the device-class interfaces and the driver registry.
+"""What every driver shares: the Reading and the device-class interfaces (the registry of
+drivers by kind and protocol is :mod:`labkit.devices.registry`).
 
 A driver is one small class per real protocol. It receives an *open* serial port (any
 ``serial.SerialBase``: a real device, ``sim://``, ``replay://``, a pty) and a
@@ -11,7 +12,6 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, ClassVar, Self
 
@@ -240,6 +240,9 @@ class MotorController(Device):
 
     kind = "motor"
     supports_speed_command: ClassVar[bool] = False
+    #: why the last ``stop()`` could not be delivered (a dead port); None when it was, or when
+    #: the driver cannot tell (labkit.devices.motor.keepalive sets it)
+    stop_error: str | None = None
 
     @abstractmethod
     def enable(self) -> None:
@@ -266,59 +269,3 @@ class MotorController(Device):
             self.stop()
         finally:
             super().close()
-
-
-DriverClass = type[Device]
-_DRIVERS: dict[tuple[str, str], DriverClass] = {}
-
-
-def register_driver(cls: DriverClass) -> DriverClass:
-    """Class decorator: make ``cls`` findable as ``(cls.kind, cls.protocol)``."""
-    _DRIVERS[(cls.kind, cls.protocol)] = cls
-    return cls
-
-
-def _load_driver_modules() -> None:
-    # Importing the packages registers their drivers.
-    import labkit.devices.camera  # noqa: F401
-    import labkit.devices.loadcell  # noqa: F401
-    import labkit.devices.motor  # noqa: F401
-    import labkit.devices.strobe  # noqa: F401
-    import labkit.devices.tachometer  # noqa: F401
-
-
-def driver_class(kind: str, protocol: str) -> DriverClass:
-    """Look up a driver; raises KeyError with the known names."""
-    _load_driver_modules()
-    if (kind, protocol) not in _DRIVERS:  # a user's driver (labkit.drivers entry point)?
-        from labkit.plugins import load_driver_plugins, problems_note
-
-        load_driver_plugins(_DRIVERS, Device)
-        if (kind, protocol) not in _DRIVERS:
-            known = sorted(p for k, p in _DRIVERS if k == kind)
-            raise KeyError(f"no {kind} driver {protocol!r}; known: {', '.join(known)}{problems_note()}")
-    return _DRIVERS[(kind, protocol)]
-
-
-def known_drivers() -> dict[str, list[str]]:
-    _load_driver_modules()
-    out: dict[str, list[str]] = {}
-    for kind, protocol in sorted(_DRIVERS):
-        out.setdefault(kind, []).append(protocol)
-    return out
-
-
-Parser = Callable[[bytes], Any]
-
-
-_PARSER_BENCHMARKS: dict[str, tuple[bytes, Callable[[bytes], Any]]] = {}
-
-
-def register_parser_benchmark(protocol: str, sample: bytes, parse: Callable[[bytes], Any]) -> None:
-    """Offer ``parse(sample)`` (one typical frame/line of ``protocol``) to ``labkit bench io``."""
-    _PARSER_BENCHMARKS[protocol] = (sample, parse)
-
-
-def parser_benchmarks() -> dict[str, tuple[bytes, Callable[[bytes], Any]]]:
-    _load_driver_modules()
-    return dict(_PARSER_BENCHMARKS)

@@ -17,7 +17,8 @@ Importing this package registers the ``sim://`` URL handler with pyserial
 from labkit.devices.camera.device import register_camera_source
 from labkit.emulators.base import Emulator, emulator_class, parse_faults, register_emulator
 from labkit.emulators.camera import SimCameraSource
-from labkit.emulators.plant import Emulation, RigPlant, current_emulation, shared_plant, use_emulation
+from labkit.emulators.plant import Emulation, current_emulation, shared_plant, use_emulation
+from labkit.emulators.rig_plant import RigPlant
 from labkit.emulators.sim_port import SimSerial, build_emulator
 from labkit.emulators.urls import SimSpec, parse_sim_url
 from labkit.io.ports import register_url_handlers

@@ -19,7 +19,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
-from labkit.emulators.plant import RigPlant
+from labkit.emulators.rig_plant import RigPlant
 
 #: pyserial's POSIX message when a USB adapter is unplugged mid-read
 #: (docs/explanation/device-rules.md#unplugged-adapters)
@@ -118,6 +118,9 @@ class Emulator:
         self._outbox: list[tuple[float, bytes]] = []  # (ready time, bytes)
         self._opened_at: float | None = None
         self.power_on_count = 0
+        #: set by a pty host around ``receive`` when it found bytes waiting after a late wake:
+        #: the earliest time they could have arrived (labkit.io.pty_host)
+        self.arrived_since: float | None = None
 
     # ---- life cycle -------------------------------------------------------------------
     def open(self, t: float) -> None:

@@ -124,7 +124,7 @@ class NoBreakUp(LabkitError, ValueError):
 @lru_cache(maxsize=32)
 def break_up(p) -> BreakUp:
     """The break-up of rig ``p`` (:class:`labkit.emulators.twin_model.TwinParams`); cached."""
-    from labkit.emulators.plant import SpinCriticalLaw
+    from labkit.emulators.rig_plant import SpinCriticalLaw
     if p.break_phi is not None:                       # the rig file fixes the cone angle
         made = _make(p, p.break_phi, p.gap_m, 0.0, False, 1.0)
         return _make(p, p.break_phi, p.gap_m, SpinCriticalLaw(c=made.c).min_trap_speed(), False, 1.0)

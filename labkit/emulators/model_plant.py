@@ -23,7 +23,7 @@ import random
 from dataclasses import dataclass, field
 
 from labkit.emulators.break_up import break_up
-from labkit.emulators.plant import FloatorPlant, MotorPlant, RigPlant, SpinCriticalLaw
+from labkit.emulators.rig_plant import FloatorPlant, MotorPlant, RigPlant, SpinCriticalLaw
 from labkit.emulators.twin_model import TwinParams, balance_force_table, default_params
 from labkit.units import G0
 

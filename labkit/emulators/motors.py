@@ -38,7 +38,7 @@ def _flag(options: dict[str, str], key: str, default: bool) -> bool:
     return value.strip().lower() in ("1", "true", "yes", "on")
 
 
-class _MotorEmulator(Emulator):
+class MotorEmulator(Emulator):
     kind = "motor"
 
     def __post_init__(self) -> None:
@@ -79,7 +79,7 @@ class _MotorEmulator(Emulator):
         """What happens up to the arrival of host bytes at ``t``. A pty host that found them
         waiting after a late wake sets ``arrived_since`` (when it last looked): the command
         timeout is judged at that earliest arrival, as the real UART would have received them."""
-        since = getattr(self, "arrived_since", None)
+        since = self.arrived_since
         self.check_events(t)
         self.check_timeout(t if since is None else min(t, since))
 
@@ -119,7 +119,7 @@ SERIAL_FORMAT, SERIAL_CRC = 1 << 4, 1 << 5
 
 
 @register_emulator
-class PololuSmcEmulator(_MotorEmulator):
+class PololuSmcEmulator(MotorEmulator):
     """Pololu SMC G2 (USB command port: baud does not matter).
 
     Options: ``device_number`` (13), ``crc`` (0/1: commands carry a CRC-7 byte),

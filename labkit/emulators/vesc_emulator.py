@@ -9,7 +9,7 @@ from __future__ import annotations
 import struct
 
 from labkit.emulators.base import register_emulator
-from labkit.emulators.motors import TWO_PI, _MotorEmulator
+from labkit.emulators.motors import TWO_PI, MotorEmulator
 
 
 def _vesc_crc(data: bytes) -> int:
@@ -27,7 +27,7 @@ def _vesc_frame(payload: bytes) -> bytes:
 
 
 @register_emulator
-class VescEmulator(_MotorEmulator):
+class VescEmulator(MotorEmulator):
     """A VESC on its UART (115200 8N1).
 
     Options: ``pole_pairs`` (1), ``max_erpm`` (100000), ``timeout_ms`` (1000: release the

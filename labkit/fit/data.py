@@ -125,8 +125,8 @@ def _session_without_results(path: Path) -> Table:
 
 def _inside(session: Path, name: str) -> Path:
     """``session/name``, refused (DataFileError) when a symlink leads it out of the session."""
+    from labkit.errors import SessionError
     from labkit.session.paths import session_file
-    from labkit.session.writer import SessionError
 
     try:
         return session_file(session, name)

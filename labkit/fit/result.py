@@ -12,6 +12,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 
 @dataclass(frozen=True)
@@ -69,7 +70,7 @@ class FitResult:
     residuals: np.ndarray
     x: np.ndarray
     y: np.ndarray
-    predict: Callable[[np.ndarray], np.ndarray]
+    predict: Callable[[ArrayLike], np.ndarray]  # x values (a list or an array) -> the model
     r_squared: float
     reduced_chi2: float
     aic: float

@@ -30,6 +30,8 @@ def poll_step(period: float, now: float, deadline: float | None) -> float:
 class ClockedSerial(SerialBase):
     """Common plumbing: the clock, no-op modem lines, a clock-based ``read_until``."""
 
+    _timeout: float | None  # SerialBase's read timeout (s), set by its ``timeout`` property
+
     def __init__(self, *args, **kwargs) -> None:
         self.clock: Clock | None = None
         super().__init__(*args, **kwargs)

@@ -43,14 +43,13 @@ from __future__ import annotations
 
 import bisect
 import heapq
-import statistics
 import threading
-from dataclasses import dataclass, field
 from typing import Any
 
 from labkit.errors import ReplayMismatch
 from labkit.io.cassette import Cassette, load_cassette
 from labkit.io.clocked import LINE_SETTINGS, REAL_POLL_S, VIRTUAL_POLL_S, ClockedSerial, poll_step
+from labkit.io.faithful_sessions import DeviceBytes, FaithfulSession, faithful_sessions
 from labkit.io.replay_port import rebuild_error, render_bytes
 from labkit.io.urls import parse_replay_url
 
@@ -92,89 +91,6 @@ def same_command(a: bytes, b: bytes) -> bool:
     packet such as a VESC's)."""
     head = 3 if len(a) >= 6 else 1
     return len(a) == len(b) and a[:head] == b[:head]
-
-
-@dataclass
-class RecordedWrite:
-    t: float          # on the recording's clock
-    data: bytes
-    line: int
-    call: str
-    before: int = 0   # device items recorded before it
-    thread: str | None = None
-    replies: list[int] = field(default_factory=list)  # device items answering it
-    state: str = "pending"  # pending | identical | near
-
-
-@dataclass
-class DeviceBytes:
-    t: float
-    kind: str        # "rx" | "error"
-    data: bytes
-    event: dict[str, Any]
-    gate: int | None = None  # stream port: the write recorded just before it (a reply may follow)
-
-
-@dataclass
-class FaithfulSession:
-    """One open/close of the recorded port, on the recording's time line."""
-
-    open_event: dict[str, Any] | None = None
-    open_error: dict[str, Any] | None = None
-    writes: list[RecordedWrite] = field(default_factory=list)
-    device: list[DeviceBytes] = field(default_factory=list)
-    unsolicited: list[int] = field(default_factory=list)
-    #: write bytes -> the median time from such a write to its reply
-    typical_latency: dict[bytes, float] = field(default_factory=dict)
-
-    def measure_latencies(self) -> None:
-        by_command: dict[bytes, list[float]] = {}
-        for write in self.writes:
-            if write.replies:
-                by_command.setdefault(write.data, []).append(self.device[write.replies[0]].t - write.t)
-        self.typical_latency = {data: statistics.median(times) for data, times in by_command.items()}
-
-
-def _last_write_of(writes: list[RecordedWrite], thread: str | None) -> RecordedWrite | None:
-    """The write a reading thread's bytes answer: its own last write (cassettes record the
-    thread, ``th``; recordings without it pair a read with the port's last write)."""
-    for write in reversed(writes[-64:]):
-        if write.thread == thread:
-            return write
-    return None
-
-
-def faithful_sessions(cassette: Cassette, origin: float, stream: bool) -> list[FaithfulSession]:
-    """A cassette's open/close sessions with every time on the recording's clock."""
-    sessions: list[FaithfulSession] = []
-    current: FaithfulSession | None = None
-    for event in cassette.events:
-        kind = event.get("event") if event["dir"] == "ctl" else event["dir"]
-        if kind == "open" or current is None:
-            current = FaithfulSession(open_event=event if kind == "open" else None)
-            sessions.append(current)
-            if kind == "open":
-                continue
-        t = origin + float(event["t"])
-        if kind == "tx":
-            current.writes.append(RecordedWrite(t, event["bytes"], event.get("line", 0),
-                                                event.get("call", "write"), len(current.device),
-                                                event.get("th")))
-        elif kind == "rx" or (kind == "error" and event.get("call") != "open"):
-            index = len(current.device)
-            gate = len(current.writes) - 1 if stream and current.writes else None
-            current.device.append(DeviceBytes(t, "rx" if kind == "rx" else "error",
-                                              event.get("bytes", b""), event, gate))
-            asked = None if stream or kind == "error" else _last_write_of(current.writes, event.get("th"))
-            if asked is None:
-                current.unsolicited.append(index)
-            else:
-                asked.replies.append(index)
-        elif kind == "error":
-            current.open_error = event
-    for session in sessions:
-        session.measure_latencies()
-    return sessions
 
 
 class FaithfulSerial(ClockedSerial):
@@ -224,7 +140,9 @@ class FaithfulSerial(ClockedSerial):
                 f"{self._next_session + 1} times but the recording opened it {len(self.sessions)} time(s)")
         session = self.sessions[self._next_session]
         self._next_session += 1
-        opened_at = self.origin + float((session.open_event or {}).get("t", 0.0))
+        origin = self.origin
+        assert origin is not None  # set with the cassette on the first open, above
+        opened_at = origin + float((session.open_event or {}).get("t", 0.0))
         if clock.is_virtual and clock.now() < opened_at:
             clock.sleep_until(opened_at)  # the recording opened it then (imports, other ports)
         self._start_session(session)
@@ -318,7 +236,9 @@ class FaithfulSerial(ClockedSerial):
             index, how = self._match(data, now)
             if index is None:
                 raise ReplayMismatch(self._mismatch_text(data, now))
-            first = self._session.writes[index].state == "pending"
+            session = self._session
+            assert session is not None  # an open port is in one of the recording's sessions
+            first = session.writes[index].state == "pending"
             self._accept(index, how, now)
             stalled = self._stall(index) if first and not self.setpoints else 0.0
         if stalled > 0 and clock.is_virtual:
@@ -370,14 +290,16 @@ class FaithfulSerial(ClockedSerial):
         assert session is not None
         lo = bisect.bisect_left(self._times, now - self.window)
         hi = bisect.bisect_right(self._times, now + self.window)
-        same: tuple[float, int, int] | None = None
-        near: tuple[float, int, int] | None = None
+        # sort keys: (distance in time, served already, index) for a motor controller's write,
+        # (served already, time or distance, index) for an instrument's poll
+        same: tuple[float, float, int] | None = None
+        near: tuple[float, float, int] | None = None
         for i in range(lo, hi):
             write = session.writes[i]
             # a motor controller's write: the nearest; an instrument's poll: the earliest not
             # served yet (its replies keep the recording's order and pace)
             pending = write.state == "pending"
-            key = ((abs(write.t - now), not pending, i) if self.setpoints
+            key: tuple[float, float, int] = ((abs(write.t - now), not pending, i) if self.setpoints
                    else (not pending, write.t if pending else abs(write.t - now), i))
             if write.data == data:
                 same = key if same is None or key < same else same
@@ -399,7 +321,7 @@ class FaithfulSerial(ClockedSerial):
         else:
             self._repeats += 1
         if self.stream:  # bytes held back for this write come after it
-            for i in [i for i in self._held if self._session.device[i].gate == index]:
+            for i in [i for i in self._held if session.device[i].gate == index]:
                 self._held.remove(i)
                 heapq.heappush(self._due, (now + session.device[i].t - write.t, i))
         else:  # what the device said before this command was read before it

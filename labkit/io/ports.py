@@ -77,7 +77,7 @@ def _release_on_close(port: serial.SerialBase, lock: int) -> None:
             if held:
                 unlock(held.pop())
 
-    port.close = close_and_unlock  # type: ignore[method-assign]
+    port.close = close_and_unlock
 
 
 register_url_handlers()

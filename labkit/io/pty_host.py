@@ -49,6 +49,9 @@ class HostedDevice(Protocol):
 
     def emit(self, t: float) -> bytes: ...
 
+    #: the earliest arrival of bytes found waiting after a late wake, set around ``receive``
+    arrived_since: float | None
+
 
 #: termios speed constant -> baud rate
 BAUD_OF_SPEED = {
@@ -159,6 +162,7 @@ class PtyHost:
                 self._unplug()
                 return
             pty = self._pty
+            assert pty is not None  # plugged in: _replug made one above if there was none
         ready, _, _ = select.select([pty.master], [], [], PUMP_PERIOD_S)
         now = self.clock.now()
         with self._lock:

@@ -81,7 +81,7 @@ def split_sessions(cassette: Cassette) -> list[PortSession]:
             last = current.device[-1] if current.device else None
             attached = (last is not None and last.kind == "rx" and last.gate == gate
                         and event.get("got") == len(last.data) and "short" not in last.event)
-            if attached:
+            if attached and last is not None:
                 last.event = {**last.event, "short": True}
             elif not event.get("got"):
                 current.device.append(DeviceItem("empty", event["t"], gate, event))
@@ -392,13 +392,3 @@ class ReplaySerial(ClockedSerial):
         self._require_open()
         with self._lock:
             self._raise_if_dead()
-
-
-def serial_class_for_url(url: str) -> tuple[str, type[ClockedSerial]]:
-    """pyserial hook (``labkit.io.urlhandlers.protocol_replay``); ``mode=faithful`` is
-    :class:`labkit.io.faithful_port.FaithfulSerial`."""
-    if parse_replay_url(url).mode == "faithful":
-        from labkit.io.faithful_port import FaithfulSerial
-
-        return url, FaithfulSerial
-    return url, ReplaySerial

@@ -16,18 +16,18 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import least_squares
 
-from labkit.model.conical_dynamics import RotatingFieldBody, _rhs_scalar
-from labkit.model.tilted_cone import TiltedOrbit, _coords, _state, describe
+from labkit.model.conical_dynamics import RotatingFieldBody, rhs_unrolled
+from labkit.model.tilted_cone import TiltedOrbit, coords_from_state, describe, state_from_coords
 
 
 def _rhs_attitude(s: float, y: np.ndarray, j_c: float, j_s: float, a1: float) -> np.ndarray:
-    """:func:`labkit.model.conical_dynamics._rhs_scalar` plus the attitude ``Q`` (row-major)."""
+    """:func:`labkit.model.conical_dynamics.rhs_unrolled` plus the attitude ``Q`` (row-major)."""
     px, py, pz, lx, ly, lz = y[:6]
     spin = a1 * (lx * px + ly * py + lz * pz)
     wx, wy, wz = lx + spin * px, ly + spin * py, lz + spin * pz - 1.0
     q = y[6:].reshape(3, 3)
     skew = np.array([[0.0, -wz, wy], [wz, 0.0, -wx], [-wy, wx, 0.0]])
-    return np.concatenate([_rhs_scalar(s, y[:6], j_c, j_s, a1), (skew @ q).ravel()])
+    return np.concatenate([rhs_unrolled(s, y[:6], j_c, j_s, a1), (skew @ q).ravel()])
 
 
 def period_map(body: RotatingFieldBody, y0: np.ndarray) -> tuple[np.ndarray, float]:
@@ -47,13 +47,13 @@ def no_spin_orbit(body: RotatingFieldBody, y_guess: np.ndarray, spin: float) -> 
     """The drive-periodic orbit with no net rotation about the dipole axis: shooting for the
     state and the conserved spin together; returns the orbit and its spin (units of w)."""
     def residual(x: np.ndarray) -> np.ndarray:
-        y0 = _state(x[:4], x[4])
+        y0 = state_from_coords(x[:4], x[4])
         end, twist = period_map(body, y0)
         return np.concatenate([end - y0, [twist]])
 
-    x0 = np.concatenate([_coords(y_guess), [spin]])
+    x0 = np.concatenate([coords_from_state(y_guess), [spin]])
     fit = least_squares(residual, x0, method="lm", xtol=1e-14, ftol=1e-14, gtol=1e-14)
-    return describe(body, _state(fit.x[:4], fit.x[4])), float(fit.x[4])
+    return describe(body, state_from_coords(fit.x[:4], fit.x[4])), float(fit.x[4])
 
 
 def tilt_angles(body: RotatingFieldBody, y0: np.ndarray, samples: int = 2048) -> tuple[float, float]:
@@ -65,8 +65,8 @@ def tilt_angles(body: RotatingFieldBody, y0: np.ndarray, samples: int = 2048) ->
     Fig. 5.6 row 3: 0.2666 < 0.275) its range folds at 0 and its centre and half-range swap
     lambda and R_X. Elsewhere both definitions agree.
     """
-    from labkit.model.tilted_cone import _flow
-    sol = _flow(body, y0, samples)
+    from labkit.model.tilted_cone import one_drive_period
+    sol = one_drive_period(body, y0, samples)
     s = sol.t
     psi = sol.y[:3] / np.linalg.norm(sol.y[:3], axis=0)
     lab = np.stack([np.cos(s) * psi[0] - np.sin(s) * psi[1], np.sin(s) * psi[0] + np.cos(s) * psi[1], psi[2]])

@@ -16,7 +16,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import least_squares
 
-from labkit.model.conical_dynamics import RotatingFieldBody, _rhs_scalar, equilibrium
+from labkit.model.conical_dynamics import RotatingFieldBody, equilibrium, rhs_unrolled
 
 
 @dataclass(frozen=True)
@@ -31,13 +31,16 @@ class TiltedOrbit:
     residual: float
 
 
-def _flow(body: RotatingFieldBody, y0: np.ndarray, n: int = 0):
+def one_drive_period(body: RotatingFieldBody, y0: np.ndarray, n: int = 0):
+    """The flow of :func:`labkit.model.conical_dynamics.rhs_unrolled` over one drive period
+    from ``y0`` (``n`` samples, or only the end state)."""
     t_eval = None if n == 0 else np.linspace(0.0, 2 * np.pi, n, endpoint=False)
-    return solve_ivp(_rhs_scalar, (0.0, 2 * np.pi), y0, method="DOP853", rtol=1e-11, atol=1e-13,
+    return solve_ivp(rhs_unrolled, (0.0, 2 * np.pi), y0, method="DOP853", rtol=1e-11, atol=1e-13,
                      t_eval=t_eval, args=(body.j_c, body.j_s, body.inertia_ratio - 1.0))
 
 
-def _state(x: np.ndarray, spin: float) -> np.ndarray:
+def state_from_coords(x: np.ndarray, spin: float) -> np.ndarray:
+    """The state (psi, ell) from (zenith, azimuth, l1, l2) and the spin along psi."""
     zen, az, l1, l2 = x
     psi = np.array([np.sin(zen) * np.cos(az), np.sin(zen) * np.sin(az), np.cos(zen)])
     e1 = np.array([np.cos(zen) * np.cos(az), np.cos(zen) * np.sin(az), -np.sin(zen)])
@@ -45,7 +48,8 @@ def _state(x: np.ndarray, spin: float) -> np.ndarray:
     return np.concatenate([psi, spin * psi + l1 * e1 + l2 * e2])
 
 
-def _coords(y: np.ndarray) -> np.ndarray:
+def coords_from_state(y: np.ndarray) -> np.ndarray:
+    """(zenith, azimuth, l1, l2) of a state (psi, ell): :func:`state_from_coords` inverted."""
     psi, ell = y[:3] / np.linalg.norm(y[:3]), y[3:]
     zen = np.arccos(np.clip(psi[2], -1, 1))
     az = np.arctan2(psi[1], psi[0])
@@ -56,12 +60,12 @@ def _coords(y: np.ndarray) -> np.ndarray:
 
 def describe(body: RotatingFieldBody, y0: np.ndarray) -> TiltedOrbit:
     """lambda = cycle mean of the dipole's zenith angle (the a_0 of Table 5.1)."""
-    sol = _flow(body, y0, 2048)
+    sol = one_drive_period(body, y0, 2048)
     psi = sol.y[:3]
     zen = np.arccos(np.clip(psi[2] / np.linalg.norm(psi, axis=0), -1, 1))
     lam = float(np.mean(zen))
     r_x = 0.5 * float(zen.max() - zen.min())
-    end = _flow(body, y0).y[:, -1]
+    end = one_drive_period(body, y0).y[:, -1]
     # azimuthal half-width of the dipole path about the tilted axis, seen in the lab frame
     s = sol.t
     lab = np.stack([np.cos(s) * psi[0] - np.sin(s) * psi[1], np.sin(s) * psi[0] + np.cos(s) * psi[1], psi[2]])
@@ -76,11 +80,11 @@ def describe(body: RotatingFieldBody, y0: np.ndarray) -> TiltedOrbit:
 def shoot(body: RotatingFieldBody, spin: float, y_guess: np.ndarray) -> TiltedOrbit:
     """Least-squares shooting for ``y0`` with ``flow_2pi(y0) = y0`` at fixed spin."""
     def residual(x: np.ndarray) -> np.ndarray:
-        y0 = _state(x, spin)
-        return _flow(body, y0).y[:, -1] - y0
+        y0 = state_from_coords(x, spin)
+        return one_drive_period(body, y0).y[:, -1] - y0
 
-    fit = least_squares(residual, _coords(y_guess), method="lm", xtol=1e-14, ftol=1e-14, gtol=1e-14)
-    return describe(body, _state(fit.x, spin))
+    fit = least_squares(residual, coords_from_state(y_guess), method="lm", xtol=1e-14, ftol=1e-14, gtol=1e-14)
+    return describe(body, state_from_coords(fit.x, spin))
 
 
 def tilted_guess(body: RotatingFieldBody, lam: float, half_angle: float) -> np.ndarray:
@@ -94,7 +98,7 @@ def tilted_guess(body: RotatingFieldBody, lam: float, half_angle: float) -> np.n
 def self_consistent_spin(body: RotatingFieldBody, y0: np.ndarray) -> float:
     """Spin of a spin-free (k = -1) cone about the orbit's own mean axis: <cos(phi')> - 1, with
     phi' the angle between the dipole and that axis (Eq. 5.12 applied about the tilted axis)."""
-    sol = _flow(body, y0, 1024)
+    sol = one_drive_period(body, y0, 1024)
     s = sol.t
     psi = sol.y[:3] / np.linalg.norm(sol.y[:3], axis=0)
     lab = np.stack([np.cos(s) * psi[0] - np.sin(s) * psi[1], np.sin(s) * psi[0] + np.cos(s) * psi[1], psi[2]])

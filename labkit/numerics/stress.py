@@ -24,7 +24,6 @@ from labkit.numerics.stress_cases.common import (
     TAU_C_S1,
     TAU_S_S1,
     Verdict,
-    _run,
     conical_dict,
     conical_scene,
     fig5_13_dict,
@@ -63,7 +62,7 @@ NAMES: dict[str, str] = {
 ALIASES: dict[str, str] = {name: case_id for case_id, name in NAMES.items()}
 
 __all__ = [
-    "ALIASES", "CASES", "I_S1", "LEVELS", "NAMES", "OMEGA_S1", "TAU_C_S1", "TAU_S_S1", "Verdict", "_run",
+    "ALIASES", "CASES", "I_S1", "LEVELS", "NAMES", "OMEGA_S1", "TAU_C_S1", "TAU_S_S1", "Verdict",
     "case_id", "conical_dict", "conical_scene", "fig5_13_dict", "run_case", "run_stress_cases", "s1_like",
 ]
 

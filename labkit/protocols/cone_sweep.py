@@ -104,7 +104,7 @@ class ConeSweep(ProtocolDef):
                 "mm_per_px": float(params["mm_per_px"]) / scale}
 
     def _burst(self, ctx: RunContext, step: Step, take: int) -> tuple[dict[str, Any], list[Any]]:
-        camera = ctx.devices["camera"]
+        camera = ctx.camera("camera")
         p = ctx.params
         t_start = ctx.now()
         frames = camera.burst(int(p["burst_frames"]), step=f"{step.index}.{take}")

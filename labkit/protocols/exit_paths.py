@@ -8,6 +8,7 @@ import signal
 from pathlib import Path
 from typing import Any
 
+from labkit.documents import RunDocument
 from labkit.errors import LabkitError
 
 #: the signals that take the Ctrl-C path (motors to zero, stop at the next checkpoint); Ctrl-Z
@@ -34,7 +35,7 @@ class SessionGuard:
         self.on_failure = on_failure
         self.problem: str | None = None
 
-    def on_event(self, event: dict[str, Any]) -> None:
+    def on_event(self, event: RunDocument) -> None:
         if self.problem is not None:
             return
         try:
@@ -95,7 +96,7 @@ def _identity(folder: Path) -> tuple[int, int] | None:
     return (st.st_dev, st.st_ino)
 
 
-def sink_failure_text(session: Any, event: dict[str, Any], exc: BaseException) -> str:
+def sink_failure_text(session: Any, event: RunDocument, exc: OSError | LabkitError) -> str:
     """``cannot write SESSION/events.jsonl: No space left on device``."""
     if isinstance(exc, LabkitError):
         return str(exc)

@@ -4,15 +4,13 @@
   checks the plan against the rig's limits and that sessions can be written: every bad
   input fails here, before any port is opened or any motor turns.
 * :func:`execute` runs a prepared plan into a new session directory.
-* :func:`replay_session` re-runs a session's protocol against its own cassettes on a
-  virtual clock and compares the results with the recorded ``results.json``
-  (:mod:`labkit.protocols.replay`).
+* what a resumed run and a replay read of a session (its points, its cassettes' URLs) is in
+  :mod:`labkit.protocols.recorded`; :mod:`labkit.protocols.replay` builds on both.
 """
 
 from __future__ import annotations
 
 import json
-import math
 import shutil
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -21,10 +19,10 @@ from typing import Any
 
 from labkit.errors import LabkitError
 from labkit.io.clock import Clock, RealClock, VirtualClock, use_clock
-from labkit.protocols import get_protocol
 from labkit.protocols.events import Sink
 from labkit.protocols.params import resolve_params
-from labkit.protocols.replay_compare import ADDED_KEYS, DERIVED_KEYS, REPLAY_FIT_RTOL, close_enough
+from labkit.protocols.recorded import recorded_points
+from labkit.protocols.registry import get_protocol
 from labkit.protocols.resume import ResumeLock, check_carried_points, rig_differences
 from labkit.protocols.resume_evidence import check_points_against_cassettes
 from labkit.protocols.runner import ProtocolDef, Runner, RunOutcome
@@ -72,16 +70,6 @@ def carried_points(record: SessionRecord) -> list[dict[str, Any]]:
     """All result rows a session holds: those it carried from earlier runs plus its own
     (as recorded, unchecked; :func:`recorded_points` says where each comes from)."""
     return list(record.meta.get("carried_points") or []) + record.completed_points()
-
-
-def recorded_points(record: SessionRecord) -> list[tuple[str, Any]]:
-    """``(where, point)`` of every point a session holds (``run.json:carried_points[i]`` and
-    ``events.jsonl:LINE``), for :func:`labkit.protocols.resume.check_carried_points`."""
-    carried = record.meta.get("carried_points") or []
-    if not isinstance(carried, list):
-        carried = [carried]
-    run_json = record.path / "run.json"
-    return [(f"{run_json}:carried_points[{i}]", p) for i, p in enumerate(carried)] + record.point_events()
 
 
 def resume_rig(record: SessionRecord, rig_path: str | Path | None, resume: str | Path) -> Rig:
@@ -221,56 +209,3 @@ def _execute(prep: PreparedRun, session_root: str | Path | None, notes: str,
 
 def _jsonable(params: dict[str, Any]) -> dict[str, Any]:
     return json.loads(json.dumps(params))
-
-
-def replay_url(session: Path, role: str) -> str:
-    """The ``replay://`` URL of one device's cassette in a session (timed, strict)."""
-    return f"replay://{(session / 'cassettes' / f'{role}.jsonl').resolve()}?mode=timed"
-
-
-#: Derived numbers (fits) may differ between CPUs in their last digits: BLAS and LAPACK pick
-#: different kernels per instruction set, and a fit sums in a different order. Recorded bytes,
-#: readings and points are compared exactly; values under a derived key (``fit``) are equal when
-#: ``|a - b| <= REPLAY_FIT_RTOL * max(|a|, |b|) + REPLAY_FIT_ATOL`` (documented in
-#: docs/reference/protocols.md).
-def diff_results(a: Any, b: Any, path: str = "results", derived: bool = False,
-                 derived_keys: frozenset[str] = DERIVED_KEYS) -> list[str]:
-    """Human-readable differences between two JSON values, both values printed.
-
-    Everything is compared exactly except numbers below a key in ``derived_keys`` (by default
-    :data:`DERIVED_KEYS`; a replay adds the protocol's image-analysis columns, ``Column.analysis``),
-    which are compared within :data:`REPLAY_FIT_RTOL` (their last digits depend on the CPU).
-    """
-    if derived and isinstance(a, int | float) and isinstance(b, int | float) \
-            and not isinstance(a, bool) and not isinstance(b, bool):
-        if close_enough(float(a), float(b)):
-            return []
-        return [f"{path}: replay {a!r} != recording {b!r} (beyond relative tolerance {REPLAY_FIT_RTOL:g})"]
-    if type(a) is not type(b):
-        return [f"{path}: replay {a!r} != recording {b!r}"]
-    if isinstance(a, dict):
-        out = []
-        for k in sorted(set(a) | set(b)):
-            if k not in b and k in ADDED_KEYS:
-                continue
-            if k not in a or k not in b:
-                out.append(f"{path}.{k}: only in {'replay' if k in a else 'recording'}")
-            else:
-                out += diff_results(a[k], b[k], f"{path}.{k}", derived or k in derived_keys, derived_keys)
-        return out
-    if isinstance(a, list):
-        if len(a) != len(b):
-            return [f"{path}: {len(a)} entries != {len(b)}"]
-        pairs = enumerate(zip(a, b, strict=True))
-        return [d for i, (x, y) in pairs for d in diff_results(x, y, f"{path}[{i}]", derived, derived_keys)]
-    if a == b or (isinstance(a, float) and math.isnan(a) and math.isnan(b)):
-        return []
-    return [f"{path}: replay {a!r} != recording {b!r}"]
-
-
-def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str = "auto") -> Any:
-    """Replay a session against its cassettes and compare (:func:`labkit.protocols.replay.replay_session`:
-    exact for virtual-clock sessions, faithful for real-clock ones, or ``level="analysis"``)."""
-    from labkit.protocols.replay import replay_session as replay
-
-    return replay(path, sinks, level)

@@ -27,9 +27,9 @@ from typing import Any
 from labkit.devices.loadcell.mtsics import parse_weight
 from labkit.devices.loadcell.units import to_si
 from labkit.devices.tachometer.labkit_tach import parse_tach_sample, strip_junk
-from labkit.protocols import get_protocol
 from labkit.protocols.params import resolve_params
-from labkit.protocols.replay_compare import diff_within
+from labkit.protocols.registry import get_protocol
+from labkit.protocols.replay_compare import ReplayOutcome, diff_within
 from labkit.protocols.runner import RunOutcome, normalise
 from labkit.protocols.speed_sweep import drift_warnings, finite_std, mean_stderr, reading_force_n
 from labkit.protocols.spin_critical import point_from_trials
@@ -174,8 +174,8 @@ def _spin_point(step: int, events: list[dict[str, Any]], params: dict[str, Any])
 
 
 def reanalyse_session(record: SessionRecord) -> Any:
-    """The analysis-only level (module docstring); a :class:`labkit.protocols.replay.ReplayOutcome`."""
-    from labkit.protocols.replay import ReplayOutcome
+    """The analysis-only level (module docstring); a
+    :class:`labkit.protocols.replay_compare.ReplayOutcome`."""
 
     rig = load_rig(record.rig_path())
     protocol = get_protocol(record.protocol)

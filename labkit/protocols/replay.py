@@ -3,7 +3,7 @@
 
 * **exact** (sessions recorded on the virtual clock): every port is ``replay://...?mode=timed``,
   what the drivers send must match the recording byte for byte, and the results must equal
-  ``results.json`` (fits within :data:`~labkit.protocols.launch.REPLAY_FIT_RTOL`).
+  ``results.json`` (fits within :data:`~labkit.protocols.replay_compare.REPLAY_FIT_RTOL`).
 * **faithful** (sessions recorded on the real clock): every port is
   ``replay://...?mode=faithful`` on a virtual clock started at the recording's clock reading;
   device bytes arrive at their recorded times, writes are matched by content within a
@@ -17,28 +17,29 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from labkit.errors import CassetteError, LabkitError
 from labkit.hints import analysis_keys
 from labkit.io.clock import ReplayClock, VirtualClock, recorded_ticks, use_clock
-from labkit.protocols import get_protocol
 from labkit.protocols.events import Sink
-from labkit.protocols.launch import diff_results, recorded_points, replay_url
 from labkit.protocols.params import resolve_params
 from labkit.protocols.reading_evidence import faithful_reading_diffs
+from labkit.protocols.recorded import recorded_points, replay_url
+from labkit.protocols.registry import get_protocol
 from labkit.protocols.replay_compare import (
     DERIVED_KEYS,
+    ReplayOutcome,
     decisions,
     diff_decisions,
+    diff_results,
     diff_within,
     offline_wording,
 )
 from labkit.protocols.replay_evidence import Evidence, diff_points, diff_readings
 from labkit.protocols.resume import check_carried_points
-from labkit.protocols.runner import Runner, RunOutcome, normalise
+from labkit.protocols.runner import Runner, normalise
 from labkit.rig import load_rig
 from labkit.session import SessionRecord, load_session
 from labkit.session.integrity import integrity_problems
@@ -50,21 +51,6 @@ LEVEL_WORDS = {
                 "by content; same decisions, points within tolerance)",
     "analysis": "analysis only (recorded bytes re-parsed by today's drivers; no protocol run)",
 }
-
-
-@dataclass
-class ReplayOutcome:
-    outcome: RunOutcome
-    recorded: dict[str, Any] | None
-    identical: bool
-    differences: list[str]
-    #: ``file:line: reason`` of damaged lines skipped while reading the session
-    warnings: list[str] = field(default_factory=list)
-    level: str = "exact"
-    #: faithful: per port, what its writes matched (labkit.io.faithful_port.FaithfulSerial.report)
-    ports: list[dict[str, Any]] = field(default_factory=list)
-    #: the replay's decisions (faithful), for reports
-    decisions: list[dict[str, Any]] = field(default_factory=list)
 
 
 class _Collect:
@@ -139,7 +125,7 @@ def faithful_ready(record: SessionRecord) -> bool:
 
 def streams_unasked(kind: str, protocol: str) -> bool:
     """Whether the driver of this device reads a stream the device sends unasked."""
-    from labkit.devices.base import driver_class
+    from labkit.devices.registry import driver_class
     from labkit.devices.tachometer.streaming import StreamingTachometer
 
     cls = driver_class(kind, protocol)

@@ -12,15 +12,26 @@ the step of each) must be the same:
   :data:`SETTLE_TOL_S`).
 * :func:`offline_wording`: an offline replay moves no motor, so the words that tell a person
   at a rig what to do are taken out of what it prints.
+
+An exact replay (virtual clock) is compared by :func:`diff_results`: everything exactly but a
+fit's numbers (:data:`REPLAY_FIT_RTOL`). Every level returns a :class:`ReplayOutcome`.
 """
 
 from __future__ import annotations
 
 import math
 import re
-from typing import Any
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
-#: an exact replay compares a fit (and a protocol's image-analysis columns) within this
+if TYPE_CHECKING:
+    from labkit.protocols.runner import RunOutcome
+
+#: Derived numbers may differ between CPUs in their last digits: BLAS and LAPACK pick different
+#: kernels per instruction set, a fit sums in a different order, OpenCV's SIMD paths round
+#: differently. Recorded bytes, readings and points are compared exactly; values under a derived
+#: key (``fit``, and a protocol's image-analysis columns) are equal when
+#: ``|a - b| <= REPLAY_FIT_RTOL * max(|a|, |b|) + REPLAY_FIT_ATOL`` (docs/explanation/replay.md).
 REPLAY_FIT_RTOL = 1e-6
 REPLAY_FIT_ATOL = 1e-12
 DERIVED_KEYS = frozenset({"fit"})
@@ -200,3 +211,53 @@ def diff_decisions(replayed: list[dict[str, Any]], recorded: list[dict[str, Any]
         extra = longer[min(len(replayed), len(recorded))]
         out.append(f"only the {who} went on: {describe(extra, labels)}")
     return out
+
+
+def diff_results(a: Any, b: Any, path: str = "results", derived: bool = False,
+                 derived_keys: frozenset[str] = DERIVED_KEYS) -> list[str]:
+    """Human-readable differences between two JSON values, both values printed.
+
+    Everything is compared exactly except numbers below a key in ``derived_keys`` (by default
+    :data:`DERIVED_KEYS`; a replay adds the protocol's image-analysis columns, ``Column.analysis``),
+    which are compared within :data:`REPLAY_FIT_RTOL` (their last digits depend on the CPU).
+    """
+    if derived and isinstance(a, int | float) and isinstance(b, int | float) \
+            and not isinstance(a, bool) and not isinstance(b, bool):
+        if close_enough(float(a), float(b)):
+            return []
+        return [f"{path}: replay {a!r} != recording {b!r} (beyond relative tolerance {REPLAY_FIT_RTOL:g})"]
+    if type(a) is not type(b):
+        return [f"{path}: replay {a!r} != recording {b!r}"]
+    if isinstance(a, dict):
+        out = []
+        for k in sorted(set(a) | set(b)):
+            if k not in b and k in ADDED_KEYS:
+                continue
+            if k not in a or k not in b:
+                out.append(f"{path}.{k}: only in {'replay' if k in a else 'recording'}")
+            else:
+                out += diff_results(a[k], b[k], f"{path}.{k}", derived or k in derived_keys, derived_keys)
+        return out
+    if isinstance(a, list):
+        if len(a) != len(b):
+            return [f"{path}: {len(a)} entries != {len(b)}"]
+        pairs = enumerate(zip(a, b, strict=True))
+        return [d for i, (x, y) in pairs for d in diff_results(x, y, f"{path}[{i}]", derived, derived_keys)]
+    if a == b or (isinstance(a, float) and math.isnan(a) and math.isnan(b)):
+        return []
+    return [f"{path}: replay {a!r} != recording {b!r}"]
+
+
+@dataclass
+class ReplayOutcome:
+    outcome: RunOutcome
+    recorded: dict[str, Any] | None
+    identical: bool
+    differences: list[str]
+    #: ``file:line: reason`` of damaged lines skipped while reading the session
+    warnings: list[str] = field(default_factory=list)
+    level: str = "exact"
+    #: faithful: per port, what its writes matched (labkit.io.faithful_port.FaithfulSerial.report)
+    ports: list[dict[str, Any]] = field(default_factory=list)
+    #: the replay's decisions (faithful), for reports
+    decisions: list[dict[str, Any]] = field(default_factory=list)

@@ -23,12 +23,15 @@ from __future__ import annotations
 import math
 import signal
 import threading
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from labkit import documents as doc
-from labkit.control.loop import SpeedControl, build_speed_control, unreachable_target
+from labkit.control.loop import SpeedControl, build_speed_control
+from labkit.devices.base import Device, Reading
+from labkit.devices.kinds import BalanceKind, CameraKind, StrobeKind, TachometerKind
 from labkit.errors import LabkitError, SafetyError
 from labkit.io.clock import record_ticks
 from labkit.protocols import exit_paths
@@ -37,6 +40,7 @@ from labkit.protocols.definition import ProtocolDef, Step
 from labkit.protocols.events import EventBus, Sink
 from labkit.protocols.exit_paths import STOP_SIGNALS, SessionGuard, signal_name, stop_failed_text
 from labkit.protocols.operator import Operator, default_operator
+from labkit.protocols.plan import check_plan, format_plan
 from labkit.rig import Rig, open_rig
 from labkit.units import rad_s_to_rpm
 
@@ -59,58 +63,47 @@ class StopRequested(LabkitError):
     motors at zero."""
 
 
-def check_plan(protocol: ProtocolDef, rig: Rig, steps: list[Step]) -> None:
-    """Refuse a plan the rig cannot do: missing devices or loops, targets beyond the limit."""
-    for role, kind in protocol.needs:
-        rig.require(role, kind, needed_by=protocol.name)
-    loops = {lc.name for lc in rig.control.loops}
-    limit = rig.limits.max_speed_rad_s
-    for step in steps:
-        for loop, target in step.targets_rad_s.items():
-            if loop not in loops:
-                raise LabkitError(f"{protocol.name}: the rig has no speed loop {loop!r} "
-                                  f"(pair a {loop}_motor with a {loop}_tach in {rig.path})")
-            if target > limit:
-                raise SafetyError(
-                    f"{protocol.name}: step {step.index + 1} asks {rad_s_to_rpm(target):.0f} RPM, above "
-                    f"the rig's limit of {rad_s_to_rpm(limit):.0f} RPM ({rig.path}: limits.max_speed); "
-                    "nothing was started")
-            if target < 0:
-                raise SafetyError(f"{protocol.name}: step {step.index + 1} asks a negative speed")
-            if problem := unreachable_target(rig, target):
-                raise SafetyError(f"{protocol.name}: step {step.index + 1}: {problem} ({rig.path}); "
-                                  "nothing was started")
-
-
-def format_plan(protocol: ProtocolDef, rig: Rig, steps: list[Step], done: set[int] | None = None) -> str:
-    """The dry-run table: one line per step with targets in RPM and an estimated duration."""
-    done = done or set()
-    lines = [f"{protocol.name} on {rig.name} ({rig.path}): {len(steps)} steps, "
-             f"limit {rad_s_to_rpm(rig.limits.max_speed_rad_s):.0f} RPM"]
-    total = 0.0
-    for s in steps:
-        targets = ", ".join(f"{k} {rad_s_to_rpm(v):.0f} RPM" for k, v in s.targets_rad_s.items())
-        mark = "done " if s.index in done else ""
-        total += 0 if s.index in done else s.est_duration_s
-        lines.append(f"  {s.index + 1:3d}. {mark}{s.label:<28s} {targets:<24s} ~{s.est_duration_s:.0f} s")
-    lines.append(f"estimated time: {total / 60:.1f} min; all targets within the rig's limits")
-    return "\n".join(lines)
-
-
 class RunContext:
     """What a step function may do. Every wait polls the interlocks and is a checkpoint."""
 
-    def __init__(self, runner: Runner, devices: dict[str, Any], control: SpeedControl) -> None:
+    def __init__(self, runner: Runner, devices: Mapping[str, Device], control: SpeedControl) -> None:
         self.runner = runner
         self.clock = runner.clock
         self.rig = runner.rig
         self.params = runner.params
+        #: the open drivers by role (motors too: steps command them through ``set``)
         self.devices = devices
         self.control = control
         self.step: Step | None = None
         self._last_control_event = -1e9
         self._tach_logged: dict[str, float] = {
             role: -1e9 for role in devices if self.rig.devices[role].kind == "tach"}
+
+    # ---- devices by kind (labkit.devices.kinds; LabkitError naming the rig's devices if not) -
+    def balance(self, role: str) -> BalanceKind:
+        if isinstance(device := self.devices.get(role), BalanceKind):
+            return device
+        raise self._not_a(role, "balance")
+
+    def tachometer(self, role: str) -> TachometerKind:
+        if isinstance(device := self.devices.get(role), TachometerKind):
+            return device
+        raise self._not_a(role, "tachometer")
+
+    def camera(self, role: str) -> CameraKind:
+        if isinstance(device := self.devices.get(role), CameraKind):
+            return device
+        raise self._not_a(role, "camera")
+
+    def strobe(self, role: str) -> StrobeKind:
+        if isinstance(device := self.devices.get(role), StrobeKind):
+            return device
+        raise self._not_a(role, "strobe")
+
+    def _not_a(self, role: str, what: str) -> LabkitError:
+        have = ", ".join(f"{r} ({self.rig.devices[r].kind})" for r in sorted(self.devices)) or "none"
+        return LabkitError(f"{self.rig.path}: this protocol needs a {what} called {role!r}; "
+                           f"the rig has {have}")
 
     # ---- events -------------------------------------------------------------------------
     def now(self) -> float:
@@ -128,7 +121,7 @@ class RunContext:
         """Emit the tachometers' new readings as ``reading`` events (readings/ROLE.jsonl)."""
         for role, since in self._tach_logged.items():
             try:
-                new = self.devices[role].readings_since(since)
+                new = self.tachometer(role).readings_since(since)
             except Exception:  # noqa: BLE001 - a dead tachometer is the interlock's business
                 continue
             for reading in new:
@@ -212,7 +205,7 @@ class RunContext:
     def wait_stopped(self, loop: str = "rotor", below_rad_s: float = 5.0, timeout_s: float = 30.0) -> None:
         """Command ``loop`` to zero and wait until its tachometer reads below ``below_rad_s``."""
         self.set(**{loop: 0.0})
-        tach = self.devices[self.rig_loop(loop).tach]
+        tach = self.tachometer(self.rig_loop(loop).tach)
         start = self.clock.now()
         while True:
             self.checkpoint()
@@ -230,17 +223,17 @@ class RunContext:
                 return lc
         raise LabkitError(f"no speed loop {name!r} in {self.rig.path}")
 
-    def read(self, role: str) -> Any:
+    def read(self, role: str) -> Reading:
         """One balance reading (emitted as a ``reading`` event)."""
-        reading = self.devices[role].read()
+        reading = self.balance(role).read()
         self.emit_reading(role, reading)
         return reading
 
-    def record(self, role: str, duration_s: float, min_n: int = 1) -> list[Any]:
+    def record(self, role: str, duration_s: float, min_n: int = 1) -> list[Reading]:
         """Balance readings for ``duration_s`` (at least ``min_n``), each a checkpoint."""
-        device = self.devices[role]
+        device = self.balance(role)
         start = self.clock.now()
-        out = []
+        out: list[Reading] = []
         while self.clock.now() - start < duration_s or len(out) < min_n:
             self.checkpoint()
             reading = device.read()
@@ -251,8 +244,8 @@ class RunContext:
         self.control.await_verdict(self.clock.now(), self.checkpoint, self._control_event)
         return out
 
-    def tach_readings(self, role: str, since: float) -> list[Any]:
-        return list(self.devices[role].readings_since(since))
+    def tach_readings(self, role: str, since: float) -> list[Reading]:
+        return list(self.tachometer(role).readings_since(since))
 
 
 @dataclass
@@ -375,7 +368,8 @@ class Runner:
 
     # ---- the run ------------------------------------------------------------------------
     def run(self) -> RunOutcome:
-        status, reason, error = "completed", None, None
+        status, reason = "completed", None
+        error: BaseException | None = None
         new_points: list[dict[str, Any]] = []
         opened = None
         pulse = None

@@ -141,14 +141,14 @@ class SpeedSweep(ProtocolDef):
         return steps
 
     def setup(self, ctx: RunContext) -> None:
-        balance = ctx.devices["balance"]
+        balance = ctx.balance("balance")
         before = balance.read_stable()
         ctx.emit(doc.Zeroed(t=ctx.now(), device="balance", value=before.value, unit=before.unit))
         balance.zero()
 
     def _rest(self, ctx: RunContext) -> tuple[float, float]:
         ctx.wait_stopped("rotor")
-        reading = ctx.devices["balance"].read_stable()
+        reading = ctx.balance("balance").read_stable()
         ctx.emit_reading("balance", reading)
         check_overload(ctx, "balance", [reading], 0.0)
         return reading.t, reading_force_n(reading)

@@ -93,7 +93,8 @@ class SpinCritical(ProtocolDef):
             raise ParamError(f"spin-critical needs the floator's mass: bodies.floator.mass_g in {rig.path} "
                              "or --set floator_mass_g=...")
         self.w_ref = float(params["w_ref_rad_s"])
-        steps, rpm = [], float(start)
+        steps: list[Step] = []
+        rpm = float(start)
         while rpm <= stop * (1 + 1e-9):
             est = params["max_trials"] * 20.0
             steps.append(Step(len(steps), f"{rpm:.0f} RPM", {"rotor": rpm_to_rad_s(rpm)},
@@ -103,10 +104,16 @@ class SpinCritical(ProtocolDef):
 
     def _weight_n(self, ctx: RunContext) -> float:
         grams = ctx.params["floator_mass_g"]
-        return grams * 1e-3 * G0 if grams > 0 else ctx.rig.bodies["floator"].mass_kg * G0
+        if grams > 0:
+            return grams * 1e-3 * G0
+        mass_kg = ctx.rig.bodies["floator"].mass_kg
+        if mass_kg is None:  # plan() refuses a rig without it: not reached
+            raise ParamError(f"spin-critical needs the floator's mass: bodies.floator.mass_g in "
+                             f"{ctx.rig.path} or --set floator_mass_g=...")
+        return mass_kg * G0
 
     def setup(self, ctx: RunContext) -> None:
-        balance = ctx.devices["balance"]
+        balance = ctx.balance("balance")
         before = balance.read_stable()
         ctx.emit(doc.Zeroed(t=ctx.now(), device="balance", value=before.value, unit=before.unit))
         balance.zero()
@@ -140,12 +147,12 @@ class SpinCritical(ProtocolDef):
                 last_held = reading.t
             else:
                 cause = "balance"
-            spin = ctx.devices["floator_tach"].latest()
+            spin = ctx.tachometer("floator_tach").latest()
             if spin is not None and spin.t > held_at and spin.value > loss:
                 spin_seen = True
             if cause is None and spin_seen:
                 silent = spin is None or ctx.now() - spin.t > ctx.rig.control.tach_timeout_s
-                if silent or spin.value < loss:
+                if spin is None or silent or spin.value < loss:
                     cause = "spin_loss"
             if cause is None and ctx.operator_signalled():
                 cause = "key"

@@ -179,7 +179,7 @@ class StrobeSweep(ProtocolDef):
 
     def setup(self, ctx: RunContext) -> None:
         """The lamp on (a rig file may power the strobe up dark: ``lamp = false``)."""
-        ctx.devices["strobe"].lamp(True)
+        ctx.strobe("strobe").lamp(True)
 
     # ---- one step ----------------------------------------------------------------------
     def _mm_per_px(self, ctx: RunContext) -> float:
@@ -188,7 +188,7 @@ class StrobeSweep(ProtocolDef):
     def _wait_lock(self, ctx: RunContext, since: float) -> None:
         """Until a status line after ``since`` says the flashes are locked (at most LOCK_TIMEOUT_S;
         the burst's own lines then say what was wrong)."""
-        strobe = ctx.devices["strobe"]
+        strobe = ctx.strobe("strobe")
         deadline = ctx.now() + LOCK_TIMEOUT_S
         while ctx.now() < deadline:
             if any(s.locked for s in strobe.statuses_since(since)):
@@ -198,7 +198,7 @@ class StrobeSweep(ProtocolDef):
     def _lines_over(self, ctx: RunContext, start: float, end: float) -> list[Any]:
         """The strobe's status lines from ``start`` to the first line after ``end`` (it closes the
         window holding the burst's last frame)."""
-        strobe = ctx.devices["strobe"]
+        strobe = ctx.strobe("strobe")
         deadline = ctx.now() + LOCK_TIMEOUT_S
         while ctx.now() < deadline and not strobe.statuses_since(end):
             ctx.sleep(0.02)
@@ -211,7 +211,7 @@ class StrobeSweep(ProtocolDef):
         p = ctx.params
         t_start = ctx.now()
         if "camera" in ctx.devices:
-            camera = ctx.devices["camera"]
+            camera = ctx.camera("camera")
             frames = camera.burst(int(p["burst_frames"]), step=f"{step.index}.{take}")
             t_end = frames[-1].t
         else:
@@ -256,7 +256,7 @@ class StrobeSweep(ProtocolDef):
     def run_step(self, ctx: RunContext, step: Step) -> dict[str, Any]:
         ctx.set(rotor=step.targets_rad_s["rotor"])
         ctx.settle(ctx.params["settle_timeout_s"] or None)
-        strobe = ctx.devices["strobe"]
+        strobe = ctx.strobe("strobe")
         t_cmd = ctx.now()
         strobe.set_offset(float(ctx.params["offset_hz"]))
         strobe.set_divider(int(ctx.params["divider"]))

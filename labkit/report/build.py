@@ -185,8 +185,8 @@ def _events_section(path: Path) -> list[str]:
     """Event counts by type, and the notable ones (interlocks, faults, drops) listed."""
     if not path.is_file():
         return []
+    from labkit.errors import SessionError
     from labkit.session.reader import read_jsonl
-    from labkit.session.writer import SessionError
 
     counts: dict[str, int] = {}
     notable: list[dict] = []

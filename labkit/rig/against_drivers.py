@@ -11,25 +11,26 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from labkit.devices.base import driver_class, unknown_options, unknown_options_message
+from labkit.devices.base import unknown_options, unknown_options_message
 from labkit.devices.camera.urls import is_camera_url, parse_camera_url
+from labkit.devices.registry import driver_class
 from labkit.emulators.base import emulator_class
 from labkit.emulators.urls import parse_sim_url
 from labkit.errors import PortURLError
-from labkit.rig.checks import _Section, rate_problem, read_rig_text
+from labkit.rig.checks import TableSection, rate_problem, read_rig_text
 from labkit.rig.config import Rig, find_rig_file, parse_rig_config
 
 
 class DriverCheck:
     """The :class:`labkit.rig.config.DeviceCheck` of a real run: drivers and emulators."""
 
-    def protocol(self, sec: _Section, kind: str, protocol: str) -> None:
+    def protocol(self, sec: TableSection, kind: str, protocol: str) -> None:
         try:
             driver_class(kind, protocol)
         except KeyError as exc:
             raise sec.error("protocol", str(exc.args[0])) from None
 
-    def port(self, sec: _Section, url: str) -> None:
+    def port(self, sec: TableSection, url: str) -> None:
         if is_camera_url(url):  # cameras: the URL's settings are checked whole (docs/reference/camera.md)
             try:
                 parse_camera_url(url)
@@ -50,7 +51,8 @@ class DriverCheck:
             if problem is not None:
                 raise sec.error("port", f"{name}={value}: {problem}")
 
-    def options(self, sec: _Section, kind: str, protocol: str, port: str, options: dict[str, Any]) -> None:
+    def options(self, sec: TableSection, kind: str, protocol: str, port: str,
+                options: dict[str, Any]) -> None:
         cls = driver_class(kind, protocol)
         unknown = unknown_options(cls, options)
         if unknown:

@@ -1,5 +1,5 @@
 """Validation helpers of rig files (:mod:`labkit.rig`): unit suffixes, absolute sanity caps,
-role names, bounded reading, and :class:`_Section`, which reads one TOML table.
+role names, bounded reading, and :class:`TableSection`, which reads one TOML table.
 
 Imports no device code except to check an emulated port URL. Caps and role names are
 documented in docs/reference/rig-files.md ("Finite values and caps", ``[devices.ROLE]``).
@@ -13,7 +13,7 @@ import os
 import re
 import stat
 from pathlib import Path
-from typing import Any
+from typing import Any, overload
 
 from labkit.errors import RigFileError
 from labkit.units import RAD_S_PER_RPM
@@ -56,7 +56,7 @@ def split_unit(key: str) -> tuple[str, str, float] | None:
     return None
 
 
-class _Section:
+class TableSection:
     """Reads one TOML table, converting unit suffixes and remembering unknown keys."""
 
     def __init__(self, file: str, prefix: str, table: Any) -> None:
@@ -91,6 +91,16 @@ class _Section:
         if isinstance(value, float) and not math.isfinite(value):
             raise self.error(name, f"must be a finite number, got {value!r}")
         return value
+
+    @overload
+    def quantity(self, base: str, si_unit: str, required: bool = False, *, default: float,
+                 positive: bool = True, allow_zero: bool = False,
+                 cap: tuple[float, str] | None = None) -> float: ...
+
+    @overload
+    def quantity(self, base: str, si_unit: str, required: bool = False, default: None = None,
+                 positive: bool = True, allow_zero: bool = False,
+                 cap: tuple[float, str] | None = None) -> float | None: ...
 
     def quantity(self, base: str, si_unit: str, required: bool = False, default: float | None = None,
                  positive: bool = True, allow_zero: bool = False,
@@ -157,17 +167,17 @@ def _example_suffix(si_unit: str) -> str:
             "s": "s", "kg m^2": "kg_m2", "A m^2": "a_m2", "N": "n"}.get(si_unit, "si")
 
 
-def _check_finite(sec: _Section, key: str, value: Any) -> None:
+def check_finite(sec: TableSection, key: str, value: Any) -> None:
     """Every number inside ``value`` (a driver's options, nested) is finite: a NaN timeout or
     gain handed to a driver is a wait that never ends or a duty that means full power."""
     if isinstance(value, float) and not math.isfinite(value):
         raise sec.error(key, f"must be a finite number, got {value!r}")
     if isinstance(value, dict):
         for k, v in value.items():
-            _check_finite(sec, f"{key}.{k}", v)
+            check_finite(sec, f"{key}.{k}", v)
     elif isinstance(value, list):
         for i, v in enumerate(value):
-            _check_finite(sec, f"{key}[{i}]", v)
+            check_finite(sec, f"{key}[{i}]", v)
 
 
 def check_role(file: str, key: str, role: str) -> None:
@@ -192,7 +202,7 @@ def rate_problem(name: str, value: Any) -> str | None:
     return None
 
 
-def check_rate_options(sec: _Section, key: str, options: dict[str, Any]) -> None:
+def check_rate_options(sec: TableSection, key: str, options: dict[str, Any]) -> None:
     """Every ``*_hz`` driver option is a rate in (0, :data:`MAX_RATE_HZ`]."""
     for name, value in options.items():
         problem = rate_problem(name, value)

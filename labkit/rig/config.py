@@ -25,8 +25,8 @@ from labkit.rig.checks import (
     MAX_DURATION_S,
     MAX_TACH_TIMEOUT_S,
     MIN_CONTROL_PERIOD_S,
-    _check_finite,
-    _Section,
+    TableSection,
+    check_finite,
     check_rate_options,
     check_role,
     check_toml_shape,
@@ -41,9 +41,9 @@ class DeviceCheck(Protocol):
     """Checks of a device against code outside the config (drivers, emulators); each raises
     ``sec.error(key, reason)``. Implemented by :class:`labkit.rig.against_drivers.DriverCheck`."""
 
-    def protocol(self, sec: _Section, kind: str, protocol: str) -> None: ...
-    def port(self, sec: _Section, url: str) -> None: ...
-    def options(self, sec: _Section, kind: str, protocol: str, port: str,
+    def protocol(self, sec: TableSection, kind: str, protocol: str) -> None: ...
+    def port(self, sec: TableSection, url: str) -> None: ...
+    def options(self, sec: TableSection, kind: str, protocol: str, port: str,
                 options: dict[str, Any]) -> None: ...
 
 
@@ -161,7 +161,7 @@ class Rig:
         return dev
 
 
-def _check_port_url(sec: _Section, url: str, check_device: DeviceCheck | None) -> None:
+def _check_port_url(sec: TableSection, url: str, check_device: DeviceCheck | None) -> None:
     if not url.strip():
         raise sec.error("port", "empty port URL")
     scheme = urllib.parse.urlsplit(url).scheme
@@ -173,7 +173,7 @@ def _check_port_url(sec: _Section, url: str, check_device: DeviceCheck | None) -
 
 def _device(file: str, role: str, table: Any, check_device: DeviceCheck | None) -> DeviceConfig:
     check_role(file, f"devices.{role}", role)
-    sec = _Section(file, f"devices.{role}", table)
+    sec = TableSection(file, f"devices.{role}", table)
     kind = sec.raw("kind", str, required=True)
     if kind not in KINDS:
         raise sec.error("kind", f"must be one of {', '.join(KINDS)}, got {kind!r}")
@@ -183,7 +183,7 @@ def _device(file: str, role: str, table: Any, check_device: DeviceCheck | None) 
     port = sec.raw("port", str, required=True)
     _check_port_url(sec, port, check_device)
     serial = dict(sec.raw("serial", dict, default={}))
-    ssec = _Section(file, sec.key("serial"), serial)
+    ssec = TableSection(file, sec.key("serial"), serial)
     for name, typ in SERIAL_KEYS.items():
         ssec.raw(name, typ)
     ssec.finish()
@@ -201,7 +201,7 @@ def _device(file: str, role: str, table: Any, check_device: DeviceCheck | None) 
         if name in serial and not 0 <= serial[name] <= MAX_DURATION_S:
             raise ssec.error(name, f"must be in [0, {MAX_DURATION_S:.0f}] s, got {serial[name]}")
     options = dict(sec.raw("options", dict, default={}))
-    _check_finite(sec, "options", options)
+    check_finite(sec, "options", options)
     check_rate_options(sec, "options", options)
     for name, value in options.items():
         scale = 1.0 if name.endswith("_s") else 1e3 if name.endswith("_ms") else None
@@ -215,7 +215,7 @@ def _device(file: str, role: str, table: Any, check_device: DeviceCheck | None) 
 
 
 def _body(file: str, name: str, table: Any) -> BodySpec:
-    sec = _Section(file, f"bodies.{name}", table)
+    sec = TableSection(file, f"bodies.{name}", table)
     shape = sec.raw("shape", str, required=True)
     if shape not in SHAPES:
         raise sec.error("shape", f"must be one of {', '.join(SHAPES)}, got {shape!r}")
@@ -244,7 +244,7 @@ def parse_body(file: str, name: str, table: Any) -> BodySpec:
 
 
 def _control(file: str, table: Any, devices: dict[str, DeviceConfig]) -> ControlSettings:
-    sec = _Section(file, "control", table)
+    sec = TableSection(file, "control", table)
     d = ControlSettings()
     loops_raw = sec.raw("loops", list, default=None)
     values = dict(
@@ -279,7 +279,7 @@ def _control(file: str, table: Any, devices: dict[str, DeviceConfig]) -> Control
                     loops.append(LoopConfig(role[: -len("_motor")], role, tach))
     else:
         for i, item in enumerate(loops_raw):
-            lsec = _Section(file, f"control.loops[{i}]", item)
+            lsec = TableSection(file, f"control.loops[{i}]", item)
             motor = lsec.raw("motor", str, required=True)
             tach = lsec.raw("tach", str, required=True)
             name = lsec.raw("name", str, default=motor.removesuffix("_motor"))
@@ -292,7 +292,7 @@ def _control(file: str, table: Any, devices: dict[str, DeviceConfig]) -> Control
     return ControlSettings(loops=tuple(loops), **values)
 
 
-def _plausibility(sec: _Section, d: ControlSettings) -> dict[str, float]:
+def _plausibility(sec: TableSection, d: ControlSettings) -> dict[str, float]:
     """The ``[control]`` keys of the plausibility interlocks (docs/reference/rig-files.md)."""
     cap = (MAX_TACH_TIMEOUT_S, f"{MAX_TACH_TIMEOUT_S:g} s")
     values = {
@@ -307,7 +307,7 @@ def _plausibility(sec: _Section, d: ControlSettings) -> dict[str, float]:
     if not 1.0 < ratio <= 10.0:
         raise sec.error("plausible_ratio", f"must be in (1, 10], got {ratio}")
     values["plausible_ratio"] = float(ratio)
-    return values  # type: ignore[return-value]
+    return values
 
 
 def parse_rig_config(text: str, file: str = "<rig>", check_device: DeviceCheck | None = None) -> Rig:
@@ -317,8 +317,8 @@ def parse_rig_config(text: str, file: str = "<rig>", check_device: DeviceCheck |
     against the driver registry and the emulators, at the point of the file it belongs to.
     """
     data = load_toml(text, file)
-    top = _Section(file, "", data)
-    rig_sec = _Section(file, "rig", top.raw("rig", dict, required=True))
+    top = TableSection(file, "", data)
+    rig_sec = TableSection(file, "rig", top.raw("rig", dict, required=True))
     name = rig_sec.raw("name", str, required=True)
     description = rig_sec.raw("description", str, default="")
     rig_sec.finish()
@@ -333,7 +333,7 @@ def parse_rig_config(text: str, file: str = "<rig>", check_device: DeviceCheck |
         if n not in ("rotator", "floator"):
             raise RigFileError(file, f"bodies.{n}", "unknown body (use rotator or floator)")
 
-    gsec = _Section(file, "geometry", top.raw("geometry", dict, default={}))
+    gsec = TableSection(file, "geometry", top.raw("geometry", dict, default={}))
     axis = gsec.raw("axis", str, default="vertical")
     if axis not in ("vertical", "horizontal"):
         raise gsec.error("axis", f"must be vertical or horizontal, got {axis!r}")
@@ -348,7 +348,7 @@ def parse_rig_config(text: str, file: str = "<rig>", check_device: DeviceCheck |
                         break_phi_rad=break_phi)
     gsec.finish()
 
-    lsec = _Section(file, "limits", top.raw("limits", dict, required=True))
+    lsec = TableSection(file, "limits", top.raw("limits", dict, required=True))
     max_duty = lsec.raw("max_duty", (int, float), default=1.0)
     if not 0 < max_duty <= 1:
         raise lsec.error("max_duty", f"must be in (0, 1], got {max_duty}")

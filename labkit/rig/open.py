@@ -15,8 +15,9 @@ from typing import Any
 
 from labkit.control.handle import RigMotor
 from labkit.control.stopping import stop_motor
-from labkit.devices.base import Balance, MotorController, Tachometer, driver_class
+from labkit.devices.base import Balance, MotorController, Tachometer
 from labkit.devices.camera import Camera, open_camera
+from labkit.devices.registry import driver_class
 from labkit.devices.strobe.labkit_strobe import Strobe
 from labkit.io.ports import open_port
 from labkit.rig.checks import check_role

@@ -5,6 +5,10 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
+from labkit.errors import SessionError
+from labkit.session.paths import session_file
+from labkit.session.reader import read_jsonl as read_checked
+
 COLUMNS = ("t", "quantity", "value", "unit", "stable", "overload", "flags")
 #: raw bytes (latin-1 text) go to Parquet only: a spreadsheet is for the numbers
 PARQUET_COLUMNS = (*COLUMNS, "raw")
@@ -14,8 +18,6 @@ def read_jsonl(path: Path, problems: list[str] | None = None) -> list[dict]:
     """Objects of a JSONL file, bounded; a torn last line (crash mid-write) is skipped, any
     other damaged line too, reported in ``problems`` as ``file:line: reason``
     (:func:`labkit.session.reader.read_jsonl_lines`)."""
-    from labkit.session.reader import read_jsonl as read_checked
-
     return read_checked(path, problems)
 
 
@@ -47,9 +49,6 @@ def readings_to_csv(src: Path, dest: Path, problems: list[str] | None = None) ->
 def export_csv(session: Path, problems: list[str] | None = None) -> list[Path]:
     """Export every device's readings of a session to ``readings/ROLE.csv`` (damaged lines
     skipped, reported in ``problems`` as ``file:line: reason``)."""
-    from labkit.session.paths import session_file
-    from labkit.session.writer import SessionError
-
     out = []
     for found in sorted((session / "readings").glob("*.jsonl")):
         src = session_file(session, "readings", found.name)  # a symlink out of the session is refused

@@ -28,18 +28,6 @@ KILLED = "killed"
 STARTED_SLACK_S = 2.0
 
 
-def process_identity(pid: int) -> str | None:
-    """``BOOT_ID:START_TICKS`` of a live process (Linux ``/proc``), which no later process with
-    the same PID shares; None where it cannot be read (another system, the process gone)."""
-    try:
-        boot = Path("/proc/sys/kernel/random/boot_id").read_text().strip()
-        stat = Path(f"/proc/{pid}/stat").read_text()
-        start = stat[stat.rindex(")") + 2:].split()[19]  # field 22, after the command in parentheses
-    except (OSError, ValueError, IndexError):
-        return None
-    return f"{boot}:{start}"
-
-
 def _started_before(meta: dict, since: float) -> bool:
     try:
         started = _dt.datetime.fromisoformat(str(meta.get("started"))).timestamp()

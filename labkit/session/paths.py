@@ -10,13 +10,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from labkit.errors import SessionError
+
 
 def session_file(session: str | Path, *parts: str) -> Path:
     """``session/part/...`` resolved; SessionError unless it lies inside ``session``.
 
     Each part must be one plain name (no ``/``, ``\\``, ``..`` or absolute path)."""
-    from labkit.session.writer import SessionError
-
     root = Path(session).resolve()
     for part in parts:
         if not part or part in (".", "..") or "/" in part or "\\" in part or "\x00" in part:

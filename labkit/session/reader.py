@@ -20,8 +20,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from labkit.errors import SessionError
 from labkit.session.paths import session_file
-from labkit.session.writer import SessionError
 
 MAX_JSON_BYTES = 64_000_000        # run.json, results.json
 MAX_JSONL_BYTES = 4_000_000_000    # events.jsonl, readings/ROLE.jsonl

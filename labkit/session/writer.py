@@ -33,13 +33,11 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from labkit.documents import ReadingEvent, RunDocument
-from labkit.errors import LabkitError
+from labkit.errors import SessionError
+from labkit.session.export import readings_to_parquet
+from labkit.session.paths import session_file
 
 FLUSH_INTERVAL_S = 0.5  # wall-clock seconds between flushes of reading files (< 1 s)
-
-
-class SessionError(LabkitError):
-    """A session directory cannot be created, written or read. Names the path."""
 
 
 def utc_now() -> str:
@@ -147,7 +145,7 @@ class Session:
     def create(cls, root: str | Path, *, protocol: str, params: dict[str, Any], rig_name: str,
                rig_text: str, clock: str, notes: str = "", resumed_from: str | None = None,
                argv: list[str] | None = None) -> Session:
-        from labkit.session.orphans import process_identity
+        from labkit.session.process import process_identity
 
         path = new_session_dir(root, protocol)
         meta = {
@@ -185,8 +183,6 @@ class Session:
             role = event.device or "unknown"
             f = self._readings.get(role)
             if f is None:
-                from labkit.session.paths import session_file
-
                 f = self._readings[role] = open(session_file(self.path, "readings", f"{role}.jsonl"), "a",  # noqa: SIM115
                                                 encoding="utf-8")
             f.write(dumps(event.reading.as_json()) + "\n")
@@ -228,8 +224,6 @@ class Session:
             raise SessionError(f"cannot write {self.path}: {failure.strerror or failure}; the session "
                                "keeps what was written before (resumable)") from None
         try:
-            from labkit.session.export import readings_to_parquet
-
             for role_file in sorted(self.readings_dir.glob("*.jsonl")):
                 readings_to_parquet(role_file, role_file.with_suffix(".parquet"))
         except Exception:  # noqa: BLE001 - the JSONL files stay the primary record

@@ -23,18 +23,19 @@ _HOME = {
     "compile_scene": "labkit.sim.compile",
     "DEFAULT_INTEGRATOR": "labkit.sim.integrators",
     "INTEGRATORS": "labkit.sim.integrators",
-    "SimulationError": "labkit.sim.integrators",
+    "SimulationError": "labkit.sim.integrators.raw_run",
     "SimResult": "labkit.sim.result",
     "simulate": "labkit.sim.run",
     **{name: "labkit.sim.scene" for name in (
-        "Body", "Rotator", "Scene", "SceneBody", "SceneError", "Shape", "UniformField", "bundled_scenes",
-        "load_scene", "scene_from_dict")},
+        "Body", "Rotator", "Scene", "SceneBody", "SceneError", "Shape", "UniformField")},
+    **{name: "labkit.sim.scene_file" for name in ("bundled_scenes", "load_scene", "scene_from_dict")},
     "validate_scene": "labkit.sim.scene_checks",
 }
 
 if TYPE_CHECKING:  # pragma: no cover
     from labkit.sim.compile import CompiledSystem, compile_scene
-    from labkit.sim.integrators import DEFAULT_INTEGRATOR, INTEGRATORS, SimulationError
+    from labkit.sim.integrators import DEFAULT_INTEGRATOR, INTEGRATORS
+    from labkit.sim.integrators.raw_run import SimulationError
     from labkit.sim.result import SimResult
     from labkit.sim.run import simulate
     from labkit.sim.scene import (
@@ -45,11 +46,9 @@ if TYPE_CHECKING:  # pragma: no cover
         SceneError,
         Shape,
         UniformField,
-        bundled_scenes,
-        load_scene,
-        scene_from_dict,
     )
     from labkit.sim.scene_checks import validate_scene
+    from labkit.sim.scene_file import bundled_scenes, load_scene, scene_from_dict
 
 
 __getattr__ = lazy_attributes(__name__, _HOME)

@@ -16,12 +16,14 @@ import numpy as np
 from labkit.sim import equilibrium
 from labkit.sim.attitude import ATTITUDES, body_axis
 from labkit.sim.compile import CompiledSystem, compile_scene
-from labkit.sim.integrators import DEFAULT_INTEGRATOR, RawRun, SimulationError, get_integrator
+from labkit.sim.integrators import DEFAULT_INTEGRATOR, get_integrator
 from labkit.sim.integrators.kernels import invariants_over_samples
+from labkit.sim.integrators.raw_run import RawRun, SimulationError
 from labkit.sim.integrators.status import LABELS, MESSAGES, Status
 from labkit.sim.result import SimResult
 from labkit.sim.rotations import orthonormality_residual, rot_x, rot_z, zenith_angle
-from labkit.sim.scene import Scene, load_scene
+from labkit.sim.scene import Scene
+from labkit.sim.scene_file import load_scene
 
 #: kernel status code -> ``SimResult.status`` (kept for callers; :mod:`.integrators.status` names them)
 RAW_STATUS = {int(code): label for code, label in LABELS.items()}

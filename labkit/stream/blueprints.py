@@ -44,7 +44,8 @@ def figure_of(hints: Any) -> FigureSpec | None:
                       hints.residual_label, hints.legend_corner, hints.figure or hints.figure_title, also)
 
 
-def _whole_x_axis() -> Any:
+def whole_x_axis() -> Any:
+    """A time axis showing the whole run (every blueprint view of a run uses it)."""
     import rerun.blueprint as rrb
 
     everything = rrb.components.TimeRange(start=rrb.TimeRangeBoundary.infinite(),
@@ -57,10 +58,10 @@ def figure_views(figure: FigureSpec) -> list[Any]:
     import rerun.blueprint as rrb
 
     return [
-        rrb.TimeSeriesView(origin=f"{figure.root}/plot", name=figure.title, axis_x=_whole_x_axis(),
+        rrb.TimeSeriesView(origin=f"{figure.root}/plot", name=figure.title, axis_x=whole_x_axis(),
                            plot_legend=rrb.PlotLegend(corner=figure.legend_corner)),
         rrb.TimeSeriesView(origin=f"{figure.root}/residual", name=figure.residual_label,
-                           axis_x=_whole_x_axis(), plot_legend=rrb.PlotLegend(visible=False)),
+                           axis_x=whole_x_axis(), plot_legend=rrb.PlotLegend(visible=False)),
     ]
 
 
@@ -72,12 +73,12 @@ def rig_views(loops: list[str], devices: list[str]) -> list[Any]:
     views = []
     for loop in loops:
         views.append(rrb.TimeSeriesView(
-            origin=f"/rig/{loop}", name=f"{loop} speed [RPM]", axis_x=_whole_x_axis(),
+            origin=f"/rig/{loop}", name=f"{loop} speed [RPM]", axis_x=whole_x_axis(),
             contents=["$origin/speed_rpm", "$origin/setpoint_rpm", "$origin/target_rpm"]))
         views.append(rrb.TimeSeriesView(origin=f"/rig/{loop}", name=f"{loop} duty [0-1]",
-                                        axis_x=_whole_x_axis(), contents=["$origin/duty"]))
+                                        axis_x=whole_x_axis(), contents=["$origin/duty"]))
     for dev in devices:
-        views.append(rrb.TimeSeriesView(origin=f"/rig/{dev}", name=f"{dev} readings", axis_x=_whole_x_axis(),
+        views.append(rrb.TimeSeriesView(origin=f"/rig/{dev}", name=f"{dev} readings", axis_x=whole_x_axis(),
                                         contents=["$origin/**", "- $origin/frame"]))
     return views
 
@@ -105,7 +106,7 @@ def run_blueprint(figure: FigureSpec | None, loops: list[str], devices: list[str
         return rrb.Blueprint(rrb.Vertical(body, events, row_shares=[3, 1]), rrb.TimePanel(timeline="time"),
                              collapse_panels=True)
     plot, residual = figure_views(figure)
-    more = [rrb.TimeSeriesView(origin=origin, name=title, axis_x=_whole_x_axis(),
+    more = [rrb.TimeSeriesView(origin=origin, name=title, axis_x=whole_x_axis(),
                                plot_legend=rrb.PlotLegend(visible=False)) for origin, title in figure.also]
     if films:
         charts = rrb.Vertical(plot, residual, *more, row_shares=[5, 2, *([3] * len(more))])

@@ -31,15 +31,15 @@ def fit_blueprint(series: list[str], y_name: str = "y") -> Any:
     parameters. Every x axis spans all the data."""
     import rerun.blueprint as rrb
 
-    from labkit.stream.blueprints import _whole_x_axis
+    from labkit.stream.blueprints import whole_x_axis
 
     views: list[Any] = []
     for name in series:
         title = f"series {name}: {y_name}" if name != "all" else y_name
         views.append(rrb.TimeSeriesView(origin=f"/fit/{name}", name=f"{title}, data and fit",
-                                        contents=["$origin/data", "$origin/model"], axis_x=_whole_x_axis()))
+                                        contents=["$origin/data", "$origin/model"], axis_x=whole_x_axis()))
         views.append(rrb.TimeSeriesView(origin=f"/fit/{name}", name=f"{title}, residual (data - fit)",
-                                        contents=["$origin/residual"], axis_x=_whole_x_axis()))
+                                        contents=["$origin/residual"], axis_x=whole_x_axis()))
     shares = [3, 1] * len(series) + [1]
     return rrb.Blueprint(rrb.Vertical(*views, rrb.TextLogView(origin="/fit", name="parameters"),
                                       row_shares=shares), collapse_panels=True)

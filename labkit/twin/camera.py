@@ -26,12 +26,13 @@ CAMERA_SETS = ["speeds_rpm=4000:9000:1000", "burst_frames=20"]
 def camera_rows(user_rig: Path, params: TwinParams, work: Path, seed: int) -> tuple[list[dict], dict]:
     """Row ``twin/camera/cone_angle``; the run's session, points and the largest point error."""
     from labkit.stream.livefit import cone_angle_fit
+    from labkit.twin.fits import compare
     from labkit.twin.footage import FOOTAGE_RPM, model_motion
+    from labkit.twin.protocol_run import run_protocol
     from labkit.twin.rigtext import write_twin_rig
-    from labkit.twin.run import _run, compare
 
     rig_file = write_twin_rig(user_rig, "camera", work / "rigs")
-    outcome = _run(rig_file, "cone-sweep", CAMERA_SETS, work / "sessions", seed)
+    outcome = run_protocol(rig_file, "cone-sweep", CAMERA_SETS, work / "sessions", seed)
     points = outcome.results["points"]
     ok = [p for p in points if p.get("verdict") == "ok" and p.get("cone_angle_rad")]
     fit = cone_angle_fit([p["speed_rad_s"] for p in ok], [p["cone_angle_rad"] for p in ok])

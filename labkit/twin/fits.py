@@ -12,7 +12,8 @@
   :func:`labkit.emulators.break_up.break_up`).
 
 Every fit returns value, stderr (the residual-scaled covariance of weighted least squares)
-and the 95 % interval ``value +/- t_{0.975, n-1} stderr``.
+and the 95 % interval ``value +/- t_{0.975, n-1} stderr`` (:func:`interval_95`); :func:`compare`
+makes the twin's row of a fit against the value put in.
 """
 
 from __future__ import annotations
@@ -24,7 +25,8 @@ from typing import Any
 from labkit.emulators.twin_model import TwinParams, balance_force_table, steady_force_n
 
 
-def _interval(value: float, stderr: float, n: int, k: int = 1) -> dict[str, Any]:
+def interval_95(value: float, stderr: float, n: int, k: int = 1) -> dict[str, Any]:
+    """A fitted value with its stderr and 95 % interval ``value +/- t_{0.975, n-k} stderr``."""
     from scipy.stats import t as student_t
     half = float(student_t.ppf(0.975, max(n - k, 1))) * stderr
     return {"value": value, "stderr": stderr, "ci95": [value - half, value + half], "n": n}
@@ -38,7 +40,7 @@ def _fit_one(model, x0: float, speeds: list[float], force: list[float], sigma: l
     # fitted in units of x0 (so the finite-difference step suits any magnitude)
     (u,), cov = curve_fit(lambda ww, uu: np.array([model(x, uu * x0) for x in ww]), w, f, p0=(1.0,),
                           sigma=s, absolute_sigma=False, epsfcn=1e-8)
-    return _interval(float(u * x0), float(math.sqrt(max(cov[0, 0], 0.0)) * abs(x0)), len(w))
+    return interval_95(float(u * x0), float(math.sqrt(max(cov[0, 0], 0.0)) * abs(x0)), len(w))
 
 
 def sweep_points(points: list[dict]) -> tuple[list[float], list[float], list[float]]:
@@ -73,3 +75,14 @@ def break_phi_from_c(params: TwinParams, c: dict) -> dict:
     lo, hi = c["ci95"]
     return {"value": phi(c["value"]), "stderr": abs(phi(c["value"] + c["stderr"]) - phi(c["value"])),
             "ci95": sorted([phi(lo), phi(hi)]), "n": c["n"]}
+
+
+def compare(group: str, param: str, put_in: float, fit: dict, unit: str, scale: float = 1.0) -> dict:
+    """One row: put-in against recovered, ``ok`` when the put-in value lies in the 95 % interval."""
+    lo, hi = (x * scale for x in fit["ci95"])
+    value = fit["value"] * scale
+    put = put_in * scale
+    return {"name": f"twin/{group}/{param}", "group": group, "param": param, "unit": unit,
+            "put_in": put, "recovered": value, "stderr": fit["stderr"] * scale, "ci95": [lo, hi],
+            "residual": value - put, "rel_diff": (value - put) / put if put else math.nan,
+            "ok": bool(lo <= put <= hi), "n": fit.get("n")}

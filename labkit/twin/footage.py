@@ -20,6 +20,7 @@ from typing import Any
 
 from labkit.emulators.twin_model import TwinParams
 from labkit.errors import LabkitError
+from labkit.twin.fits import compare
 
 FOOTAGE_RPM = 6000.0
 CLIPS = 4
@@ -112,7 +113,6 @@ def strobe_swing(phi: float, delta_m: float, body_mm: tuple[float, float], work:
 
 def footage_rows(params: TwinParams, work: Path, seed: int) -> tuple[list[dict], dict]:
     """Rows ``twin/laser/cone_angle``, ``twin/strobe/tilt_amplitude``, ``twin/strobe/rc_offset``."""
-    from labkit.twin.run import compare
     motion = model_motion(params)
     folder = work / "footage"
     folder.mkdir(parents=True, exist_ok=True)

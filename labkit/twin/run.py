@@ -3,47 +3,24 @@ rig file, rendered footage, then the fits, compared with what went in (docs/expl
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from labkit.emulators.break_up import break_up
 from labkit.emulators.twin_model import TwinParams, missing_from_rig, params_from_rig
-from labkit.twin.fits import break_phi_from_c, fit_gap, fit_moment_product
+from labkit.twin.fits import break_phi_from_c, compare, fit_gap, fit_moment_product, interval_95
+from labkit.twin.protocol_run import run_protocol
 from labkit.twin.rigtext import write_twin_rig
 
 #: speed-sweep plan of the twin (the demo's)
 SWEEP_SETS = ["speeds_rpm=6000:20000:1000", "record_s=2.0"]
 
 
-def compare(group: str, param: str, put_in: float, fit: dict, unit: str, scale: float = 1.0) -> dict:
-    """One row: put-in against recovered, ``ok`` when the put-in value lies in the 95 % interval."""
-    lo, hi = (x * scale for x in fit["ci95"])
-    value = fit["value"] * scale
-    put = put_in * scale
-    return {"name": f"twin/{group}/{param}", "group": group, "param": param, "unit": unit,
-            "put_in": put, "recovered": value, "stderr": fit["stderr"] * scale, "ci95": [lo, hi],
-            "residual": value - put, "rel_diff": (value - put) / put if put else math.nan,
-            "ok": bool(lo <= put <= hi), "n": fit.get("n")}
-
-
-def _run(rig_file: Path, protocol: str, sets: list[str], sessions: Path, seed: int) -> Any:
-    from labkit.emulators.plant import Emulation, use_emulation
-    from labkit.errors import LabkitError
-    from labkit.protocols.launch import execute, prepare_run
-    with use_emulation(Emulation(f"twin-{protocol}", seed=seed)):
-        prep = prepare_run(rig_file, protocol, sets, clock="virtual", session_root=sessions)
-        outcome = execute(prep, sessions, notes="labkit twin")
-    if outcome.status != "completed":
-        raise LabkitError(f"labkit twin: {protocol} on the model plant {outcome.status}: {outcome.reason}")
-    return outcome
-
-
 def balance_rows(user_rig: Path, params: TwinParams, work: Path, seed: int) -> tuple[list[dict], dict]:
     """Fig. 5.25: the speed sweep, m_R m_F and the gap recovered from it."""
     rig_file = write_twin_rig(user_rig, "fig525", work / "rigs")
-    outcome = _run(rig_file, "speed-sweep", SWEEP_SETS, work / "sessions", seed)
+    outcome = run_protocol(rig_file, "speed-sweep", SWEEP_SETS, work / "sessions", seed)
     points = outcome.results["points"]
     rows = [compare("fig5.25", "moment_product", params.moment_product,
                     fit_moment_product(params, points), "A^2 m^4"),
@@ -53,7 +30,7 @@ def balance_rows(user_rig: Path, params: TwinParams, work: Path, seed: int) -> t
 
 def spin_plan(params: TwinParams) -> list[str]:
     """spin-critical plan: from 5 % above the model's lowest trapping speed, +10 % per run."""
-    from labkit.emulators.plant import SpinCriticalLaw
+    from labkit.emulators.rig_plant import SpinCriticalLaw
     from labkit.units import rad_s_to_rpm
     w0 = SpinCriticalLaw(c=break_up(params).c).min_trap_speed()
     start = rad_s_to_rpm(1.05 * w0)
@@ -64,11 +41,10 @@ def spin_plan(params: TwinParams) -> list[str]:
 def spin_rows(user_rig: Path, params: TwinParams, work: Path, seed: int) -> tuple[list[dict], dict]:
     """Fig. 6.18: the spin-critical protocol; C of Eq. 6.37 and the break-up cone angle."""
     rig_file = write_twin_rig(user_rig, "fig618", work / "rigs")
-    outcome = _run(rig_file, "spin-critical", spin_plan(params), work / "sessions", seed)
+    outcome = run_protocol(rig_file, "spin-critical", spin_plan(params), work / "sessions", seed)
     c_fit = outcome.results["fit"]["params"]["C"]
     n = outcome.results["fit"].get("n", len(outcome.results["points"]))
-    from labkit.twin.fits import _interval
-    c = _interval(c_fit["value"], c_fit["stderr"], n)
+    c = interval_95(c_fit["value"], c_fit["stderr"], n)
     put_in = break_up(params)
     rows = [compare("fig6.18", "C", put_in.c, c, "rad^2/s^2"),
             compare("fig6.18", "break_phi", put_in.phi, break_phi_from_c(params, c), "rad")]

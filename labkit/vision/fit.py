@@ -70,7 +70,7 @@ def _curve(c: complex, a: complex, b: complex, k: int, t: np.ndarray) -> np.ndar
 
 
 @dataclass
-class _Rows:
+class FitRows:
     """Several fits of the same points advanced together (one row per start or candidate): complex
     coefficients ``c, a, b, v`` and integer ``k``, each of shape (S,). Batching the rows turns
     many small array operations into a few larger ones (the fit of a 250-point trace is
@@ -85,19 +85,19 @@ class _Rows:
     def col(self, name: str) -> np.ndarray:
         return getattr(self, name)[:, None]
 
-    def take(self, index: list[int] | np.ndarray) -> _Rows:
+    def take(self, index: list[int] | np.ndarray) -> FitRows:
         """The rows at ``index``."""
-        return _Rows(self.k[index], self.c[index], self.a[index], self.b[index], self.v[index])
+        return FitRows(self.k[index], self.c[index], self.a[index], self.b[index], self.v[index])
 
     @staticmethod
-    def of(fits: list[CurveFit]) -> _Rows:
+    def of(fits: list[CurveFit]) -> FitRows:
         """One row per fit, starting where the fit ended."""
-        return _Rows(np.array([f.k for f in fits]), np.array([f.c for f in fits], complex),
+        return FitRows(np.array([f.k for f in fits]), np.array([f.c for f in fits], complex),
                      np.array([f.a for f in fits], complex), np.array([f.b for f in fits], complex),
                      np.array([f.drift for f in fits], complex))
 
 
-def _closest_parameters(z: np.ndarray, rows: _Rows, samples: np.ndarray) -> np.ndarray:
+def closest_parameters(z: np.ndarray, rows: FitRows, samples: np.ndarray) -> np.ndarray:
     """Parameter t of the closest point of each row's centred curve ``A e^{it} + B e^{ikt}`` to
     each of that row's z (S, N): nearest of ``samples`` curve points, then two Newton steps on
     ``|z(t) - p|^2``."""
@@ -107,10 +107,10 @@ def _closest_parameters(z: np.ndarray, rows: _Rows, samples: np.ndarray) -> np.n
         curve = _curve(0j, rows.a[i], rows.b[i], int(rows.k[i]), ts)
         _, idx = PointTree(curve).query(z[i])
         t[i] = ts[idx]
-    return _newton_parameters(z, rows, t, 2)
+    return newton_parameters(z, rows, t, 2)
 
 
-def _newton_parameters(z: np.ndarray, rows: _Rows, t: np.ndarray, steps: int) -> np.ndarray:
+def newton_parameters(z: np.ndarray, rows: FitRows, t: np.ndarray, steps: int) -> np.ndarray:
     """Refine closest-point parameters (S, N) by Newton steps on ``|A e^{it} + B e^{ikt} - z|^2``."""
     a, b, k = rows.col("a"), rows.col("b"), rows.col("k")
     for _ in range(steps):
@@ -129,7 +129,7 @@ PROBE_ITERATIONS = 4  # every start gets this many steps; only the best one is c
 TANGENTIAL_WEIGHT = 0.2  # share of the along-curve residual kept in the solve (stabilises it)
 
 
-def _solve_point_to_line(z: np.ndarray, sw: np.ndarray, tau: np.ndarray, rows: _Rows, t: np.ndarray,
+def _solve_point_to_line(z: np.ndarray, sw: np.ndarray, tau: np.ndarray, rows: FitRows, t: np.ndarray,
                          fit_drift: bool) -> np.ndarray:
     """One linear solve per row for complex ``c, A, B (, v)`` (S, 3 or 4) with the curve parameters
     t (S, N) fixed, minimising the residual along each point's curve normal plus
@@ -160,8 +160,8 @@ def _solve_point_to_line(z: np.ndarray, sw: np.ndarray, tau: np.ndarray, rows: _
     return x[:, 0::2] + 1j * x[:, 1::2]
 
 
-def _icp_rows(z: np.ndarray, w: np.ndarray, tau: np.ndarray, rows: _Rows, iterations: int, fit_drift: bool,
-              samples: np.ndarray) -> tuple[_Rows, np.ndarray]:
+def _icp_rows(z: np.ndarray, w: np.ndarray, tau: np.ndarray, rows: FitRows, iterations: int, fit_drift: bool,
+              samples: np.ndarray) -> tuple[FitRows, np.ndarray]:
     """Point-to-line ICP of every row on the same points; returns the rows and their weighted rms
     residuals (inf for a degenerate trochoid whose second term dominates: a circle traced |k|
     times). Stops early once every row has stopped moving."""
@@ -174,22 +174,22 @@ def _icp_rows(z: np.ndarray, w: np.ndarray, tau: np.ndarray, rows: _Rows, iterat
 
     for it in range(iterations):
         if it % 6 == 0:
-            t = _closest_parameters(centred(), rows, samples)
+            t = closest_parameters(centred(), rows, samples)
         else:
-            t = _newton_parameters(centred(), rows, t, 2)
+            t = newton_parameters(centred(), rows, t, 2)
         sol = _solve_point_to_line(z[None, :], sw, tau, rows, t, fit_drift)
         c, a, b = sol[:, 0], sol[:, 1], sol[:, 2]
         v = sol[:, 3] if fit_drift else np.zeros_like(c)
         too_big = trochoid & (np.abs(b) > MAX_TROCHOID_B * np.abs(a))  # stay in the trochoid family
         b = np.where(too_big, b * MAX_TROCHOID_B * np.abs(a) / np.maximum(np.abs(b), 1e-300), b)
         moved = np.abs(c - rows.c) + np.abs(a - rows.a) + np.abs(b - rows.b)
-        rows = _Rows(rows.k, c, a, b, v)
+        rows = FitRows(rows.k, c, a, b, v)
         if it % 6 == 5 and bool(np.all(moved < 1e-3)):
             break
     if t is None or iterations < 3:
-        t = _closest_parameters(centred(), rows, samples)
+        t = closest_parameters(centred(), rows, samples)
     else:  # warm: the last parameters are close, a Newton refinement is enough
-        t = _newton_parameters(centred(), rows, t, 2)
+        t = newton_parameters(centred(), rows, t, 2)
     curve = rows.col("c") + rows.col("a") * np.exp(1j * t) + rows.col("b") * np.exp(1j * rows.col("k") * t)
     r = np.abs(curve + rows.col("v") * tau[None, :] - z[None, :])
     rms = np.sqrt(np.sum(w * r * r, axis=1) / np.sum(w))
@@ -197,7 +197,7 @@ def _icp_rows(z: np.ndarray, w: np.ndarray, tau: np.ndarray, rows: _Rows, iterat
     return rows, np.where(degenerate, math.inf, rms)
 
 
-def _curve_fit(rows: _Rows, rms: np.ndarray, i: int) -> CurveFit:
+def _curve_fit(rows: FitRows, rms: np.ndarray, i: int) -> CurveFit:
     """Row ``i`` as a :class:`CurveFit` with its canonical pattern."""
     k, c, a, b = int(rows.k[i]), complex(rows.c[i]), complex(rows.a[i]), complex(rows.b[i])
     pattern = ellipse_from_coefficients(c, a, b) if k == -1 else trochoid_from_coefficients(c, a, b, k)
@@ -207,7 +207,7 @@ def _curve_fit(rows: _Rows, rms: np.ndarray, i: int) -> CurveFit:
 def _icp(z: np.ndarray, w: np.ndarray, tau: np.ndarray, k: int, c: complex, a: complex, b: complex,
          iterations: int, fit_drift: bool, samples: int, v: complex = 0j) -> CurveFit:
     """ICP of one curve (:func:`_icp_rows` with one row)."""
-    rows = _Rows(np.array([k]), np.array([c], complex), np.array([a], complex), np.array([b], complex),
+    rows = FitRows(np.array([k]), np.array([c], complex), np.array([a], complex), np.array([b], complex),
                  np.array([v], complex))
     return _curve_fit(*_icp_rows(z, w, tau, rows, iterations, fit_drift, np.array([samples])), 0)
 
@@ -228,7 +228,7 @@ def _ellipse_start(z: np.ndarray) -> tuple[complex, complex, complex]:
 def fit_ellipse(points: np.ndarray, weights: np.ndarray | None = None, times: np.ndarray | None = None,
                 iterations: int = 18) -> CurveFit:
     """Geometric ellipse fit (major first; rotation of the major axis) with optional linear drift."""
-    z, w, tau = _prepare(points, weights, times)
+    z, w, tau = prepare_points(points, weights, times)
     c, a, b = _ellipse_start(z)
     return _icp(z, w, tau, -1, c, a, b, iterations, times is not None, 1440)
 
@@ -247,12 +247,12 @@ def fit_trochoids(points: np.ndarray, ks: list[int], weights: np.ndarray | None 
     """:func:`fit_trochoid` for several frequency ratios ``ks`` (:func:`labkit.vision.curves.k_for`)
     at once, one fit per k: every start of every k is probed for ``PROBE_ITERATIONS`` steps in one
     batch, then each k's best start is carried on to ``iterations`` steps in a second batch."""
-    z, w, tau = _prepare(points, weights, times)
+    z, w, tau = prepare_points(points, weights, times)
     drift = times is not None
     starts = [(k, c, a, b) for k in ks
               for c, a, b in trochoid_starts(z, w, k, b_starts or b_starts_for(k))]
     k_col, c, a, b = (np.array(col) for col in zip(*starts, strict=True))
-    probes = _Rows(k_col, c, a, b, np.zeros(len(starts), complex))
+    probes = FitRows(k_col, c, a, b, np.zeros(len(starts), complex))
     probes, rms = _icp_rows(z, w, tau, probes, PROBE_ITERATIONS, drift, 200 * np.abs(k_col))
     chosen = []
     for k in ks:
@@ -270,7 +270,8 @@ def fit_trochoids(points: np.ndarray, ks: list[int], weights: np.ndarray | None 
     return [_curve_fit(rows, rms, i) for i in range(len(ks))]
 
 
-def _prepare(points, weights, times):
+def prepare_points(points, weights, times):
+    """Points (N, 2) as complex numbers, their weights and centred times; ValueError on a bad shape."""
     pts = np.asarray(points, dtype=float)
     if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < MIN_POINTS:
         raise ValueError(f"need at least {MIN_POINTS} points (N, 2), got shape {pts.shape}")
@@ -331,17 +332,17 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
     else:
         ks = [k_for(kind, loops) for kind, first in (("epitrochoid", 2), ("hypotrochoid", 3))
               for loops in trochoid_loops if loops >= first]
-        zs, _, taus = _prepare(*screen)
+        zs, _, taus = prepare_points(*screen)
         screened = fit_trochoids(screen[0], ks, screen[1], screen[2], iterations=10)
         for f in screened:
             residuals[_name(f)], fits[_name(f)] = f.rms_residual, f
             coverage[_name(f)] = coverage_rms(f, zs, taus) if math.isfinite(f.rms_residual) else math.inf
         screened.sort(key=lambda f: two_way_rms(f.rms_residual, coverage[_name(f)]))
         shortlist = [f for f in screened[:2] if math.isfinite(f.rms_residual)]
-    z, w_, tau = _prepare(*full)
+    z, w_, tau = prepare_points(*full)
     refined = []
     if shortlist:  # refined together: one batch of ICP steps for both
-        rows = _Rows.of(shortlist)
+        rows = FitRows.of(shortlist)
         rows, rms = _icp_rows(z, w_, tau, rows, 20, full[2] is not None, 200 * np.abs(rows.k))
         refined = [_curve_fit(rows, rms, i) for i in range(len(shortlist))]
     for fit in refined:
@@ -358,7 +359,7 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
         # the ellipse looks like the answer: polish it on the band and judge again (polishing
         # only raises its residual on the centre line, so a trochoid that beat the unpolished
         # ellipse would beat the polished one too: that work is skipped for trochoids)
-        ellipse = _polished_on_band(ellipse, band, full, 2 * max_points)
+        ellipse = polished_on_band(ellipse, band, full, 2 * max_points)
         residuals["ellipse"] = ellipse.rms_residual
         beats = trochoid_wins()
     best = without_outliers(trochoid, *full) if beats else ellipse
@@ -368,7 +369,7 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
     return Classification(best, ellipse, residuals, t_ref, coverage, fits)
 
 
-def _polished_on_band(ellipse: CurveFit, band: tuple, full: tuple, max_points: int) -> CurveFit:
+def polished_on_band(ellipse: CurveFit, band: tuple, full: tuple, max_points: int) -> CurveFit:
     """The ellipse refitted on (up to ``max_points`` of) every trace pixel ``band`` without its
     outliers, with its residual taken on the centre-line points ``full`` (comparable with the
     trochoids'). Centres refer to the mean time of the points fitted, so the band fit's centre is
@@ -377,7 +378,7 @@ def _polished_on_band(ellipse: CurveFit, band: tuple, full: tuple, max_points: i
     subset = [None if a is None else np.asarray(a)[idx] for a in band]
     polished = without_outliers(polish(ellipse, *subset), *subset)
     shift = polished.drift * (_mean_time(full[2]) - _mean_time(subset[2]))
-    z, w, tau = _prepare(*full)
+    z, w, tau = prepare_points(*full)
     return _icp(z, w, tau, -1, polished.c + shift, polished.a, polished.b, 0, False, 1440, polished.drift)
 
 
@@ -390,10 +391,10 @@ def without_outliers(fit: CurveFit, points: np.ndarray, weights: np.ndarray | No
     (sigma = 1.4826 x the median distance, at least 1/3 px): specks of compression ringing or
     halo beside a bright trace, a few % of the points but tens of px off, would otherwise pull
     the centre and b. The rms residual of the result is over the points kept."""
-    z, w, tau = _prepare(points, weights, times)
-    rows = _Rows.of([fit])
+    z, w, tau = prepare_points(points, weights, times)
+    rows = FitRows.of([fit])
     samples = np.array([1440 if fit.k == -1 else 200 * abs(fit.k)])
-    t = _closest_parameters((z - fit.c - fit.drift * tau)[None, :], rows, samples)[0]
+    t = closest_parameters((z - fit.c - fit.drift * tau)[None, :], rows, samples)[0]
     distance = np.abs(_curve(fit.c, fit.a, fit.b, fit.k, t) + fit.drift * tau - z)
     keep = distance <= OUTLIER_SIGMAS * max(1.4826 * float(np.median(distance)), 1 / 3)
     if keep.all() or keep.sum() < MIN_POINTS:
@@ -430,7 +431,7 @@ def polish(fit: CurveFit, points: np.ndarray, weights: np.ndarray | None = None,
            times: np.ndarray | None = None, iterations: int = 12) -> CurveFit:
     """Refit from ``fit`` on a different point set (e.g. every trace pixel instead of the thinned
     centre line, which ends half a line width short of sharp tips)."""
-    z, w, tau = _prepare(points, weights, times)
+    z, w, tau = prepare_points(points, weights, times)
     samples = 1440 if fit.k == -1 else 360 * abs(fit.k)
     return _icp(z, w, tau, fit.k, fit.c, fit.a, fit.b, iterations, times is not None, samples)
 

@@ -34,10 +34,10 @@ from labkit.vision.curves import trochoid_from_coefficients
 from labkit.vision.fit import (
     Classification,
     CurveFit,
-    _closest_parameters,
-    _newton_parameters,
-    _prepare,
-    _Rows,
+    FitRows,
+    closest_parameters,
+    newton_parameters,
+    prepare_points,
 )
 from labkit.vision.nearest import PointTree
 from labkit.vision.wander import Wander, dense_curve
@@ -74,7 +74,7 @@ def cusp_fit(fit: CurveFit, points: np.ndarray, weights: np.ndarray | None = Non
     closed) or the given value: ``c + A (e^{it} + b e^{ikt}) (+ v tau)`` is linear in ``c, A, v``
     for fixed closest-point parameters, so the fit alternates those as :mod:`labkit.vision.fit`
     does (point-to-line steps). ``times`` as in the fit (mean-centred drift)."""
-    z, w, tau = _prepare(points, weights, times)
+    z, w, tau = prepare_points(points, weights, times)
     k = fit.k
     b0 = 1.0 / abs(k) if b is None else float(b)
     a = canonical_phase(fit)
@@ -84,13 +84,13 @@ def cusp_fit(fit: CurveFit, points: np.ndarray, weights: np.ndarray | None = Non
     drift = times is not None
     t = None
     for it in range(iterations):
-        rows = _Rows(np.array([k]), np.array([c]), np.array([a]), np.array([b0 * a]), np.array([v]))
+        rows = FitRows(np.array([k]), np.array([c]), np.array([a]), np.array([b0 * a]), np.array([v]))
         centred = (z - c - v * tau)[None, :]
-        t = (_closest_parameters(centred, rows, samples) if it % 6 == 0
-             else _newton_parameters(centred, rows, t, 2))[0:1]
+        t = (closest_parameters(centred, rows, samples) if it % 6 == 0
+             else newton_parameters(centred, rows, t, 2))[0:1]
         c, a, v = _solve_fixed_shape(z, sw, tau, k, b0, a, t[0], drift, v)
-    rows = _Rows(np.array([k]), np.array([c]), np.array([a]), np.array([b0 * a]), np.array([v]))
-    t = _closest_parameters((z - c - v * tau)[None, :], rows, samples)[0]
+    rows = FitRows(np.array([k]), np.array([c]), np.array([a]), np.array([b0 * a]), np.array([v]))
+    t = closest_parameters((z - c - v * tau)[None, :], rows, samples)[0]
     r = np.abs(c + a * (np.exp(1j * t) + b0 * np.exp(1j * k * t)) + v * tau - z)
     rms = float(np.sqrt(np.sum(w * r * r) / np.sum(w)))
     return CurveFit(k, c, a, b0 * a, v, rms, trochoid_from_coefficients(c, a, b0 * a, k))

@@ -35,6 +35,8 @@ FLAT_LEVEL = 200.0  # background of a dark-body frame after flattening
 DARK_FLAT_LEVEL = 20.0  # background of a bright-body frame after flattening
 SQUARE_ANISOTROPY = 0.25  # below it the silhouette is too square for a 2-fold moment axis
 LINEAR_WINDOW_PX = 3  # the linear moments' window: the half-coverage region grown by this much
+#: a midline straying more than this (px rms) is a bent silhouette: a rolling shutter (strobe_rolling_use)
+MAX_BEND_PX = 0.4  # midline of a straight body: measured <= 0.27 px with noise, blur and compression
 
 
 @dataclass

@@ -13,6 +13,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from labkit.vision.strobe_body import MAX_BEND_PX
+
 OK, DOUBTFUL, FAILED = "ok", "doubtful", "failed"
 TILT_TOL_REL, TILT_TOL_ABS = 0.05, 0.005
 LATERAL_TOL_REL, LATERAL_TOL_PX = 0.05, 0.5
@@ -33,7 +35,6 @@ MAX_FLASH_SPREAD_CYCLES = 0.125  # flashes spread over u cycles shrink amplitude
 # the tolerance
 LOCKED_WEAK, LOCKED_STRONG = 0.5, 0.8  # explained variance of tilt vs lateral (they move together)
 MAX_ROOM_LIGHT = 0.5  # room light's share of the light (strobe_ghost): above it the ghost outweighs the body
-MAX_BEND_PX = 0.4  # midline of a straight body: measured <= 0.27 px with noise, blur and compression
 
 
 def tilt_tolerance(phi: float) -> float:

@@ -16,9 +16,8 @@ import math
 import cv2
 import numpy as np
 
-from labkit.vision.strobe_body import BodyPose, ClipOrientation
+from labkit.vision.strobe_body import MAX_BEND_PX, BodyPose, ClipOrientation
 from labkit.vision.strobe_phase import PhaseModel
-from labkit.vision.strobe_quality import MAX_BEND_PX
 from labkit.vision.strobe_rolling import (
     GRID_STEPS,
     Crops,

@@ -24,8 +24,8 @@ from labkit.vision.fit import (
     SIMPLER_TOLERANCE,
     Classification,
     CurveFit,
-    _polished_on_band,
     polish,
+    polished_on_band,
     without_outliers,
 )
 from labkit.vision.nearest import PointTree, xy_points
@@ -264,5 +264,5 @@ def follow_wander(cls: Classification, points: np.ndarray, weights: np.ndarray |
     if (result.needed and fit.k == -1 and band is not None and band[2] is not None
             and len(band[0]) >= MIN_CHUNK_POINTS):
         moved_band = (result.moved(np.asarray(band[0], float), np.asarray(band[2], float)), band[1], band[2])
-        result.fit = _polished_on_band(fit, moved_band, (xy_points(moved), w, t), 2 * max_points)
+        result.fit = polished_on_band(fit, moved_band, (xy_points(moved), w, t), 2 * max_points)
     return result

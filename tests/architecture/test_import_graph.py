@@ -50,8 +50,8 @@ def part(module: str) -> str:
 
 def part_graph() -> dict[str, set[str]]:
     """Top-level part -> the parts it imports (edges to itself and to ``labkit`` left out)."""
-    known = {p.stem if p.is_file() else p.name for p in LABKIT.iterdir()
-             if (p.suffix == ".py" and p.stem != "__init__") or (p / "__init__.py").is_file()}
+    known = {p.stem if p.is_file() else p.name for p in LABKIT.iterdir()  # namespace packages too
+             if (p.suffix == ".py" and p.stem != "__init__") or (p.is_dir() and any(p.glob("*.py")))}
     graph: dict[str, set[str]] = {}
     for path in LABKIT.rglob("*.py"):
         src = part(module_name(path))

@@ -12,7 +12,7 @@ import pytest
 
 from labkit.devices.camera.cassette import read_cassette
 from labkit.devices.camera.shrink import Shrink, shrink_image
-from labkit.protocols.launch import replay_session
+from labkit.protocols.replay import replay_session
 
 from .loopback import numbered_jpeg
 

@@ -30,7 +30,7 @@ class MyBalance({balance}):
 
 
 def install_plugin(site: Path, entry_points: str) -> None:
-    from labkit.devices.base import driver_class
+    from labkit.devices.registry import driver_class
 
     balance = driver_class("balance", "mtsics").__name__
     (site / "mylab_plugin").mkdir(parents=True)

@@ -4,7 +4,8 @@ import math
 
 import pytest
 
-from labkit.emulators.plant import FloatorPlant, SpinCriticalLaw, make_plant
+from labkit.emulators.plant import make_plant
+from labkit.emulators.rig_plant import FloatorPlant, SpinCriticalLaw
 
 
 def test_critical_spin_solves_eq_6_37():

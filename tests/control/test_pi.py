@@ -3,7 +3,7 @@
 import pytest
 
 from labkit.control.pi import PIGains, PIState, SettleDetector, pi_step, ramp_toward
-from labkit.emulators.plant import MotorPlant
+from labkit.emulators.rig_plant import MotorPlant
 
 
 def run_loop(plant: MotorPlant, gains: PIGains, target: float, seconds: float, dt: float = 0.05,

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from labkit.devices.base import driver_class
+from labkit.devices.registry import driver_class
 from labkit.io.clock import VirtualClock
 from labkit.io.ports import open_port
 

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from labkit.devices.base import driver_class
+from labkit.devices.registry import driver_class
 from labkit.emulators.plant import reset_plants
 from labkit.errors import ReplayMismatch
 from labkit.io.clock import VirtualClock

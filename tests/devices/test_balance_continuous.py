@@ -7,9 +7,10 @@ import math
 
 import pytest
 
-from labkit.devices.base import driver_class
+from labkit.devices.registry import driver_class
 from labkit.emulators.balances import MtSicsEmulator
-from labkit.emulators.plant import RigPlant, shared_plant
+from labkit.emulators.plant import shared_plant
+from labkit.emulators.rig_plant import RigPlant
 from labkit.errors import DeviceDisconnected
 from labkit.io.clock import RealClock, VirtualClock
 from labkit.io.ports import open_port

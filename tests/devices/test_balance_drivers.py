@@ -8,10 +8,11 @@ import math
 
 import pytest
 
-from labkit.devices.base import driver_class
+from labkit.devices.registry import driver_class
 from labkit.emulators.balances import AndStdEmulator, MtSicsEmulator
 from labkit.emulators.hx711_sketch import Hx711SketchEmulator
-from labkit.emulators.plant import RigPlant, shared_plant
+from labkit.emulators.plant import shared_plant
+from labkit.emulators.rig_plant import RigPlant
 from labkit.io.clock import RealClock, VirtualClock
 from labkit.io.ports import open_port
 from labkit.io.pty_host import PtyHost

@@ -10,10 +10,11 @@ import math
 import pytest
 import serial
 
-from labkit.devices.base import driver_class
 from labkit.devices.loadcell import and_std, mtsics
+from labkit.devices.registry import driver_class
 from labkit.emulators.balances import MtSicsEmulator
-from labkit.emulators.plant import RigPlant, reset_plants, shared_plant
+from labkit.emulators.plant import reset_plants, shared_plant
+from labkit.emulators.rig_plant import RigPlant
 from labkit.errors import DeviceDisconnected, DeviceReplyError, DeviceTimeout
 from labkit.io.clock import RealClock, VirtualClock
 from labkit.io.ports import open_port

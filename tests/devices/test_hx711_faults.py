@@ -17,11 +17,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from labkit.devices.base import driver_class
 from labkit.devices.link import FrameError
 from labkit.devices.loadcell import line_regex
+from labkit.devices.registry import driver_class
 from labkit.emulators.hx711_sketch import Hx711SketchEmulator
-from labkit.emulators.plant import RigPlant, shared_plant
+from labkit.emulators.plant import shared_plant
+from labkit.emulators.rig_plant import RigPlant
 from labkit.errors import DeviceTimeout
 from labkit.io.clock import RealClock, VirtualClock
 from labkit.io.ports import open_port

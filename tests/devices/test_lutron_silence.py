@@ -8,14 +8,15 @@ from __future__ import annotations
 
 import pytest
 
-from labkit.devices.base import driver_class
+from labkit.devices.registry import driver_class
 from labkit.devices.tachometer.lutron16 import parse_lutron16
-from labkit.emulators.plant import RAD_S_PER_RPM, shared_plant
+from labkit.emulators.plant import shared_plant
 from labkit.emulators.sim_port import build_emulator
 from labkit.errors import DeviceTimeout
 from labkit.io.clock import RealClock, VirtualClock
 from labkit.io.ports import open_port
 from labkit.io.pty_host import PtyHost
+from labkit.units import RAD_S_PER_RPM
 
 RPM = 3000.0
 

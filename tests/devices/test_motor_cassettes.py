@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from labkit.devices.base import driver_class
 from labkit.devices.motor.scripted import run_motor_script
+from labkit.devices.registry import driver_class
 from labkit.errors import ReplayMismatch
 from labkit.io.clock import VirtualClock
 from labkit.io.ports import open_port

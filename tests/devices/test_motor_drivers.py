@@ -6,11 +6,12 @@ from __future__ import annotations
 import pytest
 from sim_driver import open_sim_driver
 
-from labkit.devices.base import driver_class
-from labkit.emulators.plant import RAD_S_PER_RPM, shared_plant
+from labkit.devices.registry import driver_class
+from labkit.emulators.plant import shared_plant
 from labkit.errors import DeviceDisconnected, DeviceError, DeviceTimeout, SafetyError
 from labkit.io.clock import VirtualClock
 from labkit.io.ports import open_port
+from labkit.units import RAD_S_PER_RPM
 
 MAX_SPEED = 2500.0  # rad/s at duty 1: the plant's default motor
 

@@ -26,7 +26,7 @@ from labkit.devices.motor.vesc import (
     parse_values,
 )
 from labkit.emulators.motors import PololuSmcEmulator
-from labkit.emulators.plant import RigPlant
+from labkit.emulators.rig_plant import RigPlant
 from labkit.emulators.vesc_emulator import VescEmulator
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from labkit.devices.base import driver_class
+from labkit.devices.registry import driver_class
 from labkit.emulators.plant import shared_plant
 from labkit.emulators.sim_port import build_emulator
 from labkit.errors import DeviceDisconnected

@@ -13,11 +13,13 @@ import math
 import pytest
 import serial
 
-from labkit.devices.base import driver_class
-from labkit.emulators.plant import G0, RAD_S_PER_RPM, fig525_force_n, shared_plant
+from labkit.devices.registry import driver_class
+from labkit.emulators.plant import shared_plant
+from labkit.emulators.rig_plant import fig525_force_n
 from labkit.errors import DeviceDisconnected, DeviceError
 from labkit.io.clock import VirtualClock
 from labkit.io.ports import open_port
+from labkit.units import G0, RAD_S_PER_RPM
 
 RPM = 9000.0
 # name -> (kind, driver protocol, emulator, extra query, driver options)

@@ -3,7 +3,7 @@ thread (real clock), so the tachometer keeps its rate while the host waits on th
 
 import pytest
 
-from labkit.devices.base import driver_class
+from labkit.devices.registry import driver_class
 from labkit.io.clock import RealClock
 from labkit.io.ports import open_port
 

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from labkit.devices.base import driver_class
+from labkit.devices.registry import driver_class
 from labkit.devices.strobe.scripted import run_strobe_script
 from labkit.io.clock import VirtualClock
 from labkit.io.ports import open_port

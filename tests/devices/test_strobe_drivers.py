@@ -15,7 +15,7 @@ import pytest
 
 import labkit.emulators  # noqa: F401 - registers sim://
 from labkit.cli import main
-from labkit.devices.base import driver_class
+from labkit.devices.registry import driver_class
 from labkit.emulators.plant import shared_plant, use_emulation
 from labkit.errors import DeviceReplyError, DeviceTimeout
 from labkit.io.clock import RealClock, VirtualClock, use_clock

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from labkit.devices.base import driver_class
+from labkit.devices.registry import driver_class
 from labkit.devices.tachometer.scripted import run_tach_script
 from labkit.io.clock import VirtualClock
 from labkit.io.ports import open_port

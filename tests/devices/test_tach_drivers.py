@@ -8,10 +8,11 @@ import math
 import pytest
 from sim_driver import open_sim_driver
 
-from labkit.devices.base import driver_class
-from labkit.emulators.plant import RAD_S_PER_RPM, reset_plants, shared_plant
+from labkit.devices.registry import driver_class
+from labkit.emulators.plant import reset_plants, shared_plant
 from labkit.errors import DeviceDisconnected, DeviceReplyError, DeviceTimeout
 from labkit.io.clock import VirtualClock
+from labkit.units import RAD_S_PER_RPM
 
 
 def open_tach(protocol: str, query: str = "", clock: VirtualClock | None = None,

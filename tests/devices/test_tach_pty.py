@@ -7,13 +7,14 @@ import threading
 
 import pytest
 
-from labkit.devices.base import driver_class
-from labkit.emulators.plant import RAD_S_PER_RPM, shared_plant
+from labkit.devices.registry import driver_class
+from labkit.emulators.plant import shared_plant
 from labkit.emulators.sim_port import build_emulator
 from labkit.errors import DeviceDisconnected, DeviceTimeout
 from labkit.io.clock import RealClock
 from labkit.io.ports import open_port
 from labkit.io.pty_host import PtyHost
+from labkit.units import RAD_S_PER_RPM
 
 pytestmark = pytest.mark.timeout(30)
 

@@ -23,8 +23,8 @@ import re
 import pytest
 
 from labkit.cli import main
-from labkit.devices.base import driver_class
 from labkit.devices.loadcell import and_std, line_regex, mtsics
+from labkit.devices.registry import driver_class
 from labkit.emulators.plant import reset_plants, shared_plant
 from labkit.errors import DeviceError
 from labkit.io.clock import VirtualClock, use_clock

@@ -16,8 +16,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from labkit.cli import main
-from labkit.devices.base import driver_class
 from labkit.devices.motor.pololu_smc import strip_response_crc
+from labkit.devices.registry import driver_class
 from labkit.emulators.plant import reset_plants
 from labkit.errors import DeviceError
 from labkit.io.clock import VirtualClock

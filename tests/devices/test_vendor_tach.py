@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import pytest
 
-from labkit.devices.base import driver_class
+from labkit.devices.registry import driver_class
 from labkit.devices.tachometer.lutron16 import parse_lutron16
 from labkit.emulators.plant import reset_plants
 from labkit.errors import DeviceTimeout

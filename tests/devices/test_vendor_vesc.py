@@ -34,7 +34,8 @@ from labkit.devices.motor.vesc import (
     parse_values,
     round_half_away,
 )
-from labkit.emulators.plant import RigPlant, reset_plants
+from labkit.emulators.plant import reset_plants
+from labkit.emulators.rig_plant import RigPlant
 from labkit.emulators.vesc_emulator import VescEmulator
 from labkit.errors import DeviceError
 from labkit.io.clock import RealClock
@@ -161,7 +162,7 @@ def test_driver_names_an_unknown_firmware_instead_of_decoding(capsys):
 
 
 def test_firmware_option_overrides_the_announced_version():
-    from labkit.devices.base import driver_class
+    from labkit.devices.registry import driver_class
     from labkit.io.clock import VirtualClock
     from labkit.io.ports import open_port
 

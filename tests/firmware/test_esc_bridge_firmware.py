@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import pytest
 
-from labkit.devices.base import driver_class
+from labkit.devices.registry import driver_class
 from labkit.io.clock import RealClock
 from labkit.io.ports import open_port
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 import pytest
 
 from labkit.emulators.balances import MtSicsEmulator
-from labkit.emulators.plant import RigPlant
+from labkit.emulators.rig_plant import RigPlant
 from labkit.io.clock import RealClock
 from labkit.io.pty_host import PtyHost
 

@@ -29,7 +29,7 @@ from labkit.devices.motor.vesc import (
     parse_packet,
     parse_values,
 )
-from labkit.emulators.plant import RigPlant
+from labkit.emulators.rig_plant import RigPlant
 from labkit.emulators.vesc_emulator import VescEmulator
 from labkit.io.clock import RealClock
 from labkit.io.pty_host import PtyHost

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 
 from labkit.cli.bench_io import main, parser_rate
-from labkit.devices.base import parser_benchmarks
+from labkit.devices.registry import parser_benchmarks
 
 
 def test_bench_io_reports_every_registered_parser_and_the_replay_fields(capsys):

@@ -3,7 +3,7 @@ do not share a motor; the test's own emulation (tests/conftest.py) is the curren
 
 from __future__ import annotations
 
-from labkit.devices.base import driver_class
+from labkit.devices.registry import driver_class
 from labkit.emulators import Emulation, current_emulation, use_emulation
 from labkit.io import VirtualClock, open_port
 

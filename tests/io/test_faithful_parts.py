@@ -9,7 +9,7 @@ import json
 import pytest
 
 import labkit.emulators  # noqa: F401 - registers sim://
-from labkit.devices.base import driver_class
+from labkit.devices.registry import driver_class
 from labkit.errors import PortURLError
 from labkit.io.clock import STALL_JOB, RealClock, ReplayClock, record_ticks, recorded_ticks
 from labkit.io.ports import open_port

@@ -13,9 +13,10 @@ from labkit import documents as doc
 from labkit.hints import Column, Curve, Hints, HintsError, ReportFit
 from labkit.protocols import PROTOCOLS, ListSink, SpeedSweep, SpinCritical
 from labkit.protocols.declaration import param_specs
-from labkit.protocols.launch import ADDED_KEYS, replay_session
 from labkit.protocols.legacy_hints import LEGACY_HINTS, hints_for
 from labkit.protocols.params import ParamError, resolve_params
+from labkit.protocols.replay import replay_session
+from labkit.protocols.replay_compare import ADDED_KEYS
 
 SESSIONS = sorted((Path(__file__).resolve().parents[2] / "recordings" / "sessions").iterdir())
 

@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 
 from labkit.emulators.break_up import break_up
-from labkit.emulators.plant import SpinCriticalLaw
+from labkit.emulators.rig_plant import SpinCriticalLaw
 from labkit.emulators.twin_model import force_g, params_from_rig
 from labkit.errors import LabkitError, RigFileError, SafetyError
 from labkit.protocols.launch import execute, prepare_run

@@ -175,7 +175,7 @@ class EmulatedRig:
 
     def rotor_rpm_at(self, when: float, timeout: float = 20.0) -> float:
         """The rotor speed from its tachometer at the first reading after ``when`` (monotonic)."""
-        from labkit.devices.base import driver_class
+        from labkit.devices.registry import driver_class
         from labkit.io.clock import RealClock
         from labkit.io.ports import open_port
 

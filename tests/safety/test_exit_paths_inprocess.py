@@ -98,7 +98,7 @@ def test_nan_gain_never_moves_the_motor():
 @pytest.mark.parametrize("protocol,command", [("pololu_smc", "set_duty"), ("vesc", "SET_DUTY")])
 @pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
 def test_non_finite_duty_at_the_driver_edge_becomes_zero_and_an_error(protocol, command, bad):
-    from labkit.devices.base import driver_class
+    from labkit.devices.registry import driver_class
 
     clock = VirtualClock()
     with use_clock(clock):

@@ -43,7 +43,7 @@ def test_a_second_call_finds_nothing_left(tmp_path):
 def test_a_stale_session_whose_pid_was_reused_is_left_alone(tmp_path):
     """Issue 27: a session left `running` by a process long gone names a PID that today's worker
     got again; the worker's death must not mark that session killed."""
-    from labkit.session.orphans import process_identity
+    from labkit.session.process import process_identity
 
     mine = _session(tmp_path)
     assert mine.meta["pid_start"] == process_identity(os.getpid()) is not None

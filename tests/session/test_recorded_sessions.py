@@ -10,7 +10,8 @@ import pytest
 
 from labkit.hints import analysis_keys
 from labkit.protocols import get_protocol
-from labkit.protocols.launch import ADDED_KEYS, REPLAY_FIT_RTOL, replay_session
+from labkit.protocols.replay import replay_session
+from labkit.protocols.replay_compare import ADDED_KEYS, REPLAY_FIT_RTOL
 
 RECORDINGS = Path(__file__).resolve().parents[2] / "recordings" / "sessions"
 SESSIONS = [p for p in sorted(RECORDINGS.glob("*/run.json"))

@@ -15,7 +15,8 @@ from labkit.emulators.break_up import (
     search_heights,
     weakest_hold,
 )
-from labkit.emulators.plant import Emulation, SpinCriticalLaw
+from labkit.emulators.plant import Emulation
+from labkit.emulators.rig_plant import SpinCriticalLaw
 from labkit.emulators.twin_model import TwinParams, params_from_rig
 from labkit.errors import RigFileError
 from labkit.rig import load_rig

@@ -21,11 +21,12 @@ import time
 from dataclasses import replace
 from typing import Any, ClassVar
 
-from labkit.devices.base import Device, register_driver
+from labkit.devices.base import Device
 from labkit.devices.camera.cassette import FrameCassetteWriter, ReplaySource
 from labkit.devices.camera.frames import CameraSettings, Frame
 from labkit.devices.camera.sources import HttpMjpegSource, SourceStopped, V4l2Source
 from labkit.devices.camera.urls import DEFAULT_TIMEOUT_S, parse_camera_url
+from labkit.devices.registry import register_driver
 from labkit.errors import DeviceError, DeviceTimeout, PortURLError
 from labkit.io.clock import Clock
 from labkit.io.urls import parse_record_url, parse_replay_url, split_scheme

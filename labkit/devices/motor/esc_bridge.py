@@ -14,7 +14,6 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
-from labkit.devices.base import register_driver
 from labkit.devices.motor.pololu_smc import (
     VAR_ERROR_STATUS,
     VAR_INPUT_VOLTAGE,
@@ -22,6 +21,7 @@ from labkit.devices.motor.pololu_smc import (
     VAR_TARGET_SPEED,
     PololuSmc,
 )
+from labkit.devices.registry import register_driver
 
 
 @register_driver

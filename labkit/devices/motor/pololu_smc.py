@@ -22,8 +22,9 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
-from labkit.devices.base import MotorStatus, register_driver, register_parser_benchmark
+from labkit.devices.base import MotorStatus
 from labkit.devices.motor.keepalive import KeepAliveMotor, as_bool
+from labkit.devices.registry import register_driver, register_parser_benchmark
 from labkit.errors import DeviceError
 
 MAX_SPEED = 3200

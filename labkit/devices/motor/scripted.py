@@ -11,7 +11,8 @@ from typing import Any, cast
 
 import serial
 
-from labkit.devices.base import MotorController, driver_class
+from labkit.devices.base import MotorController
+from labkit.devices.registry import driver_class
 from labkit.io.clock import Clock
 
 

@@ -23,13 +23,14 @@ import math
 import struct
 from typing import Any
 
-from labkit.devices.base import MotorStatus, register_driver, register_parser_benchmark
+from labkit.devices.base import MotorStatus
 from labkit.devices.motor.keepalive import KeepAliveMotor
 from labkit.devices.motor.vesc_values import CURRENT_HEAD, layout_for_firmware
 from labkit.devices.motor.vesc_values import FAULT_CODES as FAULT_CODES  # re-exported
 from labkit.devices.motor.vesc_values import VescValues as VescValues
 from labkit.devices.motor.vesc_values import fault_name as fault_name
 from labkit.devices.motor.vesc_values import parse_values as parse_values
+from labkit.devices.registry import register_driver, register_parser_benchmark
 from labkit.errors import DeviceError, DeviceTimeout
 from labkit.units import RAD_S_PER_RPM
 

@@ -17,8 +17,9 @@ from typing import Any
 
 import serial
 
-from labkit.devices.base import Device, register_driver, register_parser_benchmark
+from labkit.devices.base import Device
 from labkit.devices.link import ReplyQueue
+from labkit.devices.registry import register_driver, register_parser_benchmark
 from labkit.devices.sketch_commands import SketchCommands
 from labkit.devices.stream import LineFramer, StreamReader
 from labkit.devices.strobe.protocol import (

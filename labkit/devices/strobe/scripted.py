@@ -11,7 +11,7 @@ from typing import Any, cast
 
 import serial
 
-from labkit.devices.base import driver_class
+from labkit.devices.registry import driver_class
 from labkit.devices.strobe.labkit_strobe import Strobe
 from labkit.devices.strobe.protocol import StrobeStatus
 from labkit.io.clock import Clock

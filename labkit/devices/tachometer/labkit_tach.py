@@ -28,8 +28,9 @@ import threading
 from dataclasses import dataclass
 from typing import Any
 
-from labkit.devices.base import Reading, register_driver, register_parser_benchmark
+from labkit.devices.base import Reading
 from labkit.devices.link import ReplyQueue
+from labkit.devices.registry import register_driver, register_parser_benchmark
 from labkit.devices.sketch_commands import SketchCommands, parse_flag_letters, parse_sketch_banner
 from labkit.devices.stream import LineFramer
 from labkit.devices.tachometer.streaming import StreamingTachometer

@@ -27,7 +27,8 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from labkit.devices.base import Reading, register_driver, register_parser_benchmark
+from labkit.devices.base import Reading
+from labkit.devices.registry import register_driver, register_parser_benchmark
 from labkit.devices.tachometer.streaming import StreamingTachometer
 from labkit.errors import DeviceTimeout
 from labkit.units import rpm_to_rad_s

@@ -16,8 +16,9 @@ import re
 from collections import deque
 from typing import Any
 
-from labkit.devices.base import Reading, register_driver, register_parser_benchmark
+from labkit.devices.base import Reading
 from labkit.devices.link import ReplyQueue
+from labkit.devices.registry import register_driver, register_parser_benchmark
 from labkit.devices.tachometer.streaming import StreamingTachometer
 from labkit.errors import DeviceReplyError, DeviceTimeout
 from labkit.units import rpm_to_rad_s

@@ -11,10 +11,10 @@ import numpy as np
 from labkit.numerics import metrics
 from labkit.numerics.stress_cases.common import (
     Verdict,
-    _run,
     conical_dict,
     fig5_13_dict,
     horizon,
+    simulate_case,
 )
 from labkit.sim import load_scene, scene_from_dict
 from labkit.sim.result import SimResult
@@ -40,8 +40,8 @@ def s5(level: str) -> Verdict:
     scene = fig5_7_scene()
     cycles = 45  # 1.5 s, as the paper's 1.492 s run
     start = time.perf_counter()
-    run = _run(scene, cycles, steps_per_period=83, samples_per_period=1)
-    ref = _run(scene, cycles, steps_per_period=83 * 8, samples_per_period=1)
+    run = simulate_case(scene, cycles, steps_per_period=83, samples_per_period=1)
+    ref = simulate_case(scene, cycles, steps_per_period=83 * 8, samples_per_period=1)
     acc, acc_ref = azimuth_acceleration(run), azimuth_acceleration(ref)
     spurious = abs(acc - acc_ref)
     met = spurious <= 1e-3 and run.invariant_drift <= 1e-6
@@ -82,7 +82,7 @@ def s6(level: str) -> Verdict:
         "rotation_matrix": rot.tolist(),
         "angular_velocity_rad_s": (ell * omega).tolist(),
     }
-    res = _run(scene_from_dict(data, source="<S6>"), cycles, samples_per_period=32)
+    res = simulate_case(scene_from_dict(data, source="<S6>"), cycles, samples_per_period=32)
     zen = np.arccos(np.clip(res.dipole_directions()[:, 2], -1, 1))
     n = (len(zen) - 1) // 32
     lam = zen[: n * 32].reshape(n, 32).mean(axis=1)
@@ -113,7 +113,7 @@ def s7(level: str) -> Verdict:
         kw = {}
         if factor:
             kw["steps_per_period"] = factor * measured["auto_steps_per_period"]
-        res = _run("mbs_fig6_1", cycles, **kw)
+        res = simulate_case("mbs_fig6_1", cycles, **kw)
         drifts = {"E": res.invariant_drift, "P": res.momentum_drift, "J": res.angular_momentum_drift}
         measured[f"{label}_steps_per_period"] = res.setting["steps_per_period"]
         for k, v in drifts.items():
@@ -137,9 +137,9 @@ def s7(level: str) -> Verdict:
 def s8(level: str) -> Verdict:
     scene = scene_from_dict(fig5_13_dict(20.0, -1.0), source="<S8>")
     start = time.perf_counter()
-    a = _run(scene, 5)
+    a = simulate_case(scene, 5)
     n = a.setting["steps_per_period"]
-    b = _run(scene, 5, steps_per_period=2 * n)
+    b = simulate_case(scene, 5, steps_per_period=2 * n)
     finite = bool(np.all(np.isfinite(a.positions_m)) and np.all(np.isfinite(b.positions_m)))
     if a.event_time_s is None or b.event_time_s is None:
         diff = math.inf
@@ -168,7 +168,7 @@ def s9(level: str) -> Verdict:
     r_max = 0.1
     scene = scene_from_dict(fig5_13_dict(60.0, 2.0, escape_mm=r_max * 1e3), source="<S9>")
     start = time.perf_counter()
-    res = _run(scene, 20, samples_per_period=8)
+    res = simulate_case(scene, 20, samples_per_period=8)
     d = np.linalg.norm(res.positions_m[:, 0], axis=1)
     inside = np.flatnonzero(d < r_max)
     crossing = math.nan

@@ -121,7 +121,9 @@ def fig5_13_dict(position_mm: float, velocity_m_s: float, escape_mm: float | Non
     }
 
 
-def _run(scene, cycles: float, **kw) -> SimResult:
+def simulate_case(scene, cycles: float, **kw) -> SimResult:
+    """:func:`labkit.sim.simulate` with the drift and rotation alarms off (a stress case
+    measures the drift itself)."""
     kw.setdefault("drift_threshold", math.inf)
     kw.setdefault("rotation_threshold", math.inf)
     return simulate(scene, cycles, **kw)
@@ -137,7 +139,7 @@ def final_phase_error(res: SimResult) -> float:
     return float(abs(az[-1] - az[0]))
 
 
-def _stroboscopic_drift(res: SimResult) -> float:
+def stroboscopic_drift(res: SimResult) -> float:
     """max |u(kT) - u(0)|: the orientation (psi) error of a relative equilibrium (Eq. 5.7)."""
     idx = metrics.stroboscopic_indices(res.times_s, res.period_s)
     u = res.dipole_directions()[idx]

@@ -16,12 +16,12 @@ from labkit.numerics.stress_cases.common import (
     TAU_C_S1,
     TAU_S_S1,
     Verdict,
-    _run,
-    _stroboscopic_drift,
     conical_scene,
     final_phase_error,
     horizon,
     s1_like,
+    simulate_case,
+    stroboscopic_drift,
 )
 from labkit.sim.equilibrium import cone_angle_isotropic
 from labkit.sim.result import SimResult
@@ -29,13 +29,14 @@ from labkit.sim.result import SimResult
 
 def s1(level: str) -> Verdict:
     cycles = 500 if level == "smoke" else 10_000
-    base = _run(s1_like(I_S1, OMEGA_S1, name="S1"), cycles, samples_per_period=1)
+    base = simulate_case(s1_like(I_S1, OMEGA_S1, name="S1"), cycles, samples_per_period=1)
     # exact mirror 2 I w^2 - tau_S = 8.0001e-3 (the paper's rounded 8e-3 moves phi by 2.4e-5 rad)
     mirror_tau_s = 2.0 * I_S1 * OMEGA_S1**2 - TAU_S_S1
-    mirror = _run(s1_like(I_S1, OMEGA_S1, tau_s=mirror_tau_s, name="S1-mirror"), cycles, samples_per_period=1)
+    mirror = simulate_case(s1_like(I_S1, OMEGA_S1, tau_s=mirror_tau_s, name="S1-mirror"), cycles,
+                           samples_per_period=1)
     err = final_phase_error(base)
     err_m = final_phase_error(mirror)
-    direction_max = max(_stroboscopic_drift(base), _stroboscopic_drift(mirror))
+    direction_max = max(stroboscopic_drift(base), stroboscopic_drift(mirror))
     rz = np.diag([-1.0, -1.0, 1.0])  # rotation by pi about z
     phase = float(np.max(np.abs(mirror.dipole_directions() - base.dipole_directions() @ rz.T)))
     n = base.setting["steps_per_period"]
@@ -55,7 +56,7 @@ def s1(level: str) -> Verdict:
         "deviation over the run is a bounded offset reached in the first cycles, not a growth"
     )
     if level == "full":
-        fine = _run(
+        fine = simulate_case(
             s1_like(I_S1, OMEGA_S1, name="S1-2N"), cycles, samples_per_period=1, steps_per_period=2 * n
         )
         measured["psi_error_2N"] = final_phase_error(fine)
@@ -90,7 +91,7 @@ def scale_invariance(cycles: int, inertias=(1e-12, 1e-9, 1e-6), omegas=(100.0, 1
     out = {"vs_nondimensional_zenith": 0.0, "vs_nondimensional_jacobi": 0.0, "between_si_runs": 0.0}
     for i in inertias:
         for w in omegas:
-            res = _run(
+            res = simulate_case(
                 s1_like(i, w, name=f"S2-{i:g}-{w:g}"), cycles, steps_per_period=64, samples_per_period=8
             )
             zen = np.arccos(np.clip(res.dipole_directions()[:, 2], -1, 1))
@@ -112,8 +113,9 @@ def scale_invariance(cycles: int, inertias=(1e-12, 1e-9, 1e-6), omegas=(100.0, 1
 def s2(level: str) -> Verdict:
     cycles = horizon(level, 100, 1000)
     start = time.perf_counter()
-    tiny = _run(s1_like(1e-12, 11_000.0, name="S2"), cycles, steps_per_period=64, samples_per_period=8)
-    ref = _run(s1_like(I_S1, OMEGA_S1, name="S1"), cycles, steps_per_period=64, samples_per_period=8)
+    tiny = simulate_case(s1_like(1e-12, 11_000.0, name="S2"), cycles, steps_per_period=64,
+                         samples_per_period=8)
+    ref = simulate_case(s1_like(I_S1, OMEGA_S1, name="S1"), cycles, steps_per_period=64, samples_per_period=8)
     rel = float(np.max(np.abs(_nondim_state(tiny, 11_000.0) - _nondim_state(ref, OMEGA_S1))))
     grid = scale_invariance(cycles)
     worst = max(rel, *grid.values())
@@ -147,7 +149,7 @@ def s3(level: str) -> Verdict:
     signs = {}
     for label, factor in (("below", 1 - 1e-3), ("at", 1.0), ("above", 1 + 1e-3)):
         tau_s = factor * i_w2
-        res = _run(conical_scene(I_S1, OMEGA_S1, TAU_C_S1, tau_s, f"S3-{label}"), cycles)
+        res = simulate_case(conical_scene(I_S1, OMEGA_S1, TAU_C_S1, tau_s, f"S3-{label}"), cycles)
         phi = signed_cone_angle(res, OMEGA_S1)
         first = phi[: 8 * 10 + 1]  # the first 10 cycles
         expected = cone_angle_isotropic(omega=OMEGA_S1, tau_c=TAU_C_S1, tau_s=tau_s, inertia=I_S1)
@@ -183,8 +185,8 @@ def s4(level: str) -> Verdict:
     cycles_for = {10: horizon(level, 100, 1000), 100: horizon(level, 10, 100)}
     for ratio, cycles in cycles_for.items():
         tau_s = ratio**2 * I_S1 * OMEGA_S1**2
-        res = _run(conical_scene(I_S1, OMEGA_S1, TAU_C_S1, tau_s, f"S4-{ratio}"), cycles)
-        err = _stroboscopic_drift(res)
+        res = simulate_case(conical_scene(I_S1, OMEGA_S1, TAU_C_S1, tau_s, f"S4-{ratio}"), cycles)
+        err = stroboscopic_drift(res)
         at_1e4 = err * 1e4 / cycles
         measured[f"w0_{ratio}w_steps_per_period"] = res.setting["steps_per_period"]
         measured[f"w0_{ratio}w_psi_error"] = err
@@ -211,7 +213,7 @@ def s10(level: str) -> Verdict:
     best = {w: math.inf for w in omegas}
     for _ in range(5):  # interleaved rounds: a burst of load on the shared machine hits all speeds
         for w in omegas:
-            best[w] = min(best[w], _run(scenes[w], cycles, samples_per_period=1).wall_s)
+            best[w] = min(best[w], simulate_case(scenes[w], cycles, samples_per_period=1).wall_s)
     per = {f"wall_s_per_1e3_cycles_at_{w:g}": best[w] * 1e3 / cycles for w in omegas}
     ratio = max(per.values()) / min(per.values())
     return Verdict(
@@ -250,7 +252,7 @@ def s11(level: str) -> Verdict:
     n = 256
     measured: dict = {"steps_per_period": n}
     c_liquid = 0.1 * OMEGA_S1 * I_S1  # damping rate c / I = w / 10: liquid-like
-    res = _run(
+    res = simulate_case(
         conical_scene(I_S1, OMEGA_S1, TAU_C_S1, TAU_S_S1, "S11", damping_rot=c_liquid),
         cycles,
         steps_per_period=n,
@@ -259,7 +261,8 @@ def s11(level: str) -> Verdict:
     residual = energy_budget_residual(res, I_S1, c_liquid, OMEGA_S1, TAU_C_S1, TAU_S_S1, 1.0)
     measured.update(budget_residual=residual, status=res.status, simulator_budget_drift=res.invariant_drift)
     c_stiff = 100.0 * OMEGA_S1 * I_S1  # c / I = 100 w: overdamped, stiff against the step
-    stiff = _run(conical_scene(I_S1, OMEGA_S1, TAU_C_S1, TAU_S_S1, "S11-stiff", damping_rot=c_stiff), cycles)
+    stiff = simulate_case(conical_scene(I_S1, OMEGA_S1, TAU_C_S1, TAU_S_S1, "S11-stiff", damping_rot=c_stiff),
+                          cycles)
     finite = bool(np.all(np.isfinite(stiff.angular_velocities_rad_s)))
     measured.update(
         stiff_status=stiff.status,

@@ -19,10 +19,9 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from labkit.sim.compile import CompiledSystem
-from labkit.sim.integrators import RawRun, check_memory
+from labkit.sim.integrators.raw_run import RawRun, check_memory
+from labkit.sim.integrators.rigid_rhs import STRIDE
 from labkit.sim.integrators.splitting import reduced_acceleration
-
-STRIDE = 18
 
 
 def _unpack(y: np.ndarray, nb: int):
@@ -32,9 +31,9 @@ def _unpack(y: np.ndarray, nb: int):
 
 def _rigid_rhs(system: CompiledSystem, counter: list[int]):
     """``f(t, y)`` for solve_ivp: one call of the compiled right-hand side (the same one CyRK's
-    DOP853 runs, :func:`labkit.sim.integrators.compiled_reference.rigid_derivative`), so a scipy
+    DOP853 runs, :func:`labkit.sim.integrators.rigid_rhs.rigid_derivative`), so a scipy
     cross-check costs seconds; ``counter[0]`` counts calls."""
-    from labkit.sim.integrators.compiled_reference import pack_args, rigid_derivative
+    from labkit.sim.integrators.rigid_rhs import pack_args, rigid_derivative
 
     args = pack_args(system)
     n = system.bf.shape[0] * (STRIDE + 3) + 1

@@ -1,4 +1,5 @@
-"""Where a prediction's magnets come from: a rig file's ``[bodies]`` or command-line specs.
+"""Where ``labkit predict`` takes its magnets from: a rig file's ``[bodies]`` or command-line
+specs (the command's inputs live with the command: labkit.predict is physics and reads no rig file).
 
 Rig-file problems are :class:`labkit.errors.RigFileError` (``file:key: reason``); bad options
 are :class:`PredictInputError` naming the option.
