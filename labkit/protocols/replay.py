@@ -28,13 +28,15 @@ from labkit.protocols.events import Sink
 from labkit.protocols.launch import diff_results, recorded_points, replay_url
 from labkit.protocols.params import resolve_params
 from labkit.protocols.replay_compare import decisions, diff_decisions, diff_within, offline_wording
-from labkit.protocols.replay_evidence import Evidence, diff_points, diff_readings
+from labkit.protocols.replay_evidence import Evidence, diff_points
 from labkit.protocols.resume import check_carried_points
 from labkit.protocols.runner import Runner, RunOutcome, normalise
 from labkit.rig import load_rig
 from labkit.session import SessionRecord, load_session
 
 LEVELS = ("auto", "exact", "faithful", "analysis")
+#: events a replay does not read (the control loop's ticks: most of a long session's events.jsonl)
+REPLAY_SKIPS = frozenset({"control"})
 LEVEL_WORDS = {
     "exact": "exact (virtual-clock session: every byte as recorded, results identical)",
     "faithful": "faithful (real-clock session: device bytes at their recorded times, writes matched "
@@ -173,28 +175,22 @@ def faithful_schedules(record: SessionRecord, rig: Any) -> dict[str, list[float]
     return schedules
 
 
-def _evidence_diffs(record: Any, evidence: Evidence, resumed: bool) -> list[str]:
+def _evidence_diffs(record: Any, evidence: Evidence) -> list[str]:
     """The session's point events and readings files against what the replay parsed
-    (:mod:`labkit.protocols.replay_evidence`); readings only for a session that was not resumed
-    (a resumed session's files also hold the first run's readings)."""
-    diffs = diff_points(evidence.points, record.point_events())
-    if resumed:
-        return diffs
-    for role in sorted(set(evidence.readings) | {p.stem for p in (record.path / "readings").glob("*.jsonl")}):
-        file = f"{record.path / 'readings' / role}.jsonl"
-        diffs += diff_readings(role, evidence.readings.get(role, []), record.readings(role), file)
-    return diffs
+    (:mod:`labkit.protocols.replay_evidence`; readings compared as they came, only for a session
+    that was not resumed: a resumed session's files also hold the first run's readings)."""
+    return diff_points(evidence.points, record.point_events()) + evidence.reading_diffs()
 
 
 def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str = "auto") -> ReplayOutcome:
     """Replay a session at ``level`` (auto: exact for a virtual-clock session, faithful for a
     real-clock one) and compare it with the recording."""
-    record = load_session(path)
+    record = load_session(path, skip_types=REPLAY_SKIPS)
     chosen = choose_level(record, level)
     if chosen == "analysis":
         from labkit.protocols.reanalyse import reanalyse_session
 
-        result = reanalyse_session(record)
+        result = reanalyse_session(load_session(path))
         if level == "auto":
             result.warnings.insert(0, f"{record.path}: a real-clock session from a labkit that did not "
                                       "record its clock origin and threads: re-analysed, not replayed")
@@ -211,7 +207,7 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
     clock = (ReplayClock(faithful_start(record), faithful_schedules(record, rig)) if faithful
              else VirtualClock())
     collect = _Collect()
-    evidence = Evidence()
+    evidence = Evidence(None if points or faithful else record.path / "readings", record.problems)
 
     def port_for(dev: Any) -> str:
         return faithful_url(record.path, dev) if faithful else replay_url(record.path, dev.role)
@@ -229,7 +225,7 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
     warnings = record.problems + dropped
     if not faithful:
         diffs = diff_results(replayed, recorded) if recorded is not None else ["no results.json recorded"]
-        diffs += _evidence_diffs(record, evidence, resumed=bool(points))
+        diffs += _evidence_diffs(record, evidence)
         return ReplayOutcome(outcome, recorded, not diffs, diffs, warnings, "exact")
     replay_decisions = decisions(collect.events)
     diffs = diff_decisions(replay_decisions, decisions(record.events))
