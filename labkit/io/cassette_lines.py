@@ -20,8 +20,12 @@ one instead of spelling it out again:
   (1 = the last one). A keep-alive that resends the control loop's last write, a status poll,
   its unchanged reply: ``{"t":2.2005593789999693,"r":1}``.
 
-The time ``t`` is always written in full (Python's shortest repr of the float), so every event
-keeps its recorded time bit for bit; only the rest of the line is shortened. Both ends keep the
+* **the same time**: no ``t`` when the event has the time of the line before it (a keep-alive
+  written in the same tick as the setpoint, an input reset and the query after it, on a virtual
+  clock): ``{"r":1}``.
+
+Otherwise the time ``t`` is written in full (Python's shortest repr of the float), so every
+event keeps its recorded time bit for bit; only the rest of the line is shortened. Both ends keep the
 same list of recent events (:class:`RecentEvents`): a line refers to lines before it, never after,
 so a cassette is still written and flushed one whole line per event (a crash loses nothing) and
 read front to back in constant memory.
@@ -30,6 +34,7 @@ read front to back in constant memory.
 from __future__ import annotations
 
 import json
+import math
 from typing import Any
 
 #: how many distinct recent events a repeat line may refer to (a motor's status poll cycle is
@@ -90,6 +95,7 @@ class LineEncoder:
     def __init__(self, port: str) -> None:
         self.port = port
         self.recent = RecentEvents()
+        self.last_t: float | None = None
 
     def encode(self, t: float, body: dict[str, Any]) -> tuple[str, Any]:
         """The line (with its newline) for an event at ``t`` whose other keys are ``body``, and
@@ -101,12 +107,19 @@ class LineEncoder:
             del short["call"]
         key = _dumps(short)
         index = self.recent.find(key)
+        when = {} if self._same_time(t) else {"t": t}
         if index is not None:
-            return _dumps({"t": t, "r": index}) + "\n", ("use", index)
-        return _dumps({"t": t, **short}) + "\n", ("add", key, short)
+            return _dumps({**when, "r": index}) + "\n", ("use", index, t)
+        return _dumps({**when, **short}) + "\n", ("add", key, short, t)
+
+    def _same_time(self, t: float) -> bool:
+        last = self.last_t
+        return (last is not None and type(last) is type(t) and last == t
+                and math.copysign(1.0, last) == math.copysign(1.0, t))  # -0.0 is written
 
     def commit(self, token: Any) -> None:
         """Make the move of a written line (a line that never reached the file makes none)."""
+        self.last_t = token[-1]
         if token[0] == "use":
             self.recent.use(token[1])
         else:
@@ -119,6 +132,7 @@ class LineDecoder:
     def __init__(self, port: str) -> None:
         self.port = port
         self.recent = RecentEvents()
+        self.last_t: Any = None
 
     def decode(self, obj: dict[str, Any]) -> dict[str, Any]:
         """The full event of a parsed line; ValueError for a repeat of nothing."""
@@ -127,11 +141,11 @@ class LineDecoder:
             if not isinstance(index, int) or isinstance(index, bool) or not 1 <= index <= known:
                 raise ValueError(f"key 'r': {index!r} is not one of the {known} recent events")
             short = self.recent.use(index)
-            t = obj.get("t")
         else:
-            t = obj.get("t")
             short = {k: v for k, v in obj.items() if k != "t"}
             self.recent.add(_dumps(short), short)
+        t = obj["t"] if "t" in obj else self.last_t
+        self.last_t = t
         event: dict[str, Any] = {"t": t, "port": self.port, **short}
         if "call" not in event and _call_key(event) in DEFAULT_CALLS:
             event["call"] = DEFAULT_CALLS[_call_key(event)]

@@ -49,8 +49,12 @@ def expected_event(t: float, direction: str, data: bytes | None, fields: dict) -
     return event
 
 
+#: times, often equal to the one before (left out of the line), -0.0 kept apart from 0.0
+TIME = st.one_of(st.sampled_from([0.0, -0.0, 0.05, 1e-9, 20.70600000000016]), st.floats(0, 1e6))
+
+
 @settings(max_examples=60, deadline=None)
-@given(st.lists(st.tuples(st.floats(0, 1e6, allow_nan=False), EVENT), max_size=120))
+@given(st.lists(st.tuples(TIME, EVENT), max_size=120))
 def test_every_event_reads_back_as_written(tmp_path_factory, events):
     path = tmp_path_factory.mktemp("c") / "motor.jsonl"
     writer = CassetteWriter(path, make_header("motor", "sim://x", {}, clock="virtual", clock_origin=0.0))
@@ -59,7 +63,7 @@ def test_every_event_reads_back_as_written(tmp_path_factory, events):
     writer.close()
     read = [{k: v for k, v in e.items() if k != "line"} for e in CassetteReader(path)]
     assert read == [expected_event(t, *event) for t, event in events]
-    assert all(type(e["t"]) is float for e in read)  # times bit for bit, never rounded
+    assert [repr(e["t"]) for e in read] == [repr(t) for t, _ in events]  # bit for bit, never rounded
 
 
 def test_a_keep_alive_is_written_as_a_repeat_of_the_last_write(tmp_path):
