@@ -88,13 +88,15 @@ def real_clock(root: Path) -> dict:
 
 
 def report(rows: list[dict], real: dict | None) -> None:
-    print("speed sweep, emulated Fig. 5.25 rig, up_down, record_s=0.5, virtual clock; each command in its own process")
+    print("speed sweep, emulated Fig. 5.25 rig, up_down, record_s=0.5, virtual clock; "
+          "each command in its own process")
     print(f"  {'points':>6} {'run s':>8} {'run MB':>7} {'replay MB':>9} {'replay exit':>11} "
           f"{'session MB':>10}  cassette bytes per second of run")
     for r in rows:
         rates = ", ".join(f"{k} {v['bytes_per_s']:,.0f}" for k, v in r["cassettes"].items())
-        print(f"  {r['points']:>6} {r['run_seconds']:>8.0f} {r['run_peak_mb']:>7.0f} {r['replay_peak_mb']:>9.0f} "
-              f"{r['replay_exit']:>11} {r['session_bytes'] / 1e6:>10.1f}  {rates}")
+        print(f"  {r['points']:>6} {r['run_seconds']:>8.0f} {r['run_peak_mb']:>7.0f} "
+              f"{r['replay_peak_mb']:>9.0f} {r['replay_exit']:>11} "
+              f"{r['session_bytes'] / 1e6:>10.1f}  {rates}")
     if len(rows) >= 2:
         small, large = rows[0], rows[-1]
         print(f"  points x{large['points'] / small['points']:.1f}: run peak memory x"
@@ -102,8 +104,9 @@ def report(rows: list[dict], real: dict | None) -> None:
               f"{large['replay_peak_mb'] / small['replay_peak_mb']:.2f}")
     if real is not None:
         rates = ", ".join(f"{k} {v['bytes_per_s']:,.0f}" for k, v in real["cassettes"].items())
-        print(f"real clock, 5-step sweep, {real['run_seconds']:.0f} s (exit {real['run_exit']}): bytes per second "
-              f"{rates}; motor cassette for 10 minutes: {real['motor_mb_per_10_min']:.1f} MB (target < 20 MB)")
+        print(f"real clock, 5-step sweep, {real['run_seconds']:.0f} s (exit {real['run_exit']}): "
+              f"bytes per second {rates}; motor cassette for 10 minutes: "
+              f"{real['motor_mb_per_10_min']:.1f} MB (target < 20 MB)")
 
 
 def main(argv: list[str] | None = None) -> int:
