@@ -161,7 +161,7 @@ class RecordedSession:
 
     def mark_at(self, offset: int) -> tuple[int, str, int | None]:
         """The tx event whose bytes hold ``offset`` (offset, call, line)."""
-        found = (0, "write", None)
+        found: tuple[int, str, int | None] = (0, "write", None)
         for mark in self.tx_marks:
             if mark[0] > offset:
                 break
