@@ -105,12 +105,12 @@ class LineEncoder:
             del short["port"]
         if "call" in short and short["call"] == DEFAULT_CALLS.get(_call_key(body)):
             del short["call"]
-        key = _dumps(short)
+        key = _dumps(short)  # an object with at least "dir": "{...}"
         index = self.recent.find(key)
-        when = {} if self._same_time(t) else {"t": t}
+        when = "" if self._same_time(t) else f'"t":{json.dumps(t)},'
         if index is not None:
-            return _dumps({**when, "r": index}) + "\n", ("use", index, t)
-        return _dumps({**when, **short}) + "\n", ("add", key, short, t)
+            return f'{{{when}"r":{index}}}\n', ("use", index, t)
+        return f"{{{when}{key[1:]}\n", ("add", key, short, t)
 
     def _same_time(self, t: float) -> bool:
         last = self.last_t
