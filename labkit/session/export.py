@@ -24,8 +24,8 @@ def read_jsonl(path: Path, problems: list[str] | None = None) -> list[dict]:
 PARQUET_BATCH_ROWS = 20_000
 
 
-def readings_to_parquet(src: Path, dest: Path) -> None:
-    """``src`` (readings JSONL) as Parquet, written in batches of :data:`PARQUET_BATCH_ROWS`."""
+def readings_to_parquet(src: Path, dest: Path, batch_rows: int = PARQUET_BATCH_ROWS) -> None:
+    """``src`` (readings JSONL) as Parquet, written in batches of ``batch_rows`` rows."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
@@ -46,7 +46,7 @@ def readings_to_parquet(src: Path, dest: Path) -> None:
         rows: list[dict] = []
         for _, row in iter_jsonl_lines(src):
             rows.append(row)
-            if len(rows) >= PARQUET_BATCH_ROWS:
+            if len(rows) >= batch_rows:
                 writer.write_table(batch(rows))
                 rows = []
         if rows:
