@@ -3,7 +3,7 @@
 
 Line 1 is a header::
 
-    {"format": "labkit-cassette", "schema": 1, "labkit_version": "0.1.0",
+    {"format": "labkit-cassette", "schema": 2, "labkit_version": "0.1.0",
      "created": "2026-11-22T09:00:00+00:00", "port": "balance", "url": "sim://mtsics?seed=3",
      "serial": {"baudrate": 9600, "bytesize": 8, "parity": "N", "stopbits": 1, "timeout": 1.0},
      "device": {"vid_pid": "0403:6001", "serial_number": "A12", ...}, "clock": "real",
@@ -14,7 +14,10 @@ Line 1 is a header::
 time line.)
 
 Then one event per line, ``t`` in seconds since the port was first opened (on the port's
-clock)::
+clock). This is each event as :class:`CassetteReader` gives it back (and as schema 1 wrote
+it); schema 2 writes the same events shorter, leaving out what the reader restores and
+writing an event that repeats a recent one as ``{"t": T, "r": K}``
+(:mod:`labkit.io.cassette_lines`)::
 
     {"t": 0.0,   "port": "balance", "dir": "ctl", "event": "open", "serial": {...}}
     {"t": 0.001, "port": "balance", "dir": "tx",  "data": "SI\\r\\n", "call": "read"}
@@ -252,13 +255,6 @@ class CassetteReader:
 
     def close(self) -> None:
         self._file.close()
-
-
-def read_cassette_header(path: str | Path) -> dict[str, Any]:
-    """The header of a cassette (its first line), checked; CassetteError as for a whole cassette."""
-    reader = CassetteReader(path)
-    reader.close()
-    return reader.header
 
 
 def load_cassette(path: str | Path) -> Cassette:
