@@ -29,14 +29,17 @@ RIG = ROOT / "rigs" / "emulated-fig525.toml"
 
 
 def measured(argv: list[str]) -> tuple[int, float, float]:
-    """(exit status, peak RSS in MB, wall seconds) of ``python -m labkit ARGV`` in its own process."""
+    """(exit status, peak RSS in MB, wall seconds) of ``python -m labkit ARGV`` in its own process
+    (its stderr to a file: a long run warns a lot, and a full pipe would stop it)."""
     start = time.perf_counter()
-    child = subprocess.Popen([sys.executable, "-m", "labkit", *argv], stdout=subprocess.DEVNULL,
-                             stderr=subprocess.PIPE)
-    _, status, usage = os.wait4(child.pid, 0)
-    child.returncode = os.waitstatus_to_exitcode(status)
-    if child.returncode not in (0,):
-        sys.stderr.write((child.stderr.read() if child.stderr else b"").decode()[-2000:])
+    with tempfile.TemporaryFile() as errors:
+        child = subprocess.Popen([sys.executable, "-m", "labkit", *argv], stdout=subprocess.DEVNULL,
+                                 stderr=errors)
+        _, status, usage = os.wait4(child.pid, 0)
+        child.returncode = os.waitstatus_to_exitcode(status)
+        if child.returncode != 0:
+            errors.seek(0)
+            sys.stderr.write(errors.read().decode(errors="replace")[-2000:])
     return child.returncode, usage.ru_maxrss / 1024, time.perf_counter() - start
 
 
