@@ -3,7 +3,7 @@
 
 Line 1 is a header::
 
-    {"format": "labkit-cassette", "schema": 1, "labkit_version": "0.1.0",
+    {"format": "labkit-cassette", "schema": 2, "labkit_version": "0.1.0",
      "created": "2026-11-22T09:00:00+00:00", "port": "balance", "url": "sim://mtsics?seed=3",
      "serial": {"baudrate": 9600, "bytesize": 8, "parity": "N", "stopbits": 1, "timeout": 1.0},
      "device": {"vid_pid": "0403:6001", "serial_number": "A12", ...}, "clock": "real",
@@ -14,7 +14,10 @@ Line 1 is a header::
 time line.)
 
 Then one event per line, ``t`` in seconds since the port was first opened (on the port's
-clock)::
+clock). This is each event as :class:`CassetteReader` gives it back (and as schema 1 wrote
+it); schema 2 writes the same events shorter, leaving out what the reader restores and
+writing an event that repeats a recent one as ``{"t": T, "r": K}``
+(:mod:`labkit.io.cassette_lines`)::
 
     {"t": 0.0,   "port": "balance", "dir": "ctl", "event": "open", "serial": {...}}
     {"t": 0.001, "port": "balance", "dir": "tx",  "data": "SI\\r\\n", "call": "read"}
@@ -40,6 +43,7 @@ import binascii
 import json
 import os
 import threading
+from collections.abc import Iterator
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -47,9 +51,13 @@ from typing import Any
 
 from labkit import __version__
 from labkit.errors import CassetteError
+from labkit.io.cassette_lines import LineDecoder, LineEncoder
 
 FORMAT = "labkit-cassette"
-SCHEMA = 1
+#: the schema this labkit writes (2: compact lines, :mod:`labkit.io.cassette_lines`)
+SCHEMA = 2
+#: the schemas it reads
+SCHEMAS = (1, 2)
 DIRECTIONS = ("tx", "rx", "ctl")
 CONTROL_EVENTS = (
     "open", "close", "reconfigure", "reset_input_buffer", "short_read", "error", "identity",
@@ -101,7 +109,8 @@ def make_header(port: str, url: str, serial: dict[str, Any], device: dict[str, A
 
 
 class CassetteWriter:
-    """Writes one cassette file; thread-safe; every event is flushed at once (a crash loses nothing)."""
+    """Writes one cassette file (schema 2); thread-safe; every event is flushed at once (a crash
+    loses nothing). Events are written as :class:`~labkit.io.cassette_lines.LineEncoder` lines."""
 
     def __init__(self, path: str | Path, header: dict[str, Any]) -> None:
         self.path = Path(path)
@@ -109,12 +118,12 @@ class CassetteWriter:
         self._lock = threading.Lock()
         self._file = self.path.open("w", encoding="utf-8")
         self._good_bytes = 0  # length of the file up to its last whole line
-        self._write_line(header)
+        self._encoder = LineEncoder(str(header.get("port", "")))
+        self._write_line(json.dumps(header, ensure_ascii=False) + "\n")
 
-    def _write_line(self, obj: dict[str, Any]) -> None:
+    def _write_line(self, line: str) -> None:
         """Append one whole line. On a full disk the torn line is cut off again, the file is
         closed and the OSError raised: what was written stays a valid cassette."""
-        line = json.dumps(obj, ensure_ascii=False) + "\n"
         try:
             self._file.write(line)
             self._file.flush()
@@ -134,13 +143,15 @@ class CassetteWriter:
     def event(self, t: float, port: str, direction: str, data: bytes | None = None,
               **fields: Any) -> None:
         """Append one event (``fields`` e.g. ``event="short_read", asked=4, got=0, call="read"``)."""
-        obj: dict[str, Any] = {"t": t, "port": port, "dir": direction}
+        body: dict[str, Any] = {"port": port, "dir": direction}
         if data is not None:
-            obj.update(encode_data(data))
-        obj.update({k: v for k, v in fields.items() if v is not None})
+            body.update(encode_data(data))
+        body.update({k: v for k, v in fields.items() if v is not None})
         with self._lock:
             if not self._file.closed:
-                self._write_line(obj)
+                line, token = self._encoder.encode(t, body)
+                self._write_line(line)
+                self._encoder.commit(token)
 
     def close(self) -> None:
         with self._lock:
@@ -172,37 +183,85 @@ class Cassette:
 MAX_CASSETTE_BYTES = 4_000_000_000
 
 
-def load_cassette(path: str | Path) -> Cassette:
-    """Read and validate a cassette. Problems raise CassetteError naming file, line and key."""
-    path = Path(path)
+def _open_checked(path: Path) -> Any:
+    """The cassette opened for reading in binary, after the checks that come before any read."""
     try:
         if path.exists() and not path.is_file():  # /dev/zero, a FIFO: st_size says 0, reading never ends
             raise CassetteError(str(path), 0, "not a regular file (a device, FIFO or folder); a cassette "
                                               "is a text file in the session")
         if path.stat().st_size > MAX_CASSETTE_BYTES:
             raise CassetteError(str(path), 0, f"larger than {MAX_CASSETTE_BYTES} bytes")
-        raw = path.read_bytes()
+        return path.open("rb")
     except OSError as exc:
         raise CassetteError(str(path), 0, f"cannot read cassette: {exc.strerror or exc}") from None
+
+
+def _text_line(path: Path, number: int, raw: bytes) -> str:
     try:
-        lines = raw.decode("utf-8").splitlines()
-    except UnicodeDecodeError as exc:
-        raise CassetteError(str(path), raw.count(b"\n", 0, exc.start) + 1, "not UTF-8 text") from None
-    if not lines:
-        raise CassetteError(str(path), 1, "empty file, expected a labkit-cassette header")
-    header = _json_line(path, 1, lines[0])
-    if header.get("format") != FORMAT:
-        raise CassetteError(str(path), 1, f"format is {header.get('format')!r}, expected {FORMAT!r}")
-    if header.get("schema") != SCHEMA:
-        raise CassetteError(str(path), 1, f"schema {header.get('schema')!r} is not supported "
-                                          f"(this labkit reads schema {SCHEMA})")
-    events = []
-    for number, line in enumerate(lines[1:], start=2):
-        if not line.strip():
-            continue
-        event = _json_line(path, number, line)
-        events.append(_checked_event(path, number, event))
-    return Cassette(path, header, events)
+        return raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise CassetteError(str(path), number, "not UTF-8 text") from None
+
+
+class CassetteReader:
+    """A cassette read front to back, one event at a time (memory flat in its length).
+
+    ``CassetteReader(path)`` reads and checks the header (:attr:`header`); iterating yields the
+    events in file order as schema 1 held them (every key restored, ``data`` decoded to
+    ``bytes``, ``line`` the file line). Problems raise CassetteError naming file, line and key.
+    Reads schema 1 and 2 (:data:`SCHEMAS`)."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self._file = _open_checked(self.path)
+        try:
+            first = self._file.readline()
+            if not first.strip():
+                raise CassetteError(str(self.path), 1, "empty file, expected a labkit-cassette header")
+            header = _json_line(self.path, 1, _text_line(self.path, 1, first))
+            if header.get("format") != FORMAT:
+                raise CassetteError(str(self.path), 1,
+                                    f"format is {header.get('format')!r}, expected {FORMAT!r}")
+            if header.get("schema") not in SCHEMAS:
+                raise CassetteError(str(self.path), 1, f"schema {header.get('schema')!r} is not supported "
+                                                       f"(this labkit reads schemas {SCHEMAS})")
+        except BaseException:
+            self._file.close()
+            raise
+        self.header: dict[str, Any] = header
+        self._number = 1
+
+    @property
+    def port(self) -> str:
+        return str(self.header.get("port", self.path.stem))
+
+    def __iter__(self) -> Iterator[dict[str, Any]]:
+        decoder = LineDecoder(self.port) if self.header.get("schema") == 2 else None
+        try:
+            for raw in self._file:
+                self._number += 1
+                line = _text_line(self.path, self._number, raw)
+                if not line.strip():
+                    continue
+                obj = _json_line(self.path, self._number, line)
+                if decoder is not None:
+                    try:
+                        obj = decoder.decode(obj)
+                    except ValueError as exc:
+                        raise CassetteError(str(self.path), self._number, str(exc)) from None
+                yield _checked_event(self.path, self._number, obj)
+        finally:
+            self._file.close()
+
+    def close(self) -> None:
+        self._file.close()
+
+
+def load_cassette(path: str | Path) -> Cassette:
+    """Read and validate a whole cassette into memory (:class:`CassetteReader` streams it).
+    Problems raise CassetteError naming file, line and key."""
+    reader = CassetteReader(path)
+    return Cassette(reader.path, reader.header, list(reader))
 
 
 def _json_line(path: Path, number: int, line: str) -> dict[str, Any]:

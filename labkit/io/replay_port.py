@@ -22,78 +22,21 @@ from __future__ import annotations
 
 import builtins
 import threading
-from dataclasses import dataclass, field
 from typing import Any
 
 import serial
 from serial.serialutil import to_bytes
 
 from labkit.errors import ReplayMismatch
-from labkit.io.cassette import Cassette, load_cassette
+from labkit.io.cassette import CassetteReader
 from labkit.io.clocked import LINE_SETTINGS, REAL_POLL_S, VIRTUAL_POLL_S, ClockedSerial, poll_step
+from labkit.io.replay_stream import DeviceItem, EventQueue, RecordedSession, is_open
 from labkit.io.urls import parse_replay_url
+
+__all__ = ["DeviceItem", "ReplaySerial", "mismatch_message", "rebuild_error", "render_bytes"]
 
 #: recorded times are compared with this tolerance (float sums of clock offsets)
 TIME_EPS = 1e-9
-
-
-@dataclass
-class DeviceItem:
-    """One thing the device side delivers: an ``rx`` chunk, an ``empty`` read or an ``error``."""
-
-    kind: str
-    t: float
-    gate: int  # TX bytes of this session written before it was recorded
-    event: dict[str, Any]
-    data: bytes = b""
-
-
-@dataclass
-class PortSession:
-    """Events between one ``open`` and the next."""
-
-    open_event: dict[str, Any] | None = None
-    open_error: dict[str, Any] | None = None
-    tx: bytearray = field(default_factory=bytearray)
-    tx_events: list[tuple[int, dict[str, Any]]] = field(default_factory=list)  # (offset, event)
-    write_errors: list[tuple[int, dict[str, Any]]] = field(default_factory=list)  # (gate, event)
-    device: list[DeviceItem] = field(default_factory=list)
-
-
-def split_sessions(cassette: Cassette) -> list[PortSession]:
-    """Group a cassette's events into open/close sessions, pairing reads with their markers."""
-    sessions: list[PortSession] = []
-    current: PortSession | None = None
-    for event in cassette.events:
-        kind = event.get("event") if event["dir"] == "ctl" else event["dir"]
-        if kind == "open" or current is None:
-            current = PortSession(open_event=event if kind == "open" else None)
-            sessions.append(current)
-            if kind == "open":
-                continue
-        gate = len(current.tx)
-        if kind == "tx":
-            current.tx_events.append((gate, event))
-            current.tx += event["bytes"]
-        elif kind == "rx":
-            current.device.append(DeviceItem("rx", event["t"], gate, event, event["bytes"]))
-        elif kind == "short_read":
-            last = current.device[-1] if current.device else None
-            attached = (last is not None and last.kind == "rx" and last.gate == gate
-                        and event.get("got") == len(last.data) and "short" not in last.event)
-            if attached and last is not None:
-                last.event = {**last.event, "short": True}
-            elif not event.get("got"):
-                current.device.append(DeviceItem("empty", event["t"], gate, event))
-        elif kind == "error":
-            call = event.get("call", "")
-            if call == "open":
-                current.open_error = event
-            elif call == "write":
-                current.write_errors.append((gate, event))
-            else:
-                current.device.append(DeviceItem("error", event["t"], gate, event))
-    return sessions
 
 
 def rebuild_error(event: dict[str, Any]) -> BaseException:
@@ -153,20 +96,19 @@ def mismatch_message(port: str, cassette: str, session_offset: int, expected: by
 
 
 class ReplaySerial(ClockedSerial):
-    """A port serving a cassette. ``port_name`` and ``cassette`` are set at first open."""
+    """A port serving a cassette, read as the replay goes (:mod:`labkit.io.replay_stream`).
+    ``port_name`` and the cassette's path are set at first open."""
 
     def __init__(self, *args, **kwargs) -> None:
-        self.cassette: Cassette | None = None
+        self.cassette_path = ""
+        self.header: dict[str, Any] = {}
         self.mode = "strict"
-        self.sessions: list[PortSession] = []
         self.port_name = ""
+        self._queue: EventQueue | None = None
         self._next_session = 0
-        self._session: PortSession | None = None
-        self._tx_pos = 0
-        self._dev_idx = 0
-        self._chunk_pos = 0
-        self._write_err_idx = 0
+        self._session: RecordedSession | None = None
         self._dead: dict[str, Any] | None = None
+        self._chunk_pos = 0
         self._t0 = 0.0
         self._lock = threading.RLock()
         super().__init__(*args, **kwargs)
@@ -175,23 +117,17 @@ class ReplaySerial(ClockedSerial):
     def open(self) -> None:
         self._require_openable()
         clock = self._resolve_clock()
-        if self.cassette is None:
+        if self._queue is None:
             spec = parse_replay_url(self.portstr)
             self.mode = spec.mode
-            self.cassette = load_cassette(spec.cassette)
-            self.port_name = self.cassette.port
-            self.sessions = split_sessions(self.cassette)
-        if self._next_session >= len(self.sessions):
-            raise ReplayMismatch(
-                f"replay port {self.port_name!r} ({self.cassette.path}): opened "
-                f"{self._next_session + 1} times but the cassette recorded "
-                f"{len(self.sessions)} open(s)"
-            )
-        session = self.sessions[self._next_session]
+            reader = CassetteReader(spec.cassette)
+            self.cassette_path, self.header, self.port_name = str(reader.path), reader.header, reader.port
+            self._queue = EventQueue(iter(reader))
+        session = self._begin_session(self._queue)
         self._next_session += 1
         self._session = session
-        self._tx_pos = self._dev_idx = self._chunk_pos = self._write_err_idx = 0
         self._dead = None
+        self._chunk_pos = 0
         opened_t = session.open_event["t"] if session.open_event else 0.0
         self._t0 = clock.now() - opened_t
         self._check_settings(session)
@@ -199,7 +135,22 @@ class ReplaySerial(ClockedSerial):
             raise rebuild_error(session.open_error)
         self.is_open = True
 
-    def _check_settings(self, session: PortSession) -> None:
+    def _begin_session(self, queue: EventQueue) -> RecordedSession:
+        """The next recorded session (the one before it read to its end)."""
+        if self._session is not None:
+            self._session.drain()
+        first = queue.peek()
+        if first is None or (self._next_session and not is_open(first)):
+            raise ReplayMismatch(
+                f"replay port {self.port_name!r} ({self._path()}): opened "
+                f"{self._next_session + 1} times but the cassette recorded "
+                f"{self._next_session} open(s)"
+            )
+        session = RecordedSession(queue, queue.pop() if is_open(first) else None)
+        session.start()
+        return session
+
+    def _check_settings(self, session: RecordedSession) -> None:
         recorded = (session.open_event or {}).get("serial") or {}
         actual = self.settings_summary()
         for key in LINE_SETTINGS:
@@ -210,7 +161,7 @@ class ReplaySerial(ClockedSerial):
                 )
 
     def _path(self) -> str:
-        return str(self.cassette.path) if self.cassette else self.portstr
+        return self.cassette_path or self.portstr
 
     def close(self) -> None:
         was_open, self.is_open = self.is_open, False
@@ -223,22 +174,19 @@ class ReplaySerial(ClockedSerial):
         session = self._session
         if session is None or self._dead is not None:
             return ""  # after a recorded error only failures follow; a dead port replays them all
-        left_tx = len(session.tx) - self._tx_pos
-        left_dev = session.device[self._dev_idx:]
-        left_err = session.write_errors[self._write_err_idx:]
+        left_tx, left_dev, first, left_err = session.drain()
         if not (left_tx or left_dev or left_err):
             return ""
         parts = []
         if left_tx:
             parts.append(f"{left_tx} TX bytes never written "
-                         f"(next: {render_bytes(bytes(session.tx[self._tx_pos:self._tx_pos + 24]))})")
-        if left_dev:
-            first = left_dev[0]
+                         f"(next: {render_bytes(bytes(session.tx_pending[:24]))})")
+        if left_dev and first is not None:
             what = render_bytes(first.data[self._chunk_pos:][:24]) if first.kind == "rx" else first.kind
-            parts.append(f"{len(left_dev)} recorded reads never made "
+            parts.append(f"{left_dev} recorded reads never made "
                          f"(next at cassette line {first.event.get('line')}: {what})")
         if left_err:
-            parts.append(f"{len(left_err)} recorded write errors never reached")
+            parts.append(f"{left_err} recorded write errors never reached")
         return f"replay port {self.port_name!r} ({self._path()}): " + "; ".join(parts)
 
     def assert_consumed(self) -> None:
@@ -247,11 +195,27 @@ class ReplaySerial(ClockedSerial):
             problem = self._unconsumed()
             if problem:
                 raise ReplayMismatch(problem)
-            if self._next_session < len(self.sessions):
+            if self._session is not None:
+                self._session.drain()
+            left = self._count_opens_left()
+            if left:
                 raise ReplayMismatch(
                     f"replay port {self.port_name!r} ({self._path()}): the cassette recorded "
-                    f"{len(self.sessions)} open(s) but the port was opened {self._next_session} time(s)"
+                    f"{self._next_session + left} open(s) but the port was opened "
+                    f"{self._next_session} time(s)"
                 )
+
+    def _count_opens_left(self) -> int:
+        """The recorded opens after the current session (the cassette read again from its start,
+        kept nowhere; nothing to read when the replay is at its end)."""
+        if self._queue is None or self._queue.peek() is None:
+            return 0
+        recorded, first = 0, True
+        for event in CassetteReader(self.cassette_path):
+            if is_open(event) or first:
+                recorded += 1  # (events before any open are a session of their own)
+            first = False
+        return recorded - self._next_session
 
     # -- helpers ------------------------------------------------------------------------
     def _raise_if_dead(self) -> None:
@@ -264,12 +228,17 @@ class ReplaySerial(ClockedSerial):
 
     def _current(self) -> DeviceItem | None:
         assert self._session is not None
-        device = self._session.device
-        return device[self._dev_idx] if self._dev_idx < len(device) else None
+        return self._session.next_device()
+
+    def _delivered(self) -> None:
+        assert self._session is not None
+        self._session.device.popleft()
+        self._chunk_pos = 0
 
     def _ready_at(self, item: DeviceItem) -> float | None:
         """Clock time from which ``item`` may be delivered; None while it awaits a write."""
-        if self._tx_pos < item.gate:
+        assert self._session is not None
+        if self._session.tx_written < item.gate:
             return None
         return self._t0 + item.t if self.mode == "timed" else float("-inf")
 
@@ -281,17 +250,16 @@ class ReplaySerial(ClockedSerial):
             self._raise_if_dead()
             session = self._session
             assert session is not None
-            errors = session.write_errors
-            pending = errors[self._write_err_idx] if self._write_err_idx < len(errors) else None
-            if pending and pending[0] == self._tx_pos and not pending[1].get("tx_recorded"):
-                self._write_err_idx += 1  # a write that failed before its bytes were recorded
+            expected = session.expected(len(data))
+            pending = session.next_write_error()
+            if pending and pending[0] == session.tx_written and not pending[1].get("tx_recorded"):
+                session.write_errors.popleft()  # a write that failed before its bytes were recorded
                 raise self._die(pending[1])
-            expected = bytes(session.tx[self._tx_pos:self._tx_pos + len(data)])
             if expected != data:
                 self._raise_mismatch(data, expected)
-            self._tx_pos += len(data)
-            if pending and pending[0] == self._tx_pos and pending[1].get("tx_recorded"):
-                self._write_err_idx += 1  # these very bytes failed to go out
+            session.written(len(data))
+            if pending and pending[0] == session.tx_written and pending[1].get("tx_recorded"):
+                session.write_errors.popleft()  # these very bytes failed to go out
                 raise self._die(pending[1])
         return len(data)
 
@@ -300,16 +268,16 @@ class ReplaySerial(ClockedSerial):
         assert session is not None
         diff = next((i for i, (a, b) in enumerate(zip(expected, data, strict=False)) if a != b),
                     min(len(expected), len(data)))
-        offset = self._tx_pos + diff
-        start_event = max((e for e in session.tx_events if e[0] <= offset),
-                          key=lambda e: e[0], default=(0, {}))
-        start = max(start_event[0], offset - 24, 0)
-        before = bytes(session.tx[start:self._tx_pos])
-        exp_window = bytes(session.tx[start:offset + 16])
+        written = session.tx_written
+        offset = written + diff
+        mark = session.mark_at(offset)
+        start = max(mark[0], offset - 24, 0)
+        before = session.tx_slice(start, written) if start < written else b""
+        exp_window = session.tx_slice(start, offset + 16)
         act_window = (before + data)[:offset - start + 16]
         raise ReplayMismatch(mismatch_message(
             self.port_name, self._path(), offset, exp_window, act_window, offset - start,
-            start_event[1].get("call", "write"), start_event[1].get("line"),
+            mark[1], mark[2],
         ))
 
     def read(self, size: int = 1) -> bytes:
@@ -356,18 +324,17 @@ class ReplaySerial(ClockedSerial):
 
     def _deliver(self, item: DeviceItem, size: int, clock) -> bytes:
         if item.kind == "error":
-            self._dev_idx += 1
+            self._delivered()
             raise self._die(item.event)
         if item.kind == "empty":
-            self._dev_idx += 1
+            self._delivered()
             if self.mode == "strict" and clock.is_virtual and self._timeout:
                 clock.sleep(self._timeout)  # a timed-out read took its timeout
             return b""
         out = item.data[self._chunk_pos:self._chunk_pos + size]
         self._chunk_pos += len(out)
         if self._chunk_pos >= len(item.data):
-            self._dev_idx += 1
-            self._chunk_pos = 0
+            self._delivered()
         return out
 
     @property
@@ -383,7 +350,7 @@ class ReplaySerial(ClockedSerial):
             if ready is None or ready > clock.now() + TIME_EPS:
                 return 0
             if item.kind == "error":
-                self._dev_idx += 1
+                self._delivered()
                 raise self._die(item.event)
             return len(item.data) - self._chunk_pos if item.kind == "rx" else 0
 

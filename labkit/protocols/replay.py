@@ -37,7 +37,7 @@ from labkit.protocols.replay_compare import (
     diff_within,
     offline_wording,
 )
-from labkit.protocols.replay_evidence import Evidence, diff_points, diff_readings
+from labkit.protocols.replay_evidence import Evidence, diff_points
 from labkit.protocols.resume import check_carried_points
 from labkit.protocols.runner import Runner, normalise
 from labkit.rig import load_rig
@@ -45,6 +45,8 @@ from labkit.session import SessionRecord, load_session
 from labkit.session.integrity import integrity_problems
 
 LEVELS = ("auto", "exact", "faithful", "analysis")
+#: events a replay does not read (the control loop's ticks: most of a long session's events.jsonl)
+REPLAY_SKIPS = frozenset({"control"})
 LEVEL_WORDS = {
     "exact": "exact (virtual-clock session: every byte as recorded, results identical)",
     "faithful": "faithful (real-clock session: device bytes at their recorded times, writes matched "
@@ -168,29 +170,24 @@ def faithful_schedules(record: SessionRecord, rig: Any) -> dict[str, list[float]
     return schedules
 
 
-def _evidence_diffs(record: Any, evidence: Evidence, resumed: bool, tolerant: frozenset[str]) -> list[str]:
+def _evidence_diffs(record: Any, evidence: Evidence, tolerant: frozenset[str]) -> list[str]:
     """The session's point events and readings files against what the replay parsed
-    (:mod:`labkit.protocols.replay_evidence`); readings only for a session that was not resumed
-    (a resumed session's files also hold the first run's readings)."""
-    diffs = diff_points(evidence.points, record.point_events(), tolerant)
-    if resumed:
-        return diffs
-    for role in sorted(set(evidence.readings) | {p.stem for p in (record.path / "readings").glob("*.jsonl")}):
-        file = f"{record.path / 'readings' / role}.jsonl"
-        diffs += diff_readings(role, evidence.readings.get(role, []), record.readings(role), file)
-    return diffs
+    (:mod:`labkit.protocols.replay_evidence`; points with a protocol's image-analysis columns
+    within tolerance; readings compared as they came, only for a session that was not resumed:
+    a resumed session's files also hold the first run's readings)."""
+    return diff_points(evidence.points, record.point_events(), tolerant) + evidence.reading_diffs()
 
 
 def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str = "auto") -> ReplayOutcome:
     """Replay a session at ``level`` (auto: exact for a virtual-clock session, faithful for a
     real-clock one) and compare it with the recording."""
-    record = load_session(path)
+    record = load_session(path, skip_types=REPLAY_SKIPS)
     chosen = choose_level(record, level)
     tampered = integrity_problems(record.path, record.meta)  # digests, cassette time lines
     if chosen == "analysis":
         from labkit.protocols.reanalyse import reanalyse_session
 
-        result = reanalyse_session(record)
+        result = reanalyse_session(load_session(path))
         result.differences[:0] = tampered
         result.identical = result.identical and not tampered
         if level == "auto":
@@ -209,7 +206,8 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
     clock = (ReplayClock(faithful_start(record), faithful_schedules(record, rig)) if faithful
              else VirtualClock())
     collect = _Collect()
-    evidence = Evidence()
+    evidence = Evidence(None if points or faithful else record.path / "readings", record.problems,
+                        keep_readings=faithful and not points)
 
     def port_for(dev: Any) -> str:
         return faithful_url(record.path, dev) if faithful else replay_url(record.path, dev.role)
@@ -229,7 +227,7 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
         tolerant = DERIVED_KEYS | analysis_keys(protocol.row)  # their last digits follow the CPU
         diffs = tampered + (diff_results(replayed, recorded, derived_keys=tolerant) if recorded is not None
                             else ["no results.json recorded"])
-        diffs += _evidence_diffs(record, evidence, resumed=bool(points), tolerant=tolerant)
+        diffs += _evidence_diffs(record, evidence, tolerant)
         return ReplayOutcome(outcome, recorded, not diffs, diffs, warnings, "exact")
     replay_decisions = decisions(collect.events)
     diffs = tampered + diff_decisions(replay_decisions, decisions(record.events))

@@ -13,6 +13,8 @@ slightly other times; its points are compared within tolerances by
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 from labkit.protocols.replay_compare import ADDED_KEYS, close_enough
@@ -24,10 +26,19 @@ MAX_LISTED = 5
 
 
 class Evidence:
-    """Sink keeping the replay's points and readings (by device)."""
+    """Sink keeping the replay's points, and comparing each reading the replay parses with the
+    recorded one of the same device as it comes (:class:`ReadingsCheck`; ``readings_dir`` None:
+    readings not compared), so memory does not grow with the readings. ``keep_readings``: also
+    keep every parsed reading by device (``readings``), for a faithful replay's check against
+    the cassettes' times (:func:`labkit.protocols.reading_evidence.faithful_reading_diffs`)."""
 
-    def __init__(self) -> None:
+    def __init__(self, readings_dir: Path | None = None, problems: list[str] | None = None,
+                 keep_readings: bool = False) -> None:
         self.points: list[dict[str, Any]] = []
+        self.readings_dir = readings_dir
+        self.problems = problems
+        self.checks: dict[str, ReadingsCheck] = {}
+        self.keep_readings = keep_readings
         self.readings: dict[str, list[dict[str, Any]]] = {}
 
     def on_event(self, event: Any) -> None:
@@ -35,7 +46,75 @@ class Evidence:
         if kind == "point":
             self.points.append(json.loads(json.dumps(event.get("point"))))  # as events.jsonl holds it
         elif kind == "reading":
-            self.readings.setdefault(str(event.get("device")), []).append(event.to_json())
+            if self.readings_dir is not None:
+                self._check(str(event.get("device"))).add(event.to_json())
+            if self.keep_readings:
+                self.readings.setdefault(str(event.get("device")), []).append(event.to_json())
+
+    def _check(self, device: str) -> ReadingsCheck:
+        check = self.checks.get(device)
+        if check is None:
+            assert self.readings_dir is not None
+            check = self.checks[device] = ReadingsCheck(device, self.readings_dir, self.problems)
+        return check
+
+    def reading_diffs(self) -> list[str]:
+        """Every device's differences (also a readings file of a device that gave none)."""
+        if self.readings_dir is None:
+            return []
+        out: list[str] = []
+        for device in sorted(set(self.checks) | {p.stem for p in self.readings_dir.glob("*.jsonl")}):
+            out += self._check(device).finish()
+        return out
+
+
+class ReadingsCheck:
+    """One device's readings file (``readings/DEVICE.jsonl``) against the readings the replay
+    parsed from its bytes, compared one by one as they come; what :func:`diff_readings` says."""
+
+    def __init__(self, device: str, readings_dir: Path, problems: list[str] | None) -> None:
+        from labkit.session.paths import session_file
+        from labkit.session.reader import iter_jsonl_lines
+
+        self.device = device
+        path = readings_dir / f"{device}.jsonl"
+        self.file = str(path)
+        self._recorded: Iterator[tuple[int, dict[str, Any]]] = (
+            iter_jsonl_lines(session_file(readings_dir.parent, "readings", path.name), problems)
+            if path.exists() else iter(()))
+        self.replayed = 0
+        self.recorded = 0
+        self.lines: list[str] = []   # at most MAX_LISTED differences, in order
+
+    def add(self, again: dict[str, Any]) -> None:
+        self.replayed += 1
+        row = next(self._recorded, None)
+        if row is None:
+            return
+        self.recorded += 1
+        if len(self.lines) < MAX_LISTED:
+            self.lines += _reading_difference(self.file, self.recorded, row[1], again)
+
+    def finish(self) -> list[str]:
+        self.recorded += sum(1 for _ in self._recorded)
+        out = []
+        if self.replayed != self.recorded:
+            out.append(f"{self.file}: {self.recorded} readings recorded, the cassette of {self.device} "
+                       f"gives {self.replayed}")
+        for line in self.lines:
+            out.append(line)
+            if len(out) >= MAX_LISTED:
+                out.append(f"{self.file}: further differences not listed")
+                break
+        return out
+
+
+def _reading_difference(file: str, line: int, rec: dict[str, Any], again: dict[str, Any]) -> list[str]:
+    keys = [k for k in READING_KEYS if not _same(rec.get(k), again.get(k))]
+    if not keys:
+        return []
+    shown = ", ".join(f"{k} recorded {rec.get(k)!r}, from the bytes {again.get(k)!r}" for k in keys)
+    return [f"{file}:{line}: this reading does not follow from the cassette ({shown}): edited?"]
 
 
 def _same(a: Any, b: Any, tolerant: bool = False) -> bool:
@@ -78,10 +157,9 @@ def diff_readings(device: str, replayed: list[dict[str, Any]], recorded: list[di
         out.append(f"{file}: {len(recorded)} readings recorded, the cassette of {device} gives "
                    f"{len(replayed)}")
     for line, (rec, again) in enumerate(zip(recorded, replayed, strict=False), start=1):
-        keys = [k for k in READING_KEYS if not _same(rec.get(k), again.get(k))]
-        if keys:
-            shown = ", ".join(f"{k} recorded {rec.get(k)!r}, from the bytes {again.get(k)!r}" for k in keys)
-            out.append(f"{file}:{line}: this reading does not follow from the cassette ({shown}): edited?")
+        found = _reading_difference(file, line, rec, again)
+        if found:
+            out += found
             if len(out) >= MAX_LISTED:
                 out.append(f"{file}: further differences not listed")
                 break

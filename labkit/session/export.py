@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import itertools
 from pathlib import Path
 
 from labkit.errors import SessionError
@@ -21,29 +22,54 @@ def read_jsonl(path: Path, problems: list[str] | None = None) -> list[dict]:
     return read_checked(path, problems)
 
 
-def readings_to_parquet(src: Path, dest: Path) -> None:
+#: rows converted at a time: the export's memory does not grow with the readings file
+PARQUET_BATCH_ROWS = 20_000
+
+
+def readings_to_parquet(src: Path, dest: Path, batch_rows: int = PARQUET_BATCH_ROWS) -> None:
+    """``src`` (readings JSONL) as Parquet, written in batches of ``batch_rows`` rows."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    rows = read_jsonl(src)
-    columns = {c: [r.get(c) for r in rows] for c in PARQUET_COLUMNS}
-    # files from before flags were recorded have none
-    columns["flags"] = pa.array([list(f or []) for f in columns["flags"]], type=pa.list_(pa.string()))
-    columns["raw"] = [r if r is not None else "" for r in columns["raw"]]
-    table = pa.table(columns)
-    pq.write_table(table, dest)
+    from labkit.session.reader import iter_jsonl_lines
+
+    schema = pa.schema([("t", pa.float64()), ("quantity", pa.string()), ("value", pa.float64()),
+                        ("unit", pa.string()), ("stable", pa.bool_()), ("overload", pa.bool_()),
+                        ("flags", pa.list_(pa.string())), ("raw", pa.string())])
+
+    def batch(rows: list[dict]) -> pa.Table:
+        columns = {c: [r.get(c) for r in rows] for c in PARQUET_COLUMNS}
+        # files from before flags were recorded have none
+        columns["flags"] = [list(f or []) for f in columns["flags"]]
+        columns["raw"] = [r if r is not None else "" for r in columns["raw"]]
+        return pa.table(columns, schema=schema)
+
+    with pq.ParquetWriter(dest, schema) as writer:
+        rows: list[dict] = []
+        for _, row in iter_jsonl_lines(src):
+            rows.append(row)
+            if len(rows) >= batch_rows:
+                writer.write_table(batch(rows))
+                rows = []
+        if rows:
+            writer.write_table(batch(rows))
 
 
 def readings_to_csv(src: Path, dest: Path, problems: list[str] | None = None) -> int:
-    """Write ``src`` (readings JSONL) as CSV; returns the number of rows. Damaged lines are
-    skipped and reported in ``problems``."""
-    rows = read_jsonl(src, problems)
+    """Write ``src`` (readings JSONL) as CSV, row by row; returns the number of rows. Damaged
+    lines are skipped and reported in ``problems``."""
+    from labkit.session.reader import iter_jsonl_lines
+
+    rows = iter_jsonl_lines(src, problems)
+    first = next(rows, None)  # an unreadable file fails here, before the CSV is created
+    count = 0
     with open(dest, "w", newline="", encoding="utf-8") as f:
         writer = csv.writer(f)
         writer.writerow(COLUMNS)
-        for r in rows:
+        for _, r in itertools.chain([first] if first is not None else [], rows):
             writer.writerow([";".join(r.get(c) or ()) if c == "flags" else r.get(c) for c in COLUMNS])
-    return len(rows)
+            count += 1
+    return count
 
 
 def export_csv(session: Path, problems: list[str] | None = None) -> list[Path]:

@@ -16,6 +16,7 @@ with a size bound, and never raises anything but :class:`SessionError` naming th
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -89,13 +90,12 @@ def read_json_file(path: Path, limit: int = MAX_JSON_BYTES) -> Any:
         raise SessionError(f"{path}: unreadable: {exc}") from None
 
 
-def read_jsonl_lines(path: Path, problems: list[str] | None = None,
-                     limit: int = MAX_JSONL_BYTES) -> list[tuple[int, dict[str, Any]]]:
-    """``(line number, object)`` for each good line of a JSONL file (see the module docstring).
-
-    Damaged lines are skipped; each is reported in ``problems`` as ``file:line: reason``."""
+def iter_jsonl_lines(path: Path, problems: list[str] | None = None,
+                     limit: int = MAX_JSONL_BYTES) -> Iterator[tuple[int, dict[str, Any]]]:
+    """``(line number, object)`` for each good line of a JSONL file, read as it is asked for
+    (see the module docstring). Damaged lines are skipped; each is reported in ``problems`` as
+    ``file:line: reason``."""
     _regular_file(path, limit)
-    rows: list[tuple[int, dict[str, Any]]] = []
     try:
         with open(path, "rb") as f:
             number = 0
@@ -121,10 +121,17 @@ def read_jsonl_lines(path: Path, problems: list[str] | None = None,
                     if not torn and problems is not None:  # a torn line is the last (crash mid-write)
                         problems.append(f"{path}:{number}: damaged line skipped ({exc})")
                     continue
-                rows.append((number, value))
+                yield number, value
     except OSError as exc:
         raise SessionError(f"{path}: unreadable: {exc.strerror or exc}") from None
-    return rows
+
+
+def read_jsonl_lines(path: Path, problems: list[str] | None = None,
+                     limit: int = MAX_JSONL_BYTES) -> list[tuple[int, dict[str, Any]]]:
+    """``(line number, object)`` for each good line of a JSONL file (see the module docstring).
+
+    Damaged lines are skipped; each is reported in ``problems`` as ``file:line: reason``."""
+    return list(iter_jsonl_lines(path, problems, limit))
 
 
 def read_jsonl(path: Path, problems: list[str] | None = None) -> list[dict[str, Any]]:
@@ -173,8 +180,9 @@ class SessionRecord:
         return read_jsonl(path, self.problems) if path.exists() else []
 
 
-def load_session(path: str | Path) -> SessionRecord:
-    """Read ``run.json``, ``events.jsonl`` and ``results.json`` (if any). Raises SessionError."""
+def load_session(path: str | Path, skip_types: frozenset[str] = frozenset()) -> SessionRecord:
+    """Read ``run.json``, ``events.jsonl`` and ``results.json`` (if any). Raises SessionError.
+    Events whose ``type`` is in ``skip_types`` are not kept (a replay needs no control ticks)."""
     p = Path(path)
     run = p / "run.json"
     if not run.exists():
@@ -189,7 +197,8 @@ def load_session(path: str | Path) -> SessionRecord:
         raise SessionError(f"{run}: protocol must be a name and params an object")
     problems: list[str] = []
     events_path = session_file(p, "events.jsonl")
-    lines = read_jsonl_lines(events_path, problems) if events_path.exists() else []
+    lines = ([(n, e) for n, e in iter_jsonl_lines(events_path, problems) if e.get("type") not in skip_types]
+             if events_path.exists() else [])
     results = None
     results_path = session_file(p, "results.json")
     if results_path.exists():
