@@ -31,6 +31,9 @@ recorded device behaved, on one time line:
   every byte arrives at its recorded time, a configuration reply not before its command.
 * **Errors at their time.** A recorded error (an unplug) kills the port at its recorded time:
   bytes already in the buffer are still read, then every call raises the recorded error.
+* **Read times.** ``read_at`` is when the newest bytes a read returned arrived: the time the
+  recording read them (a ``record://`` port's ``read_at``), so drivers timestamp a line
+  (:func:`labkit.io.calls.read_time`) as the recording did, not at their next poll.
 
 A write with no counterpart within the window that the recording sent later (within
 :data:`HELD_UP_S`) waits for that time: the recording's program was held up there. Any other
@@ -43,14 +46,13 @@ from __future__ import annotations
 
 import bisect
 import heapq
-import statistics
 import threading
-from dataclasses import dataclass, field
 from typing import Any
 
 from labkit.errors import ReplayMismatch
 from labkit.io.cassette import Cassette, load_cassette
 from labkit.io.clocked import LINE_SETTINGS, REAL_POLL_S, VIRTUAL_POLL_S, ClockedSerial, poll_step
+from labkit.io.faithful_timeline import DeviceBytes, FaithfulSession, faithful_sessions
 from labkit.io.replay_port import rebuild_error, render_bytes
 from labkit.io.urls import parse_replay_url
 
@@ -94,89 +96,6 @@ def same_command(a: bytes, b: bytes) -> bool:
     return len(a) == len(b) and a[:head] == b[:head]
 
 
-@dataclass
-class RecordedWrite:
-    t: float          # on the recording's clock
-    data: bytes
-    line: int
-    call: str
-    before: int = 0   # device items recorded before it
-    thread: str | None = None
-    replies: list[int] = field(default_factory=list)  # device items answering it
-    state: str = "pending"  # pending | identical | near
-
-
-@dataclass
-class DeviceBytes:
-    t: float
-    kind: str        # "rx" | "error"
-    data: bytes
-    event: dict[str, Any]
-    gate: int | None = None  # stream port: the write recorded just before it (a reply may follow)
-
-
-@dataclass
-class FaithfulSession:
-    """One open/close of the recorded port, on the recording's time line."""
-
-    open_event: dict[str, Any] | None = None
-    open_error: dict[str, Any] | None = None
-    writes: list[RecordedWrite] = field(default_factory=list)
-    device: list[DeviceBytes] = field(default_factory=list)
-    unsolicited: list[int] = field(default_factory=list)
-    #: write bytes -> the median time from such a write to its reply
-    typical_latency: dict[bytes, float] = field(default_factory=dict)
-
-    def measure_latencies(self) -> None:
-        by_command: dict[bytes, list[float]] = {}
-        for write in self.writes:
-            if write.replies:
-                by_command.setdefault(write.data, []).append(self.device[write.replies[0]].t - write.t)
-        self.typical_latency = {data: statistics.median(times) for data, times in by_command.items()}
-
-
-def _last_write_of(writes: list[RecordedWrite], thread: str | None) -> RecordedWrite | None:
-    """The write a reading thread's bytes answer: its own last write (cassettes record the
-    thread, ``th``; recordings without it pair a read with the port's last write)."""
-    for write in reversed(writes[-64:]):
-        if write.thread == thread:
-            return write
-    return None
-
-
-def faithful_sessions(cassette: Cassette, origin: float, stream: bool) -> list[FaithfulSession]:
-    """A cassette's open/close sessions with every time on the recording's clock."""
-    sessions: list[FaithfulSession] = []
-    current: FaithfulSession | None = None
-    for event in cassette.events:
-        kind = event.get("event") if event["dir"] == "ctl" else event["dir"]
-        if kind == "open" or current is None:
-            current = FaithfulSession(open_event=event if kind == "open" else None)
-            sessions.append(current)
-            if kind == "open":
-                continue
-        t = origin + float(event["t"])
-        if kind == "tx":
-            current.writes.append(RecordedWrite(t, event["bytes"], event.get("line", 0),
-                                                event.get("call", "write"), len(current.device),
-                                                event.get("th")))
-        elif kind == "rx" or (kind == "error" and event.get("call") != "open"):
-            index = len(current.device)
-            gate = len(current.writes) - 1 if stream and current.writes else None
-            current.device.append(DeviceBytes(t, "rx" if kind == "rx" else "error",
-                                              event.get("bytes", b""), event, gate))
-            asked = None if stream or kind == "error" else _last_write_of(current.writes, event.get("th"))
-            if asked is None:
-                current.unsolicited.append(index)
-            else:
-                asked.replies.append(index)
-        elif kind == "error":
-            current.open_error = event
-    for session in sessions:
-        session.measure_latencies()
-    return sessions
-
-
 class FaithfulSerial(ClockedSerial):
     """A port serving a real-clock cassette faithfully (see the module docstring)."""
 
@@ -194,6 +113,9 @@ class FaithfulSerial(ClockedSerial):
         self._due: list[tuple[float, int]] = []   # (arrival time, device item) heap
         self._buffer = bytearray()
         self._dead: dict[str, Any] | None = None
+        #: when the bytes the last read returned arrived (labkit.io.calls.read_time)
+        self.read_at: float | None = None
+        self._arrived_at: float | None = None
         self._repeats = 0
         self._held_writes = 0
         self._stalls = 0
@@ -277,15 +199,15 @@ class FaithfulSerial(ClockedSerial):
         session = self._session
         assert session is not None
         while self._due and self._due[0][0] <= now + TIME_EPS and self._dead is None:
-            _, index = heapq.heappop(self._due)
+            due, index = heapq.heappop(self._due)
             item = session.device[index]
             if item.gate is not None and self._held_back(item, now):
                 self._held.append(index)  # not before the command it may answer (stream ports)
                 continue
-            self._due_now(index)
+            self._due_now(index, due)
         for index in [i for i in self._held if not self._held_back(session.device[i], now)]:
             self._held.remove(index)
-            self._due_now(index)
+            self._due_now(index, now)
 
     def _held_back(self, item: DeviceBytes, now: float) -> bool:
         """A stream port's bytes recorded within the window after a write wait for that write
@@ -408,7 +330,7 @@ class FaithfulSerial(ClockedSerial):
                 self._due = [(t, i) for t, i in self._due if i >= write.before]
                 heapq.heapify(self._due)
                 for _, i in sorted(early, key=lambda e: e[1]):
-                    self._due_now(i)
+                    self._due_now(i, now)
         for item in write.replies:
             # an instrument's reply arrives whole with its first bytes: lines the recording's
             # program read only later (a stale duplicate it dropped before its next command)
@@ -422,7 +344,9 @@ class FaithfulSerial(ClockedSerial):
                 arrive = now + recorded - write.t
             heapq.heappush(self._due, (arrive, item))
 
-    def _due_now(self, index: int) -> None:
+    def _due_now(self, index: int, at: float) -> None:
+        """Device item ``index`` arrives at ``at`` (the newest arrival is what ``read_at``
+        reports: the recording's read of it was no earlier)."""
         assert self._session is not None
         item = self._session.device[index]
         if self._dead is not None:
@@ -431,6 +355,7 @@ class FaithfulSerial(ClockedSerial):
             self._dead = item.event
         else:
             self._buffer += item.data
+            self._arrived_at = at
 
     def _mismatch_text(self, data: bytes, now: float) -> str:
         session = self._session
@@ -481,6 +406,7 @@ class FaithfulSerial(ClockedSerial):
 
     def _take(self, size: int) -> bytes:
         out = bytes(self._buffer[:size])
+        self.read_at = self._arrived_at if out else None
         del self._buffer[:size]
         return out
 

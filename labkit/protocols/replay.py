@@ -22,7 +22,8 @@ from pathlib import Path
 from typing import Any
 
 from labkit.errors import CassetteError, LabkitError
-from labkit.io.clock import ReplayClock, VirtualClock, recorded_ticks, use_clock
+from labkit.io.clock import VirtualClock, recorded_runs, recorded_ticks, use_clock
+from labkit.io.replay_clock import ReplayClock
 from labkit.protocols import get_protocol
 from labkit.protocols.events import Sink
 from labkit.protocols.launch import diff_results, recorded_points, replay_url
@@ -208,8 +209,8 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
     points, dropped = check_carried_points(carried, protocol.plan(rig, params))
     done = {int(p["step"]) for p in points}
     faithful = chosen == "faithful"
-    clock = (ReplayClock(faithful_start(record), faithful_schedules(record, rig)) if faithful
-             else VirtualClock())
+    clock = (ReplayClock(faithful_start(record), faithful_schedules(record, rig), recorded_runs(record.path))
+             if faithful else VirtualClock())
     collect = _Collect()
     evidence = Evidence()
 

@@ -11,8 +11,9 @@ import pytest
 import labkit.emulators  # noqa: F401 - registers sim://
 from labkit.devices.base import driver_class
 from labkit.errors import PortURLError
-from labkit.io.clock import STALL_JOB, RealClock, ReplayClock, record_ticks, recorded_ticks
+from labkit.io.clock import STALL_JOB, RealClock, record_ticks, recorded_ticks
 from labkit.io.ports import open_port
+from labkit.io.replay_clock import ReplayClock
 from labkit.io.urls import parse_replay_url
 
 
