@@ -17,6 +17,7 @@ import heapq
 import itertools
 import json
 import os
+import sys
 import threading
 import time
 from collections.abc import Callable
@@ -91,7 +92,7 @@ class RealClock(Clock):
             return
         last, self._main_last = self._main_last, t
         if last is not None and t - last > STALL_S:
-            hook(LATE_JOB, last, t)
+            hook(LATE_JOB, last, t, read_site())
 
     def sleep(self, dt: float) -> None:
         if dt > 0:
@@ -171,10 +172,11 @@ class TickRecorder:
         clock.on_run = self
         clock.on_done = self.done
 
-    def __call__(self, name: str, t: float, woke: float | None = None) -> None:
+    def __call__(self, name: str, t: float, woke: float | None = None, site: str | None = None) -> None:
         if name not in RECORDED_JOBS and name not in (STALL_JOB, LATE_JOB):
             return
-        self._write(name, t, "" if woke is None else f', "woke": {woke!r}')
+        extra = "" if woke is None else f', "woke": {woke!r}'
+        self._write(name, t, extra + ("" if site is None else f", \"site\": {json.dumps(site)}"))
 
     def done(self, name: str, t: float, end: float) -> None:
         """A job's run ended: a stream reader's that handed its lines over late is recorded."""
@@ -251,16 +253,36 @@ def recorded_ticks(session: str | os.PathLike[str]) -> dict[str, list[float]]:
     return out
 
 
-def recorded_runs(session: str | os.PathLike[str]) -> dict[str, list[tuple[float, float]]]:
-    """Intervals a session recorded: :data:`LATE_JOB` -> ``(last, woke)`` where the protocol
-    thread stood still outside a sleep; ``ROLE-reader`` -> ``(start, done)`` of a stream
-    reader's runs that handed their lines over late; sorted; {} without any (older sessions)."""
-    out: dict[str, list[tuple[float, float]]] = {}
+def recorded_runs(session: str | os.PathLike[str]) -> dict[str, list[tuple[float, float, str]]]:
+    """Intervals a session recorded: :data:`LATE_JOB` -> ``(last, woke, site)`` where the
+    protocol thread stood still outside a sleep (``site``: :func:`read_site` of its read at
+    ``woke``, "" if unknown); ``ROLE-reader`` -> ``(start, done, "")`` of a stream reader's runs
+    that handed their lines over late; sorted; {} without any (sessions before 2026-11-28)."""
+    out: dict[str, list[tuple[float, float, str]]] = {}
     for row in _clock_rows(session):
         end = row.get("woke") if row["job"] == LATE_JOB else row.get("done")
         if isinstance(end, int | float):
-            out.setdefault(str(row["job"]), []).append((float(row["t"]), float(end)))
+            site = row.get("site") if isinstance(row.get("site"), str) else ""
+            out.setdefault(str(row["job"]), []).append((float(row["t"]), float(end), site))
     return {name: sorted(runs) for name, runs in out.items()}
+
+
+#: frames of these functions are wrappers of the clock, not the place that reads it
+_CLOCK_WRAPPERS = frozenset({"now", "sleep", "sleep_until", "_main_read", "_stand_still", "read_site"})
+_IO_DIR = os.path.dirname(os.path.abspath(__file__))
+
+
+def read_site() -> str:
+    """Where the calling thread reads the clock: ``module.py:Qualified.name`` of the first
+    frame outside ``labkit/io`` (ports, clocks) and clock wrappers, so a recording's read
+    and its replay's have the same site though their ports differ (record:// vs replay://)."""
+    frame = sys._getframe(1)
+    while frame is not None:
+        code = frame.f_code
+        if code.co_name not in _CLOCK_WRAPPERS and os.path.dirname(code.co_filename) != _IO_DIR:
+            return f"{os.path.basename(code.co_filename)}:{getattr(code, 'co_qualname', code.co_name)}"
+        frame = frame.f_back  # type: ignore[assignment]
+    return ""
 
 
 class VirtualClock(Clock):

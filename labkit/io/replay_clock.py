@@ -16,6 +16,7 @@ from labkit.io.clock import (
     STALL_MATCH_S,
     PeriodicJob,
     VirtualClock,
+    read_site,
 )
 
 
@@ -44,7 +45,7 @@ class ReplayClock(VirtualClock):
     """
 
     def __init__(self, start: float = 0.0, schedules: dict[str, list[float]] | None = None,
-                 runs: dict[str, list[tuple[float, float]]] | None = None) -> None:
+                 runs: dict[str, list[tuple[float, float, str]]] | None = None) -> None:
         super().__init__(start)
         self._job_time = 0.0
         #: job name -> the times (sorted) it ran in the recording: it runs then, not every period
@@ -56,8 +57,8 @@ class ReplayClock(VirtualClock):
         self._late_next = 0
         self._standing = False
         #: reader job name -> (starts, ends) of its late deliveries
-        self._deliveries = {name: ([a for a, _ in r], [b for _, b in r]) for name, r in runs.items()
-                            if name != LATE_JOB}
+        self._deliveries = {name: ([run[0] for run in r], [run[1] for run in r])
+                            for name, r in runs.items() if name != LATE_JOB}
         #: job id -> the clock reading its next (delayed) run sees
         self._run_reading: dict[int, float] = {}
         #: how many stand-stills and late deliveries the replay repeated
@@ -126,14 +127,15 @@ class ReplayClock(VirtualClock):
 
     def _stand_still(self) -> None:
         """The protocol reads the clock (or sleeps) where the recording's stood still outside a
-        sleep: wait, running the jobs due, until the recording's thread moved on."""
+        sleep (from the same site, :func:`~labkit.io.clock.read_site`, when it was recorded):
+        wait, running the jobs due, until the recording's thread moved on."""
         late, now = self._late, self._now
         while self._late_next < len(late) and late[self._late_next][1] <= now:
             self._late_next += 1
         if self._late_next >= len(late):
             return
-        began, woke = late[self._late_next]
-        if began - LATE_MATCH_S <= now:
+        began, woke, site = late[self._late_next]
+        if began - LATE_MATCH_S <= now and (not site or read_site() == site):
             self._late_next += 1
             self.repeated["stood_still"] += 1
             self._standing = True

@@ -57,6 +57,8 @@ class ReplayOutcome:
     ports: list[dict[str, Any]] = field(default_factory=list)
     #: the replay's decisions (faithful), for reports
     decisions: list[dict[str, Any]] = field(default_factory=list)
+    #: faithful: recorded timing repeated (labkit.io.replay_clock.ReplayClock.repeated)
+    timing: dict[str, int] = field(default_factory=dict)
 
 
 class _Collect:
@@ -239,4 +241,5 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
     else:
         diffs += diff_within(replayed, recorded)
     ports = [port.report() for port in runner.ports.values() if hasattr(port, "report")]
-    return ReplayOutcome(outcome, recorded, not diffs, diffs, warnings, "faithful", ports, replay_decisions)
+    return ReplayOutcome(outcome, recorded, not diffs, diffs, warnings, "faithful", ports, replay_decisions,
+                         dict(clock.repeated) if isinstance(clock, ReplayClock) else {})
