@@ -257,7 +257,7 @@ def recorded_runs(session: str | os.PathLike[str]) -> dict[str, list[tuple[float
     """Intervals a session recorded: :data:`LATE_JOB` -> ``(last, woke, site)`` where the
     protocol thread stood still outside a sleep (``site``: :func:`read_site` of its read at
     ``woke``, "" if unknown); ``ROLE-reader`` -> ``(start, done, "")`` of a stream reader's runs
-    that handed their lines over late; sorted; {} without any (sessions before 2026-11-28)."""
+    that handed their lines over late; sorted; {} without any (sessions from an earlier labkit)."""
     out: dict[str, list[tuple[float, float, str]]] = {}
     for row in _clock_rows(session):
         end = row.get("woke") if row["job"] == LATE_JOB else row.get("done")
