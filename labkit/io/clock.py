@@ -152,7 +152,7 @@ STALL_MATCH_S = 0.01
 #: (its clock read ``read`` came more than :data:`STALL_S` after its previous read or wake-up)
 LATE_JOB = "main-late"
 #: a replayed protocol thread at most this far (s) before a recorded stand-still begins stands still
-LATE_MATCH_S = 0.02
+LATE_MATCH_S = 0.04
 #: stream readers (jobs named ``ROLE-reader``) whose run, from its start to the moment its lines
 #: were handed to the consumers, took longer than this (s) are recorded:
 #: ``{"job": NAME, "t": start, "done": end}``; lines read in such a run are delivered at ``end``
@@ -267,22 +267,30 @@ def recorded_runs(session: str | os.PathLike[str]) -> dict[str, list[tuple[float
     return {name: sorted(runs) for name, runs in out.items()}
 
 
+#: how many callers name the site of a clock read (:func:`read_site`)
+SITE_DEPTH = 3
 #: frames of these functions are wrappers of the clock, not the place that reads it
 _CLOCK_WRAPPERS = frozenset({"now", "sleep", "sleep_until", "_main_read", "_stand_still", "read_site"})
 _IO_DIR = os.path.dirname(os.path.abspath(__file__))
 
 
-def read_site() -> str:
-    """Where the calling thread reads the clock: ``module.py:Qualified.name`` of the first
-    frame outside ``labkit/io`` (ports, clocks) and clock wrappers, so a recording's read
-    and its replay's have the same site though their ports differ (record:// vs replay://)."""
+def read_site(depth: int = SITE_DEPTH) -> str:
+    """Where the calling thread reads the clock: ``module.py:Qualified.name+LINE`` (``LINE``
+    counted from the function's first line, so edits elsewhere in the file do not move it) of
+    the first ``depth`` frames outside ``labkit/io`` (ports, clocks) and clock wrappers,
+    innermost first, joined by ``<``: the settle loop's read when it sees the loop settled is
+    not its timeout check, and an event's read inside a step's ``set`` is not one of the same
+    events emitted elsewhere. A recording's read and its replay's have the same site though
+    their ports differ (``record://`` and ``replay://`` live in ``labkit/io``)."""
+    sites: list[str] = []
     frame = sys._getframe(1)
-    while frame is not None:
+    while frame is not None and len(sites) < depth:
         code = frame.f_code
         if code.co_name not in _CLOCK_WRAPPERS and os.path.dirname(code.co_filename) != _IO_DIR:
-            return f"{os.path.basename(code.co_filename)}:{getattr(code, 'co_qualname', code.co_name)}"
+            name, line = getattr(code, "co_qualname", code.co_name), frame.f_lineno - code.co_firstlineno
+            sites.append(f"{os.path.basename(code.co_filename)}:{name}+{line}")
         frame = frame.f_back  # type: ignore[assignment]
-    return ""
+    return "<".join(sites)
 
 
 class VirtualClock(Clock):

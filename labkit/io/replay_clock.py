@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import bisect
 import heapq
+import threading
 from collections.abc import Callable
 
 from labkit.io.clock import (
@@ -56,6 +57,8 @@ class ReplayClock(VirtualClock):
         self._late = list(runs.get(LATE_JOB, []))
         self._late_next = 0
         self._standing = False
+        #: the replayed protocol's thread (the one that made the clock): only it stands still
+        self._protocol_thread = threading.current_thread()
         #: reader job name -> (starts, ends) of its late deliveries
         self._deliveries = {name: ([run[0] for run in r], [run[1] for run in r])
                             for name, r in runs.items() if name != LATE_JOB}
@@ -116,14 +119,19 @@ class ReplayClock(VirtualClock):
         return ends[i]
 
     def now(self) -> float:
-        if self._late and not self._running_jobs and not self._standing:
+        if self._late and self._may_stand_still():
             self._stand_still()
         return self._now + self._job_time
 
     def sleep(self, dt: float) -> None:
-        if self._late and not self._running_jobs and not self._standing:
+        if self._late and self._may_stand_still():
             self._stand_still()
         super().sleep(dt)
+
+    def _may_stand_still(self) -> bool:
+        """The protocol's own read, not a job's nor a stand-still's nor another thread's."""
+        return (not self._running_jobs and not self._standing
+                and threading.current_thread() is self._protocol_thread)
 
     def _stand_still(self) -> None:
         """The protocol reads the clock (or sleeps) where the recording's stood still outside a
@@ -135,7 +143,7 @@ class ReplayClock(VirtualClock):
         if self._late_next >= len(late):
             return
         began, woke, site = late[self._late_next]
-        if began - LATE_MATCH_S <= now and (not site or read_site() == site):
+        if began - LATE_MATCH_S <= now and (not site or _same_site(read_site(), site)):
             self._late_next += 1
             self.repeated["stood_still"] += 1
             self._standing = True
@@ -160,3 +168,10 @@ class ReplayClock(VirtualClock):
 
 #: times (s) closer than this are the same reading
 TIME_EPS_S = 1e-9
+
+
+def _same_site(here: str, recorded: str) -> bool:
+    """Whether a replayed read is at the recorded site: the same callers, as many as were
+    recorded (a site of fewer frames matches by its first ones)."""
+    frames = recorded.split("<")
+    return here.split("<")[: len(frames)] == frames
