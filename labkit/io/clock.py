@@ -262,8 +262,8 @@ def recorded_runs(session: str | os.PathLike[str]) -> dict[str, list[tuple[float
     for row in _clock_rows(session):
         end = row.get("woke") if row["job"] == LATE_JOB else row.get("done")
         if isinstance(end, int | float):
-            site = row.get("site") if isinstance(row.get("site"), str) else ""
-            out.setdefault(str(row["job"]), []).append((float(row["t"]), float(end), site))
+            site = row["site"] if isinstance(row.get("site"), str) else ""
+            out.setdefault(str(row["job"]), []).append((float(row["t"]), float(end), str(site)))
     return {name: sorted(runs) for name, runs in out.items()}
 
 
