@@ -67,7 +67,8 @@ def main(args: argparse.Namespace) -> int:
     out = result.outcome
     write_json({"session": str(args.session), "level": result.level, "identical": result.identical,
                 "differences": result.differences, "status": out.status, "reason": out.reason,
-                "warnings": result.warnings, "ports": result.ports, "results": out.results},
+                "warnings": result.warnings, "ports": result.ports, "timing": result.timing,
+                "results": out.results},
                args.json, "replay")
     print(f"replay level: {LEVEL_WORDS[result.level]}")
     if flags.counts:
@@ -79,6 +80,8 @@ def main(args: argparse.Namespace) -> int:
         print(success_line(args.session, result))
         for port in result.ports:
             print(f"  {port_line(port)}")
+        if any(result.timing.values()):
+            print(f"  {timing_line(result.timing)}")
         return 0
     print(f"labkit replay: the replay of {args.session} differs from the recording:", file=sys.stderr)
     for line in result.differences[:20]:
@@ -118,3 +121,9 @@ def port_line(port: dict) -> str:
     if port.get("not_repeated"):
         text += f", {port['not_repeated']} not sent again (keep-alives and polls)"
     return text
+
+
+def timing_line(timing: dict) -> str:
+    """What of the recording's timing (``clock.jsonl``) the faithful replay repeated."""
+    return (f"timing as recorded: the protocol stood still {timing.get('stood_still', 0)} times outside a "
+            f"sleep, {timing.get('delivered_late', 0)} tachometer reads were handed over late")

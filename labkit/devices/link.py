@@ -31,7 +31,7 @@ import serial
 from labkit.devices.base import Reading
 from labkit.devices.stream import LineFramer
 from labkit.errors import DeviceDisconnected, DeviceError, DeviceTimeout
-from labkit.io.calls import port_call
+from labkit.io.calls import port_call, read_time
 from labkit.io.clock import Clock
 
 try:  # a hung-up pty raises termios.error (not an OSError) from tcflush
@@ -152,7 +152,7 @@ class LineLink:
             raise self._disconnected(command, exc) from exc
         if not data:
             return 0
-        t = self.clock.now()
+        t = read_time(self.port, self.clock)
         self.bytes_received += len(data)
         self.tail += data
         del self.tail[:-256]

@@ -18,6 +18,7 @@ from typing import Protocol
 import serial
 
 from labkit.errors import DeviceDisconnected
+from labkit.io.calls import read_time
 from labkit.io.clock import Clock, PeriodicJob
 
 
@@ -123,7 +124,7 @@ class StreamReader:
             data = self.port.read(waiting)
             if not data:
                 return 0
-            t = self.clock.now()
+            t = read_time(self.port, self.clock)
             self.tail.extend(data)
             frames = self.framer.feed(data)
         for frame in frames:

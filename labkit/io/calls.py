@@ -14,6 +14,10 @@ from __future__ import annotations
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from labkit.io.clock import Clock
 
 _local = threading.local()
 
@@ -46,3 +50,11 @@ def current_thread_tag() -> str | None:
         return None
     name = thread.name
     return name[len("labkit-"):] if name.startswith("labkit-") else name
+
+
+def read_time(port: object, clock: Clock) -> float:
+    """When the bytes a port's last ``read`` returned were read, on ``clock``: the time a
+    ``record://`` port wrote into its cassette, or a faithful replay port's arrival time
+    (``read_at``), so the recording and its replay timestamp a line alike; else ``clock.now()``."""
+    at = getattr(port, "read_at", None)
+    return at if isinstance(at, float) else clock.now()

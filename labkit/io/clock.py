@@ -13,11 +13,11 @@ Drivers never call :func:`time.sleep` themselves. Code that needs "the" clock of
 
 from __future__ import annotations
 
-import bisect
 import heapq
 import itertools
 import json
 import os
+import sys
 import threading
 import time
 from collections.abc import Callable
@@ -64,23 +64,46 @@ class RealClock(Clock):
 
     ``on_run(name, t)``, when set, is called each time a job runs (with the reading the job is
     given): a recorded session keeps its speed loop's ticks (:class:`TickRecorder`) so that a
-    faithful replay ticks when the recording did."""
+    faithful replay ticks when the recording did. ``on_done(name, t, end)`` is called when a
+    job's run ends, and the hook also hears where the main (protocol) thread stood still."""
 
     is_virtual = False
     #: ``on_run(name, t)`` at each job run; ``on_run(STALL_JOB, planned, woke)`` when the main
-    #: thread woke from a sleep more than :data:`STALL_S` late
+    #: thread woke from a sleep more than :data:`STALL_S` late; ``on_run(LATE_JOB, last, t)``
+    #: when it read the clock more than :data:`STALL_S` after its previous read or wake-up
     on_run: Callable[..., None] | None = None
+    #: ``on_done(name, t, end)`` when a job's run that began at ``t`` ended at ``end``
+    on_done: Callable[[str, float, float], None] | None = None
+    #: the main thread's last clock reading or wake-up (while ``on_run`` is set)
+    _main_last: float | None = None
 
     def now(self) -> float:
-        return time.monotonic()
+        t = time.monotonic()
+        if self.on_run is not None:
+            self._main_read(t)
+        return t
+
+    def _main_read(self, t: float) -> None:
+        """The main thread read the clock at ``t``: long after its previous read or wake-up it
+        stood still outside a sleep (waiting for a lock a slow control tick held, a blocking
+        call, a loaded CPU), which a faithful replay repeats (:class:`ReplayClock`)."""
+        hook = self.on_run
+        if hook is None or threading.current_thread() is not threading.main_thread():
+            return
+        last, self._main_last = self._main_last, t
+        if last is not None and t - last > STALL_S:
+            hook(LATE_JOB, last, t, read_site())
 
     def sleep(self, dt: float) -> None:
         if dt > 0:
             start = time.monotonic()
+            if self.on_run is not None:
+                self._main_read(start)
             time.sleep(dt)
             hook = self.on_run
             if hook is not None and threading.current_thread() is threading.main_thread():
                 woke = time.monotonic()
+                self._main_last = woke
                 if woke - (start + dt) > STALL_S:  # the protocol's thread stood still (a loaded PC)
                     hook(STALL_JOB, start + dt, woke)
 
@@ -98,6 +121,9 @@ class RealClock(Clock):
                     if self.on_run is not None:
                         self.on_run(name, t)
                     callback(t)
+                    done = self.on_done
+                    if done is not None:
+                        done(name, t, time.monotonic())
                 except Exception:  # a job reports its own errors; the thread must not die silently
                     job.cancelled = True
                     raise
@@ -122,6 +148,16 @@ STALL_JOB = "main-stall"
 STALL_S = 0.05
 #: a replayed sleep ends where a recorded stall was planned when within this (s)
 STALL_MATCH_S = 0.01
+#: the protocol thread stood still outside a sleep: ``{"job": LATE_JOB, "t": last, "woke": read}``
+#: (its clock read ``read`` came more than :data:`STALL_S` after its previous read or wake-up)
+LATE_JOB = "main-late"
+#: a replayed protocol thread at most this far (s) before a recorded stand-still begins stands still
+LATE_MATCH_S = 0.04
+#: stream readers (jobs named ``ROLE-reader``) whose run, from its start to the moment its lines
+#: were handed to the consumers, took longer than this (s) are recorded:
+#: ``{"job": NAME, "t": start, "done": end}``; lines read in such a run are delivered at ``end``
+READER_SUFFIX = "-reader"
+DELIVERY_S = 0.002
 
 
 class TickRecorder:
@@ -132,12 +168,22 @@ class TickRecorder:
         self._file: Any = open(path, "a", encoding="utf-8")  # noqa: SIM115 - closed by close()
         self._lock = threading.Lock()
         self.clock = clock
+        clock._main_last = None
         clock.on_run = self
+        clock.on_done = self.done
 
-    def __call__(self, name: str, t: float, woke: float | None = None) -> None:
-        if name not in RECORDED_JOBS and name != STALL_JOB:
+    def __call__(self, name: str, t: float, woke: float | None = None, site: str | None = None) -> None:
+        if name not in RECORDED_JOBS and name not in (STALL_JOB, LATE_JOB):
             return
         extra = "" if woke is None else f', "woke": {woke!r}'
+        self._write(name, t, extra + ("" if site is None else f", \"site\": {json.dumps(site)}"))
+
+    def done(self, name: str, t: float, end: float) -> None:
+        """A job's run ended: a stream reader's that handed its lines over late is recorded."""
+        if name.endswith(READER_SUFFIX) and end - t > DELIVERY_S:
+            self._write(name, t, f', "done": {end!r}')
+
+    def _write(self, name: str, t: float, extra: str) -> None:
         with self._lock:
             if self._file is None:
                 return
@@ -150,6 +196,7 @@ class TickRecorder:
     def close(self) -> None:
         """Stop recording; never raises (it runs on every exit path of a run)."""
         self.clock.on_run = None
+        self.clock.on_done = None
         with self._lock:
             if self._file is not None:
                 try:
@@ -171,23 +218,79 @@ def record_ticks(clock: Clock, session: str | os.PathLike[str]) -> TickRecorder 
         return None
 
 
-def recorded_ticks(session: str | os.PathLike[str]) -> dict[str, list[float]]:
-    """The job runs a session recorded (:class:`TickRecorder`), by job name; {} without any."""
-    path = os.path.join(session, TICKS_FILE)
-    out: dict[str, list[float]] = {}
+def _clock_rows(session: str | os.PathLike[str]) -> list[dict[str, Any]]:
+    """The rows of SESSION/clock.jsonl (torn or damaged lines skipped); [] without the file."""
+    rows: list[dict[str, Any]] = []
     try:
-        with open(path, encoding="utf-8") as f:
+        with open(os.path.join(session, TICKS_FILE), encoding="utf-8") as f:
             for line in f:
                 try:
                     row = json.loads(line)
-                    out.setdefault(str(row["job"]), []).append(float(row["t"]))
-                    if "woke" in row:
-                        out.setdefault(STALL_JOB + "-woke", []).append(float(row["woke"]))
+                    float(row["t"])
+                    str(row["job"])
                 except (ValueError, KeyError, TypeError):
                     continue  # a torn last line
+                rows.append(row)
     except OSError:
-        return {}
+        return []
+    return rows
+
+
+def recorded_ticks(session: str | os.PathLike[str]) -> dict[str, list[float]]:
+    """The job runs a session recorded (:class:`TickRecorder`), by job name; {} without any.
+    Stand-stills and deliveries (:func:`recorded_runs`) are not among them."""
+    out: dict[str, list[float]] = {}
+    for row in _clock_rows(session):
+        if row["job"] == LATE_JOB or "done" in row:
+            continue
+        try:
+            woke = float(row["woke"]) if "woke" in row else None
+        except (ValueError, TypeError):
+            continue
+        out.setdefault(str(row["job"]), []).append(float(row["t"]))
+        if woke is not None:
+            out.setdefault(STALL_JOB + "-woke", []).append(woke)
     return out
+
+
+def recorded_runs(session: str | os.PathLike[str]) -> dict[str, list[tuple[float, float, str]]]:
+    """Intervals a session recorded: :data:`LATE_JOB` -> ``(last, woke, site)`` where the
+    protocol thread stood still outside a sleep (``site``: :func:`read_site` of its read at
+    ``woke``, "" if unknown); ``ROLE-reader`` -> ``(start, done, "")`` of a stream reader's runs
+    that handed their lines over late; sorted; {} without any (sessions from an earlier labkit)."""
+    out: dict[str, list[tuple[float, float, str]]] = {}
+    for row in _clock_rows(session):
+        end = row.get("woke") if row["job"] == LATE_JOB else row.get("done")
+        if isinstance(end, int | float):
+            site = row["site"] if isinstance(row.get("site"), str) else ""
+            out.setdefault(str(row["job"]), []).append((float(row["t"]), float(end), str(site)))
+    return {name: sorted(runs) for name, runs in out.items()}
+
+
+#: how many callers name the site of a clock read (:func:`read_site`)
+SITE_DEPTH = 3
+#: frames of these functions are wrappers of the clock, not the place that reads it
+_CLOCK_WRAPPERS = frozenset({"now", "sleep", "sleep_until", "_main_read", "_stand_still", "read_site"})
+_IO_DIR = os.path.dirname(os.path.abspath(__file__))
+
+
+def read_site(depth: int = SITE_DEPTH) -> str:
+    """Where the calling thread reads the clock: ``module.py:Qualified.name+LINE`` (``LINE``
+    counted from the function's first line, so edits elsewhere in the file do not move it) of
+    the first ``depth`` frames outside ``labkit/io`` (ports, clocks) and clock wrappers,
+    innermost first, joined by ``<``: the settle loop's read when it sees the loop settled is
+    not its timeout check, and an event's read inside a step's ``set`` is not one of the same
+    events emitted elsewhere. A recording's read and its replay's have the same site though
+    their ports differ (``record://`` and ``replay://`` live in ``labkit/io``)."""
+    sites: list[str] = []
+    frame = sys._getframe(1)
+    while frame is not None and len(sites) < depth:
+        code = frame.f_code
+        if code.co_name not in _CLOCK_WRAPPERS and os.path.dirname(code.co_filename) != _IO_DIR:
+            name, line = getattr(code, "co_qualname", code.co_name), frame.f_lineno - code.co_firstlineno
+            sites.append(f"{os.path.basename(code.co_filename)}:{name}+{line}")
+        frame = frame.f_back  # type: ignore[assignment]
+    return "<".join(sites)
 
 
 class VirtualClock(Clock):
@@ -286,76 +389,3 @@ class use_clock:  # noqa: N801 - used as a context manager, reads as a verb
     def __exit__(self, *exc: object) -> None:
         assert self._previous is not None
         set_current_clock(self._previous)
-
-
-class ReplayClock(VirtualClock):
-    """A virtual clock on which periodic jobs take none of their caller's time.
-
-    On a :class:`VirtualClock` a job that waits (a motor status query waiting for its reply)
-    moves everyone's time forward, as if the threads took turns. Replaying a real-clock
-    recording (``replay://...?mode=faithful``), where the control thread's queries ran beside
-    the protocol's balance polls, that stolen time would put the protocol behind the recorded
-    device. Here a wait inside a job moves only the job's own time (``now()`` inside the job),
-    and the caller resumes at the time it slept to.
-
-    ``schedules``: job name -> the clock readings at which that job ran in the recording (a
-    stream reader's reads, the speed loop's ticks): such a job runs at those times, so it sees
-    what it saw then; once they run out it runs every period. The recorded stalls of the
-    protocol's thread (:data:`STALL_JOB`) make the replayed sleep that ended there end late
-    as it did.
-    """
-
-    def __init__(self, start: float = 0.0, schedules: dict[str, list[float]] | None = None) -> None:
-        super().__init__(start)
-        self._job_time = 0.0
-        #: job name -> the times (sorted) it ran in the recording: it runs then, not every period
-        self.schedules = {name: (list(times) if name.startswith(STALL_JOB) else sorted(times))
-                          for name, times in (schedules or {}).items()}
-        self._next_fire: dict[int, int] = {}
-
-    def every(self, period: float, callback: Callable[[float], None], name: str = "") -> PeriodicJob:
-        times = self.schedules.get(name)
-        if not times:
-            return super().every(period, callback, name)
-        job = PeriodicJob(period, callback, name)
-        with self._lock:
-            index = bisect.bisect_right(times, self._now)
-            self._next_fire[id(job)] = index
-            heapq.heappush(self._jobs, (self._due_after(job, self._now), next(self._seq), job))
-        return job
-
-    def _woken_at(self, target: float) -> float:
-        """When the recording's protocol thread woke from the sleep ending at ``target``: later
-        than planned where it recorded a stall (``clock.jsonl``), else ``target``."""
-        planned = self.schedules.get(STALL_JOB)
-        woke = self.schedules.get(STALL_JOB + "-woke")
-        if not planned or not woke or len(planned) != len(woke):
-            return target
-        i = bisect.bisect_left(planned, target - STALL_MATCH_S)
-        if i < len(planned) and abs(planned[i] - target) <= STALL_MATCH_S:
-            return max(target, woke[i])
-        return target
-
-    def _due_after(self, job: PeriodicJob, last: float) -> float:
-        """A scheduled job's next recorded time (then every period once they run out)."""
-        times = self.schedules.get(job.name)
-        index = self._next_fire.get(id(job))
-        if times is None or index is None:
-            return last + job.period
-        while index < len(times) and times[index] <= last:
-            index += 1
-        self._next_fire[id(job)] = index + 1
-        return times[index] if index < len(times) else last + job.period
-
-    def now(self) -> float:
-        return self._now + self._job_time
-
-    def _sleep_in_job(self, dt: float) -> None:
-        """A wait inside a job: the job's own time only."""
-        self._job_time += dt
-
-    def _run_job(self, job: PeriodicJob) -> None:
-        try:
-            job.callback(self._now)
-        finally:
-            self._job_time = 0.0

@@ -31,6 +31,9 @@ recorded device behaved, on one time line:
   every byte arrives at its recorded time, a configuration reply not before its command.
 * **Errors at their time.** A recorded error (an unplug) kills the port at its recorded time:
   bytes already in the buffer are still read, then every call raises the recorded error.
+* **Read times.** ``read_at`` is when the newest bytes a read returned arrived: the time the
+  recording read them (a ``record://`` port's ``read_at``), so drivers timestamp a line
+  (:func:`labkit.io.calls.read_time`) as the recording did, not at their next poll.
 
 A write with no counterpart within the window that the recording sent later (within
 :data:`HELD_UP_S`) waits for that time: the recording's program was held up there. Any other
@@ -110,6 +113,9 @@ class FaithfulSerial(ClockedSerial):
         self._due: list[tuple[float, int]] = []   # (arrival time, device item) heap
         self._buffer = bytearray()
         self._dead: dict[str, Any] | None = None
+        #: when the bytes the last read returned arrived (labkit.io.calls.read_time)
+        self.read_at: float | None = None
+        self._arrived_at: float | None = None
         self._repeats = 0
         self._held_writes = 0
         self._stalls = 0
@@ -195,15 +201,15 @@ class FaithfulSerial(ClockedSerial):
         session = self._session
         assert session is not None
         while self._due and self._due[0][0] <= now + TIME_EPS and self._dead is None:
-            _, index = heapq.heappop(self._due)
+            due, index = heapq.heappop(self._due)
             item = session.device[index]
             if item.gate is not None and self._held_back(item, now):
                 self._held.append(index)  # not before the command it may answer (stream ports)
                 continue
-            self._due_now(index)
+            self._due_now(index, due)
         for index in [i for i in self._held if not self._held_back(session.device[i], now)]:
             self._held.remove(index)
-            self._due_now(index)
+            self._due_now(index, now)
 
     def _held_back(self, item: DeviceBytes, now: float) -> bool:
         """A stream port's bytes recorded within the window after a write wait for that write
@@ -330,7 +336,7 @@ class FaithfulSerial(ClockedSerial):
                 self._due = [(t, i) for t, i in self._due if i >= write.before]
                 heapq.heapify(self._due)
                 for _, i in sorted(early, key=lambda e: e[1]):
-                    self._due_now(i)
+                    self._due_now(i, now)
         for item in write.replies:
             # an instrument's reply arrives whole with its first bytes: lines the recording's
             # program read only later (a stale duplicate it dropped before its next command)
@@ -344,7 +350,9 @@ class FaithfulSerial(ClockedSerial):
                 arrive = now + recorded - write.t
             heapq.heappush(self._due, (arrive, item))
 
-    def _due_now(self, index: int) -> None:
+    def _due_now(self, index: int, at: float) -> None:
+        """Device item ``index`` arrives at ``at`` (the newest arrival is what ``read_at``
+        reports: the recording's read of it was no earlier)."""
         assert self._session is not None
         item = self._session.device[index]
         if self._dead is not None:
@@ -353,6 +361,7 @@ class FaithfulSerial(ClockedSerial):
             self._dead = item.event
         else:
             self._buffer += item.data
+            self._arrived_at = at
 
     def _mismatch_text(self, data: bytes, now: float) -> str:
         session = self._session
@@ -403,6 +412,7 @@ class FaithfulSerial(ClockedSerial):
 
     def _take(self, size: int) -> bytes:
         out = bytes(self._buffer[:size])
+        self.read_at = self._arrived_at if out else None
         del self._buffer[:size]
         return out
 

@@ -67,20 +67,22 @@ class RecordSerial(ClockedSerial):
         self._failed = False  # after the first wire error of a session nothing more is recorded
         #: why recording stopped (disk full, permissions...): the wire keeps working without it
         self.record_error: str | None = None
+        #: the clock reading of the last read that returned bytes, as its cassette holds it (so a
+        #: driver timestamps what it read as a faithful replay will: :func:`labkit.io.calls.read_time`)
+        self.read_at: float | None = None
         super().__init__(*args, **kwargs)
 
     # -- events -------------------------------------------------------------------------
-    def _t(self) -> float:
-        assert self._t0 is not None and self.clock is not None
-        return self.clock.now() - self._t0
-
-    def _event(self, direction: str, data: bytes | None = None, **fields: Any) -> None:
-        """Record one event. A cassette that cannot be written (disk full) never stops the
-        wire: the failure is kept in ``record_error`` for the runner to stop the run safely."""
+    def _event(self, direction: str, data: bytes | None = None, now: float | None = None,
+               **fields: Any) -> None:
+        """Record one event (at ``now``, default the clock's reading). A cassette that cannot be
+        written (disk full) never stops the wire: the failure is kept in ``record_error`` for
+        the runner to stop the run safely."""
         if self.writer is not None and not self._failed and self.record_error is None:
+            assert self._t0 is not None and self.clock is not None
+            t = (self.clock.now() if now is None else now) - self._t0
             try:
-                self.writer.event(self._t(), self.port_name, direction, data, th=current_thread_tag(),
-                                  **fields)
+                self.writer.event(t, self.port_name, direction, data, th=current_thread_tag(), **fields)
             except OSError as exc:
                 self.record_error = f"cannot write {self.cassette_path}: {exc.strerror or exc}"
 
@@ -200,7 +202,8 @@ class RecordSerial(ClockedSerial):
 
     def _note_read(self, data: bytes, asked: int | None, short: bool, call: str) -> None:
         if data:
-            self._event("rx", data, call=current_call(call))
+            self.read_at = now = self._resolve_clock().now()
+            self._event("rx", data, now, call=current_call(call))
         if short:
             self._event("ctl", event="short_read", asked=asked, got=len(data),
                         call=current_call(call))

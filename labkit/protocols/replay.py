@@ -22,7 +22,8 @@ from typing import Any
 
 from labkit.errors import CassetteError, LabkitError
 from labkit.hints import analysis_keys
-from labkit.io.clock import ReplayClock, VirtualClock, recorded_ticks, use_clock
+from labkit.io.clock import VirtualClock, recorded_runs, recorded_ticks, use_clock
+from labkit.io.replay_clock import ReplayClock
 from labkit.protocols.events import Sink
 from labkit.protocols.params import resolve_params
 from labkit.protocols.reading_evidence import faithful_reading_diffs
@@ -203,8 +204,8 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
     points, dropped = check_carried_points(carried, protocol.plan(rig, params))
     done = {int(p["step"]) for p in points}
     faithful = chosen == "faithful"
-    clock = (ReplayClock(faithful_start(record), faithful_schedules(record, rig)) if faithful
-             else VirtualClock())
+    clock = (ReplayClock(faithful_start(record), faithful_schedules(record, rig), recorded_runs(record.path))
+             if faithful else VirtualClock())
     collect = _Collect()
     evidence = Evidence(None if points or faithful else record.path / "readings", record.problems,
                         keep_readings=faithful and not points)
@@ -238,4 +239,5 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
     if not points:  # a resumed session's readings files also hold the first run's readings
         diffs += faithful_reading_diffs(record, rig, evidence.readings)
     ports = [port.report() for port in runner.ports.values() if hasattr(port, "report")]
-    return ReplayOutcome(outcome, recorded, not diffs, diffs, warnings, "faithful", ports, replay_decisions)
+    return ReplayOutcome(outcome, recorded, not diffs, diffs, warnings, "faithful", ports, replay_decisions,
+                         dict(clock.repeated) if isinstance(clock, ReplayClock) else {})

@@ -261,3 +261,5 @@ class ReplayOutcome:
     ports: list[dict[str, Any]] = field(default_factory=list)
     #: the replay's decisions (faithful), for reports
     decisions: list[dict[str, Any]] = field(default_factory=list)
+    #: faithful: recorded timing repeated (labkit.io.replay_clock.ReplayClock.repeated)
+    timing: dict[str, int] = field(default_factory=dict)

@@ -35,8 +35,6 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from labkit.errors import LabkitError
 from labkit.protocols.paper_figures import EQ_5_97, STROBE_SWEEP_ROW
 from labkit.protocols.params import ParamError
@@ -295,6 +293,8 @@ class StrobeSweep(ProtocolDef):
             res = fit_cone_angle([pt["speed_rad_s"] for pt in usable], [pt["phi_rad"] for pt in usable])
         except FitError as exc:
             return {**out, "note": str(exc)}
+        import numpy as np  # here: `labkit --help` builds its parser without numpy
+
         predicted = res.predict(np.array([pt["speed_rad_s"] for pt in usable]))
         return {**out, "equation": "phi = atan(tau_C / (I omega^2 - tau_S)) (Eq. 5.24, on the tilt)",
                 "params": {k: {"value": v.value, "stderr": v.stderr, "unit": v.unit}

@@ -25,7 +25,9 @@ def _write(path: Path, lines: list[str]) -> None:
 
 
 def _rx(lines: list[str]) -> list[int]:
-    return [i for i, line in enumerate(lines) if i and json.loads(line)["dir"] == "rx"]
+    """The lines that are received chunks written in full (a schema-2 cassette's repeat lines,
+    ``{"t": T, "r": K}``, name an earlier line instead and carry no ``dir``)."""
+    return [i for i, line in enumerate(lines) if i and json.loads(line).get("dir") == "rx"]
 
 
 def _swap_rx(lines: list[str]) -> None:

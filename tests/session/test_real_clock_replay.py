@@ -130,3 +130,45 @@ def test_a_run_recorded_on_the_ptys_of_labkit_emulate_replays(tmp_path, capsys):
     assert session is not None and json.loads((session / "run.json").read_text())["clock"] == "real"
     assert main(["replay", str(session)]) == 0, capsys.readouterr().err[-2000:]
     assert "replay level: faithful" in capsys.readouterr().out
+
+
+STAND_STILL_RUN = """
+import sys, time
+from labkit.protocols.launch import execute, prepare_run
+
+class StandStill:
+    # holds the protocol's thread outside the clock for 0.4 s as the step begins (a sink
+    # writing its files on a loaded PC): the step settles 0.4 s later after its start
+    def on_event(self, event):
+        if event.get("type") == "step":
+            time.sleep(0.4)
+
+prep = prepare_run(sys.argv[1], "speed-sweep", ["speeds_rpm=6000", "record_s=0.5", "zero=start"],
+                   clock="real", session_root=sys.argv[2], sinks=[StandStill()])
+sys.exit(0 if execute(prep, sys.argv[2]).status == "completed" else 1)
+"""
+
+
+def test_a_stand_still_outside_a_sleep_is_recorded_and_replayed(tmp_path):
+    """A real-clock run whose protocol thread stood still 0.4 s outside any sleep as its step
+    began: the settle began 0.4 s after the step. The faithful replay stands still there too
+    (clock.jsonl's main-late line) and settles as recorded; without that line (as an older
+    labkit replayed) its settle time is 0.4 s longer, beyond the 0.25 s tolerance."""
+    import subprocess
+
+    rig = Path(__file__).resolve().parents[2] / "rigs" / "emulated-fig525.toml"
+    done = subprocess.run([sys.executable, "-c", STAND_STILL_RUN, str(rig), str(tmp_path / "s")],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr[-2000:]
+    session, = (tmp_path / "s").iterdir()
+    rows = [json.loads(line) for line in (session / "clock.jsonl").read_text().splitlines()]
+    assert any(r["job"] == "main-late" and r["woke"] - r["t"] > 0.35 and r["site"].startswith("runner.py:")
+               for r in rows)
+    result = replay_session(session)
+    assert result.identical, result.differences[:5]
+    assert result.timing["stood_still"] >= 1
+    older = tmp_path / "older"
+    shutil.copytree(session, older)
+    (older / "clock.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows if r["job"] != "main-late"))
+    naive = replay_session(older)
+    assert any("settled after" in d for d in naive.differences), naive.differences
