@@ -1,4 +1,4 @@
-"""The clock of a faithful replay (docs/replay.md, docs/decisions/0019-faithful-replay.md):
+"""The clock of a faithful replay (docs/explanation/replay.md, docs/decisions/0019-faithful-replay.md):
 a :class:`~labkit.io.clock.VirtualClock` that runs jobs when the recording ran them and stands
 still where the recording's protocol thread did (``SESSION/clock.jsonl``,
 :class:`~labkit.io.clock.TickRecorder`)."""
