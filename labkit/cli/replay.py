@@ -98,7 +98,7 @@ def success_line(session: str, result) -> str:
     n = len((result.outcome.results or {}).get("points", []))
     if result.level == "exact":
         return (f"replayed {session}: {n} points, results identical to results.json "
-                "(points exact, fits within relative 1e-6)")
+                "(points exact; fits and image-analysis numbers within relative 1e-6)")
     if result.level == "analysis":
         return (f"re-analysed {session}: {n} points and the fit recomputed from the recorded bytes, "
                 "within tolerance of results.json (speed and force 0.5 %)")
