@@ -190,7 +190,6 @@ def reanalyse_session(record: SessionRecord) -> Any:
         elif protocol.name == "spin-critical":
             point = _spin_point(step, events, params)
         else:
-            notes.append(f"no analysis-only rule for protocol {protocol.name!r}; its points as recorded")
             point = next((e["point"] for e in events if e["type"] == "point"), None)
         if point is not None:
             points.append(point)
@@ -204,4 +203,9 @@ def reanalyse_session(record: SessionRecord) -> Any:
     recorded = record.results
     diffs = diff_within(results, recorded) if recorded is not None else ["no results.json recorded"]
     outcome = RunOutcome("completed", None, record.path, results)
-    return ReplayOutcome(outcome, recorded, not diffs, diffs, record.problems + notes, "analysis")
+    recomputed = protocol.name in ("speed-sweep", "spin-critical")
+    if not recomputed:
+        notes.append(f"no analysis-only rule for protocol {protocol.name!r}: its points are taken as "
+                     "recorded, only the fit is recomputed from them")
+    return ReplayOutcome(outcome, recorded, not diffs, diffs, record.problems + notes, "analysis",
+                         recomputed=recomputed)

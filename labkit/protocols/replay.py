@@ -101,29 +101,35 @@ def choose_level(record: SessionRecord, level: str = "auto") -> str:
         return level
     if recorded_clock(record) == "virtual":
         return "exact"
-    return "faithful" if faithful_ready(record) else "analysis"
+    return "faithful" if faithful_gap(record) is None else "analysis"
 
 
-def faithful_ready(record: SessionRecord) -> bool:
-    """Whether a session kept its speed loop's ticks (``clock.jsonl``) and every cassette names
-    its clock origin (older real-clock sessions cannot be put on one time line: they are
+def faithful_gap(record: SessionRecord) -> str | None:
+    """None when a real-clock session can be replayed faithfully: it kept its speed loop's ticks
+    (``clock.jsonl``) and every cassette names its clock origin; else what it lacks (older
+    real-clock sessions, and a camera's frame index, cannot be put on one time line: they are
     re-analysed instead)."""
     import json
 
     from labkit.io.clock import TICKS_FILE
 
     if not (record.path / TICKS_FILE).is_file():
-        return False
+        return f"no {TICKS_FILE} (a labkit that did not record its speed loop's ticks)"
     cassettes = sorted((record.path / "cassettes").glob("*.jsonl"))
+    gaps = []
     for path in cassettes:
         try:
             with path.open(encoding="utf-8") as f:
                 header = json.loads(f.readline() or "{}")
         except (OSError, ValueError):
-            return False
+            gaps.append(f"cassettes/{path.name} has no readable header")
+            continue
+        if isinstance(header, dict) and header.get("format") == "labkit-frames":
+            return (f"cassettes/{path.name} holds camera frames, which the faithful level does not "
+                    "serve yet")
         if not isinstance(header, dict) or "clock_origin" not in header:
-            return False
-    return bool(cassettes)
+            gaps.append(f"cassettes/{path.name} names no clock origin (a labkit before 2026-11-27)")
+    return gaps[0] if gaps else (None if cassettes else "no cassettes")
 
 
 def streams_unasked(kind: str, protocol: str) -> bool:
@@ -192,8 +198,8 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
         result.differences[:0] = tampered
         result.identical = result.identical and not tampered
         if level == "auto":
-            result.warnings.insert(0, f"{record.path}: a real-clock session from a labkit that did not "
-                                      "record its clock origin and threads: re-analysed, not replayed")
+            result.warnings.insert(0, f"{record.path}: a real-clock session that cannot be replayed "
+                                      f"faithfully ({faithful_gap(record)}): re-analysed, not replayed")
         return result
     if not (record.path / "cassettes").is_dir():
         raise LabkitError(f"{record.path}: no cassettes to replay")

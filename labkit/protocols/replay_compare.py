@@ -263,3 +263,6 @@ class ReplayOutcome:
     decisions: list[dict[str, Any]] = field(default_factory=list)
     #: faithful: recorded timing repeated (labkit.io.replay_clock.ReplayClock.repeated)
     timing: dict[str, int] = field(default_factory=dict)
+    #: analysis level: the points were recomputed from the bytes (False: a protocol without an
+    #: analysis-only rule, whose points were taken as recorded)
+    recomputed: bool = True
