@@ -10,6 +10,9 @@ a rig whose timing cannot be replayed.
    readings over the recorded averaging window (``settled`` to the rotor's stop) with the
    rest readings around it; spin-critical takes each step's recorded drops (rotor speed and
    spin at the drop, as registered) through the protocol's consistency rule.
+   cone-sweep analyses each step's burst again from the frame cassette
+   (:mod:`labkit.protocols.reanalyse_camera`); strobe-sweep has no rule yet (its points are
+   taken as recorded, and the replay says so).
 3. The protocol's quick fit is made again from those points.
 
 The result is compared with ``results.json`` within the faithful tolerances
@@ -184,13 +187,21 @@ def reanalyse_session(record: SessionRecord) -> Any:
     readings = reparse(record, rig, notes)
     carried = list(record.meta.get("carried_points") or [])
     points = list(carried)
+    bursts = None
+    if protocol.name == "cone-sweep":
+        from labkit.protocols.reanalyse_camera import ConeBursts
+
+        bursts = ConeBursts(record)
     for step, events in sorted(_by_step(record.events).items()):
+        recorded_point = next((e["point"] for e in events if e["type"] == "point"), None)
         if protocol.name == "speed-sweep":
             point = _sweep_point(step, events, readings, params)
         elif protocol.name == "spin-critical":
             point = _spin_point(step, events, params)
+        elif bursts is not None and isinstance(recorded_point, dict):
+            point = bursts.point(step, recorded_point, params)
         else:
-            point = next((e["point"] for e in events if e["type"] == "point"), None)
+            point = recorded_point
         if point is not None:
             points.append(point)
     protocol.plan(rig, params)  # sets what the fit needs from the parameters (e.g. w_ref)
@@ -203,7 +214,7 @@ def reanalyse_session(record: SessionRecord) -> Any:
     recorded = record.results
     diffs = diff_within(results, recorded) if recorded is not None else ["no results.json recorded"]
     outcome = RunOutcome("completed", None, record.path, results)
-    recomputed = protocol.name in ("speed-sweep", "spin-critical")
+    recomputed = protocol.name in ("speed-sweep", "spin-critical", "cone-sweep")
     if not recomputed:
         notes.append(f"no analysis-only rule for protocol {protocol.name!r}: its points are taken as "
                      "recorded, only the fit is recomputed from them")

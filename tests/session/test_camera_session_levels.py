@@ -1,6 +1,7 @@
 """A real-clock camera session is re-analysed, not replayed faithfully (the faithful level serves
-serial cassettes only), and the analysis-only level says that a protocol without an analysis
-rule had its points taken as recorded rather than claiming it recomputed them (issue 23)."""
+serial cassettes only): cone-sweep's bursts are analysed again from the frame cassette; a
+protocol without an analysis rule (strobe-sweep) says its points were taken as recorded rather
+than claiming it recomputed them (issue 23)."""
 
 import json
 import shutil
@@ -8,19 +9,45 @@ from pathlib import Path
 
 from labkit.cli import main
 
-FIXTURE = Path(__file__).resolve().parents[2] / "recordings" / "sessions" / "cone-sweep-clean"
+SESSIONS = Path(__file__).resolve().parents[2] / "recordings" / "sessions"
 
 
-def test_a_real_clock_camera_session_says_why_it_is_re_analysed_and_what_was_not(tmp_path, capsys):
-    session = tmp_path / "cone"
-    shutil.copytree(FIXTURE, session)
+def _as_real_clock(name: str, tmp_path: Path) -> Path:
+    session = tmp_path / name
+    shutil.copytree(SESSIONS / name, session)
     meta = json.loads((session / "run.json").read_text())
-    meta["clock"] = "real"  # as a lab's cone-sweep records it
+    meta["clock"] = "real"  # as a lab's camera session records it
     (session / "run.json").write_text(json.dumps(meta))
     (session / "clock.jsonl").write_text("")
+    return session
+
+
+def test_a_real_clock_cone_sweep_is_re_analysed_from_its_frames(tmp_path, capsys):
+    session = _as_real_clock("cone-sweep-clean", tmp_path)
     assert main(["replay", str(session)]) == 0
     captured = capsys.readouterr()
     assert "cassettes/camera.jsonl holds camera frames" in captured.err
-    assert "no analysis-only rule for protocol 'cone-sweep'" in captured.err
-    assert "points taken as recorded" in captured.out + captured.err
-    assert "recomputed from the recorded bytes" not in captured.out + captured.err
+    assert "6 points and the fit recomputed from the recorded bytes" in captured.out
+
+
+def test_the_re_analysed_cone_angle_is_held_against_results_json(tmp_path, capsys):
+    session = _as_real_clock("cone-sweep-clean", tmp_path)
+    results = json.loads((session / "results.json").read_text())
+    results["points"][2]["cone_angle_rad"] *= 1.05  # not what the frames give, in both files
+    (session / "results.json").write_text(json.dumps(results))
+    events = [json.loads(line) for line in (session / "events.jsonl").read_text().splitlines()]
+    for event in events:
+        if event.get("type") == "point" and event["point"].get("step") == 2:
+            event["point"]["cone_angle_rad"] = results["points"][2]["cone_angle_rad"]
+    (session / "events.jsonl").write_text("".join(json.dumps(e) + "\n" for e in events))
+    assert main(["replay", str(session)]) == 1
+    assert "points[2].cone_angle_rad" in capsys.readouterr().err
+
+
+def test_a_protocol_without_an_analysis_rule_says_its_points_were_taken_as_recorded(tmp_path, capsys):
+    session = _as_real_clock("strobe-sweep-clean", tmp_path)
+    assert main(["replay", str(session)]) == 0
+    captured = capsys.readouterr()
+    assert "no analysis-only rule for protocol 'strobe-sweep'" in captured.err
+    assert "points taken as recorded" in captured.out
+    assert "recomputed from the recorded bytes" not in captured.out
