@@ -13,6 +13,20 @@ from labkit.errors import DeviceReplyError, DeviceTimeout
 COMMAND_ATTEMPTS = 3
 
 
+def strip_sketch_junk(line: bytes, line_starts: tuple[bytes, ...]) -> bytes:
+    """Drop bytes before the first of a sketch's ``line_starts`` (power-on junk, noise on the
+    wire); a line with none of them is returned as it came."""
+    if line.startswith(line_starts):
+        return line
+    found = [i for i in (line.find(start) for start in line_starts) if i > 0]
+    return line[min(found):] if found else line
+
+
+def is_reply(line: bytes) -> bool:
+    """Whether a sketch line answers a command (``OK``, ``ERR ...``, ``ID ...``), not a status."""
+    return line == b"OK" or line.startswith(b"ERR") or line.startswith(b"ID ")
+
+
 def parse_sketch_banner(line: bytes, sketch: str) -> dict[str, str] | None:
     """``# <sketch> 1.0 key=value ...`` (the boot banner) -> {"version": "1.0", key: value, ...};
     None for any other line (other ``#`` lines are plain comments)."""

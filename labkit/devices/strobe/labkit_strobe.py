@@ -20,12 +20,11 @@ import serial
 from labkit.devices.base import Device
 from labkit.devices.link import ReplyQueue
 from labkit.devices.registry import register_driver, register_parser_benchmark
-from labkit.devices.sketch_commands import SketchCommands
+from labkit.devices.sketch_commands import SketchCommands, is_reply
 from labkit.devices.stream import LineFramer, StreamReader
 from labkit.devices.strobe.protocol import (
     StrobeStatus,
     format_command,
-    is_reply,
     parse_banner,
     parse_status_line,
     strip_junk,

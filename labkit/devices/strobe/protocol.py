@@ -22,7 +22,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from labkit.devices.sketch_commands import parse_flag_letters, parse_sketch_banner
+from labkit.devices.sketch_commands import parse_flag_letters, parse_sketch_banner, strip_sketch_junk
 
 #: status-line flag letters -> names
 FLAG_NAMES = {
@@ -148,14 +148,7 @@ def format_command(name: str, value: float | None = None) -> bytes:
 
 def strip_junk(line: bytes) -> bytes:
     """Drop bytes before the first known line start (power-on junk, noise on the wire)."""
-    if line.startswith(LINE_STARTS):
-        return line
-    found = [i for i in (line.find(start) for start in LINE_STARTS) if i > 0]
-    return line[min(found):] if found else line
-
-
-def is_reply(line: bytes) -> bool:
-    return line == b"OK" or line.startswith(b"ERR") or line.startswith(b"ID ")
+    return strip_sketch_junk(line, LINE_STARTS)
 
 
 def width_for_blur(rotor_hz: float, blur_deg: float) -> float:

@@ -31,7 +31,13 @@ from typing import Any
 from labkit.devices.base import Reading
 from labkit.devices.link import ReplyQueue
 from labkit.devices.registry import register_driver, register_parser_benchmark
-from labkit.devices.sketch_commands import SketchCommands, parse_flag_letters, parse_sketch_banner
+from labkit.devices.sketch_commands import (
+    SketchCommands,
+    is_reply,
+    parse_flag_letters,
+    parse_sketch_banner,
+    strip_sketch_junk,
+)
 from labkit.devices.stream import LineFramer
 from labkit.devices.tachometer.streaming import StreamingTachometer
 from labkit.units import rpm_to_rad_s
@@ -117,14 +123,7 @@ LINE_STARTS = (b"T,", b"OK", b"ERR", b"ID ", b"#")
 
 def strip_junk(line: bytes) -> bytes:
     """Drop bytes before the first known line start (power-on junk, noise on the wire)."""
-    if line.startswith(LINE_STARTS):
-        return line
-    found = [i for i in (line.find(start) for start in LINE_STARTS) if i > 0]
-    return line[min(found):] if found else line
-
-
-def is_reply(line: bytes) -> bool:
-    return line == b"OK" or line.startswith(b"ERR") or line.startswith(b"ID ")
+    return strip_sketch_junk(line, LINE_STARTS)
 
 
 @register_driver
