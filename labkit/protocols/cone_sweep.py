@@ -35,6 +35,12 @@ from labkit.rig import Rig
 from labkit.units import rad_s_to_rpm, rpm_to_rad_s
 
 
+def burst_fps(frames: list[Any], nominal: float | None) -> float:
+    """The frame rate a burst is analysed at: the camera's nominal rate, else the frames' own
+    (their trusted times; a network stream declares none)."""
+    return nominal or (len(frames) - 1) / max(frames[-1].t - frames[0].t, 1e-9)
+
+
 def burst_cone_angle(frames: list[Any], fps: float, size: tuple[int, int], screen_mm: float,
                      mm_per_px: float) -> dict[str, Any]:
     """Analyse a burst's laser trace: cone angle (rad, None without a trace), verdict, reasons."""
@@ -112,7 +118,7 @@ class ConeSweep(ProtocolDef):
         ctx.checkpoint()
         speeds = [r.value for r in ctx.tach_readings("rotor_tach", t_start)
                   if r.t <= frames[-1].t + 0.1 and math.isfinite(r.value)]
-        fps = camera.settings.fps or (len(frames) - 1) / max(frames[-1].t - frames[0].t, 1e-9)
+        fps = burst_fps(frames, camera.settings.fps)
         geometry = (camera.settings.size, float(p["screen_distance_mm"]), float(p["mm_per_px"]))
         result = burst_cone_angle(frames, fps, *geometry)
         pattern = result.pop("pattern")

@@ -8,19 +8,12 @@ camera session is checked (its frames cannot be served on the replay's clock yet
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Any
 
 from labkit.devices.camera.cassette import read_cassette
-from labkit.protocols.cone_sweep import burst_cone_angle
+from labkit.devices.camera.frames import Frame
+from labkit.protocols.cone_sweep import burst_cone_angle, burst_fps
 from labkit.session import SessionRecord
-
-
-@dataclass(frozen=True)
-class StoredFrame:
-    """What the burst analysis reads of a frame: the bytes the camera sent."""
-
-    payload: bytes
 
 
 class ConeBursts:
@@ -31,12 +24,14 @@ class ConeBursts:
         settings = header["settings"]
         width, height = (int(v) for v in str(settings["size"]).split("x"))
         self.size = (width, height)
-        self.fps = float(settings.get("fps") or 0.0)
-        self.bursts: dict[str, list[StoredFrame]] = {}
+        self.fps: float | None = settings.get("fps")
+        self.bursts: dict[str, list[Frame]] = {}
         for e in entries:
             start = int(e["offset"])
-            self.bursts.setdefault(str(e.get("step")), []).append(
-                StoredFrame(data[start:start + int(e["length"])]))
+            t_device = e.get("t_device")
+            self.bursts.setdefault(str(e.get("step")), []).append(Frame(
+                int(e.get("seq") or 0), float(e["t_host"]), None if t_device is None else float(t_device),
+                data[start:start + int(e["length"])], int(e.get("dropped_before") or 0)))
 
     def point(self, step: int, recorded: dict[str, Any], params: dict[str, Any]) -> dict[str, Any]:
         """The step's point with its cone angle, verdict and stderr analysed again from the burst
@@ -46,7 +41,7 @@ class ConeBursts:
             return {**recorded, "cone_angle_rad": None, "verdict": "failed",
                     "reasons": [f"no frames of step {step} in the frame cassette"]}
         geometry = (self.size, float(params["screen_distance_mm"]), float(params["mm_per_px"]))
-        fps = self.fps or 30.0
+        fps = burst_fps(frames, self.fps)
         result = burst_cone_angle(frames, fps, *geometry)
         result.pop("pattern", None)
         angle = result["cone_angle_rad"]
