@@ -16,11 +16,11 @@ import json
 from pathlib import Path
 from typing import Any
 
-from labkit.devices.base import Reading
 from labkit.devices.registry import driver_class
 from labkit.emulators.plant import reset_plants, shared_plant
 from labkit.io.clock import VirtualClock
 from labkit.io.ports import open_port
+from labkit.readings import Reading
 
 #: name -> (driver protocol, emulator URL, serial settings, driver options)
 SESSIONS: dict[str, tuple[str, str, dict[str, Any], dict[str, Any]]] = {

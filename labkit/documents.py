@@ -16,7 +16,7 @@ settled        Settled           index, settle_time_s, speeds_rad_s {loop: rad/s
 control        ControlSnapshot   loops {name: {target_rad_s, setpoint_rad_s, measured_rad_s, duty,
                                  settled}}
 reading        ReadingEvent      device (the rig role), reading (the driver's
-                                 :class:`~labkit.devices.base.Reading`, flags and raw bytes included)
+                                 :class:`~labkit.readings.Reading`, flags and raw bytes included)
 zero           Zeroed            device, value (balance reading at rest before zeroing), unit
 point          PointDone         index, point (one result row, as written to results.json)
 frames         FramesTaken       device, index, take, seqs, times, size, fmt, verdict, pattern,
@@ -44,7 +44,7 @@ import dataclasses
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
-from labkit.devices.base import Reading
+from labkit.readings import Reading
 
 
 @dataclass(frozen=True, kw_only=True)

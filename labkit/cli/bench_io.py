@@ -24,11 +24,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from labkit.devices.base import Reading
 from labkit.devices.registry import driver_class, parser_benchmarks
 from labkit.emulators import use_emulation
 from labkit.io.clock import Clock, VirtualClock
 from labkit.io.ports import open_port
+from labkit.readings import Reading
 
 TACH_URL = "sim://labkit_tach?seed=2&plant=bench-io&role=rotor_tach&rate_hz=10"
 BALANCE_URL = "sim://mtsics?seed=3&plant=bench-io&role=balance"

@@ -13,8 +13,9 @@ The driver modules (:mod:`labkit.devices.loadcell`, ``.motor``, ``.tachometer``)
 first :func:`driver_class` / :func:`known_drivers` call.
 """
 
-from labkit.devices.base import Balance, Device, MotorController, MotorStatus, Reading, Tachometer
+from labkit.devices.base import Balance, Device, MotorController, MotorStatus, Tachometer
 from labkit.devices.registry import driver_class, known_drivers, register_driver
+from labkit.readings import Reading
 
 __all__ = ["Balance", "Device", "MotorController", "MotorStatus", "Reading", "Tachometer", "driver_class",
            "known_drivers", "register_driver"]

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import Any, Protocol, runtime_checkable
 
-from labkit.devices.base import Reading
+from labkit.readings import Reading
 
 
 @runtime_checkable

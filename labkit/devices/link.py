@@ -28,11 +28,11 @@ from typing import Any, TypeVar
 
 import serial
 
-from labkit.devices.base import Reading
 from labkit.devices.stream import LineFramer
 from labkit.errors import DeviceDisconnected, DeviceError, DeviceTimeout
 from labkit.io.calls import port_call, read_time
 from labkit.io.clock import Clock
+from labkit.readings import Reading
 
 try:  # a hung-up pty raises termios.error (not an OSError) from tcflush
     from termios import error as _TermiosError

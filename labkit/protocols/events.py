@@ -15,7 +15,6 @@ from __future__ import annotations
 import sys
 from typing import Any, Protocol
 
-from labkit.devices.base import READING_FLAGS
 from labkit.documents import (
     DOCUMENT_TYPES,
     ReadingEvent,
@@ -27,6 +26,7 @@ from labkit.documents import (
     as_document,
     document_from_json,
 )
+from labkit.readings import READING_FLAGS
 
 
 class Sink(Protocol):
@@ -88,7 +88,7 @@ class FlagTally:
     def summary(self, suspect_only: bool = False) -> str:
         """One line, e.g. ``balance: device_reset x1 (first at 7.20 s); balance: tare_lost x1 ...``;
         empty when no reading carried a flag. ``suspect_only``: only the flags that mean a value
-        may be wrong (:data:`labkit.devices.base.READING_FLAGS`)."""
+        may be wrong (:data:`labkit.readings.READING_FLAGS`)."""
         parts = [f"{role}: {flag} x{n} (first at {self.first_t[(role, flag)]:.2f} s)"
                  for role, flags in sorted(self.counts.items()) for flag, n in sorted(flags.items())
                  if not suspect_only or READING_FLAGS.get(flag, (True, ""))[0]]

@@ -43,7 +43,7 @@ from labkit.units import G0, rad_s_to_rpm, rpm_to_rad_s
 
 @dataclass(frozen=True)
 class Parsed:
-    """A re-parsed reading: what the protocols use of a :class:`~labkit.devices.base.Reading`."""
+    """A re-parsed reading: what the protocols use of a :class:`~labkit.readings.Reading`."""
 
     t: float
     value: float

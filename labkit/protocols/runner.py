@@ -30,7 +30,7 @@ from typing import Any
 
 from labkit import documents as doc
 from labkit.control.loop import SpeedControl, build_speed_control
-from labkit.devices.base import Device, Reading
+from labkit.devices.base import Device
 from labkit.devices.kinds import BalanceKind, CameraKind, StrobeKind, TachometerKind
 from labkit.errors import LabkitError, SafetyError
 from labkit.io.clock import record_ticks
@@ -41,6 +41,7 @@ from labkit.protocols.events import EventBus, Sink
 from labkit.protocols.exit_paths import STOP_SIGNALS, SessionGuard, signal_name, stop_failed_text
 from labkit.protocols.operator import Operator, default_operator
 from labkit.protocols.plan import check_plan, format_plan
+from labkit.readings import Reading
 from labkit.rig import Rig, open_rig
 from labkit.units import rad_s_to_rpm
 

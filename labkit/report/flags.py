@@ -1,18 +1,18 @@
 """The report's "Device flags" section: what the drivers noticed besides the values.
 
-Every reading in ``readings/ROLE.jsonl`` carries ``flags`` (:meth:`labkit.devices.base.Reading.as_json`):
+Every reading in ``readings/ROLE.jsonl`` carries ``flags`` (:meth:`labkit.readings.Reading.as_json`):
 ``device_reset`` (the device rebooted mid-run), ``tare_lost`` (its zero is no longer the run's
 zero), ``overload``... A reading with a flag may be wrong in a way its value does not show,
 so the report lists every flag with its count, the first flagged reading (time and raw bytes)
-and its meaning (:data:`labkit.devices.base.READING_FLAGS`), and warns about the suspect ones.
+and its meaning (:data:`labkit.readings.READING_FLAGS`), and warns about the suspect ones.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from labkit.devices.base import READING_FLAGS, Reading
 from labkit.protocols.events import FlagTally
+from labkit.readings import READING_FLAGS, Reading
 from labkit.report import markdown as md
 from labkit.session.export import read_jsonl
 

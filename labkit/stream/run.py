@@ -50,8 +50,8 @@ from typing import Any
 import numpy as np
 
 from labkit import documents as doc
-from labkit.devices.base import READING_FLAGS
 from labkit.hints import Hints
+from labkit.readings import READING_FLAGS
 from labkit.stream.blueprints import FigureSpec, figure_of, run_blueprint
 from labkit.stream.core import RerunSpec, open_stream
 from labkit.stream.frames import CameraOverlays

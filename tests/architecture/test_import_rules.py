@@ -15,8 +15,9 @@ LABKIT = Path(__file__).resolve().parents[2] / "labkit"
 # or of the layers below, never above; within a layer the parts stay free of cycles
 # (test_import_graph.py).
 LAYERS: list[set[str]] = [
-    # 0. words every part may use: errors, units, ranges, the body table, presentation hints
-    {"errors", "units", "ranges", "lazy", "bodies", "hints", "plugins"},
+    # 0. words every part may use: errors, units, ranges, the body table, presentation hints, the
+    # one reading shape
+    {"errors", "units", "ranges", "lazy", "bodies", "hints", "plugins", "readings"},
     # 1. the transport, the physics and the image analysis: none knows a device or a rig
     {"io", "model", "sim", "vision"},
     # 2. the device drivers; predictions, synthetic footage and images built on the physics

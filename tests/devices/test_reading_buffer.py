@@ -8,8 +8,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from labkit.devices.base import Reading
 from labkit.devices.link import ReadingBuffer
+from labkit.readings import Reading
 
 
 def reading(t: float) -> Reading:

@@ -11,8 +11,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from labkit import documents as doc
-from labkit.devices.base import Reading
 from labkit.protocols.launch import execute, prepare_run
+from labkit.readings import Reading
 from labkit.rig import bundled_rig_path
 from labkit.session.writer import dumps
 

@@ -15,11 +15,11 @@ from contextlib import contextmanager
 
 import serial
 
-from labkit.devices.base import Reading
 from labkit.devices.link import FrameError, LineLink, ReadingBuffer
 from labkit.devices.stream import LineFramer, StreamReader
 from labkit.errors import DeviceError, DeviceTimeout
 from labkit.io.clock import Clock
+from labkit.readings import Reading
 
 
 class ContinuousReadings:

@@ -28,7 +28,6 @@ import threading
 from dataclasses import dataclass
 from typing import Any
 
-from labkit.devices.base import Reading
 from labkit.devices.link import ReplyQueue
 from labkit.devices.registry import register_driver, register_parser_benchmark
 from labkit.devices.sketch_commands import (
@@ -40,6 +39,7 @@ from labkit.devices.sketch_commands import (
 )
 from labkit.devices.stream import LineFramer
 from labkit.devices.tachometer.streaming import StreamingTachometer
+from labkit.readings import Reading
 from labkit.units import rpm_to_rad_s
 
 FLAG_NAMES = {"Z": "zero_speed", "O": "over_range", "N": "noisy"}

@@ -27,10 +27,10 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from labkit.devices.base import Reading
 from labkit.devices.registry import register_driver, register_parser_benchmark
 from labkit.devices.tachometer.streaming import StreamingTachometer
 from labkit.errors import DeviceTimeout
+from labkit.readings import Reading
 from labkit.units import rpm_to_rad_s
 
 STX = 0x02

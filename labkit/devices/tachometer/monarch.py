@@ -16,11 +16,11 @@ import re
 from collections import deque
 from typing import Any
 
-from labkit.devices.base import Reading
 from labkit.devices.link import ReplyQueue
 from labkit.devices.registry import register_driver, register_parser_benchmark
 from labkit.devices.tachometer.streaming import StreamingTachometer
 from labkit.errors import DeviceReplyError, DeviceTimeout
+from labkit.readings import Reading
 from labkit.units import rpm_to_rad_s
 
 VALUE_LINE = re.compile(rb"^\s*([+-]?\d{1,9}(?:\.\d{1,6})?)\s*(?:RPM|rpm)?\s*$")

@@ -11,9 +11,10 @@ from typing import Any, cast
 
 import serial
 
-from labkit.devices.base import Reading, Tachometer
+from labkit.devices.base import Tachometer
 from labkit.devices.registry import driver_class
 from labkit.io.clock import Clock
+from labkit.readings import Reading
 
 
 def reading_record(reading: Reading) -> dict[str, Any]:

@@ -15,10 +15,11 @@ from typing import Any
 
 import serial
 
-from labkit.devices.base import Reading, Tachometer
+from labkit.devices.base import Tachometer
 from labkit.devices.link import ReadingBuffer
 from labkit.devices.stream import StreamReader
 from labkit.io.clock import Clock
+from labkit.readings import Reading
 
 
 class StreamingTachometer(Tachometer):
