@@ -1,7 +1,9 @@
 """The run's documents: one frozen dataclass per event type (bluesky's document model).
 
-Every document has ``t`` (clock seconds) and a class-level ``type`` (its name in
-``events.jsonl``). :meth:`RunDocument.to_json` is the one place a document becomes JSON;
+Every document has ``t`` (clock seconds), a class-level ``type`` (its name in
+``events.jsonl``) and ``run_id``, the run's id (a uuid; the event bus stamps it, and a resumed
+run carries the id of the run it resumes, so their documents join up).
+:meth:`RunDocument.to_json` is the one place a document becomes JSON;
 :func:`document_from_json` reads a line of ``events.jsonl`` (or a reading file) back.
 
 =============  ================  ====================================================================
@@ -15,8 +17,12 @@ setpoint       Setpoint          loop, target_rad_s
 settled        Settled           index, settle_time_s, speeds_rad_s {loop: rad/s}
 control        ControlSnapshot   loops {name: {target_rad_s, setpoint_rad_s, measured_rad_s, duty,
                                  settled}}
+descriptor     StreamDescriptor  device (the rig role), kind, driver, quantity, unit: a device's
+                                 stream declared once, before its first reading (again if the
+                                 device changes what it reports)
 reading        ReadingEvent      device (the rig role), reading (the driver's
-                                 :class:`~labkit.readings.Reading`, flags and raw bytes included)
+                                 :class:`~labkit.readings.Reading`, flags and raw bytes included;
+                                 its JSON carries the values only: the descriptor has the units)
 zero           Zeroed            device, value (balance reading at rest before zeroing), unit
 point          PointDone         index, point (one result row, as written to results.json)
 frames         FramesTaken       device, index, take, seqs, times, size, fmt, verdict, pattern,
@@ -32,10 +38,12 @@ results        Results           results (the results.json object)
 stop           RunStop           status ("completed"|"interrupted"|"failed"), reason, steps_done
 =============  ================  ====================================================================
 
-A reading is serialised by :meth:`Reading.as_json` only: the reading files
-(``readings/ROLE.jsonl``), ``labkit probe`` and the rerun sink all see the same keys
-(``t, quantity, value, unit, stable, overload, flags, raw``). Decision record:
-docs/decisions/0004-typed-run-documents.md.
+A reading is serialised by :class:`~labkit.readings.Reading` only: ``labkit probe`` prints
+:meth:`~labkit.readings.Reading.as_json` (``t, quantity, value, unit, stable, overload, flags,
+raw``); a run's reading files (``readings/ROLE.jsonl``) hold the stream's descriptor, then
+:meth:`~labkit.readings.Reading.values_json` per reading (the same keys without quantity and unit).
+Decision records: docs/decisions/0004-typed-run-documents.md,
+docs/decisions/0033-one-reading-shape.md.
 """
 
 from __future__ import annotations
@@ -53,6 +61,9 @@ class RunDocument:
 
     type: ClassVar[str] = ""
     t: float
+    #: the run's id (a uuid, :class:`labkit.protocols.events.EventBus` stamps it; "" in
+    #: sessions recorded before run ids)
+    run_id: str = ""
 
     def to_json(self) -> dict[str, Any]:
         """The ``events.jsonl`` object: ``{"type": ..., "t": ..., <fields>}``."""
@@ -132,8 +143,35 @@ class ControlSnapshot(RunDocument):
 
 
 @dataclass(frozen=True, kw_only=True)
+class StreamDescriptor(RunDocument):
+    """A device's stream of readings declared once, before its first reading (and again when
+    the device changes what it reports, e.g. a balance switched from g to N): ``device`` the rig
+    role, ``kind`` and ``driver`` as the rig file names them, and the ``quantity`` and SI
+    ``unit`` of every following reading's ``value``."""
+
+    type: ClassVar[str] = "descriptor"
+    device: str
+    kind: str = ""
+    driver: str = ""
+    quantity: str
+    unit: str
+
+    @classmethod
+    def of(cls, device: str, reading: Reading, kind: str = "", driver: str = "",
+           run_id: str = "") -> StreamDescriptor:
+        """The descriptor of the stream ``reading`` begins (``t``: the reading's)."""
+        return cls(t=reading.t, run_id=run_id, device=device, kind=kind, driver=driver,
+                   quantity=reading.quantity, unit=reading.unit)
+
+    def declares(self, reading: Reading) -> bool:
+        """Whether ``reading`` has this stream's quantity and unit."""
+        return reading.quantity == self.quantity and reading.unit == self.unit
+
+
+@dataclass(frozen=True, kw_only=True)
 class ReadingEvent(RunDocument):
-    """One device reading; ``device`` is the rig role (the reading file's name)."""
+    """One device reading; ``device`` is the rig role (the reading file's name). Its JSON
+    carries the reading's values; quantity and unit are its stream's :class:`StreamDescriptor`'s."""
 
     type: ClassVar[str] = "reading"
     device: str
@@ -144,7 +182,7 @@ class ReadingEvent(RunDocument):
         return cls(t=reading.t, device=device, reading=reading)
 
     def to_json(self) -> dict[str, Any]:
-        return {"type": self.type, "device": self.device, **self.reading.as_json()}
+        return {"type": self.type, "run_id": self.run_id, "device": self.device, **self.reading.values_json()}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -237,7 +275,7 @@ class Interlock(RunDocument):
     stop_failed: tuple[str, ...] = ()
 
     def to_json(self) -> dict[str, Any]:
-        out: dict[str, Any] = {"type": self.type, "t": self.t, "reason": self.reason}
+        out: dict[str, Any] = {"type": self.type, "t": self.t, "run_id": self.run_id, "reason": self.reason}
         if self.stop_failed:
             out["stop_failed"] = list(self.stop_failed)
         return out
@@ -279,9 +317,9 @@ class RunStop(RunDocument):
 
 
 DOCUMENT_TYPES: dict[str, type[RunDocument]] = {
-    cls.type: cls for cls in (RunStart, StepStart, Setpoint, Settled, ControlSnapshot, ReadingEvent,
-                              Zeroed, PointDone, FramesTaken, Drop, Checkpoint, StopRequest, Interlock,
-                              StopFailed, Fault, Results, RunStop)
+    cls.type: cls for cls in (RunStart, StepStart, Setpoint, Settled, ControlSnapshot, StreamDescriptor,
+                              ReadingEvent, Zeroed, PointDone, FramesTaken, Drop, Checkpoint, StopRequest,
+                              Interlock, StopFailed, Fault, Results, RunStop)
 }
 
 
@@ -289,8 +327,10 @@ class UnknownDocument(ValueError):
     """A JSON object that is no run document (unknown ``type`` or a missing field)."""
 
 
-def document_from_json(obj: dict[str, Any]) -> RunDocument:
-    """The document a line of ``events.jsonl`` was written from (inverse of ``to_json``).
+def document_from_json(obj: dict[str, Any], stream: StreamDescriptor | None = None) -> RunDocument:
+    """The document a line of ``events.jsonl`` was written from (inverse of ``to_json``); a
+    reading's quantity and unit are its ``stream``'s (a reading written before descriptors
+    carries its own).
 
     Raises :class:`UnknownDocument` naming the type and the missing field."""
     kind = obj.get("type")
@@ -300,8 +340,10 @@ def document_from_json(obj: dict[str, Any]) -> RunDocument:
         raise UnknownDocument(f"unknown run document type {kind!r}; known: {known}")
     if cls is ReadingEvent:
         # "device" of a reading document is the rig role; the driver's own name is not recorded
-        reading = Reading.from_json({k: v for k, v in obj.items() if k != "device"})
-        return ReadingEvent.of(str(obj.get("device", "")), reading)
+        reading = Reading.from_json({k: v for k, v in obj.items() if k != "device"},
+                                    stream.quantity if stream else "", stream.unit if stream else "")
+        return ReadingEvent(t=reading.t, run_id=str(obj.get("run_id", "")), device=str(obj.get("device", "")),
+                            reading=reading)
     kwargs: dict[str, Any] = {"t": float(obj.get("t", 0.0))}
     for f in dataclasses.fields(cls):
         if f.name == "t":

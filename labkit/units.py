@@ -1,4 +1,5 @@
-"""Units used across labkit (SI inside; these convert at the edges).
+"""Units used across labkit (SI inside; these convert at the edges): the one place a value
+changes unit (a reading's force, speeds in RPM, table columns).
 
 One definition each, so a rig file, a data table, a driver, an emulator and a plot agree to
 the last bit. :data:`UNIT_SUFFIXES` is the one table of unit suffixes in names: rig-file keys
@@ -77,3 +78,31 @@ def rpm_to_rad_s(rpm: float) -> float:
 def rad_s_to_rpm(rad_s: float) -> float:
     """rad/s -> mechanical RPM."""
     return rad_s / RAD_S_PER_RPM
+
+
+def n_to_gf(newtons: float) -> float:
+    """N -> grams-force (what a balance shows; Fig. 5.25's axis): ``n / G0 * 1e3``."""
+    return newtons / G0 * 1e3
+
+
+def gf_to_n(grams: float) -> float:
+    """Grams-force (or a mass in grams weighed under standard gravity) -> N."""
+    return grams * 1e-3 * G0
+
+
+def force_n(value: float, unit: str) -> float:
+    """A balance's value in its SI ``unit`` as a force (N): ``N`` as it is, ``kg`` a mass under
+    standard gravity. ValueError for any other unit (the caller names the device)."""
+    if unit == "N":
+        return float(value)
+    if unit == "kg":
+        return float(value) * G0
+    raise ValueError(f"cannot use a value in {unit!r} as a force (N or kg)")
+
+
+def force_gf(value: float, unit: str) -> float:
+    """A balance's value in its SI ``unit`` in grams-force: ``kg`` x 1000 (the mass in grams),
+    ``N`` via :func:`n_to_gf`. ValueError for any other unit."""
+    if unit == "kg":
+        return float(value) * 1000.0
+    return n_to_gf(force_n(value, unit))

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from labkit.units import G0
+from labkit.units import gf_to_n
 
 
 def write_sweep_session(root: str | Path, *, a: float = 224e6, b: float = -1.9, noise: float = 0.01,
@@ -23,8 +23,8 @@ def write_sweep_session(root: str | Path, *, a: float = 224e6, b: float = -1.9, 
     speeds = np.arange(6000, 20001, 1000.0) if speeds_rpm is None else np.asarray(speeds_rpm, float)
     grams = a * speeds**b * np.exp(rng.normal(0, noise, speeds.size))
     points = [{"speed_rpm": float(s), "speed_rad_s": float(s * 2 * math.pi / 60), "force_g": float(g),
-               "force_n": float(g * 1e-3 * G0), "force_stderr_g": float(g * noise),
-               "force_stderr_n": float(g * noise * 1e-3 * G0), "n": 20, "settle_time_s": 1.5}
+               "force_n": float(gf_to_n(g)), "force_stderr_g": float(g * noise),
+               "force_stderr_n": float(gf_to_n(g * noise)), "n": 20, "settle_time_s": 1.5}
               for s, g in zip(speeds, grams, strict=True)]
     root.mkdir(parents=True, exist_ok=True)
     (root / "results.json").write_text(json.dumps({

@@ -12,7 +12,9 @@ reports it once on stderr so a broken viewer never stops a motor shutdown.
 
 from __future__ import annotations
 
+import dataclasses
 import sys
+import uuid
 from typing import Any, Protocol
 
 from labkit.documents import (
@@ -29,15 +31,23 @@ from labkit.documents import (
 from labkit.readings import READING_FLAGS
 
 
+def new_run_id() -> str:
+    """A fresh run id (a random uuid, as text)."""
+    return str(uuid.uuid4())
+
+
 class Sink(Protocol):
     def on_event(self, event: RunDocument) -> None: ...
 
 
 class EventBus:
-    """Fans each event out to the sinks; a failing sink is dropped, never fatal."""
+    """Fans each event out to the sinks; a failing sink is dropped, never fatal. Every document
+    leaves it with the run's id, ``run_id`` (a new uuid unless given: a resumed run passes the
+    id of the run it resumes)."""
 
-    def __init__(self, sinks: list[Sink] | None = None) -> None:
+    def __init__(self, sinks: list[Sink] | None = None, run_id: str | None = None) -> None:
         self.sinks: list[Sink] = list(sinks or [])
+        self.run_id = run_id or new_run_id()
 
     def add(self, sink: Sink) -> None:
         self.sinks.append(sink)
@@ -45,6 +55,8 @@ class EventBus:
     def emit(self, event: RunDocument | dict[str, Any]) -> None:
         """Hand ``event`` to every sink (a plain dict is first read as its document)."""
         event = as_document(event, 0.0)
+        if event.run_id != self.run_id:
+            event = dataclasses.replace(event, run_id=self.run_id)
         for sink in list(self.sinks):
             try:
                 sink.on_event(event)

@@ -136,7 +136,7 @@ def _prepare(rig_path: str | Path | None, protocol_name: str | None, sets: list[
         warnings += dropped + notes
     done = {int(p["step"]) for p in points}
     runner = Runner(protocol, rig, params, clock=the_clock, sinks=sinks, previous_points=points,
-                    done_steps=done)
+                    done_steps=done, run_id=record.run_id if record is not None else None)
     if record is not None and len(done) >= len(runner.steps):
         lost = "" if record.results is not None else (
             f"; only its results.json is missing (deleted, or the run was killed after its last point): "
@@ -184,7 +184,7 @@ def _execute(prep: PreparedRun, session_root: str | Path | None, notes: str,
         session = Session.create(
             session_root, protocol=prep.protocol.name, params=_jsonable(prep.params), rig_name=prep.rig.name,
             rig_text=prep.rig.text, clock="virtual" if prep.clock.is_virtual else "real", notes=notes,
-            resumed_from=str(prep.resumed_from.path) if prep.resumed_from else None)
+            resumed_from=str(prep.resumed_from.path) if prep.resumed_from else None, run_id=runner.run_id)
         session.update_meta(carried_points=prep.carried_points,
                             steps_planned=len(runner.steps), resume_warnings=prep.warnings)
         runner.session = session

@@ -38,7 +38,7 @@ from labkit.protocols.speed_sweep import drift_warnings, finite_std, mean_stderr
 from labkit.protocols.spin_critical import point_from_trials
 from labkit.rig import load_rig
 from labkit.session import SessionRecord
-from labkit.units import G0, rad_s_to_rpm, rpm_to_rad_s
+from labkit.units import n_to_gf, rad_s_to_rpm, rpm_to_rad_s
 
 
 @dataclass(frozen=True)
@@ -142,19 +142,19 @@ def _sweep_point(step: int, events: list[dict[str, Any]], readings: dict[str, li
             t_mid = 0.5 * (at_speed[0].t + at_speed[-1].t) if at_speed else t_start
             frac = (t_mid - r0.t) / (r1.t - r0.t) if r1.t > r0.t else 0.5
             drift = reading_force_n(r0) + frac * (reading_force_n(r1) - reading_force_n(r0))
-            rests_g = (reading_force_n(r0) / G0 * 1e3, reading_force_n(r1) / G0 * 1e3)
+            rests_g = (n_to_gf(reading_force_n(r0)), n_to_gf(reading_force_n(r1)))
     force, stderr = mean_stderr([reading_force_n(r) - drift for r in at_speed])
     finite = [v for v in speeds if math.isfinite(v)]
     speed = statistics.fmean(finite) if finite else math.nan
     data = point["point"]
     return {"step": step, "direction": data.get("direction"), "repeat": data.get("repeat"),
             "target_rpm": data.get("target_rpm"), "speed_rad_s": speed, "speed_rpm": rad_s_to_rpm(speed),
-            "speed_std_rpm": rad_s_to_rpm(finite_std(speeds)), "force_n": force, "force_g": force / G0 * 1e3,
-            "force_stderr_n": stderr, "force_stderr_g": stderr / G0 * 1e3, "n": len(at_speed),
+            "speed_std_rpm": rad_s_to_rpm(finite_std(speeds)), "force_n": force, "force_g": n_to_gf(force),
+            "force_stderr_n": stderr, "force_stderr_g": n_to_gf(stderr), "n": len(at_speed),
             "settle_time_s": settled["settle_time_s"], "drift_n": drift,
-            "drift_g": drift / G0 * 1e3 if rests_g else None,
+            "drift_g": n_to_gf(drift) if rests_g else None,
             "unstable": sum(1 for r in at_speed if not r.stable),
-            "warnings": drift_warnings(force / G0 * 1e3, drift / G0 * 1e3, rests_g,
+            "warnings": drift_warnings(n_to_gf(force), n_to_gf(drift), rests_g,
                                        float(params.get("drift_warn", 0.05)))}
 
 

@@ -221,7 +221,8 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
 
     pacer = [_StepPacer(clock, record)] if isinstance(clock, ReplayClock) else []
     runner = Runner(protocol, rig, params, clock=clock, sinks=[*pacer, *(sinks or []), collect, evidence],
-                    previous_points=points, done_steps=done, port_override=port_for, offline=True)
+                    previous_points=points, done_steps=done, port_override=port_for, offline=True,
+                    run_id=record.run_id)
     with use_clock(clock):
         outcome = runner.run()
     if isinstance(outcome.error, CassetteError):

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from labkit.protocols.replay_compare import ADDED_KEYS, close_enough
+from labkit.readings import declared
 
 #: the reading keys compared (the time, the number and the bytes it came from)
 READING_KEYS = ("t", "value", "raw")
@@ -46,10 +47,11 @@ class Evidence:
         if kind == "point":
             self.points.append(json.loads(json.dumps(event.get("point"))))  # as events.jsonl holds it
         elif kind == "reading":
+            parsed = event.reading.as_json()   # with its quantity and unit
             if self.readings_dir is not None:
-                self._check(str(event.get("device"))).add(event.to_json())
+                self._check(str(event.get("device"))).add(parsed)
             if self.keep_readings:
-                self.readings.setdefault(str(event.get("device")), []).append(event.to_json())
+                self.readings.setdefault(str(event.get("device")), []).append(parsed)
 
     def _check(self, device: str) -> ReadingsCheck:
         check = self.checks.get(device)
@@ -80,7 +82,7 @@ class ReadingsCheck:
         path = readings_dir / f"{device}.jsonl"
         self.file = str(path)
         self._recorded: Iterator[tuple[int, dict[str, Any]]] = (
-            iter_jsonl_lines(session_file(readings_dir.parent, "readings", path.name), problems)
+            declared(iter_jsonl_lines(session_file(readings_dir.parent, "readings", path.name), problems))
             if path.exists() else iter(()))
         self.replayed = 0
         self.recorded = 0

@@ -77,6 +77,7 @@ class RunContext:
         self.control = control
         self.step: Step | None = None
         self._last_control_event = -1e9
+        self._streams: dict[str, doc.StreamDescriptor] = {}   # role -> its stream's descriptor
         self._tach_logged: dict[str, float] = {
             role: -1e9 for role in devices if self.rig.devices[role].kind == "tach"}
 
@@ -114,8 +115,16 @@ class RunContext:
         """Hand a document to the sinks (a plain dict without ``t`` is stamped now)."""
         self.runner.bus.emit(doc.as_document(event, self.clock.now()))
 
-    def emit_reading(self, role: str, reading: Any) -> None:
-        """The reading itself, flags and raw bytes included, as a ``reading`` document."""
+    def emit_reading(self, role: str, reading: Reading) -> None:
+        """The reading itself, flags and raw bytes included, as a ``reading`` document; the
+        first of a device (or one whose quantity or unit differs from the stream's so far)
+        after a ``descriptor`` declaring them."""
+        described = self._streams.get(role)
+        if described is None or not described.declares(reading):
+            spec = self.rig.devices.get(role)
+            kind, driver = (spec.kind, spec.protocol) if spec is not None else ("", "")
+            described = self._streams[role] = doc.StreamDescriptor.of(role, reading, kind, driver)
+            self.emit(described)
         self.emit(doc.ReadingEvent.of(role, reading))
 
     def log_tach_readings(self) -> None:
@@ -266,12 +275,15 @@ class Runner:
     def __init__(self, protocol: ProtocolDef, rig: Rig, params: dict[str, Any], *, clock: Any,
                  sinks: list[Sink] | None = None, session: Any = None,
                  previous_points: list[dict[str, Any]] | None = None, done_steps: set[int] | None = None,
-                 port_override: Any = None, operator: Operator | None = None, offline: bool = False) -> None:
+                 port_override: Any = None, operator: Operator | None = None, offline: bool = False,
+                 run_id: str | None = None) -> None:
         self.protocol = protocol
         self.rig = rig
         self.params = params
         self.clock = clock
-        self.bus = EventBus(sinks)
+        #: every document carries the run's id (``run_id``: a resumed run's is the first run's)
+        self.bus = EventBus(sinks, run_id)
+        self.run_id = self.bus.run_id
         self.session = session
         if session is not None:
             self.bus.add(session)

@@ -29,16 +29,16 @@ from labkit.protocols.params import ParamError
 from labkit.protocols.quickfit import quick_fit_power_law
 from labkit.protocols.runner import ProtocolDef, RunContext, Step
 from labkit.rig import Rig
-from labkit.units import G0, rad_s_to_rpm, rpm_to_rad_s
+from labkit.units import force_n, n_to_gf, rad_s_to_rpm, rpm_to_rad_s
 
 
 def reading_force_n(reading: Any) -> float:
-    """A balance reading as a force (N): kg readings are a mass under standard gravity."""
-    if reading.unit == "N":
-        return float(reading.value)
-    if reading.unit == "kg":
-        return float(reading.value) * G0
-    raise LabkitError(f"{reading.device or 'balance'}: cannot use a reading in {reading.unit!r} as a force")
+    """A balance reading as a force (N): kg readings are a mass under standard gravity
+    (:func:`labkit.units.force_n`)."""
+    try:
+        return force_n(reading.value, reading.unit)
+    except ValueError as exc:
+        raise LabkitError(f"{reading.device or 'balance'}: {exc}") from None
 
 
 def mean_stderr(values: list[float]) -> tuple[float, float]:
@@ -176,16 +176,16 @@ class SpeedSweep(ProtocolDef):
         force, stderr = mean_stderr([f - drift for f in forces])
         speed = statistics.fmean(finite_speeds) if finite_speeds else math.nan
         speed_std = finite_std(speeds)
-        rests_g = (rest0[1] / G0 * 1e3, rest1[1] / G0 * 1e3) if rest0 and rest1 else None
-        warnings = drift_warnings(force / G0 * 1e3, drift / G0 * 1e3, rests_g, float(p["drift_warn"]))
+        rests_g = (n_to_gf(rest0[1]), n_to_gf(rest1[1])) if rest0 and rest1 else None
+        warnings = drift_warnings(n_to_gf(force), n_to_gf(drift), rests_g, float(p["drift_warn"]))
         return {
             "direction": step.data["direction"], "repeat": step.data["repeat"],
             "target_rpm": step.data["target_rpm"],
             "speed_rad_s": speed, "speed_rpm": rad_s_to_rpm(speed), "speed_std_rpm": rad_s_to_rpm(speed_std),
-            "force_n": force, "force_g": force / G0 * 1e3,
-            "force_stderr_n": stderr, "force_stderr_g": stderr / G0 * 1e3,
+            "force_n": force, "force_g": n_to_gf(force),
+            "force_stderr_n": stderr, "force_stderr_g": n_to_gf(stderr),
             "n": len(forces), "settle_time_s": settle_time, "drift_n": drift,
-            "drift_g": drift / G0 * 1e3 if rests_g else None,
+            "drift_g": n_to_gf(drift) if rests_g else None,
             "unstable": sum(1 for r in readings if not r.stable),
             "warnings": warnings,
         }

@@ -30,7 +30,7 @@ from labkit.protocols.quickfit import fit_spin_critical_c
 from labkit.protocols.runner import ProtocolDef, RunContext, Step
 from labkit.protocols.speed_sweep import reading_force_n
 from labkit.rig import Rig
-from labkit.units import G0, rad_s_to_rpm, rpm_to_rad_s
+from labkit.units import force_n, gf_to_n, rad_s_to_rpm, rpm_to_rad_s
 
 
 def point_from_trials(target_rpm: float, trials: list[dict[str, Any]], consistent: bool,
@@ -105,12 +105,12 @@ class SpinCritical(ProtocolDef):
     def _weight_n(self, ctx: RunContext) -> float:
         grams = ctx.params["floator_mass_g"]
         if grams > 0:
-            return grams * 1e-3 * G0
+            return gf_to_n(grams)
         mass_kg = ctx.rig.bodies["floator"].mass_kg
         if mass_kg is None:  # plan() refuses a rig without it: not reached
             raise ParamError(f"spin-critical needs the floator's mass: bodies.floator.mass_g in "
                              f"{ctx.rig.path} or --set floator_mass_g=...")
-        return mass_kg * G0
+        return force_n(mass_kg, "kg")
 
     def setup(self, ctx: RunContext) -> None:
         balance = ctx.balance("balance")

@@ -1,6 +1,6 @@
 """The report's "Device flags" section: what the drivers noticed besides the values.
 
-Every reading in ``readings/ROLE.jsonl`` carries ``flags`` (:meth:`labkit.readings.Reading.as_json`):
+Every reading in ``readings/ROLE.jsonl`` carries ``flags`` (:meth:`labkit.readings.Reading.values_json`):
 ``device_reset`` (the device rebooted mid-run), ``tare_lost`` (its zero is no longer the run's
 zero), ``overload``... A reading with a flag may be wrong in a way its value does not show,
 so the report lists every flag with its count, the first flagged reading (time and raw bytes)
@@ -12,9 +12,9 @@ from __future__ import annotations
 from pathlib import Path
 
 from labkit.protocols.events import FlagTally
-from labkit.readings import READING_FLAGS, Reading
+from labkit.readings import READING_FLAGS, Reading, declared
 from labkit.report import markdown as md
-from labkit.session.export import read_jsonl
+from labkit.session.reader import iter_jsonl_lines
 
 
 def session_flags(session: Path) -> tuple[FlagTally, dict[tuple[str, str], Reading]]:
@@ -23,7 +23,7 @@ def session_flags(session: Path) -> tuple[FlagTally, dict[tuple[str, str], Readi
     first: dict[tuple[str, str], Reading] = {}
     for path in sorted((session / "readings").glob("*.jsonl")):
         role = path.stem
-        for row in read_jsonl(path):
+        for _, row in declared(iter_jsonl_lines(path)):
             if not row.get("flags"):
                 continue
             reading = Reading.from_json(row)

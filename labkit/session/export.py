@@ -1,4 +1,5 @@
-"""Readings files as tables: JSONL -> Parquet (pyarrow, which rerun-sdk brings) and CSV."""
+"""Readings files as tables: JSONL -> Parquet (pyarrow, which rerun-sdk brings) and CSV, one row
+per reading with its stream's quantity and unit (:func:`labkit.readings.declared`)."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import itertools
 from pathlib import Path
 
 from labkit.errors import SessionError
+from labkit.readings import declared
 from labkit.session.paths import session_file
 from labkit.session.reader import read_jsonl as read_checked
 
@@ -46,7 +48,7 @@ def readings_to_parquet(src: Path, dest: Path, batch_rows: int = PARQUET_BATCH_R
 
     with pq.ParquetWriter(dest, schema) as writer:
         rows: list[dict] = []
-        for _, row in iter_jsonl_lines(src):
+        for _, row in declared(iter_jsonl_lines(src)):
             rows.append(row)
             if len(rows) >= batch_rows:
                 writer.write_table(batch(rows))
@@ -60,7 +62,7 @@ def readings_to_csv(src: Path, dest: Path, problems: list[str] | None = None) ->
     lines are skipped and reported in ``problems``."""
     from labkit.session.reader import iter_jsonl_lines
 
-    rows = iter_jsonl_lines(src, problems)
+    rows = declared(iter_jsonl_lines(src, problems))
     first = next(rows, None)  # an unreadable file fails here, before the CSV is created
     count = 0
     with open(dest, "w", newline="", encoding="utf-8") as f:

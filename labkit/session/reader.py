@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from labkit.errors import SessionError
+from labkit.readings import declared
 from labkit.session.paths import session_file
 
 MAX_JSON_BYTES = 64_000_000        # run.json, results.json
@@ -158,6 +159,12 @@ class SessionRecord:
     def params(self) -> dict[str, Any]:
         return dict(self.meta.get("params") or {})
 
+    @property
+    def run_id(self) -> str | None:
+        """The run's id (run.json, else its documents'); None for a session recorded before run ids."""
+        found = self.meta.get("run_id") or next((e["run_id"] for e in self.events if e.get("run_id")), None)
+        return str(found) if found else None
+
     def rig_path(self) -> Path:
         """The session's rig copy; SessionError if run.json points outside the session."""
         name = self.meta.get("rig_file", "rig.toml")
@@ -176,8 +183,10 @@ class SessionRecord:
                 for n, e in zip(lines, self.events, strict=True) if e.get("type") == "point"]
 
     def readings(self, role: str) -> list[dict[str, Any]]:
+        """The readings of ``readings/ROLE.jsonl``, each with its stream's quantity and unit
+        (:func:`labkit.readings.declared`)."""
         path = session_file(self.path, "readings", f"{role}.jsonl")
-        return read_jsonl(path, self.problems) if path.exists() else []
+        return [row for _, row in declared(iter_jsonl_lines(path, self.problems))] if path.exists() else []
 
 
 def load_session(path: str | Path, skip_types: frozenset[str] = frozenset()) -> SessionRecord:

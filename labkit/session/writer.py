@@ -7,8 +7,10 @@ Layout (documented in docs/reference/session-format.md)::
                           start/end, notes, status and reason, resumed_from
       rig.toml            the rig file exactly as read
       events.jsonl        one event per line (setpoints, settles, points, drops, interlocks...)
-      readings/ROLE.jsonl one reading per line per device (Reading.as_json): t, quantity, value,
-                          unit, stable, overload, flags (device_reset, tare_lost...), raw
+      readings/ROLE.jsonl one device's stream: its descriptor (type "descriptor", run_id,
+                          device, kind, driver, quantity, unit), then one reading per line
+                          (Reading.values_json): t, value, stable, overload, flags
+                          (device_reset, tare_lost...), raw
       readings/ROLE.parquet  the same as a table, written at the end (pyarrow)
       cassettes/ROLE.jsonl   every serial byte of that port (record://)
       results.json        {"protocol", "points", "fit"} at the end
@@ -32,7 +34,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any, TextIO
 
-from labkit.documents import ReadingEvent, RunDocument
+from labkit.documents import ReadingEvent, RunDocument, StreamDescriptor
 from labkit.errors import SessionError
 from labkit.session.export import readings_to_parquet
 from labkit.session.paths import session_file
@@ -144,7 +146,7 @@ class Session:
     @classmethod
     def create(cls, root: str | Path, *, protocol: str, params: dict[str, Any], rig_name: str,
                rig_text: str, clock: str, notes: str = "", resumed_from: str | None = None,
-               argv: list[str] | None = None) -> Session:
+               argv: list[str] | None = None, run_id: str | None = None) -> Session:
         from labkit.session.process import process_identity
 
         path = new_session_dir(root, protocol)
@@ -161,6 +163,7 @@ class Session:
             "reason": None,
             "notes": notes,
             "resumed_from": resumed_from,
+            "run_id": run_id,   # every document's run_id (a resumed run keeps the first run's)
             "argv": argv if argv is not None else sys.argv[1:],
             "versions": _versions(),
             "git_commit": _git_commit(),
@@ -179,13 +182,16 @@ class Session:
     def on_event(self, event: RunDocument) -> None:
         if self.closed:
             return
-        if isinstance(event, ReadingEvent):
+        if isinstance(event, ReadingEvent | StreamDescriptor):
             role = event.device or "unknown"
             f = self._readings.get(role)
             if f is None:
                 f = self._readings[role] = open(session_file(self.path, "readings", f"{role}.jsonl"), "a",  # noqa: SIM115
                                                 encoding="utf-8")
-            f.write(dumps(event.reading.as_json()) + "\n")
+            if isinstance(event, StreamDescriptor):   # the stream's quantity and unit, once
+                f.write(dumps(event.to_json()) + "\n")
+            else:
+                f.write(dumps(event.reading.values_json()) + "\n")
             self._maybe_flush()
         else:
             self._events.write(dumps(event.to_json()) + "\n")

@@ -29,6 +29,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from labkit.units import RAD_S_PER_RPM, UNIT_SUFFIXES
+
 #: smallest number of points for a fit with a spread (two parameters need three)
 MIN_POINTS_POWER_LAW = 3
 MIN_POINTS_EQ637 = 2
@@ -36,8 +38,8 @@ MIN_POINTS_CONE = 3
 
 Band = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
 #: the x units a live fit of a speed reads (factor to rad/s) and the y units of an angle (to rad)
-SPEED_TO_RAD_S = {"rad/s": 1.0, "RPM": 2.0 * math.pi / 60.0}
-ANGLE_TO_RAD = {"rad": 1.0, "deg": math.pi / 180.0}
+SPEED_TO_RAD_S = {"rad/s": 1.0, "RPM": RAD_S_PER_RPM}
+ANGLE_TO_RAD = {"rad": 1.0, "deg": UNIT_SUFFIXES["deg"][1]}
 
 
 @dataclass(frozen=True)

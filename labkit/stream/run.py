@@ -44,6 +44,7 @@ for the power law, v for Eq. 6.37); residuals are ``ratio`` (%) or ``difference`
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -56,7 +57,7 @@ from labkit.stream.blueprints import FigureSpec, figure_of, run_blueprint
 from labkit.stream.core import RerunSpec, open_stream
 from labkit.stream.frames import CameraOverlays
 from labkit.stream.livefit import LIVE_FITS, LiveFit, live_fit
-from labkit.units import G0, RAD_S_PER_RPM
+from labkit.units import force_gf, rad_s_to_rpm
 
 FIT_COLOURS = [[220, 40, 40], [240, 150, 150], [240, 150, 150]]
 CURVE_SAMPLES = 120
@@ -89,6 +90,8 @@ class RerunRunSink:
         self.point_x: dict[int, float] = {}   # step -> the point's x (the camera overlays' fit)
         self.camera = CameraOverlays(rec, rr)
         self._styled: set[str] = set()
+        #: device -> how its readings are drawn (from its stream's descriptor)
+        self.series: dict[str, Series | None] = {}
         self.flush_error: str | None = None
 
     # ---- helpers ------------------------------------------------------------------------
@@ -142,7 +145,7 @@ class RerunRunSink:
 
     def _on_step(self, e: doc.StepStart) -> None:
         for loop, rad_s in e.targets_rad_s.items():
-            self._scalar(f"/rig/{loop}/target_rpm", rad_s / RAD_S_PER_RPM, "target [RPM]")
+            self._scalar(f"/rig/{loop}/target_rpm", rad_s_to_rpm(rad_s), "target [RPM]")
         rotor = e.targets_rad_s.get(self.loops[0]) if self.loops else None
         if rotor is not None and self.hints is not None:
             self.step_x = self.hints.step_x(rotor)
@@ -152,17 +155,24 @@ class RerunRunSink:
         for loop, snap in e.loops.items():
             for key, name in (("measured_rad_s", "speed_rpm"), ("setpoint_rad_s", "setpoint_rpm")):
                 value = snap.get(key)
-                self._scalar(f"/rig/{loop}/{name}", None if value is None else value / RAD_S_PER_RPM,
+                self._scalar(f"/rig/{loop}/{name}", None if value is None else rad_s_to_rpm(value),
                              name.replace("_rpm", " [RPM]"))
             self._scalar(f"/rig/{loop}/duty", snap.get("duty"), "duty [0-1]")
 
+    def _on_descriptor(self, e: doc.StreamDescriptor) -> None:
+        """A device's stream: how its readings are drawn, decided once (:func:`reading_series`)."""
+        self.series[e.device] = reading_series(e.device, e.quantity, e.unit, self.loop_tachs)
+
     def _on_reading(self, e: doc.ReadingEvent) -> None:
-        """The value in the unit of its quantity (above); the frame's raw bytes and flags on
-        ``/rig/<device>/frame``; a flagged reading also as a warning in ``/events``."""
+        """The value in the unit of its quantity (above, as its stream's descriptor declared);
+        the frame's raw bytes and flags on ``/rig/<device>/frame``; a flagged reading also as a
+        warning in ``/events``."""
         r = e.reading
-        plotted = reading_series(e.device, r.quantity, r.unit, r.value, self.loop_tachs)
+        if e.device not in self.series:   # documents without a descriptor: the reading's own
+            self.series[e.device] = reading_series(e.device, r.quantity, r.unit, self.loop_tachs)
+        plotted = self.series[e.device]
         if plotted is not None:
-            self._scalar(*plotted)
+            self._scalar(plotted.entity, plotted.value(r.value), plotted.legend)
             if e.device not in self.devices:   # a device the caller did not list (replay)
                 self.devices.append(e.device)
                 self.rec.send_blueprint(run_blueprint(self.figure, self.loops, self.devices))
@@ -287,19 +297,31 @@ class RerunRunSink:
             self.rec.disconnect()
 
 
-def reading_series(device: str, quantity: str, unit: str, value: float,
-                   loop_tachs: set[str]) -> tuple[str, float, str] | None:
-    """``(entity, value, legend)`` a reading is drawn as, or None (the rotor's tachometer is
-    the loop's measured speed, drawn once, in RPM)."""
-    if quantity == "mass" and unit == "kg":
-        return f"/rig/{device}/force_g", value * 1000.0, "force [g]"
-    if quantity == "force" and unit == "N":
-        return f"/rig/{device}/force_g", value / G0 * 1000.0, "force [g]"
+@dataclass(frozen=True)
+class Series:
+    """How a device stream is drawn (from its descriptor): the entity, its legend, and the
+    unit its values are converted from (``grams``: a balance's force in grams-force, by
+    :func:`labkit.units.force_gf`; else drawn as they come)."""
+
+    entity: str
+    legend: str
+    unit: str = ""
+    grams: bool = False
+
+    def value(self, value: float) -> float:
+        return force_gf(value, self.unit) if self.grams else value
+
+
+def reading_series(device: str, quantity: str, unit: str, loop_tachs: set[str]) -> Series | None:
+    """How a device's readings of ``quantity`` in ``unit`` are drawn, or None (the rotor's
+    tachometer is the loop's measured speed, drawn once, in RPM)."""
+    if (quantity, unit) in (("mass", "kg"), ("force", "N")):
+        return Series(f"/rig/{device}/force_g", "force [g]", unit, grams=True)
     if quantity == "angular_speed":
         if device in loop_tachs:
             return None
-        return f"/rig/{device}/spin_rad_s", value, "spin [rad/s]"
-    return f"/rig/{device}/{quantity}", value, f"{quantity} [{unit}]"
+        return Series(f"/rig/{device}/spin_rad_s", "spin [rad/s]")
+    return Series(f"/rig/{device}/{quantity}", f"{quantity} [{unit}]")
 
 
 def run_sink(spec: RerunSpec | str, session_path: str | Path | None,

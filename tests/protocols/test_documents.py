@@ -1,6 +1,6 @@
-"""Typed run documents: every type round-trips through its JSON line; a reading through
-``Reading.as_json`` (flags and raw bytes included); the session's events.jsonl reads back as
-documents."""
+"""Typed run documents: every type round-trips through its JSON line (a reading with its stream's
+descriptor, which declares its quantity and unit); a reading through ``Reading.values_json``
+(flags and raw bytes included); the session's events.jsonl reads back as documents."""
 
 from __future__ import annotations
 
@@ -23,6 +23,8 @@ SAMPLES = [
     doc.Setpoint(t=1.0, loop="rotor", target_rad_s=628.3),
     doc.Settled(t=2.0, index=0, settle_time_s=1.5, speeds_rad_s={"rotor": 627.0}),
     doc.ControlSnapshot(t=2.1, loops={"rotor": {"target_rad_s": 628.3, "duty": 0.4}}),
+    doc.StreamDescriptor(t=2.2, device="balance", kind="balance", driver="mtsics", quantity="mass",
+                         unit="kg"),
     doc.ReadingEvent.of("balance", Reading(2.2, "mass", 0.0146, "kg", raw=b"S S 14.6 g\r\n",
                                            flags=frozenset({"device_reset", "tare_lost"}))),
     doc.Zeroed(t=0.5, device="balance", value=0.001, unit="kg"),
@@ -43,13 +45,14 @@ SAMPLES = [
 
 
 def test_there_is_one_sample_per_document_type():
-    assert {type(d) for d in SAMPLES} == set(doc.DOCUMENT_TYPES.values()) and len(doc.DOCUMENT_TYPES) == 17
+    assert {type(d) for d in SAMPLES} == set(doc.DOCUMENT_TYPES.values()) and len(doc.DOCUMENT_TYPES) == 18
 
 
 def test_every_document_round_trips_through_its_json_line():
+    stream = SAMPLES[5]
     for d in SAMPLES:
         line = dumps(d.to_json())
-        assert doc.document_from_json(json.loads(line)) == d, line
+        assert doc.document_from_json(json.loads(line), stream) == d, line
 
 
 def test_a_frames_document_keeps_the_frames_bytes_out_of_its_json_line():
@@ -61,10 +64,11 @@ def test_a_frames_document_keeps_the_frames_bytes_out_of_its_json_line():
     assert back.payloads == () and back.seqs == [1] and back.index == 2
 
 
-def test_a_reading_document_is_the_readings_own_json():
-    d = SAMPLES[5]
-    assert d.to_json() == {"type": "reading", "device": "balance", **d.reading.as_json()}
+def test_a_reading_document_is_the_readings_own_values_without_units():
+    d = SAMPLES[6]
+    assert d.to_json() == {"type": "reading", "run_id": "", "device": "balance", **d.reading.values_json()}
     assert d.to_json()["flags"] == ["device_reset", "tare_lost"] and d.to_json()["raw"] == "S S 14.6 g\r\n"
+    assert "unit" not in d.to_json() and "quantity" not in d.to_json()
 
 
 def test_an_unknown_type_or_missing_field_is_named():

@@ -67,7 +67,9 @@ def test_labkit_run_warns_about_the_suspect_flags_only(session):
 
 def test_the_reading_file_has_the_flag_and_the_raw_line(session):
     path, _ = session
-    rows = [json.loads(line) for line in (path / "readings" / "balance.jsonl").read_text().splitlines()]
+    lines = [json.loads(line) for line in (path / "readings" / "balance.jsonl").read_text().splitlines()]
+    assert lines[0]["type"] == "descriptor" and lines[0]["unit"] in ("kg", "N")   # the stream's units, once
+    rows = lines[1:]
     flagged = [r for r in rows if "device_reset" in r["flags"]]
     assert len(flagged) == 1                       # flagged once, the line after the reboot
     [reset] = flagged
