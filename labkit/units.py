@@ -1,6 +1,7 @@
 """Units used across labkit (SI inside; these convert at the edges): the one place a value
 changes unit (a reading's force, speeds in RPM, table columns).
 
+Balances' display units become SI here too (:func:`to_si`: a mass in kg, a force in N).
 One definition each, so a rig file, a data table, a driver, an emulator and a plot agree to
 the last bit. :data:`UNIT_SUFFIXES` is the one table of unit suffixes in names: rig-file keys
 (``max_speed_rpm``, via :mod:`labkit.rig.checks`) and the columns of fit tables (``speed_rpm``,
@@ -106,3 +107,49 @@ def force_gf(value: float, unit: str) -> float:
     if unit == "kg":
         return float(value) * 1000.0
     return n_to_gf(force_n(value, unit))
+
+
+# ---- a balance's display unit -> SI (docs/reference/devices-balance.md) -----------------------
+# A balance shows either a mass (g, kg, oz, ...) or, on force-capable models (A&D ``N``, the
+# labkit HX711 sketch), a force. labkit keeps what the device measured: a force unit becomes
+# ``quantity="force"`` in N; a mass unit becomes ``quantity="mass"`` in kg. The conversion of a
+# mass reading to the PFR force (Fig. 5.25: grams-force) is :func:`force_n` / :func:`force_gf`.
+
+#: kilograms per unit, for the mass units balances display (A&D and MT-SICS unit names)
+KG_PER_UNIT: dict[str, float] = {
+    "kg": 1.0,
+    "g": 1e-3,
+    "mg": 1e-6,
+    "ug": 1e-9,
+    "ct": 2e-4,               # metric carat
+    "lb": 0.45359237,
+    "oz": 0.028349523125,
+    "ozt": 0.0311034768,      # troy ounce
+    "dwt": 0.00155517384,     # pennyweight
+    "GN": 6.479891e-5,        # grain
+    "mom": 3.75e-3,           # momme
+    "t": 1000.0,              # metric tonne
+}
+
+#: newtons per unit, for force units
+N_PER_UNIT: dict[str, float] = {"N": 1.0, "mN": 1e-3, "kN": 1e3}
+
+
+class UnitError(ValueError):
+    """The balance shows a unit that is neither a mass nor a force (pieces, percent...)."""
+
+
+def to_si(value: float, unit: str) -> tuple[str, float, str]:
+    """Convert a displayed value to SI: returns ``(quantity, value_si, si_unit)``.
+
+    ``to_si(12.34, "g") == ("mass", 0.01234, "kg")``; ``to_si(0.5, "N") == ("force", 0.5, "N")``.
+    Raises :class:`UnitError` for counting/percent units (``PC``, ``%``, ``DS``...).
+    """
+    unit = unit.strip()
+    if unit in N_PER_UNIT:
+        return "force", value * N_PER_UNIT[unit], "N"
+    if unit in KG_PER_UNIT:
+        return "mass", value * KG_PER_UNIT[unit], "kg"
+    raise UnitError(
+        f"unit {unit!r} is neither a mass nor a force; set the balance to g, kg or N"
+    )

@@ -100,7 +100,7 @@ def sink_failure_text(session: Any, event: RunDocument, exc: OSError | LabkitErr
     """``cannot write SESSION/events.jsonl: No space left on device``."""
     if isinstance(exc, LabkitError):
         return str(exc)
-    name = (f"readings/{event.get('device')}.jsonl" if event.get("type") == "reading"
+    name = (f"readings/{event.get('device')}.jsonl" if event.get("type") in ("reading", "descriptor")
             else "events.jsonl")
     return f"cannot write {Path(session.path) / name}: {exc.strerror or exc}"
 

@@ -28,7 +28,6 @@ from dataclasses import dataclass
 from typing import Any
 
 from labkit.devices.loadcell.mtsics import parse_weight
-from labkit.devices.loadcell.units import to_si
 from labkit.devices.tachometer.labkit_tach import parse_tach_sample, strip_junk
 from labkit.protocols.params import resolve_params
 from labkit.protocols.registry import get_protocol
@@ -38,7 +37,7 @@ from labkit.protocols.speed_sweep import drift_warnings, finite_std, mean_stderr
 from labkit.protocols.spin_critical import point_from_trials
 from labkit.rig import load_rig
 from labkit.session import SessionRecord
-from labkit.units import n_to_gf, rad_s_to_rpm, rpm_to_rad_s
+from labkit.units import n_to_gf, rad_s_to_rpm, rpm_to_rad_s, to_si
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from labkit.devices.link import FrameError, describe_serial
 from labkit.devices.loadcell import and_std, line_regex, mtsics
-from labkit.devices.loadcell.units import UnitError, to_si
+from labkit.units import UnitError, to_si
 
 FUZZ = settings(max_examples=300, deadline=None)
 

@@ -21,11 +21,11 @@ import serial
 from labkit.devices.base import Balance
 from labkit.devices.link import FrameError, LineLink, LinkTailMixin, eol_bytes
 from labkit.devices.loadcell.continuous import ContinuousMixin
-from labkit.devices.loadcell.units import UnitError, to_si
 from labkit.devices.registry import register_driver, register_parser_benchmark
 from labkit.errors import DeviceReplyError
 from labkit.io.clock import Clock
 from labkit.readings import Reading
+from labkit.units import UnitError, to_si
 
 ACK = b"\x06"
 

@@ -42,11 +42,11 @@ import serial
 from labkit.devices.base import Balance
 from labkit.devices.link import FrameError, LineLink, LinkTailMixin, eol_bytes
 from labkit.devices.loadcell.continuous import ContinuousMixin
-from labkit.devices.loadcell.units import UnitError, to_si
 from labkit.devices.registry import register_driver, register_parser_benchmark
 from labkit.errors import DeviceError, DeviceReplyError
 from labkit.io.clock import Clock
 from labkit.readings import Reading
+from labkit.units import UnitError, to_si
 
 FLOAT = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d{1,3})?"
 
