@@ -38,6 +38,15 @@ def test_demo_streams_speeds_forces_points_fit_and_events(tmp_path, capsys):
     times, speeds = column(rrd, "/rig/rotor/speed_rpm", "Scalars:scalars", "time")
     assert len(speeds) > 10 and max(v[0] for v in speeds) > 11000
 
+    # the balance's stream, drawn as its descriptor declares it (kg -> grams), one scalar per
+    # reading of the session's readings file (whose first line is that descriptor)
+    text = (session / "readings" / "balance.jsonl").read_text()
+    descriptor, *lines = [json.loads(x) for x in text.splitlines()]
+    assert (descriptor["type"], descriptor["quantity"], descriptor["unit"]) == ("descriptor", "mass", "kg")
+    _, grams = column(rrd, "/rig/balance/force_g", "Scalars:scalars", "time")
+    drawn = [r["value"] * 1000.0 for r in lines if r["value"] is not None]
+    assert len(grams) == len(drawn) and np.allclose([g[0] for g in grams], drawn, rtol=1e-12)
+
 
 def test_without_rerun_option_the_demo_still_saves_an_rrd_in_the_session(tmp_path, capsys):
     assert main(["demo", "--sessions", str(tmp_path), "--no-progress",
