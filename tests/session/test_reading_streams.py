@@ -5,6 +5,7 @@ resumes. Sessions written before descriptors (every reading with its own unit) s
 
 from __future__ import annotations
 
+import csv
 import json
 from pathlib import Path
 
@@ -15,7 +16,7 @@ from labkit.protocols.events import ListSink
 from labkit.protocols.launch import execute, prepare_run
 from labkit.readings import Reading, declared
 from labkit.rig import bundled_rig_path
-from labkit.session import load_session
+from labkit.session import export_csv, load_session
 
 REPO = Path(__file__).resolve().parents[2]
 SWEEP = ["speeds_rpm=6000:9000:3000", "record_s=0.5"]
@@ -60,6 +61,10 @@ def test_the_readings_file_holds_the_descriptor_then_values_without_units(sweep)
     # read back with the stream's units, as every line carried them before descriptors
     readings = load_session(session).readings("balance")
     assert readings and {(r["quantity"], r["unit"]) for r in readings} == {("mass", "kg")}
+    # and so does the CSV export, one row per reading
+    [csv_path] = [p for p in export_csv(session) if p.stem == "balance"]
+    rows = list(csv.DictReader(csv_path.open()))
+    assert len(rows) == len(readings) and {(r["quantity"], r["unit"]) for r in rows} == {("mass", "kg")}
 
 
 def test_every_document_carries_the_runs_id(sweep):
