@@ -10,6 +10,8 @@ import json
 from pathlib import Path
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from labkit import documents as doc
 from labkit.protocols.events import ListSink
@@ -125,3 +127,23 @@ def test_a_readings_file_from_before_descriptors_reads_as_it_did():
     readings = load_session(shipped).readings("balance")
     assert readings and all(r["unit"] == "kg" and r["quantity"] == "mass" for r in readings)
     assert load_session(shipped).run_id is None          # recorded before run ids
+
+
+UNITS = st.sampled_from([("mass", "kg"), ("force", "N"), ("angular_speed", "rad/s")])
+
+
+@given(st.lists(st.tuples(UNITS, st.floats(allow_nan=False, allow_infinity=False), st.binary(max_size=12)),
+                max_size=20))
+def test_fuzz_a_described_stream_reads_back_as_whole_readings(items):
+    """However often a stream's unit changes, writing it as descriptors plus values and reading
+    it back with :func:`declared` gives every reading whole, as :meth:`Reading.as_json` has it."""
+    written, current = [], None
+    readings = [Reading(float(i), q, v, u, raw=raw) for i, ((q, u), v, raw) in enumerate(items)]
+    for r in readings:
+        if current != (r.quantity, r.unit):
+            current = (r.quantity, r.unit)
+            written.append(doc.StreamDescriptor.of("balance", r).to_json())
+        written.append(r.values_json())
+    lines = [json.loads(json.dumps(x)) for x in written]
+    assert [row for _, row in declared(enumerate(lines, 1))] == [json.loads(json.dumps(r.as_json()))
+                                                                 for r in readings]
