@@ -19,7 +19,7 @@ from labkit.devices.base import Balance, Device, MotorController, Tachometer
 #: :func:`known_drivers` and :func:`parser_benchmarks`)
 BUILT_IN_DRIVER_PACKAGES = (
     "labkit.devices.camera",
-    "labkit.devices.loadcell",
+    "labkit.devices.balance",
     "labkit.devices.motor",
     "labkit.devices.strobe",
     "labkit.devices.tachometer",

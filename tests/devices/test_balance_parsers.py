@@ -9,9 +9,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from labkit.devices.balance import and_std, line_regex, mtsics
+from labkit.devices.balance.units import UnitError, to_si
 from labkit.devices.link import FrameError, describe_serial
-from labkit.devices.loadcell import and_std, line_regex, mtsics
-from labkit.devices.loadcell.units import UnitError, to_si
 
 FUZZ = settings(max_examples=300, deadline=None)
 

@@ -18,10 +18,10 @@ from typing import Any
 
 import serial
 
+from labkit.devices.balance.continuous import ContinuousMixin
+from labkit.devices.balance.units import UnitError, to_si
 from labkit.devices.base import Balance, Reading
 from labkit.devices.link import FrameError, LineLink, LinkTailMixin, eol_bytes
-from labkit.devices.loadcell.continuous import ContinuousMixin
-from labkit.devices.loadcell.units import UnitError, to_si
 from labkit.devices.registry import register_driver, register_parser_benchmark
 from labkit.errors import DeviceReplyError
 from labkit.io.clock import Clock
