@@ -77,7 +77,7 @@ class RunContext:
         self.step: Step | None = None
         self._last_control_event = -1e9
         self._tach_logged: dict[str, float] = {
-            role: -1e9 for role in devices if self.rig.devices[role].kind == "tach"}
+            role: -1e9 for role in devices if self.rig.devices[role].kind == "tachometer"}
 
     # ---- devices by kind (labkit.devices.kinds; LabkitError naming the rig's devices if not) -
     def balance(self, role: str) -> BalanceKind:

@@ -16,7 +16,7 @@ LABKIT = Path(__file__).resolve().parents[2] / "labkit"
 # (test_import_graph.py).
 LAYERS: list[set[str]] = [
     # 0. words every part may use: errors, units, ranges, the body table, presentation hints
-    {"errors", "units", "ranges", "lazy", "bodies", "hints", "plugins"},
+    {"errors", "units", "ranges", "lazy", "bodies", "hints", "plugins", "device_kinds"},
     # 1. the transport, the physics and the image analysis: none knows a device or a rig
     {"io", "model", "sim", "vision"},
     # 2. the device drivers; predictions, synthetic footage and images built on the physics

@@ -14,7 +14,7 @@ from labkit.io.clock import VirtualClock, use_clock
 from labkit.rig import load_rig, open_rig
 
 REPO = Path(__file__).resolve().parents[2]
-KINDS = {"balance": BalanceKind, "tach": TachometerKind, "camera": CameraKind}
+KINDS = {"balance": BalanceKind, "tachometer": TachometerKind, "camera": CameraKind}
 
 
 @pytest.mark.parametrize("rig_name", ["emulated-fig525", "emulated-fig618", "emulated-camera"])
@@ -28,7 +28,7 @@ def test_each_driver_satisfies_its_kinds_protocol(rig_name):
             matches = {k for k, proto in KINDS.items() if isinstance(driver, proto)}
             if kind in KINDS:
                 assert kind in matches, (role, kind, matches)
-            if kind in ("tach", "motor", "strobe"):
+            if kind in ("tachometer", "motor", "strobe"):
                 assert "balance" not in matches and "camera" not in matches, (role, kind, matches)
             if kind == "motor":
                 assert matches == set(), (role, matches)
