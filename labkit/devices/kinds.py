@@ -43,21 +43,27 @@ class TachometerKind(Protocol):
 
 
 @runtime_checkable
-class MotorKind(Protocol):
-    """A motor controller (kind ``motor``, docs/reference/devices-tach-motor.md): what the speed
-    loop commands. Opening never starts the motor; ``stop`` works from any state and never
-    raises on a dead port. A protocol step reads ``status()``; it sets speeds through
-    ``ctx.set`` (the rig's speed loop, within its limits), not ``set_duty``."""
+class MotorStatusKind(Protocol):
+    """What a protocol step may ask of a motor controller: its status (errors, duty, speed where
+    the controller measures it). Speeds go through ``ctx.set``, the rig's speed loop, within the
+    rig's limits and interlocks; so :meth:`RunContext.motor` hands a motor out as this."""
 
     name: str
+
+    def status(self) -> MotorStatus: ...
+
+
+@runtime_checkable
+class MotorKind(MotorStatusKind, Protocol):
+    """A motor controller (kind ``motor``, docs/reference/devices-tach-motor.md): what the speed
+    loop (:mod:`labkit.control.loop`) commands. Opening never starts the motor; ``stop`` works
+    from any state and never raises on a dead port."""
 
     def enable(self) -> None: ...
 
     def set_duty(self, duty: float) -> None: ...
 
     def stop(self) -> None: ...
-
-    def status(self) -> MotorStatus: ...
 
 
 @runtime_checkable

@@ -31,7 +31,14 @@ from typing import Any
 from labkit import documents as doc
 from labkit.control.loop import SpeedControl, build_speed_control
 from labkit.devices.base import Device, Reading
-from labkit.devices.kinds import BalanceKind, CameraKind, MotorKind, StrobeKind, TachometerKind
+from labkit.devices.kinds import (
+    BalanceKind,
+    CameraKind,
+    MotorKind,
+    MotorStatusKind,
+    StrobeKind,
+    TachometerKind,
+)
 from labkit.errors import LabkitError, SafetyError
 from labkit.io.clock import record_ticks
 from labkit.protocols import exit_paths
@@ -90,8 +97,9 @@ class RunContext:
             return device
         raise self._not_a(role, "tachometer")
 
-    def motor(self, role: str) -> MotorKind:
-        """The motor controller ``role``, for its ``status()``; speeds go through :meth:`set`."""
+    def motor(self, role: str) -> MotorStatusKind:
+        """The motor controller ``role``, for its ``status()``: speeds go through :meth:`set` (the
+        rig's speed loop), so the type offers no ``set_duty``."""
         if isinstance(device := self.devices.get(role), MotorKind):
             return device
         raise self._not_a(role, "motor controller")

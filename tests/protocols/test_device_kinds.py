@@ -101,3 +101,17 @@ def test_the_speed_loop_refuses_a_driver_of_the_wrong_kind_by_role():
                 build_speed_control(opened, clock)
         finally:
             opened.drivers["rotor_motor"] = right
+
+
+def test_the_type_checker_refuses_a_duty_commanded_from_a_step(tmp_path):
+    # ctx.motor is typed as MotorStatusKind: a step reads the status; speeds go through ctx.set
+    api = pytest.importorskip("mypy.api")
+    step = tmp_path / "step.py"
+    step.write_text("from labkit.protocols.runner import RunContext\n\n\n"
+                    "def step(ctx: RunContext) -> float:\n"
+                    "    ctx.motor('rotor_motor').set_duty(1.0)\n"
+                    "    return ctx.motor('rotor_motor').status().duty\n")
+    out, _, status = api.run(["--follow-imports=silent", "--ignore-missing-imports",
+                              "--cache-dir", str(REPO / ".mypy_cache"), str(step)])
+    assert status == 1 and out.count("error:") == 1
+    assert 'step.py:5: error: "MotorStatusKind" has no attribute "set_duty"' in out
