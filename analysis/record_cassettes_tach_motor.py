@@ -29,10 +29,10 @@ OUT = Path(__file__).resolve().parent.parent / "recordings" / "cassettes"
 
 #: name -> (kind, protocol, sim query, driver options, rotor rpm set on the plant first)
 SCENARIOS: dict[str, tuple[str, str, str, dict, float]] = {
-    "tach-labkit_tach": ("tach", "labkit_tach", "seed=1&rate_hz=10&faults=garbage:0.2",
+    "tach-labkit_tach": ("tachometer", "labkit_tach", "seed=1&rate_hz=10&faults=garbage:0.2",
                          {"ppr": 2}, 24_000.0),
-    "tach-lutron16": ("tach", "lutron16", "seed=1&rate_hz=5&faults=mid_frame", {}, 12_345.6),
-    "tach-monarch_at": ("tach", "monarch_at", "seed=1&faults=split:0.5", {}, 4_321.0),
+    "tach-lutron16": ("tachometer", "lutron16", "seed=1&rate_hz=5&faults=mid_frame", {}, 12_345.6),
+    "tach-monarch_at": ("tachometer", "monarch_at", "seed=1&faults=split:0.5", {}, 4_321.0),
     "motor-pololu_smc": ("motor", "pololu_smc", "seed=1&crc=1&device_number=13",
                          {"crc": True, "device_number": 13}, 0.0),
     "motor-esc_bridge": ("motor", "esc_bridge", "seed=1&arm_s=0", {}, 0.0),
@@ -48,7 +48,7 @@ def spin(rpm: float) -> None:
 
 
 def run_script(kind: str, protocol: str, port, clock, options: dict) -> dict:
-    if kind == "tach":
+    if kind == "tachometer":
         return run_tach_script(port, clock, protocol, duration_s=2.0, **options)
     return run_motor_script(port, clock, protocol, duty=0.3, run_s=1.0, **options)
 

@@ -32,8 +32,8 @@ _FACE: dict[str, str] = {
     "prepare_run": "labkit.protocols.launch",
     "execute": "labkit.protocols.launch",
     "replay_session": "labkit.protocols.replay",
-    "load_session": "labkit.session.frames",
-    "SessionFrames": "labkit.session.frames",
+    "load_session": "labkit.session.dataframes",
+    "SessionFrames": "labkit.session.dataframes",
     # video analysis
     "analyse_laser": "labkit.vision.laser",
     "analyse_strobe": "labkit.vision.strobe",
@@ -66,7 +66,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs; at run time the names come from
     from labkit.protocols.replay import replay_session
     from labkit.report.build import build_report
     from labkit.rig import load_rig, open_rig
-    from labkit.session.frames import SessionFrames, load_session
+    from labkit.session.dataframes import SessionFrames, load_session
     from labkit.sim.run import simulate
     from labkit.sim.scene_file import load_scene
     from labkit.vision.laser import analyse_laser

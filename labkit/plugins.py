@@ -20,6 +20,8 @@ from __future__ import annotations
 from importlib.metadata import entry_points
 from typing import Any
 
+from labkit.device_kinds import canonical_kind
+
 PROTOCOL_GROUP = "labkit.protocols"
 DRIVER_GROUP = "labkit.drivers"
 
@@ -49,7 +51,7 @@ def _load_group(group: str) -> list[tuple[Any, Any]]:
 
 def load_protocol_plugins(registry: dict[str, Any], base: type) -> None:
     """Add the ``labkit.protocols`` entry points to ``registry`` (name -> subclass of ``base``,
-    labkit.protocols.ProtocolDef: passed in, so this module imports no other part of labkit)."""
+    labkit.protocols.ProtocolDef: passed in, so this module imports no protocol or driver code)."""
     for ep, obj in _load_group(PROTOCOL_GROUP):
         if not (isinstance(obj, type) and issubclass(obj, base) and getattr(obj, "name", "")):
             PROBLEMS.append(f"{_where(ep)}: {ep.value} is not a ProtocolDef subclass with a name")
@@ -68,11 +70,12 @@ def load_driver_plugins(registry: dict[tuple[str, str], Any], base: type) -> Non
                 and getattr(obj, "kind", "")):
             PROBLEMS.append(f"{_where(ep)}: {ep.value} is not a Device subclass with kind and protocol")
             continue
-        existing = registry.get((obj.kind, obj.protocol))
+        kind = canonical_kind(obj.kind)  # a plugin written with kind = "tach" is a tachometer
+        existing = registry.get((kind, obj.protocol))
         if existing is not None and existing is not obj:
-            PROBLEMS.append(f"{_where(ep)}: {obj.kind} driver {obj.protocol!r} already exists; not replaced")
+            PROBLEMS.append(f"{_where(ep)}: {kind} driver {obj.protocol!r} already exists; not replaced")
             continue
-        registry[(obj.kind, obj.protocol)] = obj
+        registry[(kind, obj.protocol)] = obj
 
 
 def problems_note() -> str:

@@ -94,7 +94,7 @@ def test_probe_unknown_protocol_and_bad_option(capsys):
     code, _, err = probe(capsys, "balance", "--protocol", "line_regex", "--port", "sim://hx711",
                          "-o", "preset=unknown")
     assert code == 2 and "preset 'unknown'" in err
-    code, _, err = probe(capsys, "tach", "--protocol", "labkit_tach", "--port", "sim://labkit_tach",
+    code, _, err = probe(capsys, "tachometer", "--protocol", "labkit_tach", "--port", "sim://labkit_tach",
                          "-o", "pulses_per_rev=2")
     assert code == 2 and "unknown option 'pulses_per_rev' for labkit_tach; known: " in err
     assert "ppr" in err and len(err.strip().splitlines()) == 1

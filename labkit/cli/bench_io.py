@@ -82,7 +82,7 @@ def run_session(clock: Clock, tach_url: str, balance_url: str, seconds: float) -
     """The benchmark's session: stream the tachometer, poll the balance every second."""
     tach_port = open_port(tach_url, clock=clock, **TACH_SERIAL)
     balance_port = open_port(balance_url, clock=clock, **BALANCE_SERIAL)
-    tach = driver_class("tach", "labkit_tach")(tach_port, clock, name="rotor_tach")
+    tach = driver_class("tachometer", "labkit_tach")(tach_port, clock, name="rotor_tach")
     balance = driver_class("balance", "mtsics")(balance_port, clock, name="balance")
     start = clock.now()
     polled: list[Reading] = []

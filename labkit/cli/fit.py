@@ -137,7 +137,7 @@ def run(args: argparse.Namespace) -> int:
         fit_figure(report, args.plot, overlays=overlays)
         announce_written(args.plot, "fit", "figure")
     if args.rerun is not None:
-        from labkit.stream.fit import stream_fit_report
+        from labkit.stream.fit_report import stream_fit_report
 
         stream_fit_report(args.rerun, report)
         announce_rerun_file(args.rerun, "fit")

@@ -21,12 +21,14 @@ from typing import Any
 
 import serial
 
+from labkit.device_kinds import DEVICE_KINDS, OLD_KIND_WORDS, canonical_kind
 from labkit.devices.base import Device
 from labkit.devices.registry import driver_class, known_drivers
 from labkit.errors import DeviceError, LabkitError
 from labkit.io.clock import Clock, current_clock
 
-KINDS = ("balance", "tach", "motor", "camera", "strobe")
+#: the device kinds, and the older words still accepted (``probe tach`` is ``probe tachometer``)
+KINDS = (*DEVICE_KINDS, *OLD_KIND_WORDS)
 
 try:  # a pty or serial driver may refuse a setting in tcsetattr (not an OSError)
     from termios import error as TermiosError
@@ -40,7 +42,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "probe", help="check that a device talks: identify it and print N readings as JSON lines",
         description=__doc__.split("\n\n")[1] if __doc__ else None,
     )
-    p.add_argument("kind", choices=KINDS, help="device class")
+    p.add_argument("kind", choices=KINDS, help="device kind (tach: the older word for tachometer)")
     p.add_argument("--protocol",
                    help="driver protocol, e.g. mtsics, and_std, line_regex, lutron16, pololu_smc "
                         "(required except for cameras)")
@@ -97,11 +99,12 @@ def one_sample(device: Device, timeout: float | None) -> dict[str, Any]:
     driver's ``read_timeout_s`` if it has one, else 3 s)."""
     if timeout is None:
         timeout = float(getattr(device, "read_timeout_s", 3.0))
-    if device.kind == "balance":
+    kind = canonical_kind(device.kind)  # a plugin driver may still say "tach"
+    if kind == "balance":
         return device.read(timeout=timeout).as_json()  # type: ignore[attr-defined]
-    if device.kind == "tach":
+    if kind == "tachometer":
         return device.wait_reading(timeout=timeout).as_json()  # type: ignore[attr-defined]
-    if device.kind == "strobe":  # one status line: rotor and strobe frequency, phase, flags
+    if kind == "strobe":  # one status line: rotor and strobe frequency, phase, flags
         return device.wait_status(timeout=timeout).as_json()  # type: ignore[attr-defined]
     return device.status().as_json()  # type: ignore[attr-defined]
 
@@ -139,6 +142,7 @@ def probe(args: argparse.Namespace, out=None, err=None, clock: Clock | None = No
     clock = clock or current_clock()
     if args.samples < 0:
         raise LabkitError("--samples must be >= 0")
+    args.kind = canonical_kind(args.kind)
     if args.kind == "camera":
         from labkit.cli.probe_camera import probe_camera
 

@@ -19,7 +19,7 @@ from labkit.cli.output import add_json_argument, announce_rerun_file, write_json
 from labkit.cli.run import close_sinks
 from labkit.protocols.events import FlagTally
 from labkit.protocols.replay import LEVEL_WORDS, LEVELS, replay_session
-from labkit.session import export_csv, load_session
+from labkit.session import export_csv, load_session_record
 from labkit.stream import add_rerun_argument
 
 
@@ -46,7 +46,7 @@ def main(args: argparse.Namespace) -> int:
     from labkit.stream import run_sink
 
     if args.export_csv:
-        record = load_session(args.session)
+        record = load_session_record(args.session)
         problems: list[str] = []
         for path in export_csv(record.path, problems):
             print(path)

@@ -108,7 +108,7 @@ def attach_rerun(args: argparse.Namespace, runner: Any, session_path: Any) -> An
     loops = [loop.name for loop in rig.control.loops]
     loop_tachs = {loop.tach for loop in rig.control.loops}
     devices = [role for role, dev in rig.devices.items()
-               if dev.kind == "balance" or (dev.kind == "tach" and role not in loop_tachs)]
+               if dev.kind == "balance" or (dev.kind == "tachometer" and role not in loop_tachs)]
     sink = run_sink(spec, session_path, loops=loops or None, devices=devices or None)
     runner.bus.add(sink)
     return sink

@@ -16,6 +16,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from labkit.control.loop import SpeedControl, build_speed_control
+from labkit.devices.kinds import MotorKind
 from labkit.errors import LabkitError, SafetyError
 from labkit.units import rad_s_to_rpm, rpm_to_rad_s
 
@@ -29,30 +31,32 @@ class RigMotor:
         self.rig = opened.rig
         self.clock = opened.clock
         self.loop = next((lc.name for lc in self.rig.control.loops if lc.motor == role), None)
-        self._control: Any = None
+        self._control: SpeedControl | None = None
 
     @property
-    def raw_driver(self) -> Any:
+    def raw_driver(self) -> MotorKind:
         """The motor driver itself: no speed limit, no ramp, no interlock. Bring-up and tests only."""
         return self._opened.drivers[self.role]
 
     @property
-    def control(self) -> Any:
+    def control(self) -> SpeedControl:
         """The speed loop this handle drives (built on first use)."""
         if self._control is None:
-            if self.loop is None:
-                raise LabkitError(f"{self.rig.path}: no speed loop pairs {self.role} with a tachometer "
-                                  "([control] loops), so it cannot be run within the rig's limits; "
-                                  "use .raw_driver for bring-up")
-            from labkit.control.loop import build_speed_control
-
-            self._control = build_speed_control(self._opened, self.clock, loops=[self.loop])
+            self._control = build_speed_control(self._opened, self.clock, loops=[self._paired_loop()])
         return self._control
+
+    def _paired_loop(self) -> str:
+        """The name of the speed loop that pairs this motor with a tachometer."""
+        if self.loop is None:
+            raise LabkitError(f"{self.rig.path}: no speed loop pairs {self.role} with a tachometer "
+                              "([control] loops), so it cannot be run within the rig's limits; "
+                              "use .raw_driver for bring-up")
+        return self.loop
 
     # ---- commands -----------------------------------------------------------------------
     def set_speed(self, speed_rad_s: float) -> None:
         """Target speed in rad/s, ramped at the rig's ``max_ramp``; refused above ``max_speed``."""
-        self.control.set_targets({self.loop: float(speed_rad_s)})
+        self.control.set_targets({self._paired_loop(): float(speed_rad_s)})
 
     def set_speed_rpm(self, rpm: float) -> None:
         self.set_speed(rpm_to_rad_s(float(rpm)))
@@ -86,7 +90,7 @@ class RigMotor:
         """The last measured speed of this motor's loop (None before the first reading)."""
         if self._control is None:
             return None
-        measured = self._control.snapshots()[self.loop].measured_rad_s
+        measured = self._control.snapshots()[self._paired_loop()].measured_rad_s
         return None if measured is None else rad_s_to_rpm(measured)
 
     def stop(self) -> None:

@@ -32,6 +32,7 @@ from typing import Any
 from labkit.control import plausibility as plaus
 from labkit.control.pi import PIGains, PIState, SettleDetector, pi_step, ramp_toward
 from labkit.control.stopping import stop_motor
+from labkit.devices.kinds import MotorKind, TachometerKind
 from labkit.documents import Interlock, RunDocument
 from labkit.errors import LabkitError, SafetyError
 
@@ -57,7 +58,7 @@ class Tripped(Exception):
 class SpeedLoop:
     """One motor + one tachometer. Not thread-safe on its own: :class:`SpeedControl` locks."""
 
-    def __init__(self, name: str, motor: Any, tach: Any, *, period_s: float, gains: PIGains,
+    def __init__(self, name: str, motor: MotorKind, tach: TachometerKind, *, period_s: float, gains: PIGains,
                  max_speed_rad_s: float, max_ramp_rad_s2: float, overspeed_margin: float,
                  settle_tolerance_rad_s: float, settle_hold_s: float, tach_timeout_s: float,
                  status_period_s: float = 0.0,
@@ -168,7 +169,7 @@ class SpeedLoop:
 class SpeedControl:
     """Runs the rig's speed loops on the clock; latches the first interlock and zeroes motors."""
 
-    def __init__(self, clock: Any, loops: list[SpeedLoop], all_motors: list[Any],
+    def __init__(self, clock: Any, loops: list[SpeedLoop], all_motors: list[MotorKind],
                  period_s: float, emit: Emit | None = None) -> None:
         self.clock = clock
         self.loops = {loop.name: loop for loop in loops}
@@ -207,7 +208,7 @@ class SpeedControl:
         """Command every motor to zero; the ``name: reason`` of each STOP not delivered."""
         failed = []
         for motor in self.all_motors:
-            name = str(getattr(motor, "name", motor))
+            name = motor.name
             problem = stop_motor(motor)
             if problem:
                 self.stop_failures[name] = problem
@@ -348,10 +349,31 @@ def build_speed_control(open_rig: Any, clock: Any, emit: Emit | None = None,
         if loops is not None and cfg.name not in loops:
             continue
         built.append(SpeedLoop(
-            cfg.name, open_rig.drivers[cfg.motor], open_rig.drivers[cfg.tach],
+            cfg.name, _motor(open_rig, cfg.motor), _tachometer(open_rig, cfg.tach),
             period_s=c.period_s, gains=gains, max_speed_rad_s=lim.max_speed_rad_s,
             max_ramp_rad_s2=lim.max_ramp_rad_s2, overspeed_margin=lim.overspeed_margin,
             settle_tolerance_rad_s=c.settle_tolerance_rad_s, settle_hold_s=c.settle_hold_s,
             tach_timeout_s=c.tach_timeout_s, status_period_s=c.status_period_s,
             plausibility=settings))
-    return SpeedControl(clock, built, list(open_rig.motors().values()), c.period_s, emit)
+    motors = [_motor(open_rig, role) for role in open_rig.motors()]
+    return SpeedControl(clock, built, motors, c.period_s, emit)
+
+
+def _motor(open_rig: Any, role: str) -> MotorKind:
+    """The open driver ``role`` as a motor controller (labkit.devices.kinds.MotorKind)."""
+    if isinstance(driver := open_rig.drivers[role], MotorKind):
+        return driver
+    raise _cannot_drive(open_rig, role, driver, "motor controller", "enable, set_duty, stop and status")
+
+
+def _tachometer(open_rig: Any, role: str) -> TachometerKind:
+    """The open driver ``role`` as a tachometer (labkit.devices.kinds.TachometerKind)."""
+    if isinstance(driver := open_rig.drivers[role], TachometerKind):
+        return driver
+    raise _cannot_drive(open_rig, role, driver, "tachometer", "latest and readings_since")
+
+
+def _cannot_drive(open_rig: Any, role: str, driver: object, what: str, needs: str) -> LabkitError:
+    """A driver (a plugin's) that lacks a method its kind needs, named with its role and class."""
+    return LabkitError(f"{open_rig.rig.path}: {role} ({type(driver).__name__}) cannot serve the speed loop "
+                       f"as a {what}: it needs {needs}")

@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-from typing import Any
+from labkit.devices.kinds import MotorKind
 
 
-def stop_motor(motor: Any) -> str | None:
+def stop_motor(motor: MotorKind) -> str | None:
     """Command ``motor`` to zero. None when the STOP was delivered, else why not (the driver's
     ``stop_error`` or the exception it raised). Never raises: the caller keeps stopping the others."""
     try:

@@ -9,7 +9,7 @@ Drivers are found by kind and protocol name::
     with Balance(open_port("/dev/ttyUSB0", baudrate=9600, timeout=0.5), RealClock()) as balance:
         print(balance.read_stable())
 
-The driver modules (:mod:`labkit.devices.loadcell`, ``.motor``, ``.tachometer``) load on the
+The driver modules (:mod:`labkit.devices.balance`, ``.motor``, ``.tachometer``) load on the
 first :func:`driver_class` / :func:`known_drivers` call.
 """
 

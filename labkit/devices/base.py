@@ -74,7 +74,7 @@ def unknown_options_message(cls: type[Device], unknown: list[str]) -> str:
 class Device(ABC):
     """Common part of every driver."""
 
-    kind: ClassVar[str] = ""          # "balance" | "tach" | "motor" | "strobe"
+    kind: ClassVar[str] = ""          # "balance" | "tachometer" | "motor" | "strobe"
     protocol: ClassVar[str] = ""      # registry name, e.g. "mtsics"
     #: serial settings the real device ships with (e.g. A&D: 2400 7E1)
     default_serial: ClassVar[dict[str, Any]] = {"baudrate": 9600}
@@ -145,7 +145,7 @@ class Balance(Device):
 class Tachometer(Device):
     """A streaming tachometer. A reader (thread on a real clock) keeps the latest readings."""
 
-    kind = "tach"
+    kind = "tachometer"
 
     @abstractmethod
     def latest(self) -> Reading | None:

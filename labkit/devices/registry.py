@@ -13,13 +13,14 @@ import importlib
 from collections.abc import Callable
 from typing import Any, Literal, overload
 
+from labkit.device_kinds import canonical_kind
 from labkit.devices.base import Balance, Device, MotorController, Tachometer
 
 #: the packages whose import registers labkit's own drivers (loaded by :func:`driver_class`,
 #: :func:`known_drivers` and :func:`parser_benchmarks`)
 BUILT_IN_DRIVER_PACKAGES = (
     "labkit.devices.camera",
-    "labkit.devices.loadcell",
+    "labkit.devices.balance",
     "labkit.devices.motor",
     "labkit.devices.strobe",
     "labkit.devices.tachometer",
@@ -30,8 +31,9 @@ _DRIVERS: dict[tuple[str, str], DriverClass] = {}
 
 
 def register_driver(cls: DriverClass) -> DriverClass:
-    """Class decorator: make ``cls`` findable as ``(cls.kind, cls.protocol)``."""
-    _DRIVERS[(cls.kind, cls.protocol)] = cls
+    """Class decorator: make ``cls`` findable as ``(cls.kind, cls.protocol)`` (an old kind word,
+    ``tach``, registers under its kind, ``tachometer``: labkit.device_kinds)."""
+    _DRIVERS[(canonical_kind(cls.kind), cls.protocol)] = cls
     return cls
 
 
@@ -44,7 +46,7 @@ def load_built_in_drivers() -> None:
 @overload
 def driver_class(kind: Literal["balance"], protocol: str) -> type[Balance]: ...
 @overload
-def driver_class(kind: Literal["tach"], protocol: str) -> type[Tachometer]: ...
+def driver_class(kind: Literal["tachometer", "tach"], protocol: str) -> type[Tachometer]: ...
 @overload
 def driver_class(kind: Literal["motor"], protocol: str) -> type[MotorController]: ...
 @overload
@@ -53,7 +55,9 @@ def driver_class(kind: str, protocol: str) -> DriverClass: ...
 
 def driver_class(kind: str, protocol: str) -> DriverClass:
     """Look up a driver; raises KeyError with the known names. A literal kind gives the kind's
-    class (``driver_class("motor", ...)`` is a ``type[MotorController]``)."""
+    class (``driver_class("motor", ...)`` is a ``type[MotorController]``); ``tach`` is read as
+    ``tachometer``."""
+    kind = canonical_kind(kind)
     load_built_in_drivers()
     if (kind, protocol) not in _DRIVERS:  # a user's driver (labkit.drivers entry point)?
         from labkit.plugins import load_driver_plugins, problems_note

@@ -44,7 +44,7 @@ TWO_PI = 2.0 * math.pi
 class _StreamingTachEmulator(Emulator):
     """Shared scheduling: one frame every 1/rate s, nothing while unplugged or booting."""
 
-    kind = "tach"
+    kind = "tachometer"
     default_rate_hz = 1.0
 
     def __post_init__(self) -> None:

@@ -102,14 +102,14 @@ def _session_without_results(path: Path) -> Table:
     import sys
 
     from labkit.errors import LabkitError
-    from labkit.session import load_session
+    from labkit.session import load_session_record
     from labkit.session.recover import results_from_events
 
     if not _inside(path, "run.json").exists():
         raise DataFileError(str(path), "", "not a session directory: no results.json inside (nor run.json), "
                             "and no `labkit analyse --json` files either")
     try:
-        record = load_session(path)
+        record = load_session_record(path)
         found = results_from_events(record)
     except LabkitError as exc:
         raise DataFileError(str(path), "results.json", f"missing, and the session cannot be read: {exc}") \

@@ -88,7 +88,7 @@ class ConeSweep(ProtocolDef):
         "settle_timeout_s": 0.0,  # 0: the rig's control.settle_timeout
         "halves": True,           # also analyse odd and even frames apart: the cone angle's stderr
     }
-    needs = (("rotor_motor", "motor"), ("rotor_tach", "tach"), ("camera", "camera"))
+    needs = (("rotor_motor", "motor"), ("rotor_tach", "tachometer"), ("camera", "camera"))
 
     def plan(self, rig: Rig, params: dict[str, Any]) -> list[Step]:
         speeds = list(params["speeds_rpm"])

@@ -27,7 +27,7 @@ from labkit.protocols.resume import ResumeLock, check_carried_points, rig_differ
 from labkit.protocols.resume_evidence import check_points_against_cassettes
 from labkit.protocols.runner import ProtocolDef, Runner, RunOutcome
 from labkit.rig import Rig, load_rig
-from labkit.session import Session, SessionRecord, check_writable, load_session
+from labkit.session import Session, SessionRecord, check_writable, load_session_record
 
 
 @dataclass
@@ -111,7 +111,7 @@ def _prepare(rig_path: str | Path | None, protocol_name: str | None, sets: list[
     record = None
     warnings: list[str] = []
     if resume is not None:
-        record = load_session(resume)
+        record = load_session_record(resume)
         warnings += record.problems
         rig = resume_rig(record, rig_path, resume)
         if protocol_name and protocol_name != record.protocol:

@@ -27,7 +27,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from labkit.devices.loadcell.mtsics import parse_weight
+from labkit.devices.balance.mtsics import parse_weight
 from labkit.devices.tachometer.labkit_tach import parse_tach_sample, strip_junk
 from labkit.protocols.params import resolve_params
 from labkit.protocols.registry import get_protocol

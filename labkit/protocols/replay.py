@@ -42,7 +42,7 @@ from labkit.protocols.replay_evidence import Evidence, diff_points
 from labkit.protocols.resume import check_carried_points
 from labkit.protocols.runner import Runner, normalise
 from labkit.rig import load_rig
-from labkit.session import SessionRecord, load_session
+from labkit.session import SessionRecord, load_session_record
 from labkit.session.integrity import integrity_problems
 
 LEVELS = ("auto", "exact", "faithful", "analysis")
@@ -188,13 +188,13 @@ def _evidence_diffs(record: Any, evidence: Evidence, tolerant: frozenset[str]) -
 def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str = "auto") -> ReplayOutcome:
     """Replay a session at ``level`` (auto: exact for a virtual-clock session, faithful for a
     real-clock one) and compare it with the recording."""
-    record = load_session(path, skip_types=REPLAY_SKIPS)
+    record = load_session_record(path, skip_types=REPLAY_SKIPS)
     chosen = choose_level(record, level)
     tampered = integrity_problems(record.path, record.meta)  # digests, cassette time lines
     if chosen == "analysis":
         from labkit.protocols.reanalyse import reanalyse_session
 
-        result = reanalyse_session(load_session(path))
+        result = reanalyse_session(load_session_record(path))
         result.differences[:0] = tampered
         result.identical = result.identical and not tampered
         if level == "auto":

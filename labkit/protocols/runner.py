@@ -31,7 +31,14 @@ from typing import Any
 from labkit import documents as doc
 from labkit.control.loop import SpeedControl, build_speed_control
 from labkit.devices.base import Device
-from labkit.devices.kinds import BalanceKind, CameraKind, StrobeKind, TachometerKind
+from labkit.devices.kinds import (
+    BalanceKind,
+    CameraKind,
+    MotorKind,
+    MotorStatusKind,
+    StrobeKind,
+    TachometerKind,
+)
 from labkit.errors import LabkitError, SafetyError
 from labkit.io.clock import record_ticks
 from labkit.protocols import exit_paths
@@ -79,7 +86,7 @@ class RunContext:
         self._last_control_event = -1e9
         self._streams: dict[str, doc.StreamDescriptor] = {}   # role -> its stream's descriptor
         self._tach_logged: dict[str, float] = {
-            role: -1e9 for role in devices if self.rig.devices[role].kind == "tach"}
+            role: -1e9 for role in devices if self.rig.devices[role].kind == "tachometer"}
 
     # ---- devices by kind (labkit.devices.kinds; LabkitError naming the rig's devices if not) -
     def balance(self, role: str) -> BalanceKind:
@@ -91,6 +98,13 @@ class RunContext:
         if isinstance(device := self.devices.get(role), TachometerKind):
             return device
         raise self._not_a(role, "tachometer")
+
+    def motor(self, role: str) -> MotorStatusKind:
+        """The motor controller ``role``, for its ``status()``: speeds go through :meth:`set` (the
+        rig's speed loop), so the type offers no ``set_duty``."""
+        if isinstance(device := self.devices.get(role), MotorKind):
+            return device
+        raise self._not_a(role, "motor controller")
 
     def camera(self, role: str) -> CameraKind:
         if isinstance(device := self.devices.get(role), CameraKind):

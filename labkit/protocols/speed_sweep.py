@@ -105,7 +105,7 @@ class SpeedSweep(ProtocolDef):
         "drift_warn": 0.05,      # a point warns when the zero drifted by more than this fraction of its force
         "settle_timeout_s": 0.0,  # 0: the rig's control.settle_timeout
     }
-    needs = (("rotor_motor", "motor"), ("rotor_tach", "tach"), ("balance", "balance"))
+    needs = (("rotor_motor", "motor"), ("rotor_tach", "tachometer"), ("balance", "balance"))
     row = SPEED_SWEEP_ROW
     hints = FIG_5_25   # the paper's figure and fits (labkit/protocols/paper_figures.py)
 

@@ -72,7 +72,7 @@ class SpinCritical(ProtocolDef):
         "floator_mass_g": 0.0,      # 0: bodies.floator.mass from the rig file
         "w_ref_rad_s": 3000.0,      # Eq. 6.37's reference speed
     }
-    needs = (("rotor_motor", "motor"), ("rotor_tach", "tach"), ("floator_tach", "tach"),
+    needs = (("rotor_motor", "motor"), ("rotor_tach", "tachometer"), ("floator_tach", "tachometer"),
              ("balance", "balance"))
     row = SPIN_CRITICAL_ROW
     hints = FIG_6_18   # the paper's figure and fits (labkit/protocols/paper_figures.py)

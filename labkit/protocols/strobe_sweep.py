@@ -120,7 +120,7 @@ class StrobeSweep(ProtocolDef):
     }
     bounds = {"offset_hz": (0.05, 20.0), "divider": (1, 100), "burst_frames": (8, 1000),
               "mm_per_px": (0.0, 100.0), "clip_s": (0.5, 60.0), "exposure_s": (0.0, 1.0)}
-    needs = (("rotor_motor", "motor"), ("rotor_tach", "tach"), ("strobe", "strobe"))
+    needs = (("rotor_motor", "motor"), ("rotor_tach", "tachometer"), ("strobe", "strobe"))
 
     def plan(self, rig: Rig, params: dict[str, Any]) -> list[Step]:
         speeds = list(params["speeds_rpm"])

@@ -19,6 +19,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Protocol
 
+from labkit.device_kinds import DEVICE_KINDS, OLD_KIND_WORDS, canonical_kind
 from labkit.errors import RigFileError
 from labkit.rig.checks import (
     MAX_CONTROL_PERIOD_S,
@@ -34,7 +35,7 @@ from labkit.rig.checks import (
 )
 from labkit.rig.plausible import check_plausible
 
-KINDS = ("balance", "tach", "motor", "camera", "strobe")
+KINDS = DEVICE_KINDS
 SHAPES = ("sphere", "cylinder", "ring", "block", "cube")
 
 class DeviceCheck(Protocol):
@@ -59,7 +60,7 @@ class DeviceConfig:
     """One device of a rig, by role (``rotor_motor``, ``rotor_tach``, ``balance``...)."""
 
     role: str
-    kind: str                      # "balance" | "tach" | "motor" | "camera" | "strobe"
+    kind: str                      # "balance" | "tachometer" | "motor" | "camera" | "strobe"
     protocol: str                  # driver registry name, e.g. "mtsics"
     port: str                      # URL for serial_for_url / labkit.io.open_port
     serial: dict[str, Any] = field(default_factory=dict)
@@ -150,10 +151,13 @@ class Rig:
     text: str = ""                        # the file as read (copied into sessions)
 
     def devices_of(self, kind: str) -> dict[str, DeviceConfig]:
+        kind = canonical_kind(kind)
         return {r: d for r, d in self.devices.items() if d.kind == kind}
 
     def require(self, role: str, kind: str, needed_by: str) -> DeviceConfig:
-        """The device ``role`` of ``kind``, or a RigFileError saying who needs it."""
+        """The device ``role`` of ``kind`` (an old word such as ``tach`` names its kind), or a
+        RigFileError saying who needs it."""
+        kind = canonical_kind(kind)
         dev = self.devices.get(role)
         if dev is None or dev.kind != kind:
             raise RigFileError(str(self.path), f"devices.{role}",
@@ -174,9 +178,10 @@ def _check_port_url(sec: TableSection, url: str, check_device: DeviceCheck | Non
 def _device(file: str, role: str, table: Any, check_device: DeviceCheck | None) -> DeviceConfig:
     check_role(file, f"devices.{role}", role)
     sec = TableSection(file, f"devices.{role}", table)
-    kind = sec.raw("kind", str, required=True)
+    kind = canonical_kind(sec.raw("kind", str, required=True))  # "tach" (older files) is "tachometer"
     if kind not in KINDS:
-        raise sec.error("kind", f"must be one of {', '.join(KINDS)}, got {kind!r}")
+        old = ", ".join(f"{w!r} for {k!r}" for w, k in OLD_KIND_WORDS.items())
+        raise sec.error("kind", f"must be one of {', '.join(KINDS)} (also read: {old}), got {kind!r}")
     protocol = sec.raw("protocol", str, required=True)
     if check_device is not None:
         check_device.protocol(sec, kind, protocol)
@@ -275,7 +280,7 @@ def _control(file: str, table: Any, devices: dict[str, DeviceConfig]) -> Control
         for role, dev in devices.items():
             if dev.kind == "motor" and role.endswith("_motor"):
                 tach = role[: -len("_motor")] + "_tach"
-                if tach in devices and devices[tach].kind == "tach":
+                if tach in devices and devices[tach].kind == "tachometer":
                     loops.append(LoopConfig(role[: -len("_motor")], role, tach))
     else:
         for i, item in enumerate(loops_raw):
@@ -285,7 +290,7 @@ def _control(file: str, table: Any, devices: dict[str, DeviceConfig]) -> Control
             name = lsec.raw("name", str, default=motor.removesuffix("_motor"))
             check_role(file, lsec.key("name"), name)
             lsec.finish()
-            for key, role, kind in (("motor", motor, "motor"), ("tach", tach, "tach")):
+            for key, role, kind in (("motor", motor, "motor"), ("tach", tach, "tachometer")):
                 if role not in devices or devices[role].kind != kind:
                     raise lsec.error(key, f"{role!r} is not a {kind} device of this rig")
             loops.append(LoopConfig(name, motor, tach))

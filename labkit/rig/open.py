@@ -73,7 +73,7 @@ class OpenRig:
 
     def tachometer(self, role: str) -> Tachometer:
         """The tachometer driver ``role``."""
-        return self._of_kind(role, "tach")
+        return self._of_kind(role, "tachometer")
 
     def strobe(self, role: str) -> Strobe:
         """The stroboscope driver ``role`` (device kind ``strobe``, docs/reference/devices-strobe.md)."""
@@ -95,7 +95,7 @@ class OpenRig:
         return {r: d for r, d in self.drivers.items() if self.rig.devices[r].kind == "balance"}
 
     def tachometers(self) -> dict[str, Tachometer]:
-        return {r: d for r, d in self.drivers.items() if self.rig.devices[r].kind == "tach"}
+        return {r: d for r, d in self.drivers.items() if self.rig.devices[r].kind == "tachometer"}
 
     def motors(self) -> dict[str, MotorController]:
         """The motor drivers themselves (raw), by role."""

@@ -189,7 +189,7 @@ class SessionRecord:
         return [row for _, row in declared(iter_jsonl_lines(path, self.problems))] if path.exists() else []
 
 
-def load_session(path: str | Path, skip_types: frozenset[str] = frozenset()) -> SessionRecord:
+def load_session_record(path: str | Path, skip_types: frozenset[str] = frozenset()) -> SessionRecord:
     """Read ``run.json``, ``events.jsonl`` and ``results.json`` (if any). Raises SessionError.
     Events whose ``type`` is in ``skip_types`` are not kept (a replay needs no control ticks)."""
     p = Path(path)

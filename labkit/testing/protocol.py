@@ -2,7 +2,7 @@
 
 ::
 
-    from labkit.devices.loadcell.mtsics import MtSicsBalance
+    from labkit.devices.balance.mtsics import MtSicsBalance
     from labkit.testing import expected_protocol
 
     with expected_protocol(MtSicsBalance, [

@@ -26,9 +26,9 @@ CAMERA_SETS = ["speeds_rpm=4000:9000:1000", "burst_frames=20"]
 def camera_rows(user_rig: Path, params: TwinParams, work: Path, seed: int) -> tuple[list[dict], dict]:
     """Row ``twin/camera/cone_angle``; the run's session, points and the largest point error."""
     from labkit.stream.livefit import cone_angle_fit
-    from labkit.twin.fits import compare
     from labkit.twin.footage import FOOTAGE_RPM, model_motion
     from labkit.twin.protocol_run import run_protocol
+    from labkit.twin.recovery import compare
     from labkit.twin.rigtext import write_twin_rig
 
     rig_file = write_twin_rig(user_rig, "camera", work / "rigs")

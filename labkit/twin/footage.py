@@ -20,7 +20,7 @@ from typing import Any
 
 from labkit.emulators.twin_model import TwinParams
 from labkit.errors import LabkitError
-from labkit.twin.fits import compare
+from labkit.twin.recovery import compare
 
 FOOTAGE_RPM = 6000.0
 CLIPS = 4

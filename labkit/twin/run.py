@@ -9,8 +9,8 @@ from typing import Any
 
 from labkit.emulators.break_up import break_up
 from labkit.emulators.twin_model import TwinParams, missing_from_rig, params_from_rig
-from labkit.twin.fits import break_phi_from_c, compare, fit_gap, fit_moment_product, interval_95
 from labkit.twin.protocol_run import run_protocol
+from labkit.twin.recovery import break_phi_from_c, compare, fit_gap, fit_moment_product, interval_95
 from labkit.twin.rigtext import write_twin_rig
 
 #: speed-sweep plan of the twin (the demo's)

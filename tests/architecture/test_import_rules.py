@@ -17,7 +17,7 @@ LABKIT = Path(__file__).resolve().parents[2] / "labkit"
 LAYERS: list[set[str]] = [
     # 0. words every part may use: errors, units, ranges, the body table, presentation hints, the
     # one reading shape
-    {"errors", "units", "ranges", "lazy", "bodies", "hints", "plugins", "readings"},
+    {"errors", "units", "ranges", "lazy", "bodies", "hints", "plugins", "readings", "device_kinds"},
     # 1. the transport, the physics and the image analysis: none knows a device or a rig
     {"io", "model", "sim", "vision"},
     # 2. the device drivers; predictions, synthetic footage and images built on the physics

@@ -13,7 +13,7 @@ from pathlib import Path
 WORKTREE = Path(__file__).resolve().parents[2]
 
 PLUGIN = '''
-from labkit.devices.loadcell.mtsics import {balance}
+from labkit.devices.balance.mtsics import {balance}
 from labkit.protocols.speed_sweep import SpeedSweep
 
 

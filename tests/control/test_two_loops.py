@@ -19,7 +19,7 @@ port = "sim://pololu_smc?seed=5&plant=model-fig525&role=rotor2_motor&motor=rotor
 serial = { baudrate = 9600, timeout = 0.2 }
 
 [devices.rotor2_tach]
-kind = "tach"
+kind = "tachometer"
 protocol = "labkit_tach"
 port = "sim://labkit_tach?seed=6&plant=model-fig525&role=rotor2_tach&rate_hz=20&source=rotor2{fault}"
 serial = {{ baudrate = 115200, timeout = 0.2 }}

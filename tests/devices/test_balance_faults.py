@@ -10,7 +10,7 @@ import math
 import pytest
 import serial
 
-from labkit.devices.loadcell import and_std, mtsics
+from labkit.devices.balance import and_std, mtsics
 from labkit.devices.registry import driver_class
 from labkit.emulators.balances import MtSicsEmulator
 from labkit.emulators.plant import reset_plants, shared_plant

@@ -9,8 +9,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from labkit.devices.balance import and_std, line_regex, mtsics
 from labkit.devices.link import FrameError, describe_serial
-from labkit.devices.loadcell import and_std, line_regex, mtsics
 from labkit.units import UnitError, to_si
 
 FUZZ = settings(max_examples=300, deadline=None)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from labkit.devices.loadcell.mtsics import MtSicsBalance
+from labkit.devices.balance.mtsics import MtSicsBalance
 from labkit.devices.motor.pololu_smc import PololuSmc
 from labkit.emulators.motors import _smc_crc7
 from labkit.errors import DeviceReplyError, DeviceTimeout

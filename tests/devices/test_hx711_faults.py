@@ -17,8 +17,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from labkit.devices.balance import line_regex
 from labkit.devices.link import FrameError
-from labkit.devices.loadcell import line_regex
 from labkit.devices.registry import driver_class
 from labkit.emulators.hx711_sketch import Hx711SketchEmulator
 from labkit.emulators.plant import shared_plant

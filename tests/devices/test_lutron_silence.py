@@ -30,7 +30,7 @@ def spin(plant: str, clock) -> None:
 
 
 def open_lutron(query: str, clock, settings: dict | None = None, **options):
-    cls = driver_class("tach", "lutron16")
+    cls = driver_class("tachometer", "lutron16")
     port = open_port(f"sim://lutron16?plant=lut&rate_hz=5{query}", clock=clock, timeout=0,
                      **(settings or cls.default_serial))
     return cls(port, clock, name="rotor tach", **options)
@@ -84,7 +84,7 @@ def test_stopped_stream_over_a_real_pty_times_out():
     spin("pty-lut", clock)
     emulator = build_emulator("sim://lutron16?plant=pty-lut&rate_hz=20")
     with PtyHost(emulator, clock=clock) as host:
-        cls = driver_class("tach", "lutron16")
+        cls = driver_class("tachometer", "lutron16")
         port = open_port(host.path, clock=clock, timeout=0, **cls.default_serial)
         with cls(port, clock, name="pty tach") as tach:
             first = tach.wait_reading(timeout=5.0)

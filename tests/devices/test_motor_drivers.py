@@ -337,8 +337,8 @@ def test_a_controller_timeout_stops_the_motor_even_if_its_port_is_never_used_aga
     # act on time (an emulator only runs when its own port is used)
     motor, clock = open_motor(protocol, query)
     tach_port = open_port("sim://labkit_tach?plant=m&rate_hz=20", clock=clock, timeout=0,
-                          **driver_class("tach", "labkit_tach").default_serial)
-    tach = driver_class("tach", "labkit_tach")(tach_port, clock, name="rotor_tach")
+                          **driver_class("tachometer", "labkit_tach").default_serial)
+    tach = driver_class("tachometer", "labkit_tach")(tach_port, clock, name="rotor_tach")
     motor.enable()
     motor.set_duty(0.5)
     clock.sleep(3.0)

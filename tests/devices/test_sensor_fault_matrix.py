@@ -27,9 +27,9 @@ SENSORS = {
     "mtsics": ("balance", "mtsics", "mtsics", "", {}),
     "and_std": ("balance", "and_std", "and_std", "", {}),
     "hx711": ("balance", "line_regex", "hx711", "&startup_s=0.2", {"preset": "hx711_adc"}),
-    "labkit_tach": ("tach", "labkit_tach", "labkit_tach", "", {}),
-    "lutron16": ("tach", "lutron16", "lutron16", "&rate_hz=5", {}),
-    "monarch_at": ("tach", "monarch_at", "monarch_at", "", {}),
+    "labkit_tach": ("tachometer", "labkit_tach", "labkit_tach", "", {}),
+    "lutron16": ("tachometer", "lutron16", "lutron16", "&rate_hz=5", {}),
+    "monarch_at": ("tachometer", "monarch_at", "monarch_at", "", {}),
 }
 
 
@@ -59,7 +59,7 @@ def read(device, timeout: float = 3.0):
 
 def truth(name: str) -> float:
     """What the device should report at 9000 RPM, in the reading's SI unit."""
-    if SENSORS[name][0] == "tach":
+    if SENSORS[name][0] == "tachometer":
         return RPM * RAD_S_PER_RPM
     return fig525_force_n(RPM * RAD_S_PER_RPM)
 
@@ -71,7 +71,7 @@ def as_si(name: str, reading) -> float:
 
 
 def tolerance(name: str) -> float:
-    return 0.02 * truth(name) if SENSORS[name][0] == "tach" else 0.02e-3 * G0 + 0.01 * truth(name)
+    return 0.02 * truth(name) if SENSORS[name][0] == "tachometer" else 0.02e-3 * G0 + 0.01 * truth(name)
 
 
 @pytest.mark.parametrize("name", sorted(SENSORS))
@@ -128,5 +128,5 @@ def test_reconnect_then_reopen_reads_true_values_again(name):
     clock.sleep(0.5)
     # a balance zeroes at power-on with the force on it (as real ones do); a tachometer
     # simply sees the rotor again
-    expected = truth(name) if kind == "tach" else 0.0
+    expected = truth(name) if kind == "tachometer" else 0.0
     assert as_si(name, read(again)) == pytest.approx(expected, abs=tolerance(name))

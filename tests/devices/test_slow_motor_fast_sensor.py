@@ -15,7 +15,7 @@ def test_tachometer_keeps_its_rate_while_motor_replies_take_300_ms():
     smc = driver_class("motor", "pololu_smc")
     motor_port = open_port("sim://pololu_smc?plant=slow&faults=delay:0.3", clock=clock, timeout=0,
                            **smc.default_serial)
-    tach_cls = driver_class("tach", "labkit_tach")
+    tach_cls = driver_class("tachometer", "labkit_tach")
     tach_port = open_port("sim://labkit_tach?plant=slow&rate_hz=20&boot_s=0.05", clock=clock, timeout=0,
                           **tach_cls.default_serial)
     with tach_cls(tach_port, clock, name="rotor_tach") as tach, \

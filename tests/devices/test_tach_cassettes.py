@@ -31,7 +31,7 @@ def replay(name: str, mode: str) -> tuple[dict, dict]:
     expected = json.loads((CASSETTES / f"{name}.expected.json").read_text(encoding="utf-8"))
     clock = VirtualClock()
     port = open_port(f"replay://{CASSETTES / name}.jsonl?mode={mode}", clock=clock, timeout=0,
-                     **driver_class("tach", protocol).default_serial)
+                     **driver_class("tachometer", protocol).default_serial)
     return run_tach_script(port, clock, protocol, duration_s=2.0, **options), expected
 
 

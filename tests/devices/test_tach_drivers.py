@@ -17,7 +17,7 @@ from labkit.units import RAD_S_PER_RPM
 
 def open_tach(protocol: str, query: str = "", clock: VirtualClock | None = None,
               settings: dict | None = None, **options):
-    return open_sim_driver("tach", protocol, "t", "rotor_tach", query, clock, settings, **options)
+    return open_sim_driver("tachometer", protocol, "t", "rotor_tach", query, clock, settings, **options)
 
 
 def spin_rotor(rpm: float, t: float = 0.0) -> float:
@@ -157,7 +157,7 @@ def test_labkit_tach_reconnect_then_reopen_resyncs_from_the_boot_banner():
     clock.sleep(1.0)                     # plugged back in
     tach.port.close()
     tach.port.open()                     # the same emulator, power-cycled
-    again = driver_class("tach", "labkit_tach")(tach.port, clock, name="rotor_tach", ppr=2)
+    again = driver_class("tachometer", "labkit_tach")(tach.port, clock, name="rotor_tach", ppr=2)
     assert again.banner["version"] == "1.0"
     assert again.wait_reading(timeout=2.0).value == pytest.approx(expected, rel=0.01)
 

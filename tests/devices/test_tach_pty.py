@@ -29,7 +29,7 @@ def settled_rotor(clock: RealClock, rpm: float) -> float:
 
 
 def open_on_pty(host: PtyHost, protocol: str, clock: RealClock, **options):
-    cls = driver_class("tach", protocol)
+    cls = driver_class("tachometer", protocol)
     port = open_port(host.path, clock=clock, timeout=0, **cls.default_serial)
     return cls(port, clock, name=f"tach on {host.path}", **options)
 

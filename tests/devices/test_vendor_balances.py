@@ -23,7 +23,7 @@ import re
 import pytest
 
 from labkit.cli import main
-from labkit.devices.loadcell import and_std, line_regex, mtsics
+from labkit.devices.balance import and_std, line_regex, mtsics
 from labkit.devices.registry import driver_class
 from labkit.emulators.plant import reset_plants, shared_plant
 from labkit.errors import DeviceError

@@ -33,7 +33,7 @@ def frame(annunciator: bytes, digits: bytes = b"00000123", point: bytes = b"1") 
 
 def open_lutron(query: str, **options):
     clock = VirtualClock()
-    cls = driver_class("tach", "lutron16")
+    cls = driver_class("tachometer", "lutron16")
     port = open_port(f"sim://lutron16?plant=lu{query}", clock=clock, timeout=0, **cls.default_serial)
     return cls(port, clock, name="lutron", **options), clock
 

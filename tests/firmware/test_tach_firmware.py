@@ -20,7 +20,7 @@ pytestmark = pytest.mark.timeout(120)
 
 
 def probe(capsys, pty: str, samples: int, *options: str) -> list[dict]:
-    code = main(["probe", "tach", "--protocol", "labkit_tach", "--port", pty,
+    code = main(["probe", "tachometer", "--protocol", "labkit_tach", "--port", pty,
                  "--samples", str(samples), "--json", *options])
     out, err = capsys.readouterr()
     assert code == 0, err

@@ -39,7 +39,7 @@ class SevenE1TestEmulator(EchoTestEmulator):
 @register_emulator
 class TickerTestEmulator(Emulator):
     protocol = "test_ticker"
-    kind = "tach"
+    kind = "tachometer"
 
     def power_on(self, t: float) -> None:
         super().power_on(t)

@@ -11,7 +11,7 @@ class Hold(ProtocolDef):
     name = "hold"
     defaults = {"speed_rpm": 10000.0, "hold_s": 2.0, "steps": 2, "fail_in_step": -1, "sigint_in_step": -1,
                 "sigints": 1}
-    needs = (("rotor_motor", "motor"), ("rotor_tach", "tach"))
+    needs = (("rotor_motor", "motor"), ("rotor_tach", "tachometer"))
 
     def __init__(self):
         self.marks = {}

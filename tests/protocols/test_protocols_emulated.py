@@ -73,7 +73,7 @@ def test_dry_run_plan_lists_steps_and_checks_limits():
     ("emulated-fig525.toml", "speed-sweep", ["speeds_rpm=20000:30000:5000"], SafetyError,
      "asks 25000 RPM, above the rig's limit of 24000 RPM"),
     ("emulated-fig525.toml", "spin-critical", [], RigFileError,
-     "spin-critical needs a tach device called 'floator_tach'"),
+     "spin-critical needs a tachometer device called 'floator_tach'"),
     ("emulated-fig525.toml", "levitate", [], LabkitError, "unknown protocol 'levitate'"),
     ("emulated-fig525.toml", "speed-sweep", ["speed=5"], LabkitError, "--set speed: unknown parameter"),
     ("emulated-fig525.toml", "speed-sweep", ["speeds_rpm=fast"], LabkitError, "is not a number"),

@@ -20,7 +20,7 @@ kind = "motor"
 protocol = "pololu_smc"
 port = "sim://pololu_smc?plant=t"
 [devices.rotor_tach]
-kind = "tach"
+kind = "tachometer"
 protocol = "labkit_tach"
 port = "sim://labkit_tach?plant=t"
 [limits]
@@ -112,7 +112,7 @@ def test_bad_rig_files_name_file_key_and_reason(change, key, reason):
     ('[devices.rotor_motor.serial]\nbaud = 9600', "devices.rotor_motor.serial.baud", "unknown key"),
     ('[control]\nkp = -1', "control.kp", "must be >= 0"),
     ('[[control.loops]]\nmotor = "rotor_motor"\ntach = "floator_tach"', "control.loops[0].tach",
-     "not a tach device"),
+     "not a tachometer device"),
 ])
 def test_bad_sections(extra, key, reason):
     with pytest.raises(RigFileError) as info:

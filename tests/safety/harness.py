@@ -180,7 +180,7 @@ class EmulatedRig:
         from labkit.io.ports import open_port
 
         clock = RealClock()
-        cls = driver_class("tach", "labkit_tach")
+        cls = driver_class("tachometer", "labkit_tach")
         port = wait_for(lambda: _try_open(open_port, self.paths["rotor_tach"], clock), timeout,
                         "the tachometer's port free again")
         tach = cls(port, clock, name="rotor_tach")

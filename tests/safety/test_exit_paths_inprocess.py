@@ -33,7 +33,7 @@ class SignalledHold(ProtocolDef):
 
     name = "signalled-hold"
     defaults = {"speed_rpm": 8000.0, "signum": 0, "times": 1}
-    needs = (("rotor_motor", "motor"), ("rotor_tach", "tach"))
+    needs = (("rotor_motor", "motor"), ("rotor_tach", "tachometer"))
 
     def __init__(self) -> None:
         self.marks: dict[str, float] = {}

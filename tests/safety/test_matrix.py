@@ -18,7 +18,7 @@ import pytest
 
 from labkit.cli import main
 from labkit.io.cassette import load_cassette
-from labkit.session import load_session
+from labkit.session import load_session_record
 
 from .harness import EmulatedRig, wait_for
 
@@ -133,7 +133,7 @@ def test_full_sessions_disk_stops_the_rotor_and_keeps_a_valid_session(lab, tmp_p
     assert "File too large" in first  # the cause, as the OS said it (ENOSPC on a real full disk)
     assert run.proc.returncode == 2
     session = run.session()
-    record = load_session(session)               # what was written stays valid ...
+    record = load_session_record(session)               # what was written stays valid ...
     assert record.events[0]["type"] == "start"
     for cassette in (session / "cassettes").glob("*.jsonl"):
         assert load_cassette(cassette).events     # ... every cassette line whole ...
@@ -167,7 +167,7 @@ def test_really_full_disk_enospc_stops_the_rotor(lab, small_disk):
     first = stderr.strip().splitlines()[0]
     assert "cannot write " in first and "No space left on device" in first, first
     (small_disk / "filler").unlink()          # room again: the session is whole and resumable
-    assert load_session(run.session()).events[0]["type"] == "start"
+    assert load_session_record(run.session()).events[0]["type"] == "start"
     assert main(["run", "--resume", str(run.session()), "--dry-run"]) == 0
 
 

@@ -19,7 +19,7 @@ def run_cli(argv, capsys):
 
 
 @pytest.mark.parametrize("argv, expected", [
-    (["run", FIG525, "spin-critical"], "needs a tach device called 'floator_tach'"),
+    (["run", FIG525, "spin-critical"], "needs a tachometer device called 'floator_tach'"),
     (["run", FIG525, "speed-sweep", "--set", "speeds_rpm=20000:26000:2000"],
      "above the rig's limit of 24000 RPM"),
     (["run", FIG525, "sweep-faster"],

@@ -9,7 +9,7 @@ import shutil
 from pathlib import Path
 
 from labkit.cli import main
-from labkit.session import load_session
+from labkit.session import load_session_record
 from labkit.session.recover import results_from_events
 
 SESSIONS = Path(__file__).resolve().parents[2] / "recordings" / "sessions"
@@ -41,7 +41,7 @@ def test_fit_takes_the_points_when_the_run_ended_before_its_results(tmp_path, ca
     err = capsys.readouterr().err
     assert "using the 4 points in events.jsonl and run.json (the run ended before its results" in err, err
     recorded = json.loads((SESSIONS / "speed-sweep-clean" / "results.json").read_text())
-    found = results_from_events(load_session(session))
+    found = results_from_events(load_session_record(session))
     assert found is not None and found[0]["points"] == recorded["points"]
 
 

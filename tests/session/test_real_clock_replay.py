@@ -19,7 +19,7 @@ from labkit.io.clock import RealClock, VirtualClock
 from labkit.protocols.launch import prepare_run
 from labkit.protocols.replay import choose_level, replay_session
 from labkit.protocols.replay_compare import decisions
-from labkit.session import load_session
+from labkit.session import load_session_record
 
 RECORDINGS = Path(__file__).resolve().parents[2] / "recordings" / "sessions"
 ALL = sorted(p.parent for p in RECORDINGS.glob("*/run.json"))
@@ -47,7 +47,7 @@ def test_a_real_clock_recording_replays_faithfully(session, capsys):
 
 @pytest.mark.parametrize("session", REAL, ids=[p.name for p in REAL])
 def test_the_replay_takes_the_recorded_decisions_at_the_recorded_steps(session):
-    record = load_session(session)
+    record = load_session_record(session)
     result = replay_session(session)
     assert result.level == "faithful" and result.identical, result.differences[:5]
     recorded = decisions(record.events)
@@ -61,7 +61,7 @@ def test_the_replay_takes_the_recorded_decisions_at_the_recorded_steps(session):
 
 def test_the_unplugged_tachometer_trips_the_same_interlock_in_the_same_step():
     session = RECORDINGS / "real-speed-sweep-tach-unplug"
-    recorded = [d for d in decisions(load_session(session).events) if d["decision"] == "interlock"]
+    recorded = [d for d in decisions(load_session_record(session).events) if d["decision"] == "interlock"]
     result = replay_session(session)
     replayed = [d for d in result.decisions if d["decision"] == "interlock"]
     assert len(recorded) == 1 and "rotor_tach" in recorded[0]["reason"]
@@ -74,7 +74,7 @@ def test_analysis_only_recomputes_points_and_fit_of_every_shipped_recording(sess
     assert main(["replay", "--analysis-only", str(session)]) == 0
     assert "replay level: analysis only" in capsys.readouterr().out
     result = replay_session(session, level="analysis")
-    assert len(result.outcome.results["points"]) == len(load_session(session).results["points"])
+    assert len(result.outcome.results["points"]) == len(load_session_record(session).results["points"])
 
 
 def test_a_replay_that_diverges_names_the_step_and_no_motor_instruction(tmp_path, capsys):
@@ -95,7 +95,7 @@ def test_an_older_real_clock_session_is_re_analysed_and_says_so(tmp_path, capsys
     copy = tmp_path / "old"
     shutil.copytree(RECORDINGS / "real-speed-sweep", copy)
     (copy / "clock.jsonl").unlink()
-    assert choose_level(load_session(copy)) == "analysis"
+    assert choose_level(load_session_record(copy)) == "analysis"
     assert main(["replay", str(copy)]) == 0
     captured = capsys.readouterr()
     assert "analysis only" in captured.out and "re-analysed, not replayed" in captured.err

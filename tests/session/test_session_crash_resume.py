@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from labkit.cli import main
-from labkit.session import load_session, read_jsonl
+from labkit.session import load_session_record, read_jsonl
 
 REPO = Path(__file__).resolve().parents[2]
 RIG = str(REPO / "rigs" / "emulated-fig525.toml")
@@ -40,7 +40,7 @@ def test_sigkill_mid_sweep_leaves_a_readable_session_that_resume_completes(tmp_p
     proc.send_signal(signal.SIGKILL)
     proc.wait(timeout=10)
 
-    record = load_session(session)
+    record = load_session_record(session)
     assert record.meta["status"] == "running"          # it never got to write its end
     points = record.completed_points()
     assert len(points) >= 2
@@ -72,7 +72,7 @@ def test_ctrl_c_stops_the_cli_run_safely_and_it_can_be_resumed(tmp_path):
     _, err = proc.communicate(timeout=30)
     assert proc.returncode == 130
     assert "resume with: labkit run --resume" in err
-    record = load_session(session)
+    record = load_session_record(session)
     assert record.meta["status"] == "interrupted"
     kinds = [e["type"] for e in record.events]
     assert "stop_request" in kinds and kinds[-1] == "stop"
@@ -83,4 +83,4 @@ def test_ctrl_c_stops_the_cli_run_safely_and_it_can_be_resumed(tmp_path):
 def test_torn_last_line_of_a_killed_run_is_skipped(tmp_path):
     (tmp_path / "run.json").write_text(json.dumps({"protocol": "speed-sweep", "params": {}}))
     (tmp_path / "events.jsonl").write_text('{"type":"start","t":0}\n{"type":"poi')
-    assert [e["type"] for e in load_session(tmp_path).events] == ["start"]
+    assert [e["type"] for e in load_session_record(tmp_path).events] == ["start"]

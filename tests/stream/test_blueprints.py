@@ -10,7 +10,7 @@ import pytest
 from labkit.cli import main
 from labkit.protocols.legacy_hints import hints_for
 from labkit.stream.blueprints import figure_of, run_blueprint, view_kinds
-from labkit.stream.fit import x_timeline
+from labkit.stream.fit_report import x_timeline
 from labkit.stream.livefit import eq637_fit, power_law_fit
 
 PAPER_CSV = "labkit/data/paper/fig6_18_spin_critical.csv"

@@ -28,6 +28,7 @@ import threading
 from dataclasses import dataclass
 from typing import Any
 
+from labkit.devices.framing import LineFramer
 from labkit.devices.link import ReplyQueue
 from labkit.devices.registry import register_driver, register_parser_benchmark
 from labkit.devices.sketch_commands import (
@@ -37,7 +38,6 @@ from labkit.devices.sketch_commands import (
     parse_sketch_banner,
     strip_sketch_junk,
 )
-from labkit.devices.stream import LineFramer
 from labkit.devices.tachometer.streaming import StreamingTachometer
 from labkit.readings import Reading
 from labkit.units import rpm_to_rad_s

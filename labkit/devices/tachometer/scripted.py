@@ -30,7 +30,7 @@ def run_tach_script(port: serial.SerialBase, clock: Clock, protocol: str,
 
     Returns ``{"identify": {...}, "readings": [reading_record, ...]}``.
     """
-    cls = cast("type[Tachometer]", driver_class("tach", protocol))
+    cls = cast("type[Tachometer]", driver_class("tachometer", protocol))
     with cls(port, clock, name=f"tach {protocol}", **options) as tach:
         info = tach.identify()
         start = clock.now()

@@ -5,4 +5,4 @@
 * :mod:`.line_regex`: third-party HX711 + Arduino sketches (presets, configurable regex).
 """
 
-from labkit.devices.loadcell import and_std, line_regex, mtsics  # noqa: F401
+from labkit.devices.balance import and_std, line_regex, mtsics  # noqa: F401

@@ -1,7 +1,7 @@
 """A session as pandas DataFrames: ``labkit.load_session(PATH)`` (docs/how-to/script-labkit.md,
 docs/tutorials/notebook.md).
 
-Built on :func:`labkit.session.reader.load_session` (same bounds, same damaged-line reports).
+Built on :func:`labkit.session.reader.load_session_record` (same bounds, same damaged-line reports).
 Units are in the column names, always in the last ``_`` part:
 
 * ``.points``: one row per measured step, the columns of ``results.json`` (or the ``point``
@@ -24,8 +24,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from labkit.session.paths import session_file
-from labkit.session.reader import SessionRecord
-from labkit.session.reader import load_session as load_record
+from labkit.session.reader import SessionRecord, load_session_record
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -124,4 +123,4 @@ def load_session(path: str | Path) -> SessionFrames:
 
     Raises :class:`labkit.session.SessionError` (one line naming the file) if it is not a
     readable session."""
-    return SessionFrames(load_record(path))
+    return SessionFrames(load_session_record(path))

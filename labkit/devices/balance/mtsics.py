@@ -16,9 +16,9 @@ from typing import Any
 
 import serial
 
+from labkit.devices.balance.continuous import ContinuousMixin
 from labkit.devices.base import Balance
 from labkit.devices.link import FrameError, LineLink, LinkTailMixin, eol_bytes
-from labkit.devices.loadcell.continuous import ContinuousMixin
 from labkit.devices.registry import register_driver, register_parser_benchmark
 from labkit.errors import DeviceReplyError
 from labkit.io.clock import Clock
