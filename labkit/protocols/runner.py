@@ -78,6 +78,8 @@ class RunContext:
         self._last_control_event = -1e9
         self._tach_logged: dict[str, float] = {
             role: -1e9 for role in devices if self.rig.devices[role].kind == "tach"}
+        self._strobe_logged: dict[str, float] = {
+            role: -1e9 for role in devices if self.rig.devices[role].kind == "strobe"}
 
     # ---- devices by kind (labkit.devices.kinds; LabkitError naming the rig's devices if not) -
     def balance(self, role: str) -> BalanceKind:
@@ -118,7 +120,9 @@ class RunContext:
         self.emit(doc.ReadingEvent.of(role, reading))
 
     def log_tach_readings(self) -> None:
-        """Emit the tachometers' new readings as ``reading`` events (readings/ROLE.jsonl)."""
+        """Emit the tachometers' new readings, and the strobes' new status lines (f_rot,
+        f_strobe, flags: :meth:`labkit.devices.strobe.protocol.StrobeStatus.reading`), as
+        ``reading`` events (readings/ROLE.jsonl)."""
         for role, since in self._tach_logged.items():
             try:
                 new = self.tachometer(role).readings_since(since)
@@ -128,6 +132,15 @@ class RunContext:
                 self.emit_reading(role, reading)
             if new:
                 self._tach_logged[role] = new[-1].t
+        for role, since in self._strobe_logged.items():
+            try:
+                lines = self.strobe(role).statuses_since(since)
+            except Exception:  # noqa: BLE001 - a strobe that stopped talking fails the burst, not this
+                continue
+            for status in lines:
+                self.emit_reading(role, status.reading())
+            if lines:
+                self._strobe_logged[role] = lines[-1].t
 
     def _control_event(self) -> None:
         now = self.clock.now()
