@@ -12,6 +12,7 @@ adapter. Options per recording:
 
 * ``busy``: that many busy loops (``python -c "while True: pass"``) run during the recording,
   so the scheduler delays labkit's threads as on a loaded lab PC;
+* ``rig_changes``: ``{old: new}`` text replaced in the rig file (a camera's frame rate);
 * ``unplug``: ``(role, step)``: `labkit emulate --unplug-on-usr1 ROLE` pulls that cable 1.5 s
   after the step (1-based) begins.
 
@@ -41,6 +42,7 @@ SPIN = ["start_rpm=6600", "stop_rpm=9000", "step_pct=15", "max_trials=2", "consi
         "consistency_pct=10"]
 SPIN_FIXTURE = ["start_rpm=6600", "stop_rpm=8000", "step_pct=15", "max_trials=2", "consistent_n=2",
                 "consistency_pct=10"]
+STROBE_FIXTURE = ["speeds_rpm=4000:6000:step=1000", "burst_frames=40"]
 
 RECORDINGS: dict[str, dict] = {
     # shipped fixtures (recordings/sessions/real-*)
@@ -50,6 +52,16 @@ RECORDINGS: dict[str, dict] = {
     "real-speed-sweep-tach-unplug": dict(rig="emulated-fig525.toml", protocol="speed-sweep",
                                          sets=SWEEP_FIXTURE, unplug=("rotor_tach", 3)),
     "real-spin-critical": dict(rig="emulated-fig618.toml", protocol="spin-critical", sets=SPIN_FIXTURE),
+    # the emulated strobe lights the emulated camera only inside labkit's process (the camera asks
+    # the strobe emulator through the model plant, ADR 0025): no ptys for this rig
+    # (the camera emulator draws each frame on the real clock: at 320x240 and 30 a second on a
+    # loaded 2-core box it dropped frames and starved the tachometer's emulator; so 160x120 at
+    # 0.4 mm per pixel, 15 a second, and the tachometer timeout of a loaded CI box)
+    "real-strobe-sweep": dict(rig="emulated-strobe.toml", protocol="strobe-sweep", sets=STROBE_FIXTURE,
+                              inprocess=True, rig_changes={
+                                  "size=320x240&fps=30&": "size=160x120&fps=15&",
+                                  "mm_per_px=0.2&": "mm_per_px=0.4&",
+                                  "tach_timeout_s = 0.5": "tach_timeout_s = 2.0"}),
     "spin-3-emulate": dict(rig="emulated-fig618.toml", protocol="spin-critical", sets=SPIN),
     # acceptance (the issue's 5-step sweep, 6000-14000 RPM, default averaging), not shipped
     "sweep-5-inprocess": dict(rig="emulated-fig525.toml", protocol="speed-sweep", sets=SWEEP_ACCEPT,
@@ -89,6 +101,9 @@ def step_began(sessions: Path, step: int) -> bool:
 def record_one(spec: dict, workdir: Path) -> tuple[int, Path | None, str]:
     """Run one recording; ``(exit status, session folder, stderr)``."""
     rig_text = (RIGS / spec["rig"]).read_text()
+    for old, new in spec.get("rig_changes", {}).items():
+        assert old in rig_text, (spec["rig"], old)
+        rig_text = rig_text.replace(old, new)
     sessions = workdir / "sessions"
     procs: list[subprocess.Popen] = []
     try:

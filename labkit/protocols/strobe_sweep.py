@@ -321,6 +321,7 @@ class StrobeSweep(ProtocolDef):
         ctx.log_tach_readings()
         ctx.checkpoint()
         lines = self._lines_over(ctx, first, last)
+        ctx.log_tach_readings()  # the line closing the burst too, before the run may end
         speeds = burst_speeds(ctx.tach_readings("rotor_tach", first), first, last)
         mm_per_px = self._mm_per_px(ctx)
         if frames:
