@@ -358,8 +358,8 @@ class StrobeSweep(ProtocolDef):
         if recorded is None:
             return None
         if recorded.get("clip") is not None or "camera" not in run.rig.devices:
-            raise NotImplementedError(f"step {step} analysed a recorded clip ({recorded.get('clip')}), which "
-                                      "the session does not keep")
+            raise NotImplementedError(f"step {step} analysed a recorded clip ({recorded.get('clip')}) over a "
+                                      "window of the strobe's status lines the session does not record")
         statuses = recorded_statuses(run.record, run.params, run.notes)
         speeds_of = run.readings.get("rotor_tach", [])
         bursts = run.bursts()

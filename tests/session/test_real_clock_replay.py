@@ -35,6 +35,13 @@ PRINTED_LEVEL = {"faithful": "replay level: faithful", "analysis": "replay level
 MOTOR_WORDS = ("cut the motor", "motor's power", "cut power")
 
 
+@pytest.fixture(autouse=True)
+def _from_the_checkout(monkeypatch):
+    """real-sketch-strobe-sweep names its clips relative to the repository (they are part of the
+    fixture), as a lab's session names its clips folder: replay from the checkout's root."""
+    monkeypatch.chdir(RECORDINGS.parents[1])
+
+
 def test_every_shipped_protocol_has_a_real_clock_recording():
     protocols = {json.loads((p / "run.json").read_text())["protocol"] for p in REAL}
     assert {"speed-sweep", "spin-critical", "strobe-sweep"} <= protocols
