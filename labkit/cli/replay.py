@@ -100,9 +100,8 @@ def success_line(session: str, result) -> str:
         return (f"replayed {session}: {n} points, results identical to results.json "
                 "(points exact; fits and image-analysis numbers within relative 1e-6)")
     if result.level == "analysis" and not result.recomputed:
-        return (f"re-analysed {session}: {n} points taken as recorded (no analysis-only rule for "
-                f"{result.recorded.get('protocol') if result.recorded else 'this protocol'}: nothing "
-                "re-parsed), the fit recomputed from them within tolerance of results.json")
+        return (f"re-analysed {session}: {n} points taken as recorded (the warning above says why), the fit "
+                "recomputed from them within tolerance of results.json")
     if result.level == "analysis":
         return (f"re-analysed {session}: {n} points and the fit recomputed from the recorded bytes, "
                 "within tolerance of results.json (speed and force 0.5 %)")

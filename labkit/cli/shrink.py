@@ -132,6 +132,11 @@ def run(args: argparse.Namespace) -> int:
                               f"({replayed.outcome.reason}); try a milder shrink")
         write_json_atomic(out / "results.json", results)
         _rewrite_point_events(out / "events.jsonl", results.get("points") or [])
+        if "digests" in run_doc:  # the shrunk session's own files, as a session that ended records them
+            from labkit.session.integrity import file_digests
+
+            run_doc["digests"] = file_digests(out)
+            write_json_atomic(out / "run.json", run_doc)
         check = replay_session(out)
         if not check.identical:
             raise LabkitError(f"shrink: the shrunk session does not reproduce its results: "

@@ -158,6 +158,36 @@ class ConeSweep(ProtocolDef):
             point["model_cone_angle_rad"] = meta["model_cone_angle_rad"]
         return point
 
+    def reanalyse_step(self, run: Any, step: int, events: list[dict[str, Any]]) -> dict[str, Any] | None:
+        """The analysis-only rule: the step's cone angle, verdict and stderr analysed again from
+        the burst the run kept in the frame cassette (the retake when it retook one) by today's
+        laser analysis, with the step's recorded speed: a real-clock camera session is checked
+        from its bytes, without the camera or the recording's timing."""
+        from labkit.protocols.reanalysis import point_event
+
+        recorded = point_event(events)
+        if recorded is None:
+            return None
+        bursts = run.bursts()
+        frames = bursts.frames(step, 1 if recorded.get("retaken") else 0)
+        if not frames:
+            return {**recorded, "cone_angle_rad": None, "verdict": "failed",
+                    "reasons": [f"no frames of step {step} in the frame cassette"]}
+        params = run.params
+        geometry = (bursts.size, float(params["screen_distance_mm"]), float(params["mm_per_px"]))
+        fps = burst_fps(frames, bursts.fps)
+        result = burst_cone_angle(frames, fps, *geometry)
+        result.pop("pattern", None)
+        angle = result["cone_angle_rad"]
+        stderr = None
+        if params.get("halves") and angle is not None and len(frames) >= 8:
+            halves = [burst_cone_angle(frames[k::2], fps / 2, *geometry)["cone_angle_rad"] for k in (0, 1)]
+            if None not in halves:
+                stderr = abs(halves[0] - halves[1]) / 2
+        return {**recorded, **result, "cone_angle_stderr_rad": stderr,
+                "cone_angle_deg": math.degrees(angle) if angle is not None else None,
+                "cone_angle_stderr_deg": math.degrees(stderr) if stderr is not None else None}
+
     def fit(self, points: list[dict[str, Any]]) -> dict[str, Any]:
         from labkit.errors import FitError
         from labkit.fit.models.cone_angle import fit_cone_angle

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 from labkit.hints import Column, Hints
 
 if TYPE_CHECKING:
+    from labkit.protocols.reanalysis import RecordedRun
     from labkit.protocols.runner import RunContext
     from labkit.rig import Rig
 
@@ -54,3 +55,13 @@ class ProtocolDef:
 
     def fit(self, points: list[dict[str, Any]]) -> dict[str, Any]:
         return {"model": "none", "params": {}}
+
+    def reanalyse_step(self, run: RecordedRun, step: int,
+                       events: list[dict[str, Any]]) -> dict[str, Any] | None:
+        """The analysis-only rule (``labkit replay --analysis-only``, docs/explanation/replay.md):
+        step ``step``'s point computed again from the session's bytes (``run``: the re-parsed
+        readings, the frame cassette) and its recorded decisions (``events``, the step's lines of
+        events.jsonl), by the same rule the run used; None where the step made no point.
+        A protocol without a rule leaves this: its points are then taken as recorded, and the
+        replay says so."""
+        raise NotImplementedError

@@ -13,8 +13,10 @@ reports it once on stderr so a broken viewer never stops a motor shutdown.
 from __future__ import annotations
 
 import dataclasses
+import math
 import sys
 import uuid
+from collections.abc import Callable
 from typing import Any, Protocol
 
 from labkit.documents import (
@@ -148,3 +150,18 @@ class ProgressSink:
 
 __all__ = ["DOCUMENT_TYPES", "EventBus", "FlagTally", "ListSink", "ProgressSink", "RunDocument", "Sink",
            "document_from_json"]
+
+
+def not_logged(since: Callable[[float], list[Any]],
+               mark: tuple[float, int]) -> tuple[list[Any], tuple[float, int]]:
+    """The items ``since`` holds that were not logged yet, and the new mark. ``mark`` is (time of
+    the last item logged, how many items of that time were): the lines of one read share its
+    time, and a log may run while the reader is still adding them, so "after the last time" would
+    lose the rest of them."""
+    t_last, done = mark
+    items = since(math.nextafter(t_last, -math.inf))
+    new = items[done:]
+    if not new:
+        return [], mark
+    t_new = new[-1].t
+    return new, (t_new, sum(1 for item in items if item.t == t_new))

@@ -5,14 +5,16 @@ a rig whose timing cannot be replayed.
 1. Every reading a session kept (``readings/ROLE.jsonl``: its time and the raw bytes it was
    parsed from) is parsed again by today's parser of its device's protocol
    (:data:`REPARSERS`); a value that now comes out otherwise is reported.
-2. The points are computed again from the re-parsed readings and the run's recorded
-   decisions (``events.jsonl``): speed-sweep averages each step's balance and tachometer
-   readings over the recorded averaging window (``settled`` to the rotor's stop) with the
-   rest readings around it; spin-critical takes each step's recorded drops (rotor speed and
-   spin at the drop, as registered) through the protocol's consistency rule.
-   cone-sweep analyses each step's burst again from the frame cassette
-   (:mod:`labkit.protocols.reanalyse_camera`); strobe-sweep has no rule yet (its points are
-   taken as recorded, and the replay says so).
+2. The points are computed again from the re-parsed readings, the frame cassette and the run's
+   recorded decisions (``events.jsonl``), each by its protocol's own rule
+   (``ProtocolDef.reanalyse_step``, given a :class:`labkit.protocols.reanalysis.RecordedRun`):
+   speed-sweep averages each step's balance and tachometer readings over the recorded
+   averaging window (``settled`` to the rotor's stop) with the rest readings around it;
+   spin-critical takes each step's recorded drops (rotor speed and spin at the drop, as
+   registered) through the protocol's consistency rule; cone-sweep and strobe-sweep analyse
+   each step's bursts again from the frame cassette (strobe-sweep with the strobe's status
+   lines from ``readings/strobe.jsonl``). A protocol without a rule has its points taken as
+   recorded, and the replay says so.
 3. The protocol's quick fit is made again from those points.
 
 The result is compared with ``results.json`` within the faithful tolerances
@@ -22,33 +24,21 @@ The result is compared with ``results.json`` within the faithful tolerances
 from __future__ import annotations
 
 import math
-import statistics
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
 from labkit.devices.balance.mtsics import parse_weight
+from labkit.devices.strobe.protocol import parse_status_line
+from labkit.devices.strobe.protocol import strip_junk as strip_strobe_junk
 from labkit.devices.tachometer.labkit_tach import parse_tach_sample, strip_junk
 from labkit.protocols.params import resolve_params
+from labkit.protocols.reanalysis import Parsed, RecordedRun, point_event
 from labkit.protocols.registry import get_protocol
 from labkit.protocols.replay_compare import ReplayOutcome, diff_within
 from labkit.protocols.runner import RunOutcome, normalise
-from labkit.protocols.speed_sweep import drift_warnings, finite_std, mean_stderr, reading_force_n
-from labkit.protocols.spin_critical import point_from_trials
 from labkit.rig import load_rig
 from labkit.session import SessionRecord
-from labkit.units import n_to_gf, rad_s_to_rpm, rpm_to_rad_s, to_si
-
-
-@dataclass(frozen=True)
-class Parsed:
-    """A re-parsed reading: what the protocols use of a :class:`~labkit.readings.Reading`."""
-
-    t: float
-    value: float
-    unit: str
-    stable: bool
-    overload: bool = False
+from labkit.units import rpm_to_rad_s, to_si
 
 
 def _mtsics(t: float, raw: bytes) -> Parsed:
@@ -66,8 +56,14 @@ def _labkit_tach(t: float, raw: bytes) -> Parsed:
     return Parsed(t, rpm_to_rad_s(sample.rpm), "rad/s", "noisy" not in sample.flags)
 
 
+def _labkit_strobe(t: float, raw: bytes) -> Parsed:
+    status = parse_status_line(strip_strobe_junk(raw.strip()), t)
+    return Parsed(t, status.strobe_hz, "Hz", status.locked)
+
+
 #: protocol -> parser of one recorded frame (its ``raw`` bytes) into a reading
-REPARSERS: dict[str, Callable[[float, bytes], Parsed]] = {"mtsics": _mtsics, "labkit_tach": _labkit_tach}
+REPARSERS: dict[str, Callable[[float, bytes], Parsed]] = {
+    "mtsics": _mtsics, "labkit_tach": _labkit_tach, "labkit_strobe": _labkit_strobe}
 
 
 def reparse(record: SessionRecord, rig: Any, notes: list[str]) -> dict[str, list[Parsed]]:
@@ -117,64 +113,6 @@ def _by_step(events: list[dict[str, Any]]) -> dict[int, list[dict[str, Any]]]:
     return steps
 
 
-def _sweep_point(step: int, events: list[dict[str, Any]], readings: dict[str, list[Parsed]],
-                 params: dict[str, Any]) -> dict[str, Any] | None:
-    """One speed-sweep point from its recorded window (speed_sweep.SpeedSweep.run_step)."""
-    settled = next((e for e in events if e["type"] == "settled"), None)
-    point = next((e for e in events if e["type"] == "point"), None)
-    targets = [e for e in events if e["type"] == "setpoint"]
-    if settled is None or point is None:
-        return None
-    t_start = settled["t"]
-    stop = next((e["t"] for e in targets if e["t"] > t_start and e["target_rad_s"] == 0.0), point["t"])
-    t_end = min(stop, point["t"])
-    balance = readings["balance"]
-    at_speed = [r for r in balance if t_start < r.t <= t_end]
-    speeds = [r.value for r in readings["rotor_tach"] if t_start < r.t <= t_end]
-    drift, rests_g = 0.0, None
-    if params["zero"] == "each":
-        go = next((e["t"] for e in targets if e["target_rad_s"] > 0), t_start)
-        before = [r for r in balance if r.t <= go and r.t >= events[0]["t"]]
-        after = [r for r in balance if t_end < r.t <= point["t"]]
-        if before and after:
-            r0, r1 = before[-1], after[-1]
-            t_mid = 0.5 * (at_speed[0].t + at_speed[-1].t) if at_speed else t_start
-            frac = (t_mid - r0.t) / (r1.t - r0.t) if r1.t > r0.t else 0.5
-            drift = reading_force_n(r0) + frac * (reading_force_n(r1) - reading_force_n(r0))
-            rests_g = (n_to_gf(reading_force_n(r0)), n_to_gf(reading_force_n(r1)))
-    force, stderr = mean_stderr([reading_force_n(r) - drift for r in at_speed])
-    finite = [v for v in speeds if math.isfinite(v)]
-    speed = statistics.fmean(finite) if finite else math.nan
-    data = point["point"]
-    return {"step": step, "direction": data.get("direction"), "repeat": data.get("repeat"),
-            "target_rpm": data.get("target_rpm"), "speed_rad_s": speed, "speed_rpm": rad_s_to_rpm(speed),
-            "speed_std_rpm": rad_s_to_rpm(finite_std(speeds)), "force_n": force, "force_g": n_to_gf(force),
-            "force_stderr_n": stderr, "force_stderr_g": n_to_gf(stderr), "n": len(at_speed),
-            "settle_time_s": settled["settle_time_s"], "drift_n": drift,
-            "drift_g": n_to_gf(drift) if rests_g else None,
-            "unstable": sum(1 for r in at_speed if not r.stable),
-            "warnings": drift_warnings(n_to_gf(force), n_to_gf(drift), rests_g,
-                                       float(params.get("drift_warn", 0.05)))}
-
-
-def _spin_point(step: int, events: list[dict[str, Any]], params: dict[str, Any]) -> dict[str, Any] | None:
-    """One spin-critical point from its recorded drops (spin_critical.SpinCritical.run_step's rule)."""
-    point = next((e for e in events if e["type"] == "point"), None)
-    if point is None:
-        return None
-    trials = [{k: e[k] for k in ("rotor_rad_s", "spin_rad_s", "cause", "hold_s")}
-              for e in events if e["type"] == "drop"]
-    n = int(params["consistent_n"])
-    consistent = False
-    for i in range(len(trials)):
-        recent = [t["spin_rad_s"] for t in trials[: i + 1][-n:]]
-        spread = (max(recent) - min(recent)) / max(abs(statistics.fmean(recent)), 1e-9) * 100.0
-        if len(recent) >= n and spread <= params["consistency_pct"]:
-            consistent = True
-            break
-    return {"step": step, **point_from_trials(point["point"].get("target_rpm"), trials, consistent, n)}
-
-
 def reanalyse_session(record: SessionRecord) -> Any:
     """The analysis-only level (module docstring); a
     :class:`labkit.protocols.replay_compare.ReplayOutcome`."""
@@ -183,26 +121,16 @@ def reanalyse_session(record: SessionRecord) -> Any:
     protocol = get_protocol(record.protocol)
     params = resolve_params(protocol.defaults, record.params, protocol.name)
     notes: list[str] = []
-    readings = reparse(record, rig, notes)
-    carried = list(record.meta.get("carried_points") or [])
-    points = list(carried)
-    bursts = None
-    if protocol.name == "cone-sweep":
-        from labkit.protocols.reanalyse_camera import ConeBursts
-
-        bursts = ConeBursts(record)
-    for step, events in sorted(_by_step(record.events).items()):
-        recorded_point = next((e["point"] for e in events if e["type"] == "point"), None)
-        if protocol.name == "speed-sweep":
-            point = _sweep_point(step, events, readings, params)
-        elif protocol.name == "spin-critical":
-            point = _spin_point(step, events, params)
-        elif bursts is not None and isinstance(recorded_point, dict):
-            point = bursts.point(step, recorded_point, params)
-        else:
-            point = recorded_point
-        if point is not None:
-            points.append(point)
+    run = RecordedRun(record, rig, params, reparse(record, rig, notes), notes)
+    steps = sorted(_by_step(record.events).items())
+    try:
+        points = [p for step, events in steps
+                  if (p := protocol.reanalyse_step(run, step, events)) is not None]
+        why_not = None
+    except NotImplementedError as exc:  # no rule, or none for this session: why the points stand
+        points = [p for _, events in steps if (p := point_event(events)) is not None]
+        why_not = str(exc) or f"no analysis-only rule for protocol {protocol.name!r}"
+    points = list(record.meta.get("carried_points") or []) + points
     protocol.plan(rig, params)  # sets what the fit needs from the parameters (e.g. w_ref)
     try:
         fit = protocol.fit(points)
@@ -213,9 +141,8 @@ def reanalyse_session(record: SessionRecord) -> Any:
     recorded = record.results
     diffs = diff_within(results, recorded) if recorded is not None else ["no results.json recorded"]
     outcome = RunOutcome("completed", None, record.path, results)
-    recomputed = protocol.name in ("speed-sweep", "spin-critical", "cone-sweep")
-    if not recomputed:
-        notes.append(f"no analysis-only rule for protocol {protocol.name!r}: its points are taken as "
-                     "recorded, only the fit is recomputed from them")
+    if why_not is not None:
+        notes.append(f"{why_not}: the points of {protocol.name} are taken as recorded, only the fit is "
+                     "recomputed from them")
     return ReplayOutcome(outcome, recorded, not diffs, diffs, record.problems + notes, "analysis",
-                         recomputed=recomputed)
+                         recomputed=why_not is None)

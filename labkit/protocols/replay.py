@@ -71,19 +71,24 @@ class _Collect:
 
 class _StepPacer:
     """Sink holding a faithful replay's protocol at each step's start until the recording's
-    step began: between steps the recorded program may have stood still (writing its files
-    on a loaded PC) in code that records nothing, and a step begun early settles early."""
+    step began, and at each step's point until the recording's point was made: between steps
+    the recorded program may have stood still (writing its files on a loaded PC) in code that
+    records nothing, and a step begun early settles early; an analysis at the step's end
+    (a strobe clip's, seconds of CPU on a loaded PC) takes no time in the replay, whose run would
+    otherwise end, and stop its motor, before the recording's did."""
+
+    PACED = ("step", "point")
 
     def __init__(self, clock: ReplayClock, record: SessionRecord) -> None:
         self.clock = clock
-        self.starts = {e.get("index"): float(e["t"]) for e in record.events
-                       if e.get("type") == "step" and isinstance(e.get("t"), int | float)}
+        self.times = {(e.get("type"), e.get("index")): float(e["t"]) for e in record.events
+                      if e.get("type") in self.PACED and isinstance(e.get("t"), int | float)}
 
     def on_event(self, event: Any) -> None:
-        if event.get("type") == "step":
-            began = self.starts.get(event.get("index"))
-            if began is not None and began > self.clock.now():
-                self.clock.sleep_until(began)
+        if event.get("type") in self.PACED:
+            recorded = self.times.get((event.get("type"), event.get("index")))
+            if recorded is not None and recorded > self.clock.now():
+                self.clock.sleep_until(recorded)
 
 
 def recorded_clock(record: SessionRecord) -> str:

@@ -51,6 +51,7 @@ POINT_TOLERANCES: dict[str, tuple[str, float]] = {
     "hold_s": ("abs", 0.25),
     "n": ("count", 0.15),                # balance readings in the averaging window
     "unstable": ("count", 0.25),
+    "strobe_lines": ("count", 0.15),     # strobe status lines over a burst: one at a window's edge
     "k": ("abs", 0.01),                  # v/w - 1: a difference of two 0.5 % numbers
     "drift_n": ("abs", 1e-4),            # N (0.01 g): rest readings of the balance
     "drift_g": ("abs", 0.01),            # the same in grams (a 0.006 g drift moved 0.5 % in a replay)

@@ -44,7 +44,7 @@ from labkit.io.clock import record_ticks
 from labkit.protocols import exit_paths
 from labkit.protocols.declaration import declaration_of
 from labkit.protocols.definition import ProtocolDef, Step
-from labkit.protocols.events import EventBus, Sink
+from labkit.protocols.events import EventBus, Sink, not_logged
 from labkit.protocols.exit_paths import STOP_SIGNALS, SessionGuard, signal_name, stop_failed_text
 from labkit.protocols.operator import Operator, default_operator
 from labkit.protocols.plan import check_plan, format_plan
@@ -85,8 +85,11 @@ class RunContext:
         self.step: Step | None = None
         self._last_control_event = -1e9
         self._streams: dict[str, doc.StreamDescriptor] = {}   # role -> its stream's descriptor
-        self._tach_logged: dict[str, float] = {
-            role: -1e9 for role in devices if self.rig.devices[role].kind == "tachometer"}
+        #: per streaming device, the time of the last reading logged and how many had that time
+        self._tach_logged: dict[str, tuple[float, int]] = {
+            role: (-1e9, 0) for role in devices if self.rig.devices[role].kind == "tachometer"}
+        self._strobe_logged: dict[str, tuple[float, int]] = {
+            role: (-1e9, 0) for role in devices if self.rig.devices[role].kind == "strobe"}
 
     # ---- devices by kind (labkit.devices.kinds; LabkitError naming the rig's devices if not) -
     def balance(self, role: str) -> BalanceKind:
@@ -142,16 +145,23 @@ class RunContext:
         self.emit(doc.ReadingEvent.of(role, reading))
 
     def log_tach_readings(self) -> None:
-        """Emit the tachometers' new readings as ``reading`` events (readings/ROLE.jsonl)."""
-        for role, since in self._tach_logged.items():
+        """Emit the tachometers' new readings, and the strobes' new status lines (f_rot,
+        f_strobe, flags: :meth:`labkit.devices.strobe.protocol.StrobeStatus.reading`), as
+        ``reading`` events (readings/ROLE.jsonl)."""
+        for role, mark in self._tach_logged.items():
             try:
-                new = self.tachometer(role).readings_since(since)
+                new, self._tach_logged[role] = not_logged(self.tachometer(role).readings_since, mark)
             except Exception:  # noqa: BLE001 - a dead tachometer is the interlock's business
                 continue
             for reading in new:
                 self.emit_reading(role, reading)
-            if new:
-                self._tach_logged[role] = new[-1].t
+        for role, mark in self._strobe_logged.items():
+            try:
+                lines, self._strobe_logged[role] = not_logged(self.strobe(role).statuses_since, mark)
+            except Exception:  # noqa: BLE001 - a strobe that stopped talking fails the burst, not this
+                continue
+            for status in lines:
+                self.emit_reading(role, status.reading())
 
     def _control_event(self) -> None:
         now = self.clock.now()

@@ -91,6 +91,46 @@ def drift_warnings(force_g: float, drift_g: float, rests_g: tuple[float, float] 
             f"and after ({rests_g[1]:+.3f} g) the step, linear in time"]
 
 
+def recorded_window_point(step: int, events: list[dict[str, Any]], readings: dict[str, list[Any]],
+                          params: dict[str, Any]) -> dict[str, Any] | None:
+    """One point again from its recorded window (the analysis-only rule, :meth:`SpeedSweep.run_step`'s
+    averages over the ``settled`` event to the rotor's stop) and the re-parsed ``readings``."""
+    settled = next((e for e in events if e["type"] == "settled"), None)
+    point = next((e for e in events if e["type"] == "point"), None)
+    targets = [e for e in events if e["type"] == "setpoint"]
+    if settled is None or point is None:
+        return None
+    t_start = settled["t"]
+    stop = next((e["t"] for e in targets if e["t"] > t_start and e["target_rad_s"] == 0.0), point["t"])
+    t_end = min(stop, point["t"])
+    balance = readings["balance"]
+    at_speed = [r for r in balance if t_start < r.t <= t_end]
+    speeds = [r.value for r in readings["rotor_tach"] if t_start < r.t <= t_end]
+    drift, rests_g = 0.0, None
+    if params["zero"] == "each":
+        go = next((e["t"] for e in targets if e["target_rad_s"] > 0), t_start)
+        before = [r for r in balance if r.t <= go and r.t >= events[0]["t"]]
+        after = [r for r in balance if t_end < r.t <= point["t"]]
+        if before and after:
+            r0, r1 = before[-1], after[-1]
+            t_mid = 0.5 * (at_speed[0].t + at_speed[-1].t) if at_speed else t_start
+            frac = (t_mid - r0.t) / (r1.t - r0.t) if r1.t > r0.t else 0.5
+            drift = reading_force_n(r0) + frac * (reading_force_n(r1) - reading_force_n(r0))
+            rests_g = (n_to_gf(reading_force_n(r0)), n_to_gf(reading_force_n(r1)))
+    force, stderr = mean_stderr([reading_force_n(r) - drift for r in at_speed])
+    finite = [v for v in speeds if math.isfinite(v)]
+    speed = statistics.fmean(finite) if finite else math.nan
+    data = point["point"]
+    return {"step": step, "direction": data.get("direction"), "repeat": data.get("repeat"),
+            "target_rpm": data.get("target_rpm"), "speed_rad_s": speed, "speed_rpm": rad_s_to_rpm(speed),
+            "speed_std_rpm": rad_s_to_rpm(finite_std(speeds)), "force_n": force, "force_g": n_to_gf(force),
+            "force_stderr_n": stderr, "force_stderr_g": n_to_gf(stderr), "n": len(at_speed),
+            "settle_time_s": settled["settle_time_s"], "drift_n": drift,
+            "drift_g": n_to_gf(drift) if rests_g else None,
+            "unstable": sum(1 for r in at_speed if not r.stable),
+            "warnings": drift_warnings(n_to_gf(force), n_to_gf(drift), rests_g,
+                                       float(params.get("drift_warn", 0.05)))}
+
 class SpeedSweep(ProtocolDef):
     name = "speed-sweep"
     summary = "PFR force vs rotor speed on a balance (Fig. 5.25)"
@@ -189,6 +229,9 @@ class SpeedSweep(ProtocolDef):
             "unstable": sum(1 for r in readings if not r.stable),
             "warnings": warnings,
         }
+
+    def reanalyse_step(self, run: Any, step: int, events: list[dict[str, Any]]) -> dict[str, Any] | None:
+        return recorded_window_point(step, events, run.readings, run.params)
 
     def fit(self, points: list[dict[str, Any]]) -> dict[str, Any]:
         usable = [pt for pt in points

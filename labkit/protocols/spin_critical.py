@@ -54,6 +54,25 @@ def point_from_trials(target_rpm: float, trials: list[dict[str, Any]], consisten
     return row
 
 
+def recorded_drops_point(step: int, events: list[dict[str, Any]],
+                         params: dict[str, Any]) -> dict[str, Any] | None:
+    """One point again from its recorded drops (the analysis-only rule: rotor speed and spin at
+    each drop, as registered, through :meth:`SpinCritical.run_step`'s consistency rule)."""
+    point = next((e for e in events if e["type"] == "point"), None)
+    if point is None:
+        return None
+    trials = [{k: e[k] for k in ("rotor_rad_s", "spin_rad_s", "cause", "hold_s")}
+              for e in events if e["type"] == "drop"]
+    n = int(params["consistent_n"])
+    consistent = False
+    for i in range(len(trials)):
+        recent = [t["spin_rad_s"] for t in trials[: i + 1][-n:]]
+        spread = (max(recent) - min(recent)) / max(abs(statistics.fmean(recent)), 1e-9) * 100.0
+        if len(recent) >= n and spread <= params["consistency_pct"]:
+            consistent = True
+            break
+    return {"step": step, **point_from_trials(point["point"].get("target_rpm"), trials, consistent, n)}
+
 class SpinCritical(ProtocolDef):
     name = "spin-critical"
     summary = "rotor speed and floator spin at the drop (Fig. 6.18, Eq. 6.37)"
@@ -202,6 +221,9 @@ class SpinCritical(ProtocolDef):
                     consistent = True
                     break
         return point_from_trials(step.data["target_rpm"], trials, consistent, int(p["consistent_n"]))
+
+    def reanalyse_step(self, run: Any, step: int, events: list[dict[str, Any]]) -> dict[str, Any] | None:
+        return recorded_drops_point(step, events, run.params)
 
     def fit(self, points: list[dict[str, Any]]) -> dict[str, Any]:
         """Eq. 6.37's C from the steps with a drop; a step whose trials did not agree

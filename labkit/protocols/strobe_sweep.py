@@ -93,6 +93,111 @@ def strobe_frequencies(statuses: list[Any]) -> dict[str, Any]:
     return out
 
 
+def burst_lines(statuses: list[Any], first: float, last: float) -> list[Any]:
+    """The status lines over a burst whose frames are at ``first`` .. ``last``: from the first line
+    after the first frame (its window holds that frame) to the first line after the last one (it
+    closes the window holding the last frame), or to ``last`` if none came."""
+    after = [s for s in statuses if s.t > last]
+    end = after[0].t if after else last
+    return [s for s in statuses if first < s.t <= end]
+
+
+def burst_speeds(readings: list[Any], first: float, last: float) -> list[float]:
+    """The tachometer's finite speeds [rad/s] read over the burst (``first`` < t <= ``last``)."""
+    return [r.value for r in readings if first < r.t <= last and math.isfinite(r.value)]
+
+
+def _with_problem(result: dict[str, Any], problem: str | None) -> dict[str, Any]:
+    """An ``ok`` result with a problem becomes ``doubtful``; the problem joins its reasons."""
+    if problem and result["verdict"] == "ok":
+        result["verdict"] = "doubtful"
+    if problem:
+        result["reasons"] = [*result["reasons"], problem]
+    return result
+
+
+def burst_shot(frames: list[Any], lines: list[Any], speeds: list[float],
+               camera: tuple[float | None, Any, float | None], mm_per_px: float) -> dict[str, Any]:
+    """One burst analysed (Eq. 5.97) with the frequencies of its status lines; ``camera`` is the
+    camera's nominal (fps, size, exposure_s). The shot's ``speeds`` and ``model`` become the
+    point's speed and model columns (:func:`step_point`)."""
+    from labkit.devices.camera.avi import write_mjpeg_avi
+
+    freqs = strobe_frequencies(lines)
+    problem = freqs.pop("problem")
+    shot: dict[str, Any] = {"speeds": speeds, "frames": len(frames),
+                            "dropped": sum(f.dropped_before for f in frames[1:]), **freqs}
+    if freqs["rotor_hz"] is None:
+        return {**shot, "phi_rad": None, "verdict": "failed", "reasons": [problem]}
+    nominal_fps, size, exposure_s = camera
+    with tempfile.TemporaryDirectory(prefix="labkit-strobe-") as work:
+        fps = _frames_fps(frames, nominal_fps)
+        video = write_mjpeg_avi(Path(work) / "burst.avi", [f.payload for f in frames], fps or 30.0, size)
+        result = analyse_burst(str(video), freqs, fps, exposure_s, mm_per_px)
+    shot["model"] = _model_truth(frames)
+    dark = sum(1 for f in frames if (f.meta or {}).get("lit") is False)
+    if dark:  # the emulated camera says which frames no flash lit
+        problem = "; ".join(x for x in (problem, f"{dark} of {len(frames)} frames lit by no flash "
+                                        "(the emulated camera's strobe was dark)") if x)
+    return {**shot, **_with_problem(result, problem)}
+
+
+def clip_shot(clip: str, lines: list[Any], speeds: list[float], exposure_s: float | None,
+              mm_per_px: float) -> dict[str, Any]:
+    """A recorded clip analysed with the frequencies of the status lines read meanwhile."""
+    freqs = strobe_frequencies(lines)
+    problem = freqs.pop("problem")
+    shot: dict[str, Any] = {"speeds": speeds, "frames": 0, "dropped": 0, **freqs}
+    if freqs["rotor_hz"] is None:
+        return {**shot, "phi_rad": None, "verdict": "failed", "reasons": [problem]}
+    return {**shot, **_with_problem(analyse_burst(clip, freqs, None, exposure_s, mm_per_px), problem)}
+
+
+def step_point(target_rpm: Any, params: dict[str, Any], shot: dict[str, Any],
+               retaken: bool) -> dict[str, Any]:
+    """A step's row from the shot it kept: every declared column, in the declared order (phi,
+    beta, delta and the verdict lead: the report's table shows the first ones); null where this
+    step has none (no clip, no model)."""
+    shot = dict(shot)
+    speeds = shot.pop("speeds")
+    model = shot.pop("model", None)
+    speed = statistics.fmean(speeds) if speeds else math.nan
+    spread = rad_s_to_rpm(statistics.stdev(speeds)) if len(speeds) > 1 else math.nan
+    point = {"target_rpm": target_rpm, "speed_rpm": rad_s_to_rpm(speed), "speed_rad_s": speed,
+             "speed_std_rpm": spread, "offset_hz": float(params["offset_hz"]),
+             "divider": int(params["divider"]),
+             **shot, **(model or {}), "retaken": retaken}
+    columns = [c.name for c in STROBE_SWEEP_ROW if c.name != "step"]
+    if undeclared := set(point) - set(columns):
+        raise LabkitError(f"strobe-sweep: row keys {sorted(undeclared)} not declared in STROBE_SWEEP_ROW")
+    return {name: point.get(name) for name in columns}
+
+
+def recorded_statuses(record: Any, params: dict[str, Any], notes: list[str],
+                      role: str = "strobe") -> list[Any]:
+    """The strobe's status lines a session kept (``readings/ROLE.jsonl``), parsed again from their
+    bytes by today's parser; the flags the driver added (``reset``) as recorded. NotImplementedError
+    for a session without them (recorded before labkit kept them): its points stand as recorded."""
+    from labkit.devices.strobe.protocol import FLAG_NAMES, StrobeStatus, parse_status_line, strip_junk
+
+    rows = record.readings(role)
+    if not rows:
+        raise NotImplementedError(f"no strobe status lines in {record.path}/readings/{role}.jsonl (a session "
+                                  "recorded before labkit kept them)")
+    out: list[StrobeStatus] = []
+    for row in rows:
+        raw = str(row.get("raw", "")).encode("latin-1")
+        try:
+            status = parse_status_line(strip_junk(raw.strip()), float(row["t"]), role,
+                                       int(row.get("divider") or params["divider"]))
+        except (ValueError, KeyError) as exc:
+            notes.append(f"{role}: {raw!r} at {row.get('t')} no longer parses ({exc})")
+            continue
+        added = frozenset(row.get("flags") or ()) - frozenset(FLAG_NAMES.values())
+        out.append(StrobeStatus(**{**status.__dict__, "flags": status.flags | added}) if added else status)
+    return out
+
+
 def _frames_fps(frames: list[Any], fallback: float | None) -> float | None:
     """Frame rate from the frames' device times (a thinned fixture's too), else ``fallback``."""
     times = [f.t_device for f in frames]
@@ -193,63 +298,39 @@ class StrobeSweep(ProtocolDef):
                 return
             ctx.sleep(0.05)
 
-    def _lines_over(self, ctx: RunContext, start: float, end: float) -> list[Any]:
-        """The strobe's status lines from ``start`` to the first line after ``end`` (it closes the
-        window holding the burst's last frame)."""
+    def _lines_over(self, ctx: RunContext, first: float, last: float) -> list[Any]:
+        """The burst's status lines (:func:`burst_lines`), once the line closing the window that
+        holds its last frame has come (at most LOCK_TIMEOUT_S)."""
         strobe = ctx.strobe("strobe")
         deadline = ctx.now() + LOCK_TIMEOUT_S
-        while ctx.now() < deadline and not strobe.statuses_since(end):
+        while ctx.now() < deadline and not strobe.statuses_since(last):
             ctx.sleep(0.02)
-        after = strobe.statuses_since(end)
-        last = after[0].t if after else end
-        return [s for s in strobe.statuses_since(start) if s.t <= last]
+        return burst_lines(strobe.statuses_since(first), first, last)
 
     def _shot(self, ctx: RunContext, step: Step, take: int) -> dict[str, Any]:
         """One burst (or the step's clip) analysed with the strobe's frequencies."""
         p = ctx.params
-        t_start = ctx.now()
         if "camera" in ctx.devices:
             camera = ctx.camera("camera")
             frames = camera.burst(int(p["burst_frames"]), step=f"{step.index}.{take}")
-            t_end = frames[-1].t
+            first, last = frames[0].t, frames[-1].t
         else:
-            frames, t_end = [], t_start + float(p["clip_s"])
+            frames, first = [], ctx.now()
+            last = first + float(p["clip_s"])
             ctx.sleep(float(p["clip_s"]))
         ctx.log_tach_readings()
         ctx.checkpoint()
-        freqs = strobe_frequencies(self._lines_over(ctx, t_start, t_end))
-        speeds = [r.value for r in ctx.tach_readings("rotor_tach", t_start)
-                  if r.t <= t_end + 0.1 and math.isfinite(r.value)]
-        shot: dict[str, Any] = {"speeds": speeds, "frames": len(frames),
-                                "dropped": sum(f.dropped_before for f in frames[1:])}
-        problem = freqs.pop("problem")
-        shot.update(freqs)
-        if freqs["rotor_hz"] is None:
-            return {**shot, "phi_rad": None, "verdict": "failed", "reasons": [problem]}
+        lines = self._lines_over(ctx, first, last)
+        ctx.log_tach_readings()  # the line closing the burst too, before the run may end
+        speeds = burst_speeds(ctx.tach_readings("rotor_tach", first), first, last)
+        mm_per_px = self._mm_per_px(ctx)
         if frames:
-            with tempfile.TemporaryDirectory(prefix="labkit-strobe-") as work:
-                from labkit.devices.camera.avi import write_mjpeg_avi
-
-                fps = _frames_fps(frames, camera.settings.fps)
-                video = write_mjpeg_avi(Path(work) / "burst.avi", [f.payload for f in frames], fps or 30.0,
-                                        camera.settings.size)
-                result = analyse_burst(str(video), freqs, fps, camera.settings.exposure_s,
-                                       self._mm_per_px(ctx))
-            shot["model"] = _model_truth(frames)
-            dark = sum(1 for f in frames if (f.meta or {}).get("lit") is False)
-            if dark:  # the emulated camera says which frames no flash lit
-                problem = "; ".join(x for x in (problem, f"{dark} of {len(frames)} frames lit by no flash "
-                                                "(the emulated camera's strobe was dark)") if x)
-        else:
-            clip = _clip_of(Path(str(p["clips"])), step.index)
-            result = analyse_burst(str(clip), freqs, None, float(p["exposure_s"]) or None,
-                                   self._mm_per_px(ctx))
-            shot["clip"] = str(clip)
-        if problem and result["verdict"] == "ok":
-            result["verdict"] = "doubtful"
-        if problem:
-            result["reasons"] = [*result["reasons"], problem]
-        return {**shot, **result}
+            settings = camera.settings
+            return burst_shot(frames, lines, speeds, (settings.fps, settings.size, settings.exposure_s),
+                              mm_per_px)
+        clip = _clip_of(Path(str(p["clips"])), step.index)
+        return {**clip_shot(str(clip), lines, speeds, float(p["exposure_s"]) or None, mm_per_px),
+                "clip": str(clip)}
 
     def run_step(self, ctx: RunContext, step: Step) -> dict[str, Any]:
         ctx.set(rotor=step.targets_rad_s["rotor"])
@@ -263,19 +344,43 @@ class StrobeSweep(ProtocolDef):
         retaken = shot["verdict"] != "ok"
         if retaken:
             shot = self._shot(ctx, step, 1)
-        speeds = shot.pop("speeds")
-        model = shot.pop("model", None)
-        speed = statistics.fmean(speeds) if speeds else math.nan
-        spread = rad_s_to_rpm(statistics.stdev(speeds)) if len(speeds) > 1 else math.nan
-        point = {"target_rpm": step.data["target_rpm"], "speed_rpm": rad_s_to_rpm(speed),
-                 "speed_rad_s": speed, "speed_std_rpm": spread, "offset_hz": float(ctx.params["offset_hz"]),
-                 "divider": int(ctx.params["divider"]), **shot, **(model or {}), "retaken": retaken}
-        # every declared column, in the declared order (phi, beta, delta and the verdict lead: the
-        # report's table shows the first ones); null where this step has none (no clip, no model)
-        columns = [c.name for c in STROBE_SWEEP_ROW if c.name != "step"]
-        if undeclared := set(point) - set(columns):
-            raise LabkitError(f"strobe-sweep: row keys {sorted(undeclared)} not declared in STROBE_SWEEP_ROW")
-        return {name: point.get(name) for name in columns}
+        return step_point(step.data["target_rpm"], ctx.params, shot, retaken)
+
+    def reanalyse_step(self, run: Any, step: int, events: list[dict[str, Any]]) -> dict[str, Any] | None:
+        """The analysis-only rule: the step's bursts analysed again from the frame cassette with
+        the strobe's status lines re-parsed from ``readings/strobe.jsonl`` and the tachometer's
+        readings, by the run's own rules (:func:`burst_lines`, :func:`burst_speeds`,
+        :func:`burst_shot`, :func:`step_point`): phi, beta, delta, their verdict and whether the
+        first burst had to be taken again all follow from the bytes."""
+        from labkit.protocols.reanalysis import point_event
+
+        recorded = point_event(events)
+        if recorded is None:
+            return None
+        if recorded.get("clip") is not None or "camera" not in run.rig.devices:
+            raise NotImplementedError(f"step {step} analysed a recorded clip ({recorded.get('clip')}) over a "
+                                      "window of the strobe's status lines the session does not record")
+        statuses = recorded_statuses(run.record, run.params, run.notes)
+        speeds_of = run.readings.get("rotor_tach", [])
+        bursts = run.bursts()
+        camera = (bursts.fps, bursts.size, bursts.exposure_s)
+        mm_per_px = float(run.params["mm_per_px"]) or float(self._camera_scale(run.rig) or 0.0)
+        shot: dict[str, Any] | None = None
+        for take in (0, 1):
+            frames = bursts.frames(step, take)
+            if not frames:  # the burst the rule asks for is not in the cassette: said in the row
+                missing = f"no frames of step {step}, take {take} in the frame cassette"
+                shot = {"frames": 0, "speeds": [], "phi_rad": None, "verdict": "failed", "reasons": []} \
+                    if shot is None else dict(shot)
+                shot["reasons"] = [*shot["reasons"], missing]
+                break
+            first, last = frames[0].t, frames[-1].t
+            shot = burst_shot(frames, burst_lines(statuses, first, last),
+                              burst_speeds(speeds_of, first, last), camera, mm_per_px)
+            if shot["verdict"] == "ok":
+                break
+        retaken = take == 1
+        return {"step": step, **step_point(recorded.get("target_rpm"), run.params, shot or {}, retaken)}
 
     def fit(self, points: list[dict[str, Any]]) -> dict[str, Any]:
         from labkit.errors import FitError

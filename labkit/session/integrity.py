@@ -74,11 +74,15 @@ def timeline_problems(path: Path) -> list[str]:
     out: list[str] = []
     last: dict[Any, tuple[float, int]] = {}
     latest: tuple[float, int] | None = None
+    from labkit.io.cassette_lines import LineDecoder
+
+    decoder = LineDecoder("")   # a repeat line ({"t": T, "r": K}) takes the thread of the event it repeats
     with path.open(encoding="utf-8", errors="replace") as f:
         for number, line in enumerate(f, start=1):
             try:
                 event = json.loads(line)
-            except (ValueError, RecursionError):
+                event = decoder.decode(event) if number > 1 and isinstance(event, dict) else event
+            except (ValueError, RecursionError, TypeError):
                 continue  # a damaged line: the cassette reader names it
             t = event.get("t") if isinstance(event, dict) else None
             if number == 1 or not isinstance(t, int | float) or isinstance(t, bool):

@@ -81,3 +81,22 @@ def test_a_session_with_digests_names_data_swapped_between_chunks(tmp_path, caps
     assert main(["replay", str(session)]) == 1
     err = capsys.readouterr().err
     assert f"{cassette}: changed after the session ended" in err, err
+
+
+def test_repeat_lines_of_two_threads_a_moment_apart_are_no_tampering(tmp_path):
+    """A schema-2 repeat line ({"t": T, "r": K}) belongs to the thread of the event it repeats: a
+    keep-alive's repeat and the control loop's repeated reply written 0.1 ms out of order (as a
+    real-clock recording did) are two threads, not a line moved; the same within one thread is."""
+    from labkit.session.integrity import timeline_problems
+
+    header = {"format": "labkit-cassette", "schema": 2, "port": "m"}
+    keepalive = {"t": 1.0, "dir": "tx", "data": "hRsQ", "enc": "b64", "th": "keepalive"}
+    reply = {"t": 1.001, "dir": "rx", "data": "GwI=", "enc": "b64", "th": "speed-control"}
+    cassette = tmp_path / "m.jsonl"
+    # the keep-alive again (r 2) at 2.0005, then the reply again (r 2, now the older one) at 2.0004
+    lines = [header, keepalive, reply, {"t": 2.0005, "r": 2}, {"t": 2.0004, "r": 2}]
+    cassette.write_text("".join(json.dumps(line) + "\n" for line in lines))
+    assert timeline_problems(cassette) == []
+    same = [header, keepalive, reply, {"t": 2.0005, "r": 2}, {"t": 2.0004, "r": 1}]  # the keep-alive twice
+    cassette.write_text("".join(json.dumps(line) + "\n" for line in same))
+    assert any("goes back from 2.0005 (line 4, the same thread)" in p for p in timeline_problems(cassette))

@@ -18,7 +18,7 @@ from labkit.protocols.events import ListSink
 from labkit.protocols.launch import execute, prepare_run
 from labkit.readings import Reading, declared
 from labkit.rig import bundled_rig_path
-from labkit.session import export_csv, load_session
+from labkit.session import export_csv, load_session_record
 
 REPO = Path(__file__).resolve().parents[2]
 SWEEP = ["speeds_rpm=6000:9000:3000", "record_s=0.5"]
@@ -61,7 +61,7 @@ def test_the_readings_file_holds_the_descriptor_then_values_without_units(sweep)
         assert first["type"] == "descriptor" and first["device"] == path.stem and first["unit"]
         assert rows and all("unit" not in r and "quantity" not in r and "type" not in r for r in rows), path
     # read back with the stream's units, as every line carried them before descriptors
-    readings = load_session(session).readings("balance")
+    readings = load_session_record(session).readings("balance")
     assert readings and {(r["quantity"], r["unit"]) for r in readings} == {("mass", "kg")}
     # and so does the CSV export, one row per reading
     [csv_path] = [p for p in export_csv(session) if p.stem == "balance"]
@@ -76,7 +76,7 @@ def test_every_document_carries_the_runs_id(sweep):
     assert {e.run_id for e in events} == {run_id}
     assert {e["run_id"] for e in _lines(session / "events.jsonl")} == {run_id}
     assert all(_lines(p)[0]["run_id"] == run_id for p in (session / "readings").glob("*.jsonl"))
-    assert load_session(session).run_id == run_id
+    assert load_session_record(session).run_id == run_id
 
 
 class _StopAfterFirstPoint:
@@ -102,8 +102,8 @@ def test_a_resumed_run_carries_the_run_id_of_the_run_it_resumes(tmp_path):
                         sinks=[seen])
     second = execute(again, tmp_path)
     assert second.status == "completed" and second.session != first.session
-    first_id = load_session(first.session).run_id
-    assert first_id and load_session(second.session).run_id == first_id
+    first_id = load_session_record(first.session).run_id
+    assert first_id and load_session_record(second.session).run_id == first_id
     assert {e["run_id"] for e in _lines(second.session / "events.jsonl")} == {first_id}
     assert {e.run_id for e in seen.events} == {first_id}
     described = [_lines(p)[0] for p in (second.session / "readings").glob("*.jsonl")]
@@ -124,9 +124,9 @@ def test_a_readings_file_from_before_descriptors_reads_as_it_did():
            Reading(0.2, "mass", 0.02, "kg", raw=b"S S 20.0 g").as_json()]
     assert [r for _, r in declared(enumerate(old, 1))] == old
     shipped = REPO / "recordings" / "sessions" / "speed-sweep-clean"
-    readings = load_session(shipped).readings("balance")
+    readings = load_session_record(shipped).readings("balance")
     assert readings and all(r["unit"] == "kg" and r["quantity"] == "mass" for r in readings)
-    assert load_session(shipped).run_id is None          # recorded before run ids
+    assert load_session_record(shipped).run_id is None          # recorded before run ids
 
 
 UNITS = st.sampled_from([("mass", "kg"), ("force", "N"), ("angular_speed", "rad/s")])

@@ -24,19 +24,35 @@ from labkit.session import load_session_record
 RECORDINGS = Path(__file__).resolve().parents[2] / "recordings" / "sessions"
 ALL = sorted(p.parent for p in RECORDINGS.glob("*/run.json"))
 REAL = [p for p in ALL if json.loads((p / "run.json").read_text()).get("clock") == "real"]
+#: The level each real-clock fixture reaches (`labkit replay`'s default level); "faithful" where
+#: not listed. real-strobe-sweep holds a frame cassette, which the faithful level does not serve
+#: yet: it is re-analysed, with a warning naming the frame cassette. Tighten an entry to
+#: "faithful" (or remove it) once frame cassettes replay faithfully.
+LEVEL = {"real-strobe-sweep": "analysis"}
+FAITHFUL = [p for p in REAL if LEVEL.get(p.name, "faithful") == "faithful"]
+BELOW_FAITHFUL = [p for p in REAL if p not in FAITHFUL]
+PRINTED_LEVEL = {"faithful": "replay level: faithful", "analysis": "replay level: analysis only"}
 MOTOR_WORDS = ("cut the motor", "motor's power", "cut power")
+
+
+@pytest.fixture(autouse=True)
+def _from_the_checkout(monkeypatch):
+    """real-sketch-strobe-sweep names its clips relative to the repository (they are part of the
+    fixture), as a lab's session names its clips folder: replay from the checkout's root."""
+    monkeypatch.chdir(RECORDINGS.parents[1])
 
 
 def test_every_shipped_protocol_has_a_real_clock_recording():
     protocols = {json.loads((p / "run.json").read_text())["protocol"] for p in REAL}
-    assert {"speed-sweep", "spin-critical"} <= protocols
+    assert {"speed-sweep", "spin-critical", "strobe-sweep"} <= protocols
     for session in REAL:
         assert (session / "clock.jsonl").is_file()
-        header = json.loads((session / "cassettes" / "balance.jsonl").read_text().splitlines()[0])
-        assert isinstance(header["clock_origin"], float)
+        headers = [json.loads(p.read_text().splitlines()[0]) for p in (session / "cassettes").glob("*.jsonl")]
+        serial = [h for h in headers if h.get("format") == "labkit-cassette"]
+        assert serial and all(isinstance(h["clock_origin"], float) for h in serial)
 
 
-@pytest.mark.parametrize("session", REAL, ids=[p.name for p in REAL])
+@pytest.mark.parametrize("session", FAITHFUL, ids=[p.name for p in FAITHFUL])
 def test_a_real_clock_recording_replays_faithfully(session, capsys):
     assert main(["replay", str(session)]) == 0
     out = capsys.readouterr()
@@ -45,7 +61,7 @@ def test_a_real_clock_recording_replays_faithfully(session, capsys):
     assert not any(word in (out.out + out.err).lower() for word in MOTOR_WORDS)
 
 
-@pytest.mark.parametrize("session", REAL, ids=[p.name for p in REAL])
+@pytest.mark.parametrize("session", FAITHFUL, ids=[p.name for p in FAITHFUL])
 def test_the_replay_takes_the_recorded_decisions_at_the_recorded_steps(session):
     record = load_session_record(session)
     result = replay_session(session)
@@ -57,6 +73,20 @@ def test_the_replay_takes_the_recorded_decisions_at_the_recorded_steps(session):
         for key in ("speed_rpm", "force_g", "rotor_rpm", "spin_rpm"):
             if isinstance(theirs.get(key), float):
                 assert mine[key] == pytest.approx(theirs[key], rel=0.005), key
+
+
+@pytest.mark.parametrize("session", BELOW_FAITHFUL, ids=[p.name for p in BELOW_FAITHFUL])
+def test_a_real_clock_recording_below_faithful_replays_at_its_stated_level(session, capsys):
+    """exit 0 at the level LEVEL states, every point recomputed from the bytes (not taken as
+    recorded), and no motor instruction."""
+    assert main(["replay", str(session)]) == 0
+    out = capsys.readouterr()
+    assert PRINTED_LEVEL[LEVEL[session.name]] in out.out
+    assert "recomputed from the recorded bytes" in out.out and "taken as recorded" not in out.out
+    assert not any(word in (out.out + out.err).lower() for word in MOTOR_WORDS)
+    result = replay_session(session)
+    assert result.level == LEVEL[session.name] and result.identical and result.recomputed
+    assert len(result.outcome.results["points"]) == len(load_session_record(session).results["points"])
 
 
 def test_the_unplugged_tachometer_trips_the_same_interlock_in_the_same_step():

@@ -81,6 +81,9 @@ class LabkitStrobe(SketchCommands, Strobe):
     an Arduino's port resets it), ``reply_timeout_s`` (0.5)."""
 
     protocol = "labkit_strobe"
+    #: its status lines come unasked: a faithful replay serves them at their recorded times and
+    #: holds a command's reply until the replayed command was sent (labkit.protocols.replay)
+    talks_unasked = True
     option_names = frozenset({"boot_timeout_s", "divider", "lamp", "offset_hz", "rate_hz",
                               "reply_timeout_s", "width_us"})
     default_serial = {"baudrate": 115200, "bytesize": 8, "parity": "N", "stopbits": 1}

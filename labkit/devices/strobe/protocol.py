@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from labkit.devices.sketch_commands import parse_flag_letters, parse_sketch_banner, strip_sketch_junk
+from labkit.readings import Reading
 
 #: status-line flag letters -> names
 FLAG_NAMES = {
@@ -74,7 +75,15 @@ class StrobeStatus:
     @property
     def locked(self) -> bool:
         """Flashing in lock for the whole window, with no flag that may make it wrong."""
-        return self.strobe_hz > 0.0 and not any(STROBE_FLAGS[f][0] for f in self.flags)
+        return self.strobe_hz > 0.0 and not any(STROBE_FLAGS.get(f, (True, ""))[0] for f in self.flags)
+
+    def reading(self) -> StrobeReading:
+        """The line as a reading for ``readings/ROLE.jsonl`` (the strobe frequency, its lock, and
+        everything else the line said beside it)."""
+        return StrobeReading(t=self.t, quantity="strobe_frequency", value=self.strobe_hz, unit="Hz",
+                             stable=self.locked, raw=self.raw, device=self.device, flags=self.flags,
+                             rotor_hz=self.rotor_hz, phase_deg=self.phase_deg, seq=self.seq, t_ms=self.t_ms,
+                             divider=self.divider)
 
     def as_json(self) -> dict[str, Any]:
         """The probe's JSON object: ``value`` is the strobe frequency (Hz), ``stable`` its lock."""
@@ -85,6 +94,25 @@ class StrobeStatus:
             "rotor_hz": self.rotor_hz, "strobe_hz": self.strobe_hz, "phase_deg": self.phase_deg,
             "apparent_hz": self.apparent_hz, "divider": self.divider,
         }
+
+
+@dataclass(frozen=True)
+class StrobeReading(Reading):
+    """A status line kept as a reading: ``value`` the strobe frequency [Hz], ``stable`` its lock
+    (:attr:`StrobeStatus.locked`), ``flags`` the line's flags; the rotor frequency, phase,
+    sequence number, device time and the divider the driver had set beside them."""
+
+    rotor_hz: float = 0.0
+    phase_deg: float = 0.0
+    seq: int = 0
+    t_ms: int = 0
+    divider: int = 1
+
+    def as_json(self) -> dict[str, Any]:
+        apparent = self.rotor_hz - self.divider * self.value if self.rotor_hz > 0 and self.value > 0 else None
+        return {**super().as_json(), "rotor_hz": self.rotor_hz, "strobe_hz": self.value,
+                "apparent_hz": apparent, "phase_deg": self.phase_deg, "seq": self.seq, "t_ms": self.t_ms,
+                "divider": self.divider}
 
 
 def _decimal(text: bytes, what: str, places: int) -> float:
