@@ -2,7 +2,7 @@
 
 A kind has one word everywhere: the rig file's ``kind = "..."``, a driver's ``kind``, its
 package ``labkit/devices/<word>/``, the class of :mod:`labkit.devices.base` and the
-accessor of :class:`labkit.protocols.runner.RunContext` (``ctx.balance(role)``,
+accessor of :class:`labkit.protocols.context.RunContext` (``ctx.balance(role)``,
 ``ctx.tachometer(role)``, ``ctx.motor(role)``, ...). A word used before (``tach``, written in
 rig files, recorded sessions and plugin drivers) is read as the kind it names
 (docs/decisions/0035-one-name-per-thing.md).

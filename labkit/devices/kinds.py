@@ -4,7 +4,7 @@ and, by method name, at run time.
 
 The abstract classes of :mod:`labkit.devices.base` (``Balance``, ``Tachometer``,
 ``MotorController``) satisfy them; so does a plugin driver (``labkit.drivers`` entry point) that
-subclasses only ``Device`` but has the methods. :class:`labkit.protocols.runner.RunContext`
+subclasses only ``Device`` but has the methods. :class:`labkit.protocols.context.RunContext`
 hands devices out through them (``ctx.balance(role)``, ``ctx.tachometer(role)``,
 ``ctx.motor(role)``, ``ctx.camera(role)``, ``ctx.strobe(role)``); :mod:`labkit.control.loop`
 drives a :class:`MotorKind` from a :class:`TachometerKind`. The kinds' words are in

@@ -172,6 +172,14 @@ TIME_EPS_S = 1e-9
 
 def _same_site(here: str, recorded: str) -> bool:
     """Whether a replayed read is at the recorded site: the same callers, as many as were
-    recorded (a site of fewer frames matches by its first ones)."""
-    frames = recorded.split("<")
-    return here.split("<")[: len(frames)] == frames
+    recorded (a site of fewer frames matches by its first ones). Callers compare by qualified
+    name and line within the function, not by module file: a function moved to another module
+    (``RunContext`` from ``runner.py`` to ``context.py``) still matches a session recorded
+    before the move."""
+    frames = [_without_module(f) for f in recorded.split("<")]
+    return [_without_module(f) for f in here.split("<")][: len(frames)] == frames
+
+
+def _without_module(frame: str) -> str:
+    """``runner.py:RunContext.settle+12`` -> ``RunContext.settle+12``."""
+    return frame.partition(":")[2] or frame

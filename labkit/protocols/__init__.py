@@ -4,9 +4,11 @@ from __future__ import annotations
 
 from labkit.hints import Column, Curve, Hints, ReportFit
 from labkit.protocols.cone_sweep import ConeSweep
+from labkit.protocols.context import RunContext, StopRequested
+from labkit.protocols.definition import ProtocolDef, Step
 from labkit.protocols.events import EventBus, ListSink, ProgressSink, Sink
 from labkit.protocols.registry import PROTOCOLS, get_protocol
-from labkit.protocols.runner import ProtocolDef, RunContext, Runner, RunOutcome, Step, StopRequested
+from labkit.protocols.runner import Runner, RunOutcome
 from labkit.protocols.speed_sweep import SpeedSweep
 from labkit.protocols.spin_critical import SpinCritical
 from labkit.protocols.strobe_sweep import StrobeSweep

@@ -28,9 +28,10 @@ from pathlib import Path
 from typing import Any
 
 from labkit.documents import FramesTaken
+from labkit.protocols.context import RunContext
+from labkit.protocols.definition import ProtocolDef, Step
 from labkit.protocols.paper_figures import CONE_SWEEP_ROW, EQ_5_24
 from labkit.protocols.params import ParamError
-from labkit.protocols.runner import ProtocolDef, RunContext, Step
 from labkit.rig import Rig
 from labkit.units import rad_s_to_rpm, rpm_to_rad_s
 

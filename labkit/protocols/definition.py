@@ -15,8 +15,8 @@ from typing import TYPE_CHECKING, Any
 from labkit.hints import Column, Hints
 
 if TYPE_CHECKING:
+    from labkit.protocols.context import RunContext
     from labkit.protocols.reanalysis import RecordedRun
-    from labkit.protocols.runner import RunContext
     from labkit.rig import Rig
 
 

@@ -19,13 +19,14 @@ from typing import Any
 
 from labkit.errors import LabkitError
 from labkit.io.clock import Clock, RealClock, VirtualClock, use_clock
+from labkit.protocols.definition import ProtocolDef
 from labkit.protocols.events import Sink
 from labkit.protocols.params import resolve_params
 from labkit.protocols.recorded import recorded_points
 from labkit.protocols.registry import get_protocol
 from labkit.protocols.resume import ResumeLock, check_carried_points, rig_differences
 from labkit.protocols.resume_evidence import check_points_against_cassettes
-from labkit.protocols.runner import ProtocolDef, Runner, RunOutcome
+from labkit.protocols.runner import Runner, RunOutcome
 from labkit.rig import Rig, load_rig
 from labkit.session import Session, SessionRecord, check_writable, load_session_record
 

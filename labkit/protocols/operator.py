@@ -1,6 +1,6 @@
 """Operator input of a run: the signal a person gives by hand (the Enter key of spin-critical).
 
-A protocol never reads stdin itself; it asks its :class:`~labkit.protocols.runner.RunContext`
+A protocol never reads stdin itself; it asks its :class:`~labkit.protocols.context.RunContext`
 (``ctx.operator_signalled()``, ``ctx.discard_operator_signals()``), which asks the runner's
 :class:`Operator`:
 

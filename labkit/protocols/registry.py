@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from labkit.errors import LabkitError
 from labkit.protocols.cone_sweep import ConeSweep
-from labkit.protocols.runner import ProtocolDef
+from labkit.protocols.definition import ProtocolDef
 from labkit.protocols.speed_sweep import SpeedSweep
 from labkit.protocols.spin_critical import SpinCritical
 from labkit.protocols.strobe_sweep import StrobeSweep

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from labkit.errors import LabkitError
-from labkit.protocols.runner import Step
+from labkit.protocols.definition import Step
 from labkit.rig import Rig
 from labkit.session.paths import session_file
 

@@ -24,10 +24,11 @@ from typing import Any
 
 from labkit import documents as doc
 from labkit.errors import LabkitError
+from labkit.protocols.context import RunContext
+from labkit.protocols.definition import ProtocolDef, Step
 from labkit.protocols.paper_figures import FIG_5_25, SPEED_SWEEP_ROW
 from labkit.protocols.params import ParamError
 from labkit.protocols.quickfit import quick_fit_power_law
-from labkit.protocols.runner import ProtocolDef, RunContext, Step
 from labkit.rig import Rig
 from labkit.units import force_n, n_to_gf, rad_s_to_rpm, rpm_to_rad_s
 

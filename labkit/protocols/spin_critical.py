@@ -23,11 +23,12 @@ from typing import Any
 
 from labkit import documents as doc
 from labkit.errors import LabkitError
+from labkit.protocols.context import RunContext
+from labkit.protocols.definition import ProtocolDef, Step
 from labkit.protocols.drop_spin import drop_instant, fresh_samples, line_spacing, spin_at
 from labkit.protocols.paper_figures import FIG_6_18, SPIN_CRITICAL_ROW
 from labkit.protocols.params import MAX_PLAN_STEPS, ParamError, check_count
 from labkit.protocols.quickfit import fit_spin_critical_c
-from labkit.protocols.runner import ProtocolDef, RunContext, Step
 from labkit.protocols.speed_sweep import reading_force_n
 from labkit.rig import Rig
 from labkit.units import force_n, gf_to_n, rad_s_to_rpm, rpm_to_rad_s

@@ -36,9 +36,10 @@ from pathlib import Path
 from typing import Any
 
 from labkit.errors import LabkitError
+from labkit.protocols.context import RunContext
+from labkit.protocols.definition import ProtocolDef, Step
 from labkit.protocols.paper_figures import EQ_5_97, STROBE_SWEEP_ROW
 from labkit.protocols.params import ParamError
-from labkit.protocols.runner import ProtocolDef, RunContext, Step
 from labkit.rig import Rig
 from labkit.units import rad_s_to_rpm, rpm_to_rad_s
 

@@ -27,9 +27,9 @@ from labkit import units
 from labkit.devices import link
 from labkit.devices.registry import driver_class
 from labkit.documents import ReadingEvent
+from labkit.protocols.context import RunContext
 from labkit.protocols.events import EventBus
 from labkit.protocols.exit_paths import SessionGuard
-from labkit.protocols.runner import RunContext
 from labkit.readings import Reading
 from labkit.session.writer import Session
 from labkit.stream.run import RerunRunSink

@@ -3,7 +3,7 @@
 import os
 import signal
 
-from labkit.protocols.runner import ProtocolDef, Step
+from labkit.protocols.definition import ProtocolDef, Step
 from labkit.units import rpm_to_rad_s
 
 

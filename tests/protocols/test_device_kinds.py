@@ -16,8 +16,8 @@ from labkit.emulators.plant import reset_plants
 from labkit.errors import LabkitError
 from labkit.io.clock import VirtualClock, use_clock
 from labkit.protocols import ListSink, Runner
+from labkit.protocols.definition import ProtocolDef, Step
 from labkit.protocols.params import resolve_params
-from labkit.protocols.runner import ProtocolDef, Step
 from labkit.rig import load_rig, open_rig
 from labkit.units import rpm_to_rad_s
 
@@ -107,7 +107,7 @@ def test_the_type_checker_refuses_a_duty_commanded_from_a_step(tmp_path):
     # ctx.motor is typed as MotorStatusKind: a step reads the status; speeds go through ctx.set
     api = pytest.importorskip("mypy.api")
     step = tmp_path / "step.py"
-    step.write_text("from labkit.protocols.runner import RunContext\n\n\n"
+    step.write_text("from labkit.protocols.context import RunContext\n\n\n"
                     "def step(ctx: RunContext) -> float:\n"
                     "    ctx.motor('rotor_motor').set_duty(1.0)\n"
                     "    return ctx.motor('rotor_motor').status().duty\n")

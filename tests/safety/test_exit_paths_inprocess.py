@@ -19,8 +19,8 @@ from labkit.errors import SafetyError
 from labkit.io.clock import VirtualClock, use_clock
 from labkit.io.ports import open_port
 from labkit.protocols import ListSink, Runner
+from labkit.protocols.definition import ProtocolDef, Step
 from labkit.protocols.params import resolve_params
-from labkit.protocols.runner import ProtocolDef, Step
 from labkit.rig import load_rig, parse_rig
 from labkit.units import rpm_to_rad_s
 
