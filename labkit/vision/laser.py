@@ -315,8 +315,6 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
     fps = source.fps or 0.0
     per_chunk = chunk_length(source, quality)
     expected = math.ceil(source.frame_count / per_chunk) if source.frame_count > 0 else 0
-    # the fit side loads while the first chunk decodes
-    threading.Thread(target=_preload_fit_side, name="labkit-fit-import", daemon=True).start()
     with _Worker() as pool:  # trace extraction overlaps decoding
         futures: dict[int, Future] = {}
         histograms: list[Future] = []
@@ -331,6 +329,8 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
             return trace
 
         def extract(c: Chunk) -> None:
+            if not done:  # the fit side loads while frames decode, not before the first frame
+                threading.Thread(target=_preload_fit_side, name="labkit-fit-import", daemon=True).start()
             futures[id(c)] = pool.submit(extracted, c)
             histograms.append(pool.submit(grey_histogram, c.image))
             done.append(c)
@@ -344,6 +344,7 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
                                max(source.size))
         chunks = accumulate(source, quality, on_frame, on_chunk=extract, probe=probe)
         t_frames = time.perf_counter()
+        scene = scene_measures([c.image for c in chunks], source.levels[0])  # while the last trace is found
         check_exposure(sum(h.result() for h in histograms), source.path, source.levels)
         traces = [futures[id(c)].result() for c in chunks]
         preliminary = prior["fit"].result() if "fit" in prior else None
@@ -382,7 +383,7 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
                 qual = {**qual, "verdict": "failed" if qual["verdict"] == "failed" else "doubtful",
                         "reasons": [*qual["reasons"], doubt],
                         "checks": {**qual["checks"], "tilt_geometry": "doubtful"}}
-    qual = strobe_scene_verdict(qual, *scene_measures([c.image for c in chunks], source.levels[0]))
+    qual = strobe_scene_verdict(qual, *scene)
     qual["settings"] = asdict(quality)
     qual["elapsed_s"] = time.perf_counter() - t_start
     qual["fit_s"] = time.perf_counter() - t_frames  # work left after the last frame: mostly the fit
