@@ -49,7 +49,7 @@ print(n)
 
 DECODE_FRAMES = """
 import sys
-from labkit.vision.frames import open_frames
+from labkit.vision.shared.frames import open_frames
 print(open_frames(sys.argv[1]).decode_only())
 """
 
@@ -198,7 +198,7 @@ def analyse_pairs(clip: Path, pairs: int, compare_with: str | None = None) -> No
     """Interleaved rounds of the two decode-only processes and ``labkit analyse laser`` (and, with
     ``compare_with``, the same command from another copy of labkit, e.g. the previous commit)."""
     jobs = {
-        "decode-only, labkit.vision.frames (bench vision's reference)":
+        "decode-only, labkit.vision.shared.frames (bench vision's reference)":
             [sys.executable, "-c", DECODE_FRAMES, str(clip)],
         "decode-only, bare cv2 read loop": [sys.executable, "-c", DECODE_ONLY, str(clip)],
         "labkit analyse laser": [sys.executable, "-m", "labkit", "analyse", "laser", str(clip)],

@@ -208,7 +208,7 @@ def _fmt(v, digits: int = 2) -> str:
 
 
 def run_laser(args: argparse.Namespace) -> int:
-    from labkit.vision.laser import LaserQuality, analyse_laser
+    from labkit.vision.laser.analyse import LaserQuality, analyse_laser
 
     if args.stride < 1 or args.max_chunks < 1 or not args.chunk_s > 0:
         raise VideoError(args.path, "--stride and --max-chunks must be at least 1, --chunk-s positive")
@@ -265,7 +265,7 @@ def _laser_overlay(trace, result: dict, out: str | None, stream) -> None:
     """Draw the overlay; write it to ``out`` (if given) and log it to ``stream`` (if any)."""
     import cv2
 
-    from labkit.vision.overlay import draw_overlay
+    from labkit.vision.laser.overlay import draw_overlay
 
     image = draw_overlay(trace, result)
     if stream is not None and hasattr(stream, "overlay"):
@@ -288,7 +288,7 @@ def _loops_in_words(p: dict) -> str:
 
 
 def _print_laser(r: dict) -> None:
-    from labkit.vision.quality import in_words
+    from labkit.vision.shared.verdict import in_words
 
     p = r["pattern"]
     rate = f"{r['fps']:.3g} fps" if r["fps"] else "photo"
@@ -341,7 +341,7 @@ def _strobe_speed_rpm(speed_rpm: float | None, rotor_hz: float | None) -> float 
 
 
 def run_strobe(args: argparse.Namespace) -> int:
-    from labkit.vision.strobe import analyse_strobe
+    from labkit.vision.strobe.analyse import analyse_strobe
 
     if args.strobe_hz is not None and args.rotor_hz is None:
         raise LabkitError("labkit analyse strobe: --strobe-hz needs --rotor-hz (or give --apparent-hz)")
@@ -377,7 +377,7 @@ def run_strobe(args: argparse.Namespace) -> int:
 def _strobe_overlay(drawing: dict, result: dict, out: str | None, stream) -> None:
     """Draw the strobe overlay; write it to ``out`` (if given) and hand it to the rerun stream
     (``stream.overlay(bgr)``, when the stream offers it)."""
-    from labkit.vision.strobe_overlay import draw_strobe_overlay, write_strobe_overlay
+    from labkit.vision.strobe.overlay import draw_strobe_overlay, write_strobe_overlay
 
     frame = drawing.pop("bgr")
     if out:
@@ -391,7 +391,7 @@ def _pm(value, se, digits: int) -> str:
 
 
 def _print_strobe(r: dict) -> None:
-    from labkit.vision.strobe_quality import describe
+    from labkit.vision.strobe.checks import describe
 
     q, u, pm = r["quality"], r["uncertainty"], r["phase_model"]
     print(f"{r['source']}: {r['frames']} frames ({q['frames_with_body']} with a body), "

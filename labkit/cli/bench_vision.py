@@ -34,12 +34,12 @@ from typing import TYPE_CHECKING
 from labkit.cli.parsers import command_parser
 
 if TYPE_CHECKING:  # OpenCV and the vision stack load when the benchmark runs, not for --help
-    from labkit.vision.laser import LaserQuality
+    from labkit.vision.laser.analyse import LaserQuality
 
 
 def settings(roi: tuple[int, int, int, int]) -> list[tuple[str, LaserQuality]]:
     """The quality settings compared; ``roi`` is a box around the pattern (as a user would set)."""
-    from labkit.vision.laser import LaserQuality
+    from labkit.vision.laser.analyse import LaserQuality
 
     return [
         ("full (stride 1, whole frame, sub-pixel, auto)", LaserQuality()),
@@ -112,7 +112,7 @@ def _spread(values: list[float]) -> str:
 
 
 def _errors(result: dict, truth: dict) -> str:
-    from labkit.vision.curves import rotation_error_deg
+    from labkit.vision.shared.curves import rotation_error_deg
 
     p, t = result["pattern"], truth["pattern"]
     if p["type"] == "none":
@@ -180,8 +180,8 @@ def run_laser(args: argparse.Namespace) -> int:
     """The laser table: accuracy and time per quality setting, ratio to decode-only."""
     from labkit.synth import laser_truth, render_laser, write_clip
     from labkit.synth.presets import laser_pattern, laser_preset
-    from labkit.vision.frames import open_frames
-    from labkit.vision.laser import LaserQuality, accumulate, analyse_laser
+    from labkit.vision.laser.analyse import LaserQuality, accumulate, analyse_laser
+    from labkit.vision.shared.frames import open_frames
 
     w, h = args.size
     kw = {"ellipticity": 0.3, "rotation_deg": 35} if args.pattern == "ellipse" else {"loops": 4, "b": 0.3}

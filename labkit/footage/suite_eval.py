@@ -164,8 +164,8 @@ def _call(fn, path: Path, inputs: dict) -> dict:
 def evaluate_case(case: CaseSpec, cache: Path | None = None) -> Outcome:
     """Render (or reuse) the case, run labkit's public analysis on it, score it."""
     from labkit.errors import LabkitError
-    from labkit.vision.laser import analyse_laser
-    from labkit.vision.strobe import analyse_strobe
+    from labkit.vision.laser.analyse import analyse_laser
+    from labkit.vision.strobe.analyse import analyse_strobe
 
     path, truth = render_case(case, cache)
     strobe = case.family == "strobe"

@@ -5,7 +5,7 @@ For each planned speed the step ramps the rotor and settles, sets the strobe
 (``strobe``, device kind ``strobe``: docs/reference/devices-strobe.md) to ``offset_hz`` (and ``divider``),
 waits for a status line that says the flashes are locked, takes a burst of ``burst_frames`` from
 the ``camera`` and waits for the status line that closes the burst. The analysis
-(:func:`labkit.vision.strobe.analyse_strobe`) gets the rotor and strobe frequencies from the
+(:func:`labkit.vision.strobe.analyse.analyse_strobe`) gets the rotor and strobe frequencies from the
 strobe's own status lines over the burst (their means: nobody types them) and reads exactly the
 bytes the camera sent (the frame cassette's JPEGs in an AVI, :mod:`labkit.devices.camera.avi`).
 A burst whose verdict is ``doubtful`` or ``failed`` is taken again once; the point keeps the
@@ -52,7 +52,7 @@ def analyse_burst(video: str, freqs: dict[str, Any], fps: float | None, exposure
                   mm_per_px: float) -> dict[str, Any]:
     """One burst's Eq. 5.97 result: phi, beta, delta (with standard errors), verdict, reasons."""
     from labkit.errors import VideoError
-    from labkit.vision.strobe import analyse_strobe
+    from labkit.vision.strobe.analyse import analyse_strobe
 
     try:
         r = analyse_strobe(video, rotor_hz=freqs["rotor_hz"], strobe_hz=freqs["strobe_hz"], camera_fps=fps,

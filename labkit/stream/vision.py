@@ -50,7 +50,7 @@ def vision_blueprint() -> Any:
 
 def pattern_curve(pattern: dict[str, Any], samples: int = 720) -> np.ndarray | None:
     """Points (N, 2) of the fitted pattern of a ``labkit analyse`` JSON, in OpenCV pixels."""
-    from labkit.vision.overlay import pattern_curve as curve
+    from labkit.vision.laser.overlay import pattern_curve as curve
 
     return curve(pattern, samples)
 
@@ -122,7 +122,7 @@ class VisionStream:
             self.rec.log("/video/trace/fit", strip, static=True)
 
     def overlay(self, bgr: np.ndarray) -> None:
-        """Log the overlay image (:func:`labkit.vision.overlay.draw_overlay`) as a static PNG."""
+        """Log the overlay image (:func:`labkit.vision.laser.overlay.draw_overlay`) as a static PNG."""
         import cv2
 
         ok, encoded = cv2.imencode(".png", bgr)
@@ -152,7 +152,7 @@ def describe(result: dict[str, Any]) -> str:
         parts.append(f"tilt amplitude {result['tilt_amplitude_rad']:.4f} rad")
     quality = result.get("quality") or {}
     if quality.get("verdict"):
-        from labkit.vision.quality import in_words
+        from labkit.vision.shared.verdict import in_words
 
         parts.append(in_words(quality))
     return ", ".join(parts)

@@ -66,7 +66,7 @@ def laser_cone_angle(phi: float, work: Path, seed: int, clip: int) -> float:
         render_laser,
         write_footage,
     )
-    from labkit.vision.laser import analyse_laser
+    from labkit.vision.laser.analyse import analyse_laser
     beam = math.tan(2.0 * phi)
     mm_per_px = SCREEN_MM * beam / LASER_RADIUS_PX
     cycle_hz = (2 + 0.381966 + 0.01 * clip) * FPS
@@ -95,7 +95,7 @@ def strobe_swing(phi: float, delta_m: float, body_mm: tuple[float, float], work:
         strobe_truth,
         write_footage,
     )
-    from labkit.vision.strobe import analyse_strobe
+    from labkit.vision.strobe.analyse import analyse_strobe
     scale = STROBE_MM_PER_PX[clip % len(STROBE_MM_PER_PX)]
     length_px, width_px = (x / scale for x in body_mm)
     rotor_hz = 7 * FPS + (0.13 + 0.01 * clip) * FPS         # 7th harmonic, slow apparent motion

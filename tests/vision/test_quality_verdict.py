@@ -1,4 +1,4 @@
-"""The quality verdict of a laser result (labkit.vision.quality, labkit.vision.laser_checks): the
+"""The quality verdict of a laser result (labkit.vision.shared.verdict, labkit.vision.laser.checks): the
 combination rule, and whole analyses of traces whose fit cannot be right, through the CLI."""
 
 import json
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from labkit.cli import main
-from labkit.vision.quality import Finding, graded, in_words, rank, verdict, worst
+from labkit.vision.shared.verdict import Finding, graded, in_words, rank, verdict, worst
 
 
 def test_the_verdict_is_the_worst_finding_and_lists_the_reasons_of_the_others():
@@ -118,7 +118,7 @@ def test_overlay_draws_the_fitted_curve_over_the_trace_with_the_verdict(tmp_path
     assert rc == 0 and r["quality"]["verdict"] == "ok"
     image = cv2.imread(str(png))
     assert image.shape == (240, 320, 3)
-    from labkit.vision.overlay import pattern_curve
+    from labkit.vision.laser.overlay import pattern_curve
 
     curve = pattern_curve(r["pattern"], 200)
     b, g, red = (image[np.round(curve[:, 1]).astype(int), np.round(curve[:, 0]).astype(int)].astype(int).T)

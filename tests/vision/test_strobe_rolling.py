@@ -1,6 +1,6 @@
 """A rolling shutter with the camera as the strobe (issue 11; Fig. 6.20 without a lamp): every image
 row samples the rotor at its own phase, so the silhouette is a smear of most of a revolution. The
-per-row phase model (labkit.vision.strobe_rolling) fits Eq. 5.97 row by row.
+per-row phase model (labkit.vision.strobe.rolling_model) fits Eq. 5.97 row by row.
 
 The suite clip is drawn by the independent renderer (labkit.footage), which shares no code with
 the analysis; the unit tests check the row slices against that renderer's rectangle coverage and
@@ -20,9 +20,10 @@ from labkit.footage.strobe_scene import render_strobe, strobe_truth
 from labkit.footage.suite import suite_cases
 from labkit.footage.suite_build import build_shot
 from labkit.footage.suite_eval import analysis_inputs, score_strobe
-from labkit.vision.strobe import analyse_strobe
-from labkit.vision.strobe_phase import choose_phase_model
-from labkit.vision.strobe_rolling import (
+from labkit.vision.strobe.analyse import analyse_strobe
+from labkit.vision.strobe.phase import choose_phase_model
+from labkit.vision.strobe.rolling_analysis import ends_separation, rolling_applies
+from labkit.vision.strobe.rolling_model import (
     Crops,
     FitInput,
     fit_rolling,
@@ -31,7 +32,6 @@ from labkit.vision.strobe_rolling import (
     render,
     slice_intervals,
 )
-from labkit.vision.strobe_rolling_use import ends_separation, rolling_applies
 
 CASE = "strobe-cylinder-37-medium"  # 320x240, no lamp, 1/5600 s exposure, readout 0.79 frame, rotor 243 Hz
 

@@ -1,6 +1,6 @@
 """Room light's ghost of the revolution on footage from the independent renderer (labkit.footage,
 issue 11; renderer v4 sends the ghost through the lens as it does the flashes): the analysis takes
-the ghost out in linear light (labkit.vision.strobe_ghost) and says how much room light it found."""
+the ghost out in linear light (labkit.vision.strobe.room_light) and says how much room light it found."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from labkit.footage.strobe_scene import render_strobe, strobe_truth
 from labkit.footage.suite import suite_cases
 from labkit.footage.suite_build import build_shot
 from labkit.footage.suite_eval import analysis_inputs, score_strobe
-from labkit.vision.strobe import analyse_strobe
+from labkit.vision.strobe.analyse import analyse_strobe
 
 CASE = "strobe-cuboid-23-hard"  # 320x240, a spinning plate, one flash per exposure, room light 0.3
 

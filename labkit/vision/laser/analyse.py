@@ -20,23 +20,23 @@ from typing import TYPE_CHECKING
 import cv2
 import numpy as np
 
-from labkit.vision.exposure import check_exposure, grey_histogram
-from labkit.vision.framepath import (
+from labkit.vision.laser.frame_path import (
     AMPLE_LUMA_CNR,
     PROBE_FRAMES,
     FramePathChoice,
     luma_plane_cnr,
     measure_frame_path,
 )
-from labkit.vision.frames import FrameSource, open_frames
-from labkit.vision.laser_gather import MAX_POINTS_PER_CHUNK, GatheredTrace, gather  # noqa: F401 (API)
-from labkit.vision.scene_kind import scene_measures, strobe_scene_verdict
-from labkit.vision.trace import TracePoints, trace_points
+from labkit.vision.laser.gather import MAX_POINTS_PER_CHUNK, GatheredTrace, gather  # noqa: F401 (API)
+from labkit.vision.laser.scene_kind import scene_measures, strobe_scene_verdict
+from labkit.vision.laser.trace import TracePoints, trace_points
+from labkit.vision.shared.exposure import check_exposure, grey_histogram
+from labkit.vision.shared.frames import FrameSource, open_frames
 
 if TYPE_CHECKING:
     from concurrent.futures import Future
 
-    from labkit.vision.fit import Classification
+    from labkit.vision.laser.pattern_fit import Classification
 
 # The fit side (labkit.vision.laser_pattern: the fit, wander, checks, second readings) loads in
 # the worker thread while the first frames decode, not before the first frame; its public
@@ -46,7 +46,7 @@ _FIT_SIDE = ("pattern_dict", "symmetry_of", "read_pattern")
 
 def __getattr__(name: str):
     if name in _FIT_SIDE:
-        from labkit.vision import laser_pattern
+        from labkit.vision.laser import pattern as laser_pattern
 
         return getattr(laser_pattern, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
@@ -277,7 +277,7 @@ class _Worker:
 
 def _load_fit_side():
     """The fit side's module (imported on first use; see ``_FIT_SIDE``)."""
-    from labkit.vision import laser_pattern
+    from labkit.vision.laser import pattern as laser_pattern
 
     return laser_pattern
 
@@ -349,7 +349,7 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
         preliminary = prior["fit"].result() if "fit" in prior else None
     points, weights, times, band, peak, noise = gathered.result()
     if on_trace is not None:
-        from labkit.vision.overlay import accumulated_trace
+        from labkit.vision.laser.overlay import accumulated_trace
 
         on_trace(accumulated_trace(chunks, source.size))
     qual = {"frames_analysed": len(range(0, source.frames_read, quality.stride)),

@@ -20,10 +20,10 @@ import cv2
 import numpy as np
 
 from labkit.errors import VideoError
-from labkit.vision.curves import a_for_k, ellipse_from_coefficients, trochoid_from_coefficients
-from labkit.vision.fit import CIRCLE_MAX_ELLIPTICITY, MAX_TROCHOID_B, trochoid_beats
-from labkit.vision.frames import open_frames
-from labkit.vision.strobe_body import (
+from labkit.vision.laser.pattern_fit import CIRCLE_MAX_ELLIPTICITY, MAX_TROCHOID_B, trochoid_beats
+from labkit.vision.shared.curves import a_for_k, ellipse_from_coefficients, trochoid_from_coefficients
+from labkit.vision.shared.frames import open_frames
+from labkit.vision.strobe.body import (
     BodyPose,
     ClipOrientation,
     flatten_illumination,
@@ -32,8 +32,18 @@ from labkit.vision.strobe_body import (
     orient_clip,
     static_light,
 )
-from labkit.vision.strobe_fit import MotionFit, fit_motion, sine_fit
-from labkit.vision.strobe_ghost import (
+from labkit.vision.strobe.checks import strobe_quality
+from labkit.vision.strobe.motion_fit import MotionFit, fit_motion, sine_fit
+from labkit.vision.strobe.phase import (
+    PhaseModel,
+    apparent_cycles_per_frame,
+    choose_phase_model,
+    estimate_cycles_per_frame,
+    explained_fraction,
+    fold,
+)
+from labkit.vision.strobe.rolling_analysis import rolling_analysis, rolling_applies
+from labkit.vision.strobe.room_light import (
     ENCODING_GAMMA,
     FIT_FRAMES,
     ClipLight,
@@ -43,16 +53,6 @@ from labkit.vision.strobe_ghost import (
     spread_frames,
     swing_of,
 )
-from labkit.vision.strobe_phase import (
-    PhaseModel,
-    apparent_cycles_per_frame,
-    choose_phase_model,
-    estimate_cycles_per_frame,
-    explained_fraction,
-    fold,
-)
-from labkit.vision.strobe_quality import strobe_quality
-from labkit.vision.strobe_rolling_use import rolling_analysis, rolling_applies
 
 __all__ = ["analyse_strobe", "apparent_cycles_per_frame", "measure_body", "phase_pattern"]
 

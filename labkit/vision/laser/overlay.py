@@ -14,7 +14,7 @@ import math
 import cv2
 import numpy as np
 
-from labkit.vision.curves import Pattern
+from labkit.vision.shared.curves import Pattern
 
 VERDICT_BGR = {"ok": (80, 200, 60), "doubtful": (0, 170, 255), "failed": (40, 40, 230)}
 CURVE_BGR = (60, 230, 60)

@@ -48,11 +48,11 @@ import math
 
 import numpy as np
 
-from labkit.vision.fit import Classification, CurveFit, coverage_rms, two_way_rms
-from labkit.vision.loops_seen import LOOP_SEEN_WIDTHS, TIPS_LIT_WIDTHS, loop_width, tip_gap
-from labkit.vision.nearest import PointTree
-from labkit.vision.quality import Finding, graded, verdict
-from labkit.vision.wander import Wander, chunk_offsets, dense_curve
+from labkit.vision.laser.loops_seen import LOOP_SEEN_WIDTHS, TIPS_LIT_WIDTHS, loop_width, tip_gap
+from labkit.vision.laser.nearest import PointTree
+from labkit.vision.laser.pattern_fit import Classification, CurveFit, coverage_rms, two_way_rms
+from labkit.vision.laser.wander import Wander, chunk_offsets, dense_curve
+from labkit.vision.shared.verdict import Finding, graded, verdict
 
 MIN_LINE_WIDTH_PX = 2.0  # a trace is never judged against less than this (sub-pixel lines)
 # a different pattern whose score is within this factor of the chosen one's is a real alternative

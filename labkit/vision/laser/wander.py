@@ -20,7 +20,8 @@ from dataclasses import dataclass, replace
 import cv2
 import numpy as np
 
-from labkit.vision.fit import (
+from labkit.vision.laser.nearest import PointTree, xy_points
+from labkit.vision.laser.pattern_fit import (
     SIMPLER_TOLERANCE,
     Classification,
     CurveFit,
@@ -28,7 +29,6 @@ from labkit.vision.fit import (
     polished_on_band,
     without_outliers,
 )
-from labkit.vision.nearest import PointTree, xy_points
 
 MIN_CHUNKS = 3
 MIN_CHUNK_POINTS = 10

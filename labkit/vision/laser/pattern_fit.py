@@ -17,15 +17,15 @@ from dataclasses import dataclass, field, replace
 import cv2
 import numpy as np
 
-from labkit.vision.curves import (
+from labkit.vision.laser.nearest import PointTree
+from labkit.vision.laser.starts import b_starts_for, trochoid_starts
+from labkit.vision.shared.curves import (
     Pattern,
     a_for_k,
     ellipse_from_coefficients,
     k_for,
     trochoid_from_coefficients,
 )
-from labkit.vision.nearest import PointTree
-from labkit.vision.starts import b_starts_for, trochoid_starts
 
 CIRCLE_MAX_ELLIPTICITY = 0.02  # below this an ellipse is reported as a circle
 SIMPLER_TOLERANCE = 1.12  # a simpler pattern wins unless a trochoid's residual is this much lower

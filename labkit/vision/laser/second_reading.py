@@ -26,9 +26,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from labkit.vision.clusters import LINK_WIDTHS, linked_groups, separate_pattern
-from labkit.vision.fit import MIN_POINTS, Classification, classify
-from labkit.vision.nearest import PointTree
+from labkit.vision.laser.nearest import PointTree
+from labkit.vision.laser.pattern_fit import MIN_POINTS, Classification, classify
+from labkit.vision.laser.stray_light import LINK_WIDTHS, linked_groups, separate_pattern
 
 
 def without_stray_light(points: np.ndarray, weights: np.ndarray, times: np.ndarray, band: tuple | None,

@@ -16,9 +16,9 @@ import math
 import cv2
 import numpy as np
 
-from labkit.vision.strobe_body import MAX_BEND_PX, BodyPose, ClipOrientation
-from labkit.vision.strobe_phase import PhaseModel
-from labkit.vision.strobe_rolling import (
+from labkit.vision.strobe.body import MAX_BEND_PX, BodyPose, ClipOrientation
+from labkit.vision.strobe.phase import PhaseModel
+from labkit.vision.strobe.rolling_model import (
     GRID_STEPS,
     Crops,
     FitInput,

@@ -35,9 +35,9 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from labkit.vision.frames import open_frames
-from labkit.vision.strobe_body import FLAT_LEVEL, BodyPose, measure_flat
-from labkit.vision.strobe_ghost_fit import MAX_AMBIENT, NormalSums, fit_room_light
+from labkit.vision.shared.frames import open_frames
+from labkit.vision.strobe.body import FLAT_LEVEL, BodyPose, measure_flat
+from labkit.vision.strobe.room_light_fit import MAX_AMBIENT, NormalSums, fit_room_light
 
 __all__ = ["ClipLight", "ENCODING_GAMMA", "Swing", "fit_room_light", "ghost_free_poses", "linear_darkening",
            "read_clip_light", "revolution_average", "swing_of", "GhostFit", "fit_ghosts",

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from labkit.vision.trace import brightness, contrast_to_noise
+from labkit.vision.laser.trace import brightness, contrast_to_noise
 
 # Luma is used when its CNR is ample on its own, or when it keeps most of the colour path's CNR
 # and still clears the detection threshold with margin. Measured (docs/explanation/laser-analysis.md, "Luma or

@@ -15,7 +15,7 @@ from typing import NamedTuple, Protocol
 
 import numpy as np
 
-from labkit.vision.trace import TracePoints
+from labkit.vision.laser.trace import TracePoints
 
 MAX_POINTS_PER_CHUNK = 4000
 

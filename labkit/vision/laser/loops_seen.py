@@ -30,8 +30,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from labkit.vision.curves import trochoid_from_coefficients
-from labkit.vision.fit import (
+from labkit.vision.laser.nearest import PointTree
+from labkit.vision.laser.pattern_fit import (
     Classification,
     CurveFit,
     FitRows,
@@ -39,8 +39,8 @@ from labkit.vision.fit import (
     newton_parameters,
     prepare_points,
 )
-from labkit.vision.nearest import PointTree
-from labkit.vision.wander import Wander, dense_curve
+from labkit.vision.laser.wander import Wander, dense_curve
+from labkit.vision.shared.curves import trochoid_from_coefficients
 
 
 def loop_width(k: int, b: float, scale: float, samples: int = 4000) -> float:

@@ -16,19 +16,19 @@ from dataclasses import replace
 
 import numpy as np
 
-from labkit.vision.curves import a_for_k
-from labkit.vision.fit import MIN_POINTS, Classification, classify, pattern_kind
-from labkit.vision.laser_checks import judged_width, laser_evidence, laser_verdict, no_pattern_verdict
-from labkit.vision.laser_gather import GatheredTrace
-from labkit.vision.loops_seen import tips_in_light
-from labkit.vision.quality import rank
-from labkit.vision.rescue import (
+from labkit.vision.laser.checks import judged_width, laser_evidence, laser_verdict, no_pattern_verdict
+from labkit.vision.laser.gather import GatheredTrace
+from labkit.vision.laser.loops_seen import tips_in_light
+from labkit.vision.laser.pattern_fit import MIN_POINTS, Classification, classify, pattern_kind
+from labkit.vision.laser.second_reading import (
     one_chunk_start,
     pattern_moved_px,
     without_fixed_light,
     without_stray_light,
 )
-from labkit.vision.wander import Wander, follow_wander
+from labkit.vision.laser.wander import Wander, follow_wander
+from labkit.vision.shared.curves import a_for_k
+from labkit.vision.shared.verdict import rank
 
 
 def read_pattern(points: np.ndarray, weights: np.ndarray, times: np.ndarray, drift: bool, band: tuple | None,

@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from labkit.vision.strobe_body import MAX_BEND_PX
+from labkit.vision.strobe.body import MAX_BEND_PX
 
 OK, DOUBTFUL, FAILED = "ok", "doubtful", "failed"
 TILT_TOL_REL, TILT_TOL_ABS = 0.05, 0.005
@@ -183,7 +183,7 @@ def strobe_quality(evidence: dict) -> dict:
     rolling = evidence.get("rolling_shutter") is not None
     _body_checks(v, evidence, per_frame=not rolling)
     if rolling:  # the per-row model of a rolling shutter with the camera as the strobe
-        from labkit.vision.strobe_rolling_use import rolling_checks
+        from labkit.vision.strobe.rolling_analysis import rolling_checks
         rolling_checks(v, evidence)
     else:
         _phase_checks(v, evidence)

@@ -1,0 +1,1 @@
+"""The laser-trace pipeline: frames -> trace -> gathered points -> pattern fit -> checks."""

@@ -1,0 +1,1 @@
+"""The stroboscope pipeline: frames -> body -> phase -> motion fit -> checks."""
