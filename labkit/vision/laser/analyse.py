@@ -2,8 +2,8 @@
 
 Per frame the only work is a running per-pixel maximum into the accumulator of the current time
 chunk (about as cheap as decoding), so full analysis keeps pace with reading the video. Each
-chunk's accumulation is then turned into trace points (:mod:`labkit.vision.trace`) stamped with
-the chunk's mid time; the fit (:mod:`labkit.vision.fit`) carries a linear drift of the centre.
+chunk's accumulation is then turned into trace points (:mod:`labkit.vision.laser.trace`) stamped with
+the chunk's mid time; the fit (:mod:`labkit.vision.laser.pattern_fit`) carries a linear drift of the centre.
 Tilt amplitudes: the reflected beam turns by twice the magnet's tilt, so a semi-axis ``r`` on a
 screen at distance ``L`` is a tilt of ``atan(r / L) / 2`` (Sec. 5.2.3, Fig. 5.19/5.20).
 """
@@ -38,7 +38,7 @@ if TYPE_CHECKING:
 
     from labkit.vision.laser.pattern_fit import Classification
 
-# The fit side (labkit.vision.laser_pattern: the fit, wander, checks, second readings) loads in
+# The fit side (labkit.vision.laser.pattern: the fit, wander, checks, second readings) loads in
 # the worker thread while the first frames decode, not before the first frame; its public
 # functions stay importable from here.
 _FIT_SIDE = ("pattern_dict", "symmetry_of", "read_pattern")
@@ -68,7 +68,7 @@ class LaserQuality:
     chunks (fewer chunks: faster; more: follows a fast drift better). ``luma``: None (auto)
     measures the trace's contrast-to-noise on the first frames in luma and in colour and uses the
     decoder's own luma plane (skips the colour conversion) only if luma keeps enough of it
-    (:mod:`labkit.vision.framepath`); True forces luma where the codec has a luma plane; False
+    (:mod:`labkit.vision.laser.frame_path`); True forces luma where the codec has a luma plane; False
     forces the brightest colour channel of BGR frames. A live-stream hook always gets BGR."""
 
     stride: int = 1
@@ -121,7 +121,7 @@ def _clip_roi(roi: tuple[int, int, int, int], size: tuple[int, int]) -> tuple[in
 
 def chunk_length(source: FrameSource, quality: LaserQuality) -> int:
     """Frames per chunk: ``chunk_s`` of video, shortened so that a short clip still has
-    ``MIN_CHUNKS`` chunks to follow a wandering centre with (:mod:`labkit.vision.wander`); at
+    ``MIN_CHUNKS`` chunks to follow a wandering centre with (:mod:`labkit.vision.laser.wander`); at
     least ``MIN_FRAMES_PER_CHUNK`` analysed frames, at most ``max_chunks`` chunks."""
     fps = source.fps or 30.0
     wanted = min(round(quality.chunk_s * fps), math.ceil(source.frame_count / MIN_CHUNKS))
@@ -292,7 +292,7 @@ def _preload_fit_side() -> None:
 
 
 def _preliminary(gathered: GatheredTrace, chunks: int, fps: float) -> Classification | None:
-    """:func:`labkit.vision.laser_pattern.preliminary` (in the worker, while later frames decode)."""
+    """:func:`labkit.vision.laser.pattern.preliminary` (in the worker, while later frames decode)."""
     return _load_fit_side().preliminary(gathered, chunks, fps)
 
 
@@ -305,7 +305,7 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
     ``on_frame(index, t_s, bgr)`` is called for every analysed frame (live streams hook in here;
     the frame buffer is reused, copy it to keep it). ``on_progress(frames_read, frame_count)``
     after each time chunk (``frame_count`` as the file says; 0 if unknown). ``on_trace(image)``
-    gets the accumulated trace of the whole clip in a full frame (for :mod:`labkit.vision.overlay`).
+    gets the accumulated trace of the whole clip in a full frame (for :mod:`labkit.vision.laser.overlay`).
     Raises :class:`VideoError` for unusable input; a usable file without a trace gives
     ``pattern.type == "none"`` with a reason.
     """

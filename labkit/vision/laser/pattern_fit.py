@@ -2,7 +2,7 @@
 or hypotrochoid (Sec. 5.2.3 Fig. 5.19/5.20, Sec. 6.5 Eq. 6.38).
 
 All patterns share the model ``z(t) = c + v tau + A e^{it} + B e^{ikt}`` (see
-:mod:`labkit.vision.curves`), where ``tau`` is each point's time relative to the middle of the
+:mod:`labkit.vision.shared.curves`), where ``tau`` is each point's time relative to the middle of the
 recording and ``v`` a slow linear drift of the pattern centre. With the curve parameter ``t_i`` of
 each point's closest curve point fixed, the model is linear in the complex ``c, v, A, B``; the fit
 alternates closest-point search and a weighted linear least-squares solve (iterative closest
@@ -237,14 +237,14 @@ def fit_trochoid(points: np.ndarray, kind: str, loops: int, weights: np.ndarray 
                  times: np.ndarray | None = None, iterations: int = 30,
                  b_starts: tuple[float, ...] | None = None) -> CurveFit:
     """Fit an epitrochoid or hypotrochoid (Eq. 6.38) with ``loops`` loops: a few steps from each
-    start (:func:`labkit.vision.starts.trochoid_starts`), then the best one to ``iterations`` steps."""
+    start (:func:`labkit.vision.laser.starts.trochoid_starts`), then the best one to ``iterations`` steps."""
     return fit_trochoids(points, [k_for(kind, loops)], weights, times, iterations, b_starts)[0]
 
 
 def fit_trochoids(points: np.ndarray, ks: list[int], weights: np.ndarray | None = None,
                   times: np.ndarray | None = None, iterations: int = 30,
                   b_starts: tuple[float, ...] | None = None) -> list[CurveFit]:
-    """:func:`fit_trochoid` for several frequency ratios ``ks`` (:func:`labkit.vision.curves.k_for`)
+    """:func:`fit_trochoid` for several frequency ratios ``ks`` (:func:`labkit.vision.shared.curves.k_for`)
     at once, one fit per k: every start of every k is probed for ``PROBE_ITERATIONS`` steps in one
     batch, then each k's best start is carried on to ``iterations`` steps in a second batch."""
     z, w, tau = prepare_points(points, weights, times)

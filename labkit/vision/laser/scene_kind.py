@@ -3,7 +3,7 @@ gave a pattern with verdict ``doubtful`` and exit 0.)
 
 A laser trace is a thin bright line on a dark screen. A stroboscope clip is a body: dark before
 a lit background (the usual set-up), or lit before a dark one. Two measures on the clip's
-accumulated frames (each pixel's brightest value, :func:`labkit.vision.laser.accumulate`), the
+accumulated frames (each pixel's brightest value, :func:`labkit.vision.laser.analyse.accumulate`), the
 light being what is brighter than the middle of the black level and the brightest level
 (99.9th percentile):
 

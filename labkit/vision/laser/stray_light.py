@@ -23,7 +23,7 @@ near it (up to 20 % of the trace points, which pulled the fit hundreds of px off
 What it cannot do: when a pattern is seen only as arcs that do not touch (very short exposures
 at a frame rate commensurate with the pattern) and a timestamp is larger than every arc, the
 timestamp is taken for the pattern. If the camera moved, the timestamp is the light that stayed
-at the same pixels, and :func:`labkit.vision.rescue.without_fixed_light` leaves it out; with a
+at the same pixels, and :func:`labkit.vision.laser.second_reading.without_fixed_light` leaves it out; with a
 still camera the fit fails its checks and says so.
 """
 

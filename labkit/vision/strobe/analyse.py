@@ -1,10 +1,10 @@
 """Stroboscope analysis (Sec. 5.4.3, Fig. 5.19, 6.14, 6.20; docs/explanation/strobe-analysis.md,
-*Stroboscope*): measure the floating body in every frame (:mod:`labkit.vision.strobe_body`), map frames to
+*Stroboscope*): measure the floating body in every frame (:mod:`labkit.vision.strobe.body`), map frames to
 rotor
-phase (:mod:`labkit.vision.strobe_phase`), fit the tilt amplitude phi, the lateral amplitude beta
+phase (:mod:`labkit.vision.strobe.phase`), fit the tilt amplitude phi, the lateral amplitude beta
 and the offset of the rotation centre from the centre of mass ``delta = beta / tan(phi)`` (Eq.
-5.97) with standard errors (:mod:`labkit.vision.strobe_fit`), and judge the result
-(:mod:`labkit.vision.strobe_quality`).
+5.97) with standard errors (:mod:`labkit.vision.strobe.motion_fit`), and judge the result
+(:mod:`labkit.vision.strobe.checks`).
 
 Tilt is measured about the body's own mean orientation (mod pi, or mod pi/2 for a square
 silhouette), so a rotor axis horizontal in the image or a rolled camera changes nothing; the
@@ -180,7 +180,7 @@ def _measure(poses: list[BodyPose | None], model: PhaseModel) -> _Measured:
 
 
 def _without_room_light(light: ClipLight, first: _Measured, model: PhaseModel) -> tuple[_Measured, dict]:
-    """Take the room light's ghost out (:mod:`labkit.vision.strobe_ghost`) with the swing of the
+    """Take the room light's ghost out (:mod:`labkit.vision.strobe.room_light`) with the swing of the
     previous measurement, measure again, and repeat until the tilt amplitude settles (changes by
     less than ``ROOM_LIGHT_SETTLED`` of itself) or ``ROOM_LIGHT_ROUNDS`` have run. The rounds
     measure only the frames the room light is fitted on (``FIT_FRAMES``, spread over the clip);
@@ -275,7 +275,7 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
                    readout_s: float | None = None, encoding_gamma: float = ENCODING_GAMMA) -> dict:
     """Analyse a stroboscope video; returns the ``labkit analyse strobe`` JSON.
 
-    Phase (see :mod:`labkit.vision.strobe_phase`): ``rotor_hz`` with ``strobe_hz`` (a lamp,
+    Phase (see :mod:`labkit.vision.strobe.phase`): ``rotor_hz`` with ``strobe_hz`` (a lamp,
     any number of flashes per frame), ``rotor_hz`` alone (the camera's exposure is the strobe),
     ``apparent_hz``, or the signal. ``camera_fps`` overrides the file's frame rate,
     ``exposure_s`` (when known) gives the blur correction. ``point``: the body point whose
@@ -285,10 +285,10 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
     an overlay; the caller removes it before writing JSON. ``readout_s``: the rolling shutter's
     readout (first to last row) when known, 0 for a global shutter; with the camera as the strobe
     and a rolling shutter the amplitudes come from the per-row model
-    (:mod:`labkit.vision.strobe_rolling_use`), the readout estimated from the footage unless given.
+    (:mod:`labkit.vision.strobe.rolling_analysis`), the readout estimated from the footage unless given.
     ``encoding_gamma``: the camera's encoding exponent (2.2 for sRGB-like cameras, 1 for linear
     ones), with which room light's ghost is taken out in linear light
-    (:mod:`labkit.vision.strobe_ghost`).
+    (:mod:`labkit.vision.strobe.room_light`).
     """
     source, poses, kept, ghost, light = _read_poses(path, on_frame, 0 if keep_frame else None, encoding_gamma)
     fps = camera_fps or source.fps or (strobe_hz or 0.0)
@@ -451,7 +451,7 @@ def phase_pattern(points: np.ndarray, phases: np.ndarray) -> dict:
     """Classify a body point's trajectory with known phase per sample: least squares of
     ``c + A e^{i s psi} + B e^{i s k psi}`` (s = +-1, the sense of rotation) for the ellipse
     (k = -1) and the trochoids of Eq. 6.38 (epitrochoid k = 2..7, hypotrochoid k = -2..-6); the
-    ellipse wins unless :func:`labkit.vision.fit.trochoid_beats` it. Same JSON layout as
+    ellipse wins unless :func:`labkit.vision.laser.pattern_fit.trochoid_beats` it. Same JSON layout as
     the laser pattern."""
     z = points[:, 0] + 1j * points[:, 1]
     fits = []

@@ -34,7 +34,7 @@ RUNNER_UP_CLOSE = 0.9  # runner-up frequency explains this much of what the best
 MAX_FLASH_SPREAD_CYCLES = 0.125  # flashes spread over u cycles shrink amplitudes by 1 - sinc(u): 2.5 %, half
 # the tolerance
 LOCKED_WEAK, LOCKED_STRONG = 0.5, 0.8  # explained variance of tilt vs lateral (they move together)
-MAX_ROOM_LIGHT = 0.5  # room light's share of the light (strobe_ghost): above it the ghost outweighs the body
+MAX_ROOM_LIGHT = 0.5  # room light's share of the light (room_light): above it the ghost outweighs the body
 
 
 def tilt_tolerance(phi: float) -> float:
