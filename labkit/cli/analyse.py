@@ -391,7 +391,7 @@ def _pm(value, se, digits: int) -> str:
 
 
 def _print_strobe(r: dict) -> None:
-    from labkit.vision.strobe.checks import describe
+    from labkit.vision.shared.verdict import describe
 
     q, u, pm = r["quality"], r["uncertainty"], r["phase_model"]
     print(f"{r['source']}: {r['frames']} frames ({q['frames_with_body']} with a body), "

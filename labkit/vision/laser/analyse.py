@@ -32,6 +32,7 @@ from labkit.vision.laser.scene_kind import scene_measures, strobe_scene_verdict
 from labkit.vision.laser.trace import TracePoints, trace_points
 from labkit.vision.shared.exposure import check_exposure, grey_histogram
 from labkit.vision.shared.frames import FrameSource, open_frames
+from labkit.vision.shared.verdict import Verdict
 
 if TYPE_CHECKING:
     from concurrent.futures import Future
@@ -379,9 +380,9 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
                     "minor": tilt_from_semi_axis(minor, mm_per_px, screen_distance_mm)}
             doubt = tilt_geometry_doubt(major, mm_per_px, screen_distance_mm)
             if doubt is not None:
-                qual = {**qual, "verdict": "failed" if qual["verdict"] == "failed" else "doubtful",
-                        "reasons": [*qual["reasons"], doubt],
-                        "checks": {**qual["checks"], "tilt_geometry": "doubtful"}}
+                verdict = Verdict.from_json(qual)
+                verdict.doubt(doubt, "tilt_geometry")
+                qual = {**qual, **verdict.as_json()}
     qual = strobe_scene_verdict(qual, *scene_measures([c.image for c in chunks], source.levels[0]))
     qual["settings"] = asdict(quality)
     qual["elapsed_s"] = time.perf_counter() - t_start

@@ -52,7 +52,7 @@ from labkit.vision.laser.loops_seen import LOOP_SEEN_WIDTHS, TIPS_LIT_WIDTHS, lo
 from labkit.vision.laser.nearest import PointTree
 from labkit.vision.laser.pattern_fit import Classification, CurveFit, coverage_rms, two_way_rms
 from labkit.vision.laser.wander import Wander, chunk_offsets, dense_curve
-from labkit.vision.shared.verdict import Finding, graded, verdict
+from labkit.vision.shared.verdict import Finding, Verdict, graded
 
 MIN_LINE_WIDTH_PX = 2.0  # a trace is never judged against less than this (sub-pixel lines)
 # a different pattern whose score is within this factor of the chosen one's is a real alternative
@@ -260,10 +260,10 @@ def runner_up_is_close(runner: dict, width: float) -> bool:
 
 def laser_verdict(evidence: dict, frame_size: tuple[int, int]) -> dict:
     """``{"verdict", "reasons", "checks", ...evidence}`` for a fitted pattern."""
-    return {**verdict(laser_findings(evidence, frame_size)), **evidence}
+    return {**Verdict.of(laser_findings(evidence, frame_size)).as_json(), **evidence}
 
 
 def no_pattern_verdict(reason: str) -> dict:
     """The verdict of a usable file without a trace."""
-    return verdict([Finding("trace", "failed", reason)])
+    return Verdict.of([Finding("trace", "failed", reason)]).as_json()
 

@@ -25,6 +25,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from labkit.vision.shared.verdict import Verdict
+
 MAX_LIT_SHARE = 0.5
 MAX_THICKNESS_WIDTHS = 3.0
 
@@ -65,5 +67,6 @@ def strobe_scene_verdict(quality: dict, lit: float, thickness_px: float) -> dict
         return quality
     reason = (f"this looks like a stroboscope clip, not a laser trace: {why}; analyse it with "
               "labkit analyse strobe")
-    return {**quality, "verdict": "failed", "reasons": [reason, *quality.get("reasons", [])],
-            "checks": {**quality.get("checks", {}), "scene": "failed"}}
+    verdict = Verdict.from_json(quality)
+    verdict.fail(reason, "scene")
+    return {**quality, **verdict.as_json()}
