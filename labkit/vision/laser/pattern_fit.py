@@ -20,19 +20,17 @@ import numpy as np
 from labkit.vision.laser.nearest import PointTree
 from labkit.vision.laser.starts import b_starts_for, trochoid_starts
 from labkit.vision.shared.curves import (
+    CIRCLE_MAX_ELLIPTICITY,
+    MAX_TROCHOID_B,
     Pattern,
     a_for_k,
     ellipse_from_coefficients,
     k_for,
+    trochoid_beats,
     trochoid_from_coefficients,
 )
 
-CIRCLE_MAX_ELLIPTICITY = 0.02  # below this an ellipse is reported as a circle
-SIMPLER_TOLERANCE = 1.12  # a simpler pattern wins unless a trochoid's residual is this much lower
-MIN_GAIN_PX = 0.1  # ... and at least this much lower in absolute terms
-MIN_SECOND_TERM_PX = 1.0  # ... and its second term (b * scale) is visible
 MIN_POINTS = 20
-MAX_TROCHOID_B = 1.05  # larger b means the fast term dominates: not a trochoid of Eq. 6.38
 # a prior classification (of part of the trace) is trusted while its choice explains the whole
 # trace nearly as well as it explained the part: rms <= PRIOR_RMS_FACTOR x its rms + PRIOR_RMS_SLACK_PX
 PRIOR_RMS_FACTOR = 1.5
@@ -434,14 +432,6 @@ def polish(fit: CurveFit, points: np.ndarray, weights: np.ndarray | None = None,
     z, w, tau = prepare_points(points, weights, times)
     samples = 1440 if fit.k == -1 else 360 * abs(fit.k)
     return _icp(z, w, tau, fit.k, fit.c, fit.a, fit.b, iterations, times is not None, samples)
-
-
-def trochoid_beats(trochoid_rms: float, second_term_px: float, simpler_rms: float) -> bool:
-    """A trochoid replaces a simpler pattern only if it lowers the residual by the factor
-    ``SIMPLER_TOLERANCE`` and by ``MIN_GAIN_PX``, and its second term (``|B| = b * scale``) is at
-    least ``MIN_SECOND_TERM_PX``: otherwise it is a circle with invisible wiggles fitted to noise."""
-    return (trochoid_rms * SIMPLER_TOLERANCE < simpler_rms and simpler_rms - trochoid_rms > MIN_GAIN_PX
-            and second_term_px >= MIN_SECOND_TERM_PX)
 
 
 def _name(fit: CurveFit) -> str:

@@ -22,13 +22,13 @@ import numpy as np
 
 from labkit.vision.laser.nearest import PointTree, xy_points
 from labkit.vision.laser.pattern_fit import (
-    SIMPLER_TOLERANCE,
     Classification,
     CurveFit,
     polish,
     polished_on_band,
     without_outliers,
 )
+from labkit.vision.shared.curves import SIMPLER_TOLERANCE
 
 MIN_CHUNKS = 3
 MIN_CHUNK_POINTS = 10

@@ -20,8 +20,14 @@ import cv2
 import numpy as np
 
 from labkit.errors import VideoError
-from labkit.vision.laser.pattern_fit import CIRCLE_MAX_ELLIPTICITY, MAX_TROCHOID_B, trochoid_beats
-from labkit.vision.shared.curves import a_for_k, ellipse_from_coefficients, trochoid_from_coefficients
+from labkit.vision.shared.curves import (
+    CIRCLE_MAX_ELLIPTICITY,
+    MAX_TROCHOID_B,
+    a_for_k,
+    ellipse_from_coefficients,
+    trochoid_beats,
+    trochoid_from_coefficients,
+)
 from labkit.vision.shared.frames import open_frames
 from labkit.vision.strobe.body import (
     BodyPose,
@@ -451,7 +457,7 @@ def phase_pattern(points: np.ndarray, phases: np.ndarray) -> dict:
     """Classify a body point's trajectory with known phase per sample: least squares of
     ``c + A e^{i s psi} + B e^{i s k psi}`` (s = +-1, the sense of rotation) for the ellipse
     (k = -1) and the trochoids of Eq. 6.38 (epitrochoid k = 2..7, hypotrochoid k = -2..-6); the
-    ellipse wins unless :func:`labkit.vision.laser.pattern_fit.trochoid_beats` it. Same JSON layout as
+    ellipse wins unless :func:`labkit.vision.shared.curves.trochoid_beats` it. Same JSON layout as
     the laser pattern."""
     z = points[:, 0] + 1j * points[:, 1]
     fits = []
