@@ -35,6 +35,7 @@ from labkit.cli.parsers import command_parser
 
 if TYPE_CHECKING:  # OpenCV and the vision stack load when the benchmark runs, not for --help
     from labkit.vision.laser.analyse import LaserQuality
+    from labkit.vision.laser.result import LaserResult
 
 
 def settings(roi: tuple[int, int, int, int]) -> list[tuple[str, LaserQuality]]:
@@ -181,6 +182,7 @@ def run_laser(args: argparse.Namespace) -> int:
     from labkit.synth import laser_truth, render_laser, write_clip
     from labkit.synth.presets import laser_pattern, laser_preset
     from labkit.vision.laser.analyse import LaserQuality, accumulate, analyse_laser
+    from labkit.vision.laser.result import LaserResult
     from labkit.vision.shared.frames import open_frames
 
     w, h = args.size
@@ -226,8 +228,8 @@ def run_laser(args: argparse.Namespace) -> int:
         print(f"{header}  accuracy")
         for name, _ in jobs:
             best, result = min(times[name]), results[name]
-            fixed = f"{_fixed_cost(result):7.3f}" if isinstance(result, dict) else f"{'':7s}"
-            accuracy = _errors(result, truth) if isinstance(result, dict) else ""
+            fixed = f"{_fixed_cost(result):7.3f}" if isinstance(result, LaserResult) else f"{'':7s}"
+            accuracy = _errors(result, truth) if isinstance(result, LaserResult) else ""
             print(f"{name:46s} {best:7.3f} {n / best:6.0f} {_spread(ratios[name]):>22s} {fixed}  {accuracy}")
         print()
         print("target: full analysis >= 0.8x decode-only (VideoCapture.read, BGR) on the same file;")
@@ -235,5 +237,5 @@ def run_laser(args: argparse.Namespace) -> int:
     return 0
 
 
-def _fixed_cost(result: dict) -> float:
-    return float(result["quality"].get("fit_s", 0.0))
+def _fixed_cost(result: LaserResult) -> float:
+    return float(result.quality.get("fit_s", 0.0))

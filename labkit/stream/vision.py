@@ -22,6 +22,7 @@ pixel coordinate is shifted by +0.5 when logged.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -87,7 +88,7 @@ class VisionStream:
         self.trace = bgr.copy() if fresh else np.maximum(self.trace, bgr)
         self.trace_dark = bgr.copy() if fresh else np.minimum(self.trace_dark, bgr)
 
-    def result(self, result: dict[str, Any]) -> None:
+    def result(self, result: Mapping[str, Any]) -> None:
         pattern = result.get("pattern") or result.get("point_pattern") or {}
         curve = pattern_curve(pattern)
         self._log_trace(curve)
@@ -137,7 +138,7 @@ class VisionStream:
             self.rec.disconnect()
 
 
-def describe(result: dict[str, Any]) -> str:
+def describe(result: Mapping[str, Any]) -> str:
     """One line about the analysis for the viewer's log."""
     pattern = result.get("pattern") or result.get("point_pattern") or {}
     kind = pattern.get("type", "none")

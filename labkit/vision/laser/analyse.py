@@ -28,6 +28,7 @@ from labkit.vision.laser.frame_path import (
     measure_frame_path,
 )
 from labkit.vision.laser.gather import MAX_POINTS_PER_CHUNK, GatheredTrace, gather  # noqa: F401 (API)
+from labkit.vision.laser.result import LaserResult
 from labkit.vision.laser.scene_kind import scene_measures, strobe_scene_verdict
 from labkit.vision.laser.trace import TracePoints, trace_points
 from labkit.vision.shared.exposure import check_exposure, grey_histogram
@@ -300,8 +301,9 @@ def _preliminary(gathered: GatheredTrace, chunks: int, fps: float) -> Classifica
 def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px: float | None = None,
                   quality: LaserQuality | None = None, on_frame: FrameHook | None = None,
                   on_trace: Callable[[np.ndarray], None] | None = None,
-                  on_progress: Callable[[int, int], None] | None = None) -> dict:
-    """Analyse a laser-trace video or long-exposure photo; returns the ``labkit analyse laser`` JSON.
+                  on_progress: Callable[[int, int], None] | None = None) -> LaserResult:
+    """Analyse a laser-trace video or long-exposure photo; returns the ``labkit analyse laser``
+    result (its JSON: ``.to_json()``).
 
     ``on_frame(index, t_s, bgr)`` is called for every analysed frame (live streams hook in here;
     the frame buffer is reused, copy it to keep it). ``on_progress(frames_read, frame_count)``
@@ -387,5 +389,5 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
     qual["settings"] = asdict(quality)
     qual["elapsed_s"] = time.perf_counter() - t_start
     qual["fit_s"] = time.perf_counter() - t_frames  # work left after the last frame: mostly the fit
-    return {"source": source.path, "frames": source.frames_read, "fps": fps, "size": list(source.size),
-            "pattern": pattern, "tilt_rad": tilt, "quality": qual}
+    return LaserResult(source=source.path, frames=source.frames_read, fps=fps, size=list(source.size),
+                       pattern=pattern, tilt_rad=tilt, quality=qual)

@@ -48,6 +48,7 @@ from labkit.vision.strobe.phase import (
     explained_fraction,
     fold,
 )
+from labkit.vision.strobe.result import InMillimetres, StrobeResult
 from labkit.vision.strobe.rolling_analysis import rolling_analysis, rolling_applies
 from labkit.vision.strobe.room_light import (
     ENCODING_GAMMA,
@@ -278,8 +279,9 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
                    apparent_hz: float | None = None, mm_per_px: float | None = None,
                    point: str = "tip", on_frame=None, camera_fps: float | None = None,
                    exposure_s: float | None = None, keep_frame: bool = False,
-                   readout_s: float | None = None, encoding_gamma: float = ENCODING_GAMMA) -> dict:
-    """Analyse a stroboscope video; returns the ``labkit analyse strobe`` JSON.
+                   readout_s: float | None = None, encoding_gamma: float = ENCODING_GAMMA) -> StrobeResult:
+    """Analyse a stroboscope video; returns the ``labkit analyse strobe`` result (its JSON:
+    ``.to_json()``).
 
     Phase (see :mod:`labkit.vision.strobe.phase`): ``rotor_hz`` with ``strobe_hz`` (a lamp,
     any number of flashes per frame), ``rotor_hz`` alone (the camera's exposure is the strobe),
@@ -287,8 +289,8 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
     ``exposure_s`` (when known) gives the blur correction. ``point``: the body point whose
     trajectory is classified, ``tip`` (top end of the body axis), ``bottom`` or ``centroid``.
     ``on_frame(index, t_s, bgr)`` is called for every frame (live streams hook in here).
-    ``keep_frame``: return the first frame with a body as ``result["_frame"]`` (index, BGR) for
-    an overlay; the caller removes it before writing JSON. ``readout_s``: the rolling shutter's
+    ``keep_frame``: return the first frame with a body as ``result.overlay_frame`` (index, BGR)
+    for an overlay (no part of the JSON). ``readout_s``: the rolling shutter's
     readout (first to last row) when known, 0 for a global shutter; with the camera as the strobe
     and a rolling shutter the amplitudes come from the per-row model
     (:mod:`labkit.vision.strobe.rolling_analysis`), the readout estimated from the footage unless given.
@@ -352,19 +354,21 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
                                                ghost, room, rolling))}
     if rolling is not None:
         _use_rolling(out, rolling)
+    in_mm = None
     if mm_per_px:
-        out["lateral_amplitude_mm"] = motion.beta * mm_per_px
-        out["rc_offset_mm"] = None if motion.delta is None else motion.delta * mm_per_px
+        delta_mm = None if motion.delta is None else motion.delta * mm_per_px
+        in_mm = InMillimetres(motion.beta * mm_per_px, delta_mm)
         out["uncertainty"]["lateral_amplitude_mm"] = motion.beta_se * mm_per_px
         out["uncertainty"]["rc_offset_mm"] = None if motion.delta_se is None else motion.delta_se * mm_per_px
+    frame = None
     if keep_frame and kept is not None:
         k = kept[0]
         j = int(np.searchsorted(idx, k))
-        out["_frame"] = {"index": k, "bgr": kept[1], "centre": [found[j].x, found[j].y],
-                         "axis": _axis_at(orient, tilt)[j].tolist(), "rest_axis": orient.axis.tolist(),
-                         "half_length_px": half, "point": points[j].tolist(), "track": points.tolist(),
-                         "radius_px": math.sqrt(3 * (found[j].mu20 + found[j].mu02))}
-    return out
+        frame = {"index": k, "bgr": kept[1], "centre": [found[j].x, found[j].y],
+                 "axis": _axis_at(orient, tilt)[j].tolist(), "rest_axis": orient.axis.tolist(),
+                 "half_length_px": half, "point": points[j].tolist(), "track": points.tolist(),
+                 "radius_px": math.sqrt(3 * (found[j].mu20 + found[j].mu02))}
+    return StrobeResult(**out, in_mm=in_mm, overlay_frame=frame)
 
 
 def _per_row(source, poses, found, orient: ClipOrientation, fps: float, readout_s: float | None,
