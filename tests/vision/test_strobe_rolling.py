@@ -33,6 +33,7 @@ from labkit.vision.strobe.rolling_model import (
     slice_intervals,
 )
 
+MM_PER_PX = 0.05  # any scale: the millimetres must be the reported pixels scaled
 CASE = "strobe-cylinder-37-medium"  # 320x240, no lamp, 1/5600 s exposure, readout 0.79 frame, rotor 243 Hz
 
 
@@ -46,7 +47,7 @@ def rolling_clip(tmp_path_factory):
                          shot.camera.fps, truth, jpeg_quality=shot.camera.jpeg_quality)
     given = analysis_inputs(truth)
     assert "strobe_hz" not in given  # the user gives the rotor frequency only: the camera is the strobe
-    return truth, analyse_strobe(str(path), **given)
+    return truth, analyse_strobe(str(path), mm_per_px=MM_PER_PX, **given)
 
 
 def test_rolling_camera_strobe_clip_is_within_tolerance(rolling_clip):
@@ -61,6 +62,13 @@ def test_rolling_camera_strobe_clip_is_within_tolerance(rolling_clip):
     assert rolling["readout_s"] == pytest.approx(truth["readout_s"], rel=0.05)
     # the per-frame model would have been far off: the result's per-frame series is the smear's
     assert rolling["rows_explained"] > 0.9 > rolling["rows_explained_one_phase_per_frame"] + 0.3
+    # the millimetres are the per-row model's amplitudes too, not the per-frame fit's (which were
+    # 7.6 times smaller on this clip before the result was typed)
+    in_mm, u = result.in_mm, result.uncertainty
+    assert in_mm is not None and result.rc_offset_px is not None
+    assert in_mm.lateral_amplitude_mm == pytest.approx(result.lateral_amplitude_px * MM_PER_PX, rel=1e-12)
+    assert in_mm.rc_offset_mm == pytest.approx(result.rc_offset_px * MM_PER_PX, rel=1e-12)
+    assert u["lateral_amplitude_mm"] == pytest.approx(u["lateral_amplitude_px"] * MM_PER_PX, rel=1e-12)
 
 
 def test_row_slices_match_an_independent_rectangle_coverage():

@@ -355,11 +355,11 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
     if rolling is not None:
         _use_rolling(out, rolling)
     in_mm = None
-    if mm_per_px:
-        delta_mm = None if motion.delta is None else motion.delta * mm_per_px
-        in_mm = InMillimetres(motion.beta * mm_per_px, delta_mm)
-        out["uncertainty"]["lateral_amplitude_mm"] = motion.beta_se * mm_per_px
-        out["uncertainty"]["rc_offset_mm"] = None if motion.delta_se is None else motion.delta_se * mm_per_px
+    if mm_per_px:  # the amplitudes reported (the per-row model's when it applies), in mm
+        u = out["uncertainty"]
+        in_mm = InMillimetres.scaled(out["lateral_amplitude_px"], out["rc_offset_px"], mm_per_px)
+        se_mm = InMillimetres.scaled(u["lateral_amplitude_px"], u["rc_offset_px"], mm_per_px)
+        u["lateral_amplitude_mm"], u["rc_offset_mm"] = se_mm.lateral_amplitude_mm, se_mm.rc_offset_mm
     frame = None
     if keep_frame and kept is not None:
         k = kept[0]

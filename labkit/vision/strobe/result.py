@@ -16,6 +16,10 @@ class InMillimetres:
     lateral_amplitude_mm: float
     rc_offset_mm: float | None
 
+    @classmethod
+    def scaled(cls, lateral_px: float, rc_offset_px: float | None, mm_per_px: float) -> InMillimetres:
+        return cls(lateral_px * mm_per_px, None if rc_offset_px is None else rc_offset_px * mm_per_px)
+
 
 @dataclass(frozen=True)
 class StrobeResult(AnalysisResult):
