@@ -24,7 +24,7 @@ from labkit.footage.output import truth_path, write_footage
 from labkit.footage.suite import suite_cases
 from labkit.footage.suite_build import build_shot
 from labkit.footage.suite_eval import score_laser
-from labkit.vision.laser import analyse_laser
+from labkit.vision.laser.analyse import analyse_laser
 
 CASES = ("circle-05-hard", "ellipse-09-hard", "epitrochoid-4-05-hard", "hypotrochoid-4-04-hard",
          "epitrochoid-3-04-hard", "circle-08-hard", "hypotrochoid-5-05-hard", "epitrochoid-6-01-hard")

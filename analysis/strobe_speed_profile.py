@@ -18,7 +18,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from labkit.testing.strobe_cylinder import sized, write_clip
-from labkit.vision.strobe import analyse_strobe
+from labkit.vision.strobe.analyse import analyse_strobe
 
 
 def main() -> None:

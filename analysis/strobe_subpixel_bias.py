@@ -4,7 +4,7 @@
 Draws random elongated rectangles (half diagonal 10-40 px, width 0.35-0.6 of the length, axis
 within 0.3 rad of image vertical, sub-pixel centre), blurs each with a Gaussian lens of sigma
 0.5-2.5 px, encodes it with gamma 1/2.2 into 8 bits (with or without sensor noise), and measures
-it with :func:`labkit.vision.strobe_body.measure_body`: the soft-mask axis and the axis of the
+it with :func:`labkit.vision.strobe.body.measure_body`: the soft-mask axis and the axis of the
 moments linear in intensity. Each clip swings the body by Eq. 5.97 over 48 frames; the error of
 the fitted tilt amplitude times the half diagonal is the bias at the body's ends that the
 verdict's tilt-resolution check assumes. Its own rectangle drawing (4x supersampled
@@ -21,7 +21,7 @@ import math
 import cv2
 import numpy as np
 
-from labkit.vision.strobe_body import measure_body
+from labkit.vision.strobe.body import measure_body
 
 SUPER = 8
 

@@ -20,9 +20,9 @@ import numpy as np
 
 from labkit.synth import laser_truth, render_laser, write_clip
 from labkit.synth.presets import laser_pattern, laser_preset
-from labkit.vision.curves import Pattern, a_for_k
-from labkit.vision.laser import analyse_laser, symmetry_of
-from labkit.vision.overlay import draw_overlay
+from labkit.vision.laser.analyse import analyse_laser, symmetry_of
+from labkit.vision.laser.overlay import draw_overlay
+from labkit.vision.shared.curves import Pattern, a_for_k
 
 PANEL = 180
 

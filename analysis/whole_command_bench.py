@@ -50,7 +50,7 @@ print(n)
 
 DECODE_FRAMES = """
 import sys
-from labkit.vision.frames import open_frames
+from labkit.vision.shared.frames import open_frames
 print(open_frames(sys.argv[1]).decode_only())
 """
 
@@ -238,7 +238,7 @@ def analyse_pairs(clip: Path, pairs: int, compare_with: str | None = None, quiet
     (a shared machine's quiet moments), and rounds run until ``pairs`` such rounds are in or
     ``max_wait_s`` has passed."""
     jobs = {
-        "decode-only, labkit.vision.frames (bench vision's reference)":
+        "decode-only, labkit.vision.shared.frames (bench vision's reference)":
             [sys.executable, "-c", DECODE_FRAMES, str(clip)],
         "decode-only, bare cv2 read loop": [sys.executable, "-c", DECODE_ONLY, str(clip)],
         "labkit analyse laser": [sys.executable, "-m", "labkit", "analyse", "laser", str(clip)],

@@ -35,8 +35,8 @@ _FACE: dict[str, str] = {
     "load_session": "labkit.session.dataframes",
     "SessionFrames": "labkit.session.dataframes",
     # video analysis
-    "analyse_laser": "labkit.vision.laser",
-    "analyse_strobe": "labkit.vision.strobe",
+    "analyse_laser": "labkit.vision.laser.analyse",
+    "analyse_strobe": "labkit.vision.strobe.analyse",
     # fits, reports, simulation
     "load_tables": "labkit.fit.data",
     "fit_table": "labkit.fit.table_fit",
@@ -69,8 +69,8 @@ if TYPE_CHECKING:  # for type checkers and IDEs; at run time the names come from
     from labkit.session.dataframes import SessionFrames, load_session
     from labkit.sim.run import simulate
     from labkit.sim.scene_file import load_scene
-    from labkit.vision.laser import analyse_laser
-    from labkit.vision.strobe import analyse_strobe
+    from labkit.vision.laser.analyse import analyse_laser
+    from labkit.vision.strobe.analyse import analyse_strobe
 
 
 def fit_data(inputs: str | Path | Sequence[str | Path], model: str, **options: Any) -> FitReport:

@@ -14,13 +14,22 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from dataclasses import replace
 from pathlib import Path
+from typing import TYPE_CHECKING, TypeVar
 
 from labkit.cli.numbers import number
 from labkit.cli.output import add_json_argument, write_json
 from labkit.cli.parsers import command_parser
 from labkit.cli.progress import ProgressLines
 from labkit.errors import LabkitError, VideoError
+
+if TYPE_CHECKING:
+    from labkit.vision.laser.result import LaserResult
+    from labkit.vision.shared.result import AnalysisResult
+    from labkit.vision.strobe.result import StrobeResult
+
+R = TypeVar("R", bound="AnalysisResult")
 
 
 def _roi(text: str) -> tuple[int, int, int, int]:
@@ -180,27 +189,29 @@ def open_stream(spec: str | None, kind: str):
     return open_vision_stream(spec, kind)
 
 
-def record_speeds(result: dict, speed_rpm: float | None, spin_rad_s: float | None) -> dict:
-    """Add the top-level ``rotor_speed_rpm`` and ``spin_rad_s`` keys (None when not known) that
-    ``labkit.fit.data`` reads to put a clip's cone angle against its rotor speed (Eq. 5.24)."""
-    result["rotor_speed_rpm"] = speed_rpm
-    result["spin_rad_s"] = spin_rad_s
-    return result
+def record_speeds(result: R, speed_rpm: float | None, spin_rad_s: float | None) -> R:
+    """The result with the top-level ``rotor_speed_rpm`` and ``spin_rad_s`` keys (None when not
+    known) that ``labkit.fit.data`` reads to put a clip's cone angle against its rotor speed
+    (Eq. 5.24)."""
+    from labkit.vision.shared.result import RecordedSpeeds
+
+    return replace(result, speeds=RecordedSpeeds(speed_rpm, spin_rad_s))
 
 
-def _speed_line(r: dict) -> str | None:
-    if r.get("rotor_speed_rpm") is None and r.get("spin_rad_s") is None:
+def _speed_line(r: AnalysisResult) -> str | None:
+    s = r.speeds
+    if s is None or (s.rotor_speed_rpm is None and s.spin_rad_s is None):
         return None
     parts = []
-    if r.get("rotor_speed_rpm") is not None:
-        parts.append(f"rotor speed {r['rotor_speed_rpm']:.6g} rpm")
-    if r.get("spin_rad_s") is not None:
-        parts.append(f"floator spin {r['spin_rad_s']:.6g} rad/s")
+    if s.rotor_speed_rpm is not None:
+        parts.append(f"rotor speed {s.rotor_speed_rpm:.6g} rpm")
+    if s.spin_rad_s is not None:
+        parts.append(f"floator spin {s.spin_rad_s:.6g} rad/s")
     return "  ".join(parts)
 
 
-def _write_json(result: dict, out: str | None) -> None:
-    write_json(result, out, "analyse")  # labkit.cli.output: '-' is stdout, alone
+def _write_json(result: AnalysisResult, out: str | None) -> None:
+    write_json(result.to_json(), out, "analyse")  # labkit.cli.output: '-' is stdout, alone
 
 
 def _fmt(v, digits: int = 2) -> str:
@@ -208,7 +219,7 @@ def _fmt(v, digits: int = 2) -> str:
 
 
 def run_laser(args: argparse.Namespace) -> int:
-    from labkit.vision.laser import LaserQuality, analyse_laser
+    from labkit.vision.laser.analyse import LaserQuality, analyse_laser
 
     if args.stride < 1 or args.max_chunks < 1 or not args.chunk_s > 0:
         raise VideoError(args.path, "--stride and --max-chunks must be at least 1, --chunk-s positive")
@@ -236,7 +247,7 @@ def run_laser(args: argparse.Namespace) -> int:
             )
         except ValueError as exc:
             raise VideoError(args.path, str(exc)) from None
-        record_speeds(result, args.speed_rpm, args.spin_rad_s)
+        result = record_speeds(result, args.speed_rpm, args.spin_rad_s)
         if stream:
             stream.result(result)
         if traces:
@@ -247,25 +258,25 @@ def run_laser(args: argparse.Namespace) -> int:
     return _finish("laser", args, result, _print_laser, "no pattern")
 
 
-def _finish(kind: str, args: argparse.Namespace, result: dict, print_result, no_reason: str) -> int:
+def _finish(kind: str, args: argparse.Namespace, result: AnalysisResult, print_result, no_reason: str) -> int:
     """Write the JSON, print the result (unless the JSON goes to stdout), and turn a ``failed``
     verdict into one stderr line naming the file and the first reason, and exit status 1."""
     _write_json(result, args.json)
     if args.json != "-":
         print_result(result)
-    if result["quality"]["verdict"] == "failed":
-        reasons = result["quality"]["reasons"]
+    if result.verdict == "failed":
+        reasons = result.reasons
         print(f"labkit analyse {kind}: {args.path}: result failed: {reasons[0] if reasons else no_reason}",
               file=sys.stderr)
         return 1
     return 0
 
 
-def _laser_overlay(trace, result: dict, out: str | None, stream) -> None:
+def _laser_overlay(trace, result: LaserResult, out: str | None, stream) -> None:
     """Draw the overlay; write it to ``out`` (if given) and log it to ``stream`` (if any)."""
     import cv2
 
-    from labkit.vision.overlay import draw_overlay
+    from labkit.vision.laser.overlay import draw_overlay
 
     image = draw_overlay(trace, result)
     if stream is not None and hasattr(stream, "overlay"):
@@ -287,13 +298,13 @@ def _loops_in_words(p: dict) -> str:
     return f"main loop + {n - 1} small" if p["type"] == "epitrochoid" else f"{n} arms"
 
 
-def _print_laser(r: dict) -> None:
-    from labkit.vision.quality import in_words
+def _print_laser(r: LaserResult) -> None:
+    from labkit.vision.shared.verdict import in_words
 
-    p = r["pattern"]
-    rate = f"{r['fps']:.3g} fps" if r["fps"] else "photo"
-    print(f"{r['source']}: {r['frames']} frames, {r['size'][0]}x{r['size'][1]}, {rate}")
-    q = r["quality"]
+    p = r.pattern
+    rate = f"{r.fps:.3g} fps" if r.fps else "photo"
+    print(f"{r.source}: {r.frames} frames, {r.size[0]}x{r.size[1]}, {rate}")
+    q = r.quality
     if q.get("frame_path") == "colour" and q.get("cnr_luma") is not None:
         print(f"frames: colour (the trace's contrast-to-noise is {q['cnr_luma']:.1f} in luma vs "
               f"{q['cnr_colour']:.1f} in colour on the first frames: too little kept in luma)")
@@ -315,14 +326,14 @@ def _print_laser(r: dict) -> None:
             f"{p['symmetry']}-fold symmetry  a {t['a']:.4f}  b {t['b']:.3f}  "
             f"scale {t['scale_px']:.2f} px  rotation {t['rotation_deg']:.2f} deg"
         )
-    if r["tilt_rad"]:
-        t = r["tilt_rad"]
+    if r.tilt_rad:
+        t = r.tilt_rad
         print(
             f"tilt amplitude: major {t['major']:.5f} rad ({math.degrees(t['major']):.3f} deg), "
             f"minor {t['minor']:.5f} rad ({math.degrees(t['minor']):.3f} deg)"
         )
-    if r["quality"].get("truncated"):
-        print(f"warning: {r['quality']['truncated']}")
+    if q.get("truncated"):
+        print(f"warning: {q['truncated']}")
     if _speed_line(r):
         print(_speed_line(r))
     print(f"quality: {in_words(q)}")
@@ -341,7 +352,7 @@ def _strobe_speed_rpm(speed_rpm: float | None, rotor_hz: float | None) -> float 
 
 
 def run_strobe(args: argparse.Namespace) -> int:
-    from labkit.vision.strobe import analyse_strobe
+    from labkit.vision.strobe.analyse import analyse_strobe
 
     if args.strobe_hz is not None and args.rotor_hz is None:
         raise LabkitError("labkit analyse strobe: --strobe-hz needs --rotor-hz (or give --apparent-hz)")
@@ -355,15 +366,15 @@ def run_strobe(args: argparse.Namespace) -> int:
             stream.frame(index, t_s, frame)
 
     try:
-        result = analyse_strobe(
+        found = analyse_strobe(
             args.path, args.rotor_hz, args.strobe_hz, args.apparent_hz, args.mm_per_px, args.point,
             on_frame=on_frame, camera_fps=args.camera_fps,
             exposure_s=args.exposure_s, keep_frame=bool(args.overlay or stream),
             readout_s=None if args.readout_ms is None else args.readout_ms / 1000,
             encoding_gamma=args.gamma,
         )
-        drawing = result.pop("_frame", None)
-        record_speeds(result, speed_rpm, args.spin_rad_s)
+        drawing = found.overlay_frame
+        result = record_speeds(replace(found, overlay_frame=None), speed_rpm, args.spin_rad_s)
         if stream:
             stream.result(result)
         if drawing is not None:
@@ -374,10 +385,10 @@ def run_strobe(args: argparse.Namespace) -> int:
     return _finish("strobe", args, result, _print_strobe, "no reason")
 
 
-def _strobe_overlay(drawing: dict, result: dict, out: str | None, stream) -> None:
+def _strobe_overlay(drawing: dict, result: StrobeResult, out: str | None, stream) -> None:
     """Draw the strobe overlay; write it to ``out`` (if given) and hand it to the rerun stream
     (``stream.overlay(bgr)``, when the stream offers it)."""
-    from labkit.vision.strobe_overlay import draw_strobe_overlay, write_strobe_overlay
+    from labkit.vision.strobe.overlay import draw_strobe_overlay, write_strobe_overlay
 
     frame = drawing.pop("bgr")
     if out:
@@ -390,36 +401,36 @@ def _pm(value, se, digits: int) -> str:
     return "-" if value is None else f"{value:.{digits}f}" + ("" if se is None else f" +- {se:.{digits}f}")
 
 
-def _print_strobe(r: dict) -> None:
-    from labkit.vision.strobe_quality import describe
+def _print_strobe(r: StrobeResult) -> None:
+    from labkit.vision.shared.verdict import describe
 
-    q, u, pm = r["quality"], r["uncertainty"], r["phase_model"]
-    print(f"{r['source']}: {r['frames']} frames ({q['frames_with_body']} with a body), "
-          f"phase from {r['phase_source']}")
+    q, u, pm = r.quality, r.uncertainty, r.phase_model
+    print(f"{r.source}: {r.frames} frames ({q['frames_with_body']} with a body), "
+          f"phase from {r.phase_source}")
     extra = ""
     if pm.get("flashes_per_frame") is not None and pm["kind"] == "lamp":
         up_to = "up to " if pm["cycles_per_exposure"] is None else ""  # exposure not given
         extra = f"  {up_to}{pm['flashes_per_frame']:.3g} flashes per frame, harmonic m = {pm['harmonic_m']}"
-    print(f"apparent frequency {r['apparent_hz']:.4f} Hz ({pm['cycles_per_frame']:+.4f} cycles per frame at "
-          f"{r['fps']:.4g} fps){extra}")
-    body = r["body"]
+    print(f"apparent frequency {r.apparent_hz:.4f} Hz ({pm['cycles_per_frame']:+.4f} cycles per frame at "
+          f"{r.fps:.4g} fps){extra}")
+    body = r.body
     print(f"body: rest axis {body['rest_axis_deg']:.1f} deg from image +x, "
           f"{'square (tilt mod 90 deg)' if body['symmetry'] == 4 else 'elongated (tilt mod 180 deg)'}, "
           f"half length {body['half_length_px']:.1f} px")
-    print(f"tilt amplitude {_pm(r['tilt_amplitude_rad'], u['tilt_amplitude_rad'], 4)} rad "
-          f"({math.degrees(r['tilt_amplitude_rad']):.2f} deg)  lateral amplitude "
-          f"{_pm(r['lateral_amplitude_px'], u['lateral_amplitude_px'], 2)} px  RC offset (Eq. 5.97) "
-          f"{_pm(r['rc_offset_px'], u['rc_offset_px'], 2)} px {r['rc_offset_direction'] or ''}".rstrip())
-    rolling = r.get("rolling_shutter")
+    print(f"tilt amplitude {_pm(r.tilt_amplitude_rad, u['tilt_amplitude_rad'], 4)} rad "
+          f"({math.degrees(r.tilt_amplitude_rad):.2f} deg)  lateral amplitude "
+          f"{_pm(r.lateral_amplitude_px, u['lateral_amplitude_px'], 2)} px  RC offset (Eq. 5.97) "
+          f"{_pm(r.rc_offset_px, u['rc_offset_px'], 2)} px {r.rc_offset_direction or ''}".rstrip())
+    rolling = r.rolling_shutter
     if rolling:
         given = "given" if rolling["readout_given"] else "from the footage"
         print(f"rolling shutter, camera as the strobe: per-row phase model, readout "
               f"{rolling['readout_s'] * 1e3:.2f} ms ({given})")
-    room = r.get("room_light")
+    room = r.room_light
     if room:
         print(f"room light: {room['fraction_of_light']:.0%} of the light, its ghost of the revolution taken "
               f"out in linear light (tilt {room['tilt_amplitude_uncorrected_rad']:.4f} rad without)")
-    print(f"{q['point']} trajectory: {r['point_pattern']['type']}")
+    print(f"{q['point']} trajectory: {r.point_pattern['type']}")
     if _speed_line(r):
         print(_speed_line(r))
     print(describe(q))

@@ -3,7 +3,7 @@
 For bursts of one second at 320x240 and 640x480, 30 and 60 fps, the emulated camera
 (``sim://camera``, the model plant's motor driven open loop towards ``--rpm``) films the laser
 trace on a virtual clock; the burst's JPEG bytes are wrapped in an AVI (no re-encoding) and
-:func:`labkit.vision.laser.analyse_laser` runs on it, as ``cone-sweep`` does at every step.
+:func:`labkit.vision.laser.analyse.analyse_laser` runs on it, as ``cone-sweep`` does at every step.
 Printed per case: the analysis wall time over the burst's duration (goal: at most 1.0, so
 analysis in a worker keeps up with the camera), the same for the process's CPU time (all its
 threads: what the analysis costs whatever else the machine runs; wall time on a loaded machine

@@ -34,12 +34,13 @@ from typing import TYPE_CHECKING
 from labkit.cli.parsers import command_parser
 
 if TYPE_CHECKING:  # OpenCV and the vision stack load when the benchmark runs, not for --help
-    from labkit.vision.laser import LaserQuality
+    from labkit.vision.laser.analyse import LaserQuality
+    from labkit.vision.laser.result import LaserResult
 
 
 def settings(roi: tuple[int, int, int, int]) -> list[tuple[str, LaserQuality]]:
     """The quality settings compared; ``roi`` is a box around the pattern (as a user would set)."""
-    from labkit.vision.laser import LaserQuality
+    from labkit.vision.laser.analyse import LaserQuality
 
     return [
         ("full (stride 1, whole frame, sub-pixel, auto)", LaserQuality()),
@@ -112,7 +113,7 @@ def _spread(values: list[float]) -> str:
 
 
 def _errors(result: dict, truth: dict) -> str:
-    from labkit.vision.curves import rotation_error_deg
+    from labkit.vision.shared.curves import rotation_error_deg
 
     p, t = result["pattern"], truth["pattern"]
     if p["type"] == "none":
@@ -180,8 +181,9 @@ def run_laser(args: argparse.Namespace) -> int:
     """The laser table: accuracy and time per quality setting, ratio to decode-only."""
     from labkit.synth import laser_truth, render_laser, write_clip
     from labkit.synth.presets import laser_pattern, laser_preset
-    from labkit.vision.frames import open_frames
-    from labkit.vision.laser import LaserQuality, accumulate, analyse_laser
+    from labkit.vision.laser.analyse import LaserQuality, accumulate, analyse_laser
+    from labkit.vision.laser.result import LaserResult
+    from labkit.vision.shared.frames import open_frames
 
     w, h = args.size
     kw = {"ellipticity": 0.3, "rotation_deg": 35} if args.pattern == "ellipse" else {"loops": 4, "b": 0.3}
@@ -226,8 +228,8 @@ def run_laser(args: argparse.Namespace) -> int:
         print(f"{header}  accuracy")
         for name, _ in jobs:
             best, result = min(times[name]), results[name]
-            fixed = f"{_fixed_cost(result):7.3f}" if isinstance(result, dict) else f"{'':7s}"
-            accuracy = _errors(result, truth) if isinstance(result, dict) else ""
+            fixed = f"{_fixed_cost(result):7.3f}" if isinstance(result, LaserResult) else f"{'':7s}"
+            accuracy = _errors(result, truth) if isinstance(result, LaserResult) else ""
             print(f"{name:46s} {best:7.3f} {n / best:6.0f} {_spread(ratios[name]):>22s} {fixed}  {accuracy}")
         print()
         print("target: full analysis >= 0.8x decode-only (VideoCapture.read, BGR) on the same file;")
@@ -235,5 +237,5 @@ def run_laser(args: argparse.Namespace) -> int:
     return 0
 
 
-def _fixed_cost(result: dict) -> float:
-    return float(result["quality"].get("fit_s", 0.0))
+def _fixed_cost(result: LaserResult) -> float:
+    return float(result.quality.get("fit_s", 0.0))

@@ -25,7 +25,7 @@ ROOM_LIGHTS = (0.0, 0.5)  # room light over one exposure's flash light (0.5: a t
 
 CHILD = """
 import json, sys, time
-from labkit.vision.strobe import analyse_strobe
+from labkit.vision.strobe.analyse import analyse_strobe
 path, rotor, strobe = sys.argv[1], float(sys.argv[2]), float(sys.argv[3])
 cpu, wall = time.process_time(), time.perf_counter()
 r = analyse_strobe(path, rotor_hz=rotor, strobe_hz=strobe)

@@ -236,7 +236,7 @@ def run_strobe(args: argparse.Namespace) -> int:
 def phase_spread(apparent_hz: float, strobe_hz: float, frames: int) -> float:
     """How evenly ``frames`` flashes sample the apparent cycle: twice the smaller eigenvalue of the
     covariance of (sin psi, cos psi), 1 for uniform phases, 0 for one phase (the measure
-    ``labkit analyse strobe`` reports as ``phase_spread``, labkit.vision.strobe)."""
+    ``labkit analyse strobe`` reports as ``phase_spread``, labkit.vision.strobe.analyse)."""
     import numpy as np
 
     psi = 2 * math.pi * apparent_hz * np.arange(frames) / strobe_hz
@@ -253,7 +253,7 @@ def strobe_coverage_problem(rotor_hz: float, strobe_hz: float, frames: int) -> s
     can): an apparent frequency of 0 (the rotor turns a whole number of times between flashes)
     shows a still body (the text starts with :data:`STILL`); too few frames for the apparent
     cycle sample too little of it."""
-    from labkit.vision.strobe_quality import MIN_PHASE_SPREAD
+    from labkit.vision.strobe.checks import MIN_PHASE_SPREAD
 
     ratio = rotor_hz / strobe_hz
     apparent = (ratio - round(ratio)) * strobe_hz

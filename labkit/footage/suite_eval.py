@@ -164,8 +164,8 @@ def _call(fn, path: Path, inputs: dict) -> dict:
 def evaluate_case(case: CaseSpec, cache: Path | None = None) -> Outcome:
     """Render (or reuse) the case, run labkit's public analysis on it, score it."""
     from labkit.errors import LabkitError
-    from labkit.vision.laser import analyse_laser
-    from labkit.vision.strobe import analyse_strobe
+    from labkit.vision.laser.analyse import analyse_laser
+    from labkit.vision.strobe.analyse import analyse_strobe
 
     path, truth = render_case(case, cache)
     strobe = case.family == "strobe"
@@ -176,13 +176,13 @@ def evaluate_case(case: CaseSpec, cache: Path | None = None) -> Outcome:
             result = analyse_laser(str(path))
     except LabkitError as exc:
         return Outcome(case, False, "error", "failed", ["analysis refused the file"], message=str(exc))
-    verdict = (result.get("quality") or {}).get("verdict")
+    verdict = result.verdict
     if strobe:
         fails, err = score_strobe(result, truth)
         reported = "strobe"
     else:
         fails, err = score_laser(result, truth)
-        p = result.get("pattern") or {}
+        p = result.pattern
         reported = p.get("type", "none")
         if reported in ("epitrochoid", "hypotrochoid"):
             reported = f"{reported}-{p.get('loops')}"

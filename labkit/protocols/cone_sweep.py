@@ -3,7 +3,7 @@
 For each planned speed the step ramps the rotor, settles, takes a burst of ``burst_frames``
 frames from the ``camera`` while the tachometer keeps reading, and analyses the laser trace of
 exactly the bytes the camera sent (the frame cassette's bytes, wrapped in an AVI without
-re-encoding: :mod:`labkit.devices.camera.avi`) with :func:`labkit.vision.laser.analyse_laser`.
+re-encoding: :mod:`labkit.devices.camera.avi`) with :func:`labkit.vision.laser.analyse.analyse_laser`.
 The cone angle is the mean tilt of the pattern's semi-axes on a screen ``screen_distance_mm``
 away seen at ``mm_per_px`` (Sec. 5.2.3: a semi-axis r is a tilt atan(r / L) / 2). A burst whose
 verdict is ``doubtful`` or ``failed`` is taken again once; the point keeps the retake's verdict.
@@ -46,16 +46,15 @@ def burst_cone_angle(frames: list[Any], fps: float, size: tuple[int, int], scree
                      mm_per_px: float) -> dict[str, Any]:
     """Analyse a burst's laser trace: cone angle (rad, None without a trace), verdict, reasons."""
     from labkit.devices.camera.avi import write_mjpeg_avi
-    from labkit.vision.laser import analyse_laser
+    from labkit.vision.laser.analyse import analyse_laser
 
     with tempfile.TemporaryDirectory(prefix="labkit-burst-") as work:
         video = write_mjpeg_avi(Path(work) / "burst.avi", [f.payload for f in frames], fps, size)
         result = analyse_laser(str(video), screen_distance_mm=screen_mm, mm_per_px=mm_per_px)
-    tilt = result.get("tilt_rad")
-    quality = result.get("quality", {})
+    tilt = result.tilt_rad
     angle = 0.5 * (tilt["major"] + tilt["minor"]) if tilt else None
-    return {"cone_angle_rad": angle, "verdict": quality.get("verdict", "failed"),
-            "reasons": list(quality.get("reasons") or []), "pattern": result.get("pattern")}
+    return {"cone_angle_rad": angle, "verdict": result.verdict, "reasons": result.reasons,
+            "pattern": result.pattern}
 
 
 def pattern_at_angles(pattern: dict[str, Any] | None, angle_rad: float | None, screen_mm: float,

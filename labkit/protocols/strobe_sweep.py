@@ -5,7 +5,7 @@ For each planned speed the step ramps the rotor and settles, sets the strobe
 (``strobe``, device kind ``strobe``: docs/reference/devices-strobe.md) to ``offset_hz`` (and ``divider``),
 waits for a status line that says the flashes are locked, takes a burst of ``burst_frames`` from
 the ``camera`` and waits for the status line that closes the burst. The analysis
-(:func:`labkit.vision.strobe.analyse_strobe`) gets the rotor and strobe frequencies from the
+(:func:`labkit.vision.strobe.analyse.analyse_strobe`) gets the rotor and strobe frequencies from the
 strobe's own status lines over the burst (their means: nobody types them) and reads exactly the
 bytes the camera sent (the frame cassette's JPEGs in an AVI, :mod:`labkit.devices.camera.avi`).
 A burst whose verdict is ``doubtful`` or ``failed`` is taken again once; the point keeps the
@@ -53,22 +53,22 @@ def analyse_burst(video: str, freqs: dict[str, Any], fps: float | None, exposure
                   mm_per_px: float) -> dict[str, Any]:
     """One burst's Eq. 5.97 result: phi, beta, delta (with standard errors), verdict, reasons."""
     from labkit.errors import VideoError
-    from labkit.vision.strobe import analyse_strobe
+    from labkit.vision.strobe.analyse import analyse_strobe
 
     try:
         r = analyse_strobe(video, rotor_hz=freqs["rotor_hz"], strobe_hz=freqs["strobe_hz"], camera_fps=fps,
                            exposure_s=exposure_s, mm_per_px=mm_per_px)
     except VideoError as exc:
         return {"phi_rad": None, "verdict": "failed", "reasons": [str(exc)]}
-    u = r["uncertainty"]
-    quality = r.get("quality", {})
-    phi, phi_se = r["tilt_amplitude_rad"], u["tilt_amplitude_rad"]
+    u, in_mm = r.uncertainty, r.in_mm
+    assert in_mm is not None  # mm_per_px was given
+    phi, phi_se = r.tilt_amplitude_rad, u["tilt_amplitude_rad"]
     return {"phi_rad": phi, "phi_stderr_rad": phi_se, "phi_deg": math.degrees(phi),
-            "phi_stderr_deg": math.degrees(phi_se), "beta_px": r["lateral_amplitude_px"],
-            "beta_mm": r["lateral_amplitude_mm"], "beta_stderr_mm": u["lateral_amplitude_mm"],
-            "delta_mm": r["rc_offset_mm"], "delta_stderr_mm": u["rc_offset_mm"],
-            "rc_offset_direction": r["rc_offset_direction"], "analysed_apparent_hz": r["apparent_hz"],
-            "verdict": quality.get("verdict", "failed"), "reasons": list(quality.get("reasons") or [])}
+            "phi_stderr_deg": math.degrees(phi_se), "beta_px": r.lateral_amplitude_px,
+            "beta_mm": in_mm.lateral_amplitude_mm, "beta_stderr_mm": u["lateral_amplitude_mm"],
+            "delta_mm": in_mm.rc_offset_mm, "delta_stderr_mm": u["rc_offset_mm"],
+            "rc_offset_direction": r.rc_offset_direction, "analysed_apparent_hz": r.apparent_hz,
+            "verdict": r.verdict, "reasons": r.reasons}
 
 
 def strobe_frequencies(statuses: list[Any]) -> dict[str, Any]:

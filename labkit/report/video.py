@@ -25,7 +25,7 @@ def sample_frames(path: str | Path, count: int = 8) -> list[tuple[int, np.ndarra
     if not p.exists():
         raise VideoError(str(p), "no such file (the video the result was made from)")
     if p.suffix.lower() in PHOTO_SUFFIXES:
-        from labkit.vision.image_size import check_image_pixels
+        from labkit.vision.shared.image_size import check_image_pixels
 
         check_image_pixels(p)  # header only: an image bomb never reaches OpenCV
         img = cv2.imread(str(p), cv2.IMREAD_COLOR)

@@ -57,7 +57,7 @@ def ellipse_strip(pattern: dict[str, Any], semi_axes: tuple[float, float] | None
                   samples: int = 240) -> np.ndarray | None:
     """Points (N, 2) of ``pattern`` in rerun pixels (+0.5), with other semi-axes for a
     circle/ellipse when given; None for a pattern that cannot be drawn."""
-    from labkit.vision.overlay import pattern_curve
+    from labkit.vision.laser.overlay import pattern_curve
 
     if semi_axes is not None:
         if pattern.get("type") not in ("ellipse", "circle"):

@@ -22,6 +22,7 @@ pixel coordinate is shifted by +0.5 when logged.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -50,7 +51,7 @@ def vision_blueprint() -> Any:
 
 def pattern_curve(pattern: dict[str, Any], samples: int = 720) -> np.ndarray | None:
     """Points (N, 2) of the fitted pattern of a ``labkit analyse`` JSON, in OpenCV pixels."""
-    from labkit.vision.overlay import pattern_curve as curve
+    from labkit.vision.laser.overlay import pattern_curve as curve
 
     return curve(pattern, samples)
 
@@ -87,7 +88,7 @@ class VisionStream:
         self.trace = bgr.copy() if fresh else np.maximum(self.trace, bgr)
         self.trace_dark = bgr.copy() if fresh else np.minimum(self.trace_dark, bgr)
 
-    def result(self, result: dict[str, Any]) -> None:
+    def result(self, result: Mapping[str, Any]) -> None:
         pattern = result.get("pattern") or result.get("point_pattern") or {}
         curve = pattern_curve(pattern)
         self._log_trace(curve)
@@ -122,7 +123,7 @@ class VisionStream:
             self.rec.log("/video/trace/fit", strip, static=True)
 
     def overlay(self, bgr: np.ndarray) -> None:
-        """Log the overlay image (:func:`labkit.vision.overlay.draw_overlay`) as a static PNG."""
+        """Log the overlay image (:func:`labkit.vision.laser.overlay.draw_overlay`) as a static PNG."""
         import cv2
 
         ok, encoded = cv2.imencode(".png", bgr)
@@ -137,7 +138,7 @@ class VisionStream:
             self.rec.disconnect()
 
 
-def describe(result: dict[str, Any]) -> str:
+def describe(result: Mapping[str, Any]) -> str:
     """One line about the analysis for the viewer's log."""
     pattern = result.get("pattern") or result.get("point_pattern") or {}
     kind = pattern.get("type", "none")
@@ -152,7 +153,7 @@ def describe(result: dict[str, Any]) -> str:
         parts.append(f"tilt amplitude {result['tilt_amplitude_rad']:.4f} rad")
     quality = result.get("quality") or {}
     if quality.get("verdict"):
-        from labkit.vision.quality import in_words
+        from labkit.vision.shared.verdict import in_words
 
         parts.append(in_words(quality))
     return ", ".join(parts)

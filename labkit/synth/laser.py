@@ -1,7 +1,7 @@
 """Render a laser beam reflected from the floating magnet's polar face onto a screen (Sec. 5.2.3,
 Fig. 5.19: fuzzy halo, saturated core, dark hole where the beam leaves the screen).
 
-The spot follows a :class:`labkit.vision.curves.Pattern` (circle, ellipse, epitrochoid,
+The spot follows a :class:`labkit.vision.shared.curves.Pattern` (circle, ellipse, epitrochoid,
 hypotrochoid, Eq. 6.38) at ``cycle_hz``, or any trajectory ``position(t) -> (N, 2) px`` such as one
 built from a simulator's tilt angles by :func:`positions_from_angles`. Impairments: exposure smear,
 rolling shutter, halo, saturation, sensor noise, background light with a gradient and a lamp, the
@@ -18,7 +18,7 @@ from dataclasses import asdict, dataclass, field
 import cv2
 import numpy as np
 
-from labkit.vision.curves import Pattern, a_for_k
+from labkit.vision.shared.curves import Pattern, a_for_k
 
 Trajectory = Callable[[np.ndarray], np.ndarray]
 

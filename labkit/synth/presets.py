@@ -12,7 +12,7 @@ from dataclasses import replace
 
 from labkit.synth.laser import LaserSpec
 from labkit.synth.strobe import StrobeSpec
-from labkit.vision.curves import Pattern
+from labkit.vision.shared.curves import Pattern
 
 LEVELS = ("easy", "medium", "hard")
 

@@ -66,7 +66,7 @@ def laser_cone_angle(phi: float, work: Path, seed: int, clip: int) -> float:
         render_laser,
         write_footage,
     )
-    from labkit.vision.laser import analyse_laser
+    from labkit.vision.laser.analyse import analyse_laser
     beam = math.tan(2.0 * phi)
     mm_per_px = SCREEN_MM * beam / LASER_RADIUS_PX
     cycle_hz = (2 + 0.381966 + 0.01 * clip) * FPS
@@ -77,7 +77,7 @@ def laser_cone_angle(phi: float, work: Path, seed: int, clip: int) -> float:
                             psf_core_px=1.2),
                      Lighting(level=0.03), frames=30, power=1.2, seed=1000 * seed + clip)
     path = write_footage(work / f"laser-{clip}.mp4", render_laser(shot), FPS, laser_truth(shot))
-    tilt = analyse_laser(str(path), screen_distance_mm=SCREEN_MM, mm_per_px=mm_per_px)["tilt_rad"]
+    tilt = analyse_laser(str(path), screen_distance_mm=SCREEN_MM, mm_per_px=mm_per_px).tilt_rad
     return 0.5 * (tilt["major"] + tilt["minor"])
 
 
@@ -95,7 +95,7 @@ def strobe_swing(phi: float, delta_m: float, body_mm: tuple[float, float], work:
         strobe_truth,
         write_footage,
     )
-    from labkit.vision.strobe import analyse_strobe
+    from labkit.vision.strobe.analyse import analyse_strobe
     scale = STROBE_MM_PER_PX[clip % len(STROBE_MM_PER_PX)]
     length_px, width_px = (x / scale for x in body_mm)
     rotor_hz = 7 * FPS + (0.13 + 0.01 * clip) * FPS         # 7th harmonic, slow apparent motion
@@ -107,8 +107,8 @@ def strobe_swing(phi: float, delta_m: float, body_mm: tuple[float, float], work:
                       (320.0, 240.0), lighting=Lighting(level=0.0), frames=60, seed=1000 * seed + clip)
     path = write_footage(work / f"strobe-{clip}.mp4", render_strobe(shot), FPS, strobe_truth(shot))
     r = analyse_strobe(str(path), rotor_hz=rotor_hz, strobe_hz=FPS)
-    tilt = r["tilt_amplitude_rad"]
-    return tilt, r["lateral_amplitude_px"] * scale * 1e-3 / math.tan(tilt), r["quality"]["verdict"]
+    tilt = r.tilt_amplitude_rad
+    return tilt, r.lateral_amplitude_px * scale * 1e-3 / math.tan(tilt), r.verdict
 
 
 def footage_rows(params: TwinParams, work: Path, seed: int) -> tuple[list[dict], dict]:

@@ -1,23 +1,26 @@
-"""labkit.vision: laser-trace and stroboscope video analysis with OpenCV (issue 6).
+"""labkit.vision: laser-trace and stroboscope video analysis with OpenCV (issue 6), in three
+packages named by pipeline stage (ADR 0034); no devices, no rerun (live streams hook in through
+``on_frame`` callbacks, see ``labkit.stream.vision``).
 
-Frame source -> detections -> trace -> pattern fit, pure functions where possible; no devices, no
-rerun (live streams hook in through ``on_frame`` callbacks, see ``labkit.stream.vision``).
-
-* :mod:`~labkit.vision.frames`: videos and photos, with :class:`labkit.errors.VideoError` reasons
-* :mod:`~labkit.vision.trace`: laser light -> centre-line trace points; per-frame spot detection
-* :mod:`~labkit.vision.curves`: circle, ellipse and the trochoids of Eq. 6.38 as ``c + A e^{it} + B e^{ikt}``
-* :mod:`~labkit.vision.fit`: geometric fits with drift and classification
-* :mod:`~labkit.vision.laser`: ``analyse_laser`` (the ``labkit analyse laser`` JSON)
-* :mod:`~labkit.vision.strobe`: ``analyse_strobe`` (tilt, lateral amplitude, RC offset, Eq. 5.97)
+* :mod:`~labkit.vision.shared`: frame sources (:mod:`~labkit.vision.shared.frames`, with
+  :class:`labkit.errors.VideoError` reasons), the curves of Eq. 6.38
+  (:mod:`~labkit.vision.shared.curves`, ``c + A e^{it} + B e^{ikt}``), the one verdict type
+  (:mod:`~labkit.vision.shared.verdict`) and the typed results' base
+* :mod:`~labkit.vision.laser`: frames -> trace points -> pattern fit -> checks;
+  ``analyse_laser`` (the ``labkit analyse laser`` result, :class:`LaserResult`)
+* :mod:`~labkit.vision.strobe`: frames -> body -> phase -> Eq. 5.97 fit -> checks;
+  ``analyse_strobe`` (tilt, lateral amplitude, RC offset, :class:`StrobeResult`)
 
 The public face (imported on first use, so ``import labkit.vision`` does not load OpenCV):
-:func:`analyse_laser`, :func:`analyse_strobe`, :func:`open_frames`, :class:`Pattern`.
+:func:`analyse_laser`, :func:`analyse_strobe`, :class:`LaserResult`, :class:`StrobeResult`,
+:func:`open_frames`, :class:`Pattern`.
 """
 
 from labkit.lazy import lazy_attributes
 
-_PUBLIC = {"analyse_laser": "labkit.vision.laser", "analyse_strobe": "labkit.vision.strobe",
-           "open_frames": "labkit.vision.frames", "Pattern": "labkit.vision.curves"}
+_PUBLIC = {"analyse_laser": "labkit.vision.laser.analyse", "analyse_strobe": "labkit.vision.strobe.analyse",
+           "LaserResult": "labkit.vision.laser.result", "StrobeResult": "labkit.vision.strobe.result",
+           "open_frames": "labkit.vision.shared.frames", "Pattern": "labkit.vision.shared.curves"}
 
 __all__ = sorted(_PUBLIC)
 

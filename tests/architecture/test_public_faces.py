@@ -10,8 +10,9 @@ from pathlib import Path
 
 import pytest
 
-FACES = ("labkit.devices", "labkit.io", "labkit.emulators", "labkit.model", "labkit.vision", "labkit.report",
-         "labkit.protocols", "labkit.fit", "labkit.rig")
+FACES = ("labkit.devices", "labkit.io", "labkit.emulators", "labkit.model", "labkit.vision",
+         "labkit.vision.laser", "labkit.vision.strobe", "labkit.report", "labkit.protocols", "labkit.fit",
+         "labkit.rig")
 PAGE = Path(__file__).resolve().parents[2] / "docs" / "how-to" / "script-labkit.md"
 
 

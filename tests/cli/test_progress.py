@@ -6,7 +6,7 @@ import io
 from pathlib import Path
 
 from labkit.cli.progress import ProgressLines
-from labkit.vision.laser import analyse_laser
+from labkit.vision.laser.analyse import analyse_laser
 
 CLIP = Path(__file__).resolve().parents[2] / "recordings" / "videos" / "laser-ellipse-medium.mp4"
 

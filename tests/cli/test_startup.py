@@ -70,7 +70,7 @@ def test_parser_names_match_their_registries():
 
 LASER_FIRST_FRAME = """
 import json, sys
-from labkit.vision.laser import analyse_laser
+from labkit.vision.laser.analyse import analyse_laser
 seen = []
 def on_frame(index, t_s, bgr):
     if not seen:
@@ -83,7 +83,7 @@ print(json.dumps({"at_first_frame": seen[0], "after": after, "pattern": result["
 
 def test_analyse_laser_reaches_its_first_frame_before_scipy():
     """Issue 15: ``analyse laser`` starts decoding at once and never imports scipy (about 0.3 s):
-    its nearest-point queries use pykdtree (labkit.vision.nearest), loaded only for the fit,
+    its nearest-point queries use pykdtree (labkit.vision.laser.nearest), loaded only for the fit,
     while later frames decode. The second assertion shows the probe can see that load."""
     clip = Path(__file__).resolve().parents[2] / "recordings" / "videos" / "laser-ellipse-medium.mp4"
     proc = subprocess.run([sys.executable, "-c", LASER_FIRST_FRAME, str(clip)], capture_output=True,

@@ -114,13 +114,13 @@ def test_a_camera_wandering_six_times_as_far_as_the_hard_preset_is_followed(tmp_
     """epitrochoid-4-05-hard (640x480, 0.2 of a cycle per frame) rendered again with the tripod
     wandering by 18 px instead of 3 and shaking by 1 px (as analysis/laser_wander_stress.py): the
     camera moves 28 x 33 px. Before the stray-light grouping it read as a hypotrochoid 59 px off;
-    before chunks were moved by a coarse shift first (labkit.vision.wander), 10 px off."""
+    before chunks were moved by a coarse shift first (labkit.vision.laser.wander), 10 px off."""
     from dataclasses import replace
 
     from labkit.footage.laser_scene import laser_truth, render_laser
     from labkit.footage.mount import Mount
     from labkit.footage.output import write_footage
-    from labkit.vision.laser import analyse_laser
+    from labkit.vision.laser.analyse import analyse_laser
 
     (case,) = [c for c in suite_cases() if c.name == "epitrochoid-4-05-hard"]
     shot = build_shot(case)
@@ -173,7 +173,7 @@ def test_bench_vision_suite_rejects_an_unknown_family(capsys):
 
 #: 320x240 hypotrochoids whose small loops (|k| b = 1.08) are filled in by a 6-8 px line: the
 #: fit grew its loops into the thick tips and read the outer extent 6 % and 25 % long with verdict
-#: ok; the tips-lit check and the b set where the light ends (labkit.vision.loops_seen) fix both
+#: ok; the tips-lit check and the b set where the light ends (labkit.vision.laser.loops_seen) fix both
 FILLED_LOOPS = ("hypotrochoid-3-00-hard", "hypotrochoid-7-00-medium")
 
 

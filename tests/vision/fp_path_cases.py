@@ -20,7 +20,7 @@ SCREEN_MM, MM_PER_PX = 500.0, 0.4
 
 
 def laser_case(name: str) -> dict:
-    from labkit.vision.laser import analyse_laser
+    from labkit.vision.laser.analyse import analyse_laser
 
     r = analyse_laser(str(VIDEOS / name), screen_distance_mm=SCREEN_MM, mm_per_px=MM_PER_PX)
     p = r["pattern"]
@@ -31,7 +31,7 @@ def laser_case(name: str) -> dict:
 
 
 def strobe_case(path: str, rotor_hz: float, strobe_hz: float) -> dict:
-    from labkit.vision.strobe import analyse_strobe
+    from labkit.vision.strobe.analyse import analyse_strobe
 
     r = analyse_strobe(path, rotor_hz=rotor_hz, strobe_hz=strobe_hz)
     room = r.get("room_light") or {}

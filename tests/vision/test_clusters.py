@@ -1,4 +1,4 @@
-"""Light that is not the pattern (labkit.vision.clusters): a timestamp-like row of strokes close
+"""Light that is not the pattern (labkit.vision.laser.stray_light): a timestamp-like row of strokes close
 below a pattern is set apart; arcs of one pattern broken by gaps are all kept."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from labkit.vision.clusters import separate_pattern
+from labkit.vision.laser.stray_light import separate_pattern
 
 
 def _circle(centre: complex, radius: float, spacing: float = 0.5,

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from labkit.vision.curves import (
+from labkit.vision.shared.curves import (
     Pattern,
     a_for_k,
     ellipse_from_coefficients,

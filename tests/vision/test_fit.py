@@ -5,8 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from labkit.vision.curves import Pattern, rotation_error_deg
-from labkit.vision.fit import (
+from labkit.vision.laser.pattern_fit import (
     classify,
     coverage_rms,
     fit_ellipse,
@@ -15,6 +14,7 @@ from labkit.vision.fit import (
     two_way_rms,
     without_outliers,
 )
+from labkit.vision.shared.curves import Pattern, rotation_error_deg
 
 
 def cloud(pattern, n=2500, noise=1.0, seed=0):

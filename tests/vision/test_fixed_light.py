@@ -1,5 +1,5 @@
-"""Light fixed in the frame while the pattern moves (labkit.vision.rescue): a timestamp burnt into
-every frame stays at the same pixels; arcs of a pattern filmed by a moving camera do not."""
+"""Light fixed in the frame while the pattern moves (labkit.vision.laser.second_reading): a timestamp
+burnt into every frame stays at the same pixels; arcs of a pattern filmed by a moving camera do not."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from labkit.vision.rescue import fixed_in_frame, pattern_moved_px, without_fixed_light
+from labkit.vision.laser.second_reading import fixed_in_frame, pattern_moved_px, without_fixed_light
 
 CHUNKS = 8
 DRIFT = complex(3.0, -1.5)  # px per chunk

@@ -14,9 +14,9 @@ import pytest
 
 from labkit.synth import laser_truth, render_laser, write_clip
 from labkit.synth.presets import laser_pattern, laser_preset
-from labkit.vision.framepath import AMPLE_LUMA_CNR, PROBE_FRAMES, luma_plane_cnr, measure_frame_path
-from labkit.vision.frames import open_frames
-from labkit.vision.laser import LaserQuality, analyse_laser
+from labkit.vision.laser.analyse import LaserQuality, analyse_laser
+from labkit.vision.laser.frame_path import AMPLE_LUMA_CNR, PROBE_FRAMES, luma_plane_cnr, measure_frame_path
+from labkit.vision.shared.frames import open_frames
 
 SIZE = (640, 480)
 

@@ -14,8 +14,8 @@ import pytest
 
 from labkit.synth import laser_truth, render_laser, write_clip
 from labkit.synth.presets import laser_pattern, laser_preset
-from labkit.vision.frames import open_frames
-from labkit.vision.laser import LaserQuality, analyse_laser
+from labkit.vision.laser.analyse import LaserQuality, analyse_laser
+from labkit.vision.shared.frames import open_frames
 
 
 def clip(folder, codec, ext, level="medium", frames=6, size=(320, 240), **pattern):

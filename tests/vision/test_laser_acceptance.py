@@ -7,8 +7,8 @@ import math
 import pytest
 
 from labkit.synth.presets import laser_test_set
-from labkit.vision.curves import rotation_error_deg
-from labkit.vision.laser import LaserQuality, analyse_laser
+from labkit.vision.laser.analyse import LaserQuality, analyse_laser
+from labkit.vision.shared.curves import rotation_error_deg
 
 NAMES = [name for name, _ in laser_test_set()]
 
@@ -63,7 +63,7 @@ def test_tilt_from_a_simulated_cone(tmp_path):
 def test_frame_hook_sees_every_analysed_frame(laser_clips):
     path, truth = laser_clips[NAMES[0]]
     seen = []
-    from labkit.vision.laser import LaserQuality
+    from labkit.vision.laser.analyse import LaserQuality
 
     analyse_laser(str(path), quality=LaserQuality(stride=3),
                   on_frame=lambda i, t, f: seen.append((i, t, f.shape)))

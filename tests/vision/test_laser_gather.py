@@ -1,4 +1,4 @@
-"""Gathering the chunks' trace points chunk by chunk (labkit.vision.laser_gather), as the laser
+"""Gathering the chunks' trace points chunk by chunk (labkit.vision.laser.gather), as the laser
 analysis does in its worker while later frames decode, gives exactly what gathering them all at
 once gives, and the first chunks alone what gathering only those gives."""
 
@@ -10,8 +10,8 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from labkit.vision.laser_gather import MAX_POINTS_PER_CHUNK, GatheredTrace, gather
-from labkit.vision.trace import TracePoints
+from labkit.vision.laser.gather import MAX_POINTS_PER_CHUNK, GatheredTrace, gather
+from labkit.vision.laser.trace import TracePoints
 
 
 @dataclass

@@ -14,7 +14,7 @@ from labkit.footage.suite import suite_cases
 from labkit.footage.suite_eval import render_case, score_laser
 from labkit.synth import laser_truth, render_laser, write_clip
 from labkit.synth.presets import laser_pattern, laser_preset
-from labkit.vision.laser import analyse_laser
+from labkit.vision.laser.analyse import analyse_laser
 
 SUITE = {c.name: c for c in suite_cases(None, None, None)}
 

@@ -1,5 +1,5 @@
 """Small loops seen or filled in, tips on the light, and b set by where the light ends
-(labkit.vision.loops_seen), on point clouds drawn from the curves of labkit.vision.curves."""
+(labkit.vision.laser.loops_seen), on point clouds drawn from the curves of labkit.vision.shared.curves."""
 
 from __future__ import annotations
 
@@ -8,10 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from labkit.vision.curves import Pattern, k_for
-from labkit.vision.fit import Classification, fit_ellipse, fit_trochoid
-from labkit.vision.laser_checks import laser_evidence, laser_verdict
-from labkit.vision.loops_seen import cusp_fit, loop_width, tip_gap, tip_limited
+from labkit.vision.laser.checks import laser_evidence, laser_verdict
+from labkit.vision.laser.loops_seen import cusp_fit, loop_width, tip_gap, tip_limited
+from labkit.vision.laser.pattern_fit import Classification, fit_ellipse, fit_trochoid
+from labkit.vision.shared.curves import Pattern, k_for
 
 
 def cloud(p: Pattern, n: int = 3000, noise: float = 0.3, seed: int = 1) -> np.ndarray:

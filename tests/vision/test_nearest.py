@@ -1,4 +1,4 @@
-"""labkit.vision.nearest.PointTree: exact nearest neighbours, checked against brute force."""
+"""labkit.vision.laser.nearest.PointTree: exact nearest neighbours, checked against brute force."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from labkit.vision.nearest import PointTree
+from labkit.vision.laser.nearest import PointTree
 
 coords = st.floats(-2000, 2000, allow_nan=False, width=64)
 clouds = st.integers(1, 60).flatmap(lambda n: arrays(np.float64, (n, 2), elements=coords))
@@ -48,7 +48,7 @@ def test_the_tree_leaves_the_environment_as_it_was():
 @settings(max_examples=80, deadline=None)
 @given(clouds, clouds, st.floats(0.1, 500))
 def test_a_search_bound_leaves_every_distance_within_it_exactly_as_it_was(points, queries, bound):
-    """labkit.vision.wander prunes its coverage test (distance <= width) with a bound of twice
+    """labkit.vision.laser.wander prunes its coverage test (distance <= width) with a bound of twice
     the width; that gives the same answer only if the bound changes no distance within it, not
     even in the last bit."""
     free_dist, free_idx = PointTree(points).query(queries)

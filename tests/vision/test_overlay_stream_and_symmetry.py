@@ -3,8 +3,8 @@
 import pytest
 
 from labkit.cli import main
-from labkit.vision.curves import a_for_k, k_for
-from labkit.vision.laser import symmetry_of
+from labkit.vision.laser.analyse import symmetry_of
+from labkit.vision.shared.curves import a_for_k, k_for
 
 
 def test_rerun_stream_logs_the_overlay_of_the_fit_on_the_accumulated_trace(tmp_path, capsys):

@@ -1,4 +1,4 @@
-"""The quality verdict of a laser result (labkit.vision.quality, labkit.vision.laser_checks): the
+"""The quality verdict of a laser result (labkit.vision.shared.verdict, labkit.vision.laser.checks): the
 combination rule, and whole analyses of traces whose fit cannot be right, through the CLI."""
 
 import json
@@ -9,18 +9,49 @@ import numpy as np
 import pytest
 
 from labkit.cli import main
-from labkit.vision.quality import Finding, graded, in_words, rank, verdict, worst
+from labkit.vision.shared.verdict import Finding, Verdict, describe, graded, in_words, rank, worst
 
 
 def test_the_verdict_is_the_worst_finding_and_lists_the_reasons_of_the_others():
     found = [Finding("a", "ok"), Finding("b", "doubtful", "b is shaky"), Finding("c", "failed", "c is wrong")]
-    v = verdict(found)
+    v = Verdict.of(found).as_json()
     assert v["verdict"] == "failed"
     assert v["reasons"] == ["c is wrong", "b is shaky"]  # failed first
     assert v["checks"] == {"a": "ok", "b": "doubtful", "c": "failed"}
-    assert verdict([Finding("a", "ok")]) == {"verdict": "ok", "reasons": [], "checks": {"a": "ok"}}
+    alone = Verdict.of([Finding("a", "ok")]).as_json()
+    assert alone == {"verdict": "ok", "reasons": [], "checks": {"a": "ok"}}
     assert worst([]) == "ok" and worst(["ok", "doubtful"]) == "doubtful"
     assert in_words(v) == "result failed: c is wrong; b is shaky"
+
+
+def test_checks_made_one_by_one_give_the_same_verdict_type():
+    """The strobe's way (doubt and fail as the checks run): doubts in the order found, a failure
+    before every earlier reason; without named checks the JSON has no ``checks``."""
+    v = Verdict()
+    assert v.as_json() == {"verdict": "ok", "reasons": []}
+    v.doubt("d1")
+    v.fail("f1")
+    v.doubt("d2")
+    assert v.as_json() == {"verdict": "failed", "reasons": ["f1", "d1", "d2"]}
+    v.fail("f2")
+    assert v.reasons[:2] == ["f2", "f1"]
+    assert describe(v.as_json()) == "quality: FAILED\n  - f2\n  - f1\n  - d1\n  - d2"
+
+
+def test_a_later_stage_adds_to_a_verdict_read_back_from_its_json():
+    """The laser's scene and tilt-geometry checks run after the fit's verdict: a doubt keeps a
+    failure, a failure reads first, and both are named among the checks."""
+    first = Verdict.of([Finding("a", "ok"), Finding("b", "doubtful", "b is shaky")]).as_json()
+    v = Verdict.from_json({**first, "evidence": 1.0})
+    v.doubt("too far", "tilt_geometry")
+    assert (v.verdict, v.reasons) == ("doubtful", ["b is shaky", "too far"])
+    v.fail("not a laser", "scene")
+    assert v.as_json() == {"verdict": "failed", "reasons": ["not a laser", "b is shaky", "too far"],
+                           "checks": {"a": "ok", "b": "doubtful", "tilt_geometry": "doubtful",
+                                      "scene": "failed"}}
+    kept = Verdict.from_json({"verdict": "failed", "reasons": ["x"], "checks": {}})
+    kept.doubt("y", "later")
+    assert kept.verdict == "failed" and rank(kept.as_json()) == (2, 2)
 
 
 def test_graded_findings_follow_their_two_limits_and_a_missing_measure_is_doubtful():
@@ -118,7 +149,7 @@ def test_overlay_draws_the_fitted_curve_over_the_trace_with_the_verdict(tmp_path
     assert rc == 0 and r["quality"]["verdict"] == "ok"
     image = cv2.imread(str(png))
     assert image.shape == (240, 320, 3)
-    from labkit.vision.overlay import pattern_curve
+    from labkit.vision.laser.overlay import pattern_curve
 
     curve = pattern_curve(r["pattern"], 200)
     b, g, red = (image[np.round(curve[:, 1]).astype(int), np.round(curve[:, 0]).astype(int)].astype(int).T)

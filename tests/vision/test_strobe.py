@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from labkit.vision.strobe import analyse_strobe, apparent_cycles_per_frame
+from labkit.vision.strobe.analyse import analyse_strobe, apparent_cycles_per_frame
 
 
 def phase_error(a, b):

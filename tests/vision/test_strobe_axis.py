@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 from strobe_scenes import Scene, write
 
-from labkit.vision.strobe import analyse_strobe
-from labkit.vision.strobe_body import measure_body
-from labkit.vision.strobe_quality import strobe_quality
+from labkit.vision.strobe.analyse import analyse_strobe
+from labkit.vision.strobe.body import measure_body
+from labkit.vision.strobe.checks import strobe_quality
 
 SUPER = 8
 

@@ -1,7 +1,7 @@
 """A body that hardly moves, filmed with lens blur and no room light at all, has no ambient ghost:
 the blurred edge of the part it covers in every frame darkens the clip's static light as a ghost
 would, and used to be measured as one (1-10 % of the contrast), which sent the tilt through the
-static-light correction 19 % off (the twin's strobe clips; labkit.vision.strobe.ghost_fraction)."""
+static-light correction 19 % off (the twin's strobe clips; labkit.vision.strobe.analyse.ghost_fraction)."""
 
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ from labkit.footage import (
     strobe_truth,
     write_footage,
 )
-from labkit.vision.strobe import GHOST_FLOOR, analyse_strobe
+from labkit.vision.strobe.analyse import GHOST_FLOOR, analyse_strobe
 
 FPS = 30.0
 PHI = 0.10146

@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from labkit.testing.strobe_cylinder import sized, write_clip
-from labkit.vision.strobe import GHOST_FLOOR, analyse_strobe
+from labkit.vision.strobe.analyse import GHOST_FLOOR, analyse_strobe
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from strobe_scenes import lateral_ok, tilt_ok  # noqa: E402  (the acceptance's tolerances)

@@ -1,4 +1,4 @@
-"""The room-light model of labkit.vision.strobe_ghost on pictures made here: a bar swung through
+"""The room-light model of labkit.vision.strobe.room_light on pictures made here: a bar swung through
 a known revolution, blurred by a known lens, with a known share of room light."""
 
 from __future__ import annotations
@@ -11,8 +11,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from labkit.vision.strobe_body import measure_flat
-from labkit.vision.strobe_ghost import _blur_basis, fit_room_light, linear_darkening, revolution_average
+from labkit.vision.strobe.body import measure_flat
+from labkit.vision.strobe.room_light import _blur_basis, fit_room_light, linear_darkening, revolution_average
 
 SIZE = 96
 
@@ -34,7 +34,7 @@ def _lens(cover: np.ndarray) -> np.ndarray:
 
 
 def test_a_positive_tilt_turns_the_body_clockwise_on_screen():
-    """The tilt convention of labkit.vision.strobe_body.ClipOrientation: positive turns the top
+    """The tilt convention of labkit.vision.strobe.body.ClipOrientation: positive turns the top
     towards the normal, clockwise on screen, so the moment angle (from +x towards +y) grows."""
     image = _lens(_bar(0.3))
     turned = revolution_average(image, (48.0, 48.0), 0.0, np.array([0.2]))

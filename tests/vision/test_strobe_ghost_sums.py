@@ -1,4 +1,4 @@
-"""The room light's normal equations accumulated frame by frame (labkit.vision.strobe_ghost_fit)
+"""The room light's normal equations accumulated frame by frame (labkit.vision.strobe.room_light_fit)
 give the fit that every pixel stacked at once gives: checked against a plain alternation written
 here from the model ``d = (1 - a) B p + a h``, ``a = alpha w`` (each step a least-squares solve
 over all pixels), on frames whose rows see different light."""
@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from labkit.vision.strobe_ghost_fit import ALPHA_TOL, NormalSums, fit_room_light
+from labkit.vision.strobe.room_light_fit import ALPHA_TOL, NormalSums, fit_room_light
 
 
 def _plain_alternation(d, h, w, b, rounds=400):

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 from strobe_scenes import Scene, write
 
-from labkit.vision.strobe_fit import fit_motion, t1
-from labkit.vision.strobe_phase import choose_phase_model, fold
+from labkit.vision.strobe.motion_fit import fit_motion, t1
+from labkit.vision.strobe.phase import choose_phase_model, fold
 
 
 def test_lamp_with_several_flashes_per_frame():

@@ -11,8 +11,8 @@ from scipy.special import j1
 
 from labkit.synth import StrobeSpec, strobe_truth
 from labkit.synth.strobe import body_coverage
-from labkit.vision.curves import a_for_k, k_for
-from labkit.vision.strobe import analyse_strobe, phase_pattern
+from labkit.vision.shared.curves import a_for_k, k_for
+from labkit.vision.strobe.analyse import analyse_strobe, phase_pattern
 
 # Bounds for point_pattern on the seeded clips. Measured over 7 seeds per level (20-82):
 # centre error <= 0.04 px easy, 0.18 px medium, 0.40 px hard (rolling shutter and a 60-level

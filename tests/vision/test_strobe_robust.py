@@ -12,7 +12,7 @@ import math
 import pytest
 from strobe_scenes import Scene, lateral_ok, tilt_ok, write
 
-from labkit.vision.strobe import analyse_strobe
+from labkit.vision.strobe.analyse import analyse_strobe
 
 CASES = {
     # rotor axis horizontal in the image (Fig. 5.19): tilt wrapped to ~pi/2 before

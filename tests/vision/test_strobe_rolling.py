@@ -1,6 +1,6 @@
 """A rolling shutter with the camera as the strobe (issue 11; Fig. 6.20 without a lamp): every image
 row samples the rotor at its own phase, so the silhouette is a smear of most of a revolution. The
-per-row phase model (labkit.vision.strobe_rolling) fits Eq. 5.97 row by row.
+per-row phase model (labkit.vision.strobe.rolling_model) fits Eq. 5.97 row by row.
 
 The suite clip is drawn by the independent renderer (labkit.footage), which shares no code with
 the analysis; the unit tests check the row slices against that renderer's rectangle coverage and
@@ -20,9 +20,10 @@ from labkit.footage.strobe_scene import render_strobe, strobe_truth
 from labkit.footage.suite import suite_cases
 from labkit.footage.suite_build import build_shot
 from labkit.footage.suite_eval import analysis_inputs, score_strobe
-from labkit.vision.strobe import analyse_strobe
-from labkit.vision.strobe_phase import choose_phase_model
-from labkit.vision.strobe_rolling import (
+from labkit.vision.strobe.analyse import analyse_strobe
+from labkit.vision.strobe.phase import choose_phase_model
+from labkit.vision.strobe.rolling_analysis import ends_separation, rolling_applies
+from labkit.vision.strobe.rolling_model import (
     Crops,
     FitInput,
     fit_rolling,
@@ -31,8 +32,8 @@ from labkit.vision.strobe_rolling import (
     render,
     slice_intervals,
 )
-from labkit.vision.strobe_rolling_use import ends_separation, rolling_applies
 
+MM_PER_PX = 0.05  # any scale: the millimetres must be the reported pixels scaled
 CASE = "strobe-cylinder-37-medium"  # 320x240, no lamp, 1/5600 s exposure, readout 0.79 frame, rotor 243 Hz
 
 
@@ -46,20 +47,28 @@ def rolling_clip(tmp_path_factory):
                          shot.camera.fps, truth, jpeg_quality=shot.camera.jpeg_quality)
     given = analysis_inputs(truth)
     assert "strobe_hz" not in given  # the user gives the rotor frequency only: the camera is the strobe
-    return truth, analyse_strobe(str(path), **given)
+    return truth, analyse_strobe(str(path), mm_per_px=MM_PER_PX, **given)
 
 
 def test_rolling_camera_strobe_clip_is_within_tolerance(rolling_clip):
     truth, result = rolling_clip
     failures, errors = score_strobe(result, truth)
     assert failures == [], errors
-    assert result["quality"]["verdict"] != "failed"
-    rolling = result["rolling_shutter"]
+    assert result.verdict != "failed"
+    rolling = result.rolling_shutter
+    assert rolling is not None
     # the readout was not given: the footage tells it (renderer: 26.2 ms)
     assert not rolling["readout_given"]
     assert rolling["readout_s"] == pytest.approx(truth["readout_s"], rel=0.05)
     # the per-frame model would have been far off: the result's per-frame series is the smear's
     assert rolling["rows_explained"] > 0.9 > rolling["rows_explained_one_phase_per_frame"] + 0.3
+    # the millimetres are the per-row model's amplitudes too, not the per-frame fit's (which were
+    # 7.6 times smaller on this clip before the result was typed)
+    in_mm, u = result.in_mm, result.uncertainty
+    assert in_mm is not None and result.rc_offset_px is not None
+    assert in_mm.lateral_amplitude_mm == pytest.approx(result.lateral_amplitude_px * MM_PER_PX, rel=1e-12)
+    assert in_mm.rc_offset_mm == pytest.approx(result.rc_offset_px * MM_PER_PX, rel=1e-12)
+    assert u["lateral_amplitude_mm"] == pytest.approx(u["lateral_amplitude_px"] * MM_PER_PX, rel=1e-12)
 
 
 def test_row_slices_match_an_independent_rectangle_coverage():

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from labkit.synth import LaserSpec, render_laser
-from labkit.vision.curves import Pattern
-from labkit.vision.trace import detect_spot, trace_points
+from labkit.vision.laser.trace import detect_spot, trace_points
+from labkit.vision.shared.curves import Pattern
 
 
 def gaussian_spot(x, y, sigma=2.0, size=(200, 150), peak=200.0, background=30.0):

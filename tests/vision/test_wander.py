@@ -1,4 +1,4 @@
-"""Following a wandering camera chunk by chunk (labkit.vision.wander), on point clouds with a
+"""Following a wandering camera chunk by chunk (labkit.vision.laser.wander), on point clouds with a
 known centre path: chunks the camera moved by several line widths off a straight drift are
 registered too."""
 
@@ -9,9 +9,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from labkit.vision.curves import Pattern
-from labkit.vision.fit import classify
-from labkit.vision.wander import follow_wander
+from labkit.vision.laser.pattern_fit import classify
+from labkit.vision.laser.wander import follow_wander
+from labkit.vision.shared.curves import Pattern
 
 WIDTH = 4.0
 MIDS = (np.arange(8) + 0.5) * 0.25  # eight chunks of a 2 s clip

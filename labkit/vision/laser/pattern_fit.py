@@ -2,7 +2,7 @@
 or hypotrochoid (Sec. 5.2.3 Fig. 5.19/5.20, Sec. 6.5 Eq. 6.38).
 
 All patterns share the model ``z(t) = c + v tau + A e^{it} + B e^{ikt}`` (see
-:mod:`labkit.vision.curves`), where ``tau`` is each point's time relative to the middle of the
+:mod:`labkit.vision.shared.curves`), where ``tau`` is each point's time relative to the middle of the
 recording and ``v`` a slow linear drift of the pattern centre. With the curve parameter ``t_i`` of
 each point's closest curve point fixed, the model is linear in the complex ``c, v, A, B``; the fit
 alternates closest-point search and a weighted linear least-squares solve (iterative closest
@@ -17,22 +17,20 @@ from dataclasses import dataclass, field, replace
 import cv2
 import numpy as np
 
-from labkit.vision.curves import (
+from labkit.vision.laser.nearest import PointTree
+from labkit.vision.laser.starts import b_starts_for, trochoid_starts
+from labkit.vision.shared.curves import (
+    CIRCLE_MAX_ELLIPTICITY,
+    MAX_TROCHOID_B,
     Pattern,
     a_for_k,
     ellipse_from_coefficients,
     k_for,
+    trochoid_beats,
     trochoid_from_coefficients,
 )
-from labkit.vision.nearest import PointTree
-from labkit.vision.starts import b_starts_for, trochoid_starts
 
-CIRCLE_MAX_ELLIPTICITY = 0.02  # below this an ellipse is reported as a circle
-SIMPLER_TOLERANCE = 1.12  # a simpler pattern wins unless a trochoid's residual is this much lower
-MIN_GAIN_PX = 0.1  # ... and at least this much lower in absolute terms
-MIN_SECOND_TERM_PX = 1.0  # ... and its second term (b * scale) is visible
 MIN_POINTS = 20
-MAX_TROCHOID_B = 1.05  # larger b means the fast term dominates: not a trochoid of Eq. 6.38
 # a prior classification (of part of the trace) is trusted while its choice explains the whole
 # trace nearly as well as it explained the part: rms <= PRIOR_RMS_FACTOR x its rms + PRIOR_RMS_SLACK_PX
 PRIOR_RMS_FACTOR = 1.5
@@ -237,14 +235,14 @@ def fit_trochoid(points: np.ndarray, kind: str, loops: int, weights: np.ndarray 
                  times: np.ndarray | None = None, iterations: int = 30,
                  b_starts: tuple[float, ...] | None = None) -> CurveFit:
     """Fit an epitrochoid or hypotrochoid (Eq. 6.38) with ``loops`` loops: a few steps from each
-    start (:func:`labkit.vision.starts.trochoid_starts`), then the best one to ``iterations`` steps."""
+    start (:func:`labkit.vision.laser.starts.trochoid_starts`), then the best one to ``iterations`` steps."""
     return fit_trochoids(points, [k_for(kind, loops)], weights, times, iterations, b_starts)[0]
 
 
 def fit_trochoids(points: np.ndarray, ks: list[int], weights: np.ndarray | None = None,
                   times: np.ndarray | None = None, iterations: int = 30,
                   b_starts: tuple[float, ...] | None = None) -> list[CurveFit]:
-    """:func:`fit_trochoid` for several frequency ratios ``ks`` (:func:`labkit.vision.curves.k_for`)
+    """:func:`fit_trochoid` for several frequency ratios ``ks`` (:func:`labkit.vision.shared.curves.k_for`)
     at once, one fit per k: every start of every k is probed for ``PROBE_ITERATIONS`` steps in one
     batch, then each k's best start is carried on to ``iterations`` steps in a second batch."""
     z, w, tau = prepare_points(points, weights, times)
@@ -434,14 +432,6 @@ def polish(fit: CurveFit, points: np.ndarray, weights: np.ndarray | None = None,
     z, w, tau = prepare_points(points, weights, times)
     samples = 1440 if fit.k == -1 else 360 * abs(fit.k)
     return _icp(z, w, tau, fit.k, fit.c, fit.a, fit.b, iterations, times is not None, samples)
-
-
-def trochoid_beats(trochoid_rms: float, second_term_px: float, simpler_rms: float) -> bool:
-    """A trochoid replaces a simpler pattern only if it lowers the residual by the factor
-    ``SIMPLER_TOLERANCE`` and by ``MIN_GAIN_PX``, and its second term (``|B| = b * scale``) is at
-    least ``MIN_SECOND_TERM_PX``: otherwise it is a circle with invisible wiggles fitted to noise."""
-    return (trochoid_rms * SIMPLER_TOLERANCE < simpler_rms and simpler_rms - trochoid_rms > MIN_GAIN_PX
-            and second_term_px >= MIN_SECOND_TERM_PX)
 
 
 def _name(fit: CurveFit) -> str:

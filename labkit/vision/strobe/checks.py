@@ -11,11 +11,10 @@ check below, the numbers are within them.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
-from labkit.vision.strobe_body import MAX_BEND_PX
+from labkit.vision.shared.verdict import Verdict
+from labkit.vision.strobe.body import MAX_BEND_PX
 
-OK, DOUBTFUL, FAILED = "ok", "doubtful", "failed"
 TILT_TOL_REL, TILT_TOL_ABS = 0.05, 0.005
 LATERAL_TOL_REL, LATERAL_TOL_PX = 0.05, 0.5
 MIN_DETECTED = 0.9  # of the frames
@@ -34,7 +33,7 @@ RUNNER_UP_CLOSE = 0.9  # runner-up frequency explains this much of what the best
 MAX_FLASH_SPREAD_CYCLES = 0.125  # flashes spread over u cycles shrink amplitudes by 1 - sinc(u): 2.5 %, half
 # the tolerance
 LOCKED_WEAK, LOCKED_STRONG = 0.5, 0.8  # explained variance of tilt vs lateral (they move together)
-MAX_ROOM_LIGHT = 0.5  # room light's share of the light (strobe_ghost): above it the ghost outweighs the body
+MAX_ROOM_LIGHT = 0.5  # room light's share of the light (room_light): above it the ghost outweighs the body
 
 
 def tilt_tolerance(phi: float) -> float:
@@ -49,21 +48,6 @@ def lateral_tolerance(beta: float) -> float:
 
 def _sinc(u: float) -> float:
     return math.sin(math.pi * u) / (math.pi * u) if u else 1.0
-
-
-@dataclass
-class Verdict:
-    verdict: str = OK
-    reasons: list[str] = field(default_factory=list)
-
-    def doubt(self, reason: str) -> None:
-        self.reasons.append(reason)
-        if self.verdict == OK:
-            self.verdict = DOUBTFUL
-
-    def fail(self, reason: str) -> None:
-        self.reasons.insert(0, reason)
-        self.verdict = FAILED
 
 
 def _amplitude_checks(v: Verdict, e: dict) -> None:
@@ -183,17 +167,10 @@ def strobe_quality(evidence: dict) -> dict:
     rolling = evidence.get("rolling_shutter") is not None
     _body_checks(v, evidence, per_frame=not rolling)
     if rolling:  # the per-row model of a rolling shutter with the camera as the strobe
-        from labkit.vision.strobe_rolling_use import rolling_checks
+        from labkit.vision.strobe.rolling_analysis import rolling_checks
         rolling_checks(v, evidence)
     else:
         _phase_checks(v, evidence)
     _amplitude_checks(v, evidence)
     return {"verdict": v.verdict, "reasons": v.reasons, **evidence}
 
-
-def describe(quality: dict) -> str:
-    """The verdict in words for the terminal."""
-    if quality["verdict"] == OK:
-        return "quality: ok (every check passed; numbers within the stated tolerances by their own scatter)"
-    head = "quality: DOUBTFUL, check before use" if quality["verdict"] == DOUBTFUL else "quality: FAILED"
-    return "\n".join([head, *(f"  - {r}" for r in quality["reasons"])])

@@ -1,5 +1,5 @@
 """The trace points of all time chunks of a laser clip, gathered chunk by chunk as each chunk's
-trace is extracted (:mod:`labkit.vision.laser`), so that the work is done in the extraction
+trace is extracted (:mod:`labkit.vision.laser.analyse`), so that the work is done in the extraction
 worker while later frames decode instead of after the last frame. Pure bookkeeping, no I/O.
 
 Each chunk's points are stamped with the chunk's mid time; seeded subsampling keeps at most
@@ -15,7 +15,7 @@ from typing import NamedTuple, Protocol
 
 import numpy as np
 
-from labkit.vision.trace import TracePoints
+from labkit.vision.laser.trace import TracePoints
 
 MAX_POINTS_PER_CHUNK = 4000
 

@@ -1,5 +1,5 @@
 """Refusing footage that shows nothing: all-black or all-white (saturated) frames, judged from
-histograms of the accumulated chunks (:mod:`labkit.vision.laser`). Pure functions."""
+histograms of the accumulated chunks (:mod:`labkit.vision.laser.analyse`). Pure functions."""
 
 from __future__ import annotations
 

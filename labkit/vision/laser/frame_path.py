@@ -2,7 +2,7 @@
 measurement on its first frames.
 
 Luma is 0.299 R + 0.587 G + 0.114 B, so a red laser keeps only part of its contrast there, while
-the colour path scores light by the brightest channel (:func:`labkit.vision.trace.brightness`).
+the colour path scores light by the brightest channel (:func:`labkit.vision.laser.trace.brightness`).
 On a dark screen that loss does not matter; on a bright or warm screen a faint trace can sink
 into the noise in luma. :func:`choose_frame_path` measures the contrast-to-noise ratio (CNR) of
 the accumulated first frames both ways, scored exactly as trace extraction scores light.
@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from labkit.vision.trace import brightness, contrast_to_noise
+from labkit.vision.laser.trace import brightness, contrast_to_noise
 
 # Luma is used when its CNR is ample on its own, or when it keeps most of the colour path's CNR
 # and still clears the detection threshold with margin. Measured (docs/explanation/laser-analysis.md, "Luma or

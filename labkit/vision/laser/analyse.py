@@ -2,8 +2,8 @@
 
 Per frame the only work is a running per-pixel maximum into the accumulator of the current time
 chunk (about as cheap as decoding), so full analysis keeps pace with reading the video. Each
-chunk's accumulation is then turned into trace points (:mod:`labkit.vision.trace`) stamped with
-the chunk's mid time; the fit (:mod:`labkit.vision.fit`) carries a linear drift of the centre.
+chunk's accumulation is then turned into trace points (:mod:`labkit.vision.laser.trace`) stamped with
+the chunk's mid time; the fit (:mod:`labkit.vision.laser.pattern_fit`) carries a linear drift of the centre.
 Tilt amplitudes: the reflected beam turns by twice the magnet's tilt, so a semi-axis ``r`` on a
 screen at distance ``L`` is a tilt of ``atan(r / L) / 2`` (Sec. 5.2.3, Fig. 5.19/5.20).
 """
@@ -20,25 +20,27 @@ from typing import TYPE_CHECKING
 import cv2
 import numpy as np
 
-from labkit.vision.exposure import check_exposure, grey_histogram
-from labkit.vision.framepath import (
+from labkit.vision.laser.frame_path import (
     AMPLE_LUMA_CNR,
     PROBE_FRAMES,
     FramePathChoice,
     luma_plane_cnr,
     measure_frame_path,
 )
-from labkit.vision.frames import FrameSource, open_frames
-from labkit.vision.laser_gather import MAX_POINTS_PER_CHUNK, GatheredTrace, gather  # noqa: F401 (API)
-from labkit.vision.scene_kind import scene_measures, strobe_scene_verdict
-from labkit.vision.trace import TracePoints, trace_points
+from labkit.vision.laser.gather import MAX_POINTS_PER_CHUNK, GatheredTrace, gather  # noqa: F401 (API)
+from labkit.vision.laser.result import LaserResult
+from labkit.vision.laser.scene_kind import scene_measures, strobe_scene_verdict
+from labkit.vision.laser.trace import TracePoints, trace_points
+from labkit.vision.shared.exposure import check_exposure, grey_histogram
+from labkit.vision.shared.frames import FrameSource, open_frames
+from labkit.vision.shared.verdict import Verdict
 
 if TYPE_CHECKING:
     from concurrent.futures import Future
 
-    from labkit.vision.fit import Classification
+    from labkit.vision.laser.pattern_fit import Classification
 
-# The fit side (labkit.vision.laser_pattern: the fit, wander, checks, second readings) loads in
+# The fit side (labkit.vision.laser.pattern: the fit, wander, checks, second readings) loads in
 # the worker thread while the first frames decode, not before the first frame; its public
 # functions stay importable from here.
 _FIT_SIDE = ("pattern_dict", "symmetry_of", "read_pattern")
@@ -46,7 +48,7 @@ _FIT_SIDE = ("pattern_dict", "symmetry_of", "read_pattern")
 
 def __getattr__(name: str):
     if name in _FIT_SIDE:
-        from labkit.vision import laser_pattern
+        from labkit.vision.laser import pattern as laser_pattern
 
         return getattr(laser_pattern, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
@@ -68,7 +70,7 @@ class LaserQuality:
     chunks (fewer chunks: faster; more: follows a fast drift better). ``luma``: None (auto)
     measures the trace's contrast-to-noise on the first frames in luma and in colour and uses the
     decoder's own luma plane (skips the colour conversion) only if luma keeps enough of it
-    (:mod:`labkit.vision.framepath`); True forces luma where the codec has a luma plane; False
+    (:mod:`labkit.vision.laser.frame_path`); True forces luma where the codec has a luma plane; False
     forces the brightest colour channel of BGR frames. A live-stream hook always gets BGR."""
 
     stride: int = 1
@@ -121,7 +123,7 @@ def _clip_roi(roi: tuple[int, int, int, int], size: tuple[int, int]) -> tuple[in
 
 def chunk_length(source: FrameSource, quality: LaserQuality) -> int:
     """Frames per chunk: ``chunk_s`` of video, shortened so that a short clip still has
-    ``MIN_CHUNKS`` chunks to follow a wandering centre with (:mod:`labkit.vision.wander`); at
+    ``MIN_CHUNKS`` chunks to follow a wandering centre with (:mod:`labkit.vision.laser.wander`); at
     least ``MIN_FRAMES_PER_CHUNK`` analysed frames, at most ``max_chunks`` chunks."""
     fps = source.fps or 30.0
     wanted = min(round(quality.chunk_s * fps), math.ceil(source.frame_count / MIN_CHUNKS))
@@ -277,7 +279,7 @@ class _Worker:
 
 def _load_fit_side():
     """The fit side's module (imported on first use; see ``_FIT_SIDE``)."""
-    from labkit.vision import laser_pattern
+    from labkit.vision.laser import pattern as laser_pattern
 
     return laser_pattern
 
@@ -292,20 +294,21 @@ def _preload_fit_side() -> None:
 
 
 def _preliminary(gathered: GatheredTrace, chunks: int, fps: float) -> Classification | None:
-    """:func:`labkit.vision.laser_pattern.preliminary` (in the worker, while later frames decode)."""
+    """:func:`labkit.vision.laser.pattern.preliminary` (in the worker, while later frames decode)."""
     return _load_fit_side().preliminary(gathered, chunks, fps)
 
 
 def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px: float | None = None,
                   quality: LaserQuality | None = None, on_frame: FrameHook | None = None,
                   on_trace: Callable[[np.ndarray], None] | None = None,
-                  on_progress: Callable[[int, int], None] | None = None) -> dict:
-    """Analyse a laser-trace video or long-exposure photo; returns the ``labkit analyse laser`` JSON.
+                  on_progress: Callable[[int, int], None] | None = None) -> LaserResult:
+    """Analyse a laser-trace video or long-exposure photo; returns the ``labkit analyse laser``
+    result (its JSON: ``.to_json()``).
 
     ``on_frame(index, t_s, bgr)`` is called for every analysed frame (live streams hook in here;
     the frame buffer is reused, copy it to keep it). ``on_progress(frames_read, frame_count)``
     after each time chunk (``frame_count`` as the file says; 0 if unknown). ``on_trace(image)``
-    gets the accumulated trace of the whole clip in a full frame (for :mod:`labkit.vision.overlay`).
+    gets the accumulated trace of the whole clip in a full frame (for :mod:`labkit.vision.laser.overlay`).
     Raises :class:`VideoError` for unusable input; a usable file without a trace gives
     ``pattern.type == "none"`` with a reason.
     """
@@ -350,7 +353,7 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
         preliminary = prior["fit"].result() if "fit" in prior else None
     points, weights, times, band, peak, noise = gathered.result()
     if on_trace is not None:
-        from labkit.vision.overlay import accumulated_trace
+        from labkit.vision.laser.overlay import accumulated_trace
 
         on_trace(accumulated_trace(chunks, source.size))
     qual = {"frames_analysed": len(range(0, source.frames_read, quality.stride)),
@@ -380,12 +383,12 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
                     "minor": tilt_from_semi_axis(minor, mm_per_px, screen_distance_mm)}
             doubt = tilt_geometry_doubt(major, mm_per_px, screen_distance_mm)
             if doubt is not None:
-                qual = {**qual, "verdict": "failed" if qual["verdict"] == "failed" else "doubtful",
-                        "reasons": [*qual["reasons"], doubt],
-                        "checks": {**qual["checks"], "tilt_geometry": "doubtful"}}
+                verdict = Verdict.from_json(qual)
+                verdict.doubt(doubt, "tilt_geometry")
+                qual = {**qual, **verdict.as_json()}
     qual = strobe_scene_verdict(qual, *scene)
     qual["settings"] = asdict(quality)
     qual["elapsed_s"] = time.perf_counter() - t_start
     qual["fit_s"] = time.perf_counter() - t_frames  # work left after the last frame: mostly the fit
-    return {"source": source.path, "frames": source.frames_read, "fps": fps, "size": list(source.size),
-            "pattern": pattern, "tilt_rad": tilt, "quality": qual}
+    return LaserResult(source=source.path, frames=source.frames_read, fps=fps, size=list(source.size),
+                       pattern=pattern, tilt_rad=tilt, quality=qual)

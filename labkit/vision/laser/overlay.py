@@ -10,11 +10,13 @@ amber doubtful, red failed).
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from typing import Any
 
 import cv2
 import numpy as np
 
-from labkit.vision.curves import Pattern
+from labkit.vision.shared.curves import Pattern
 
 VERDICT_BGR = {"ok": (80, 200, 60), "doubtful": (0, 170, 255), "failed": (40, 40, 230)}
 CURVE_BGR = (60, 230, 60)
@@ -38,7 +40,7 @@ def pattern_curve(pattern: dict, samples: int = 2000) -> np.ndarray | None:
     return shape.points(np.linspace(0.0, 2.0 * math.pi, samples))
 
 
-def _label(result: dict) -> list[str]:
+def _label(result: Mapping[str, Any]) -> list[str]:
     p, q = result.get("pattern") or {}, result.get("quality") or {}
     kind = p.get("type", "none")
     head = kind if kind in ("none", "circle", "ellipse") else f"{kind}, {p.get('loops')} loops"
@@ -48,7 +50,7 @@ def _label(result: dict) -> list[str]:
     return lines
 
 
-def draw_overlay(trace: np.ndarray, result: dict) -> np.ndarray:
+def draw_overlay(trace: np.ndarray, result: Mapping[str, Any]) -> np.ndarray:
     """BGR image: ``trace`` (grey or BGR, full frame) dimmed, the fitted curve, its centre and the
     verdict of ``result`` (a ``labkit analyse laser`` result)."""
     grey = trace if trace.ndim == 2 else cv2.cvtColor(trace, cv2.COLOR_BGR2GRAY)

@@ -1,5 +1,5 @@
 """Starting values for trochoid fits (Eq. 6.38): pure functions of the point cloud and the
-frequency ratio k (:mod:`labkit.vision.curves`)."""
+frequency ratio k (:mod:`labkit.vision.shared.curves`)."""
 
 from __future__ import annotations
 

@@ -21,9 +21,9 @@ per row), so ``a`` of row r in frame k is ``alpha / L_kr`` with ``L_kr`` the row
 coverage levels, each blurred by Gaussians of several widths, :func:`_blur_basis`): the blur is
 the same all round the edge, the ghost is not (large beside the part that stays covered, small
 beside the tips), which is what tells the two apart. Then ``c_k = (D_k - a h_k) / (1 - a)`` is the body
-alone; its coverage is linear in intensity, so :func:`labkit.vision.strobe_body.linear_moments`
+alone; its coverage is linear in intensity, so :func:`labkit.vision.strobe.body.linear_moments`
 measures it without the bias a ghost gives any threshold or mask. The swing the ghost is made
-with comes from the previous measurement, so :func:`labkit.vision.strobe.analyse_strobe`
+with comes from the previous measurement, so :func:`labkit.vision.strobe.analyse.analyse_strobe`
 repeats the two until the tilt settles.
 """
 
@@ -35,9 +35,9 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from labkit.vision.frames import open_frames
-from labkit.vision.strobe_body import FLAT_LEVEL, BodyPose, measure_flat
-from labkit.vision.strobe_ghost_fit import MAX_AMBIENT, NormalSums, fit_room_light
+from labkit.vision.shared.frames import open_frames
+from labkit.vision.strobe.body import FLAT_LEVEL, BodyPose, measure_flat
+from labkit.vision.strobe.room_light_fit import MAX_AMBIENT, NormalSums, fit_room_light
 
 __all__ = ["ClipLight", "ENCODING_GAMMA", "Swing", "fit_room_light", "ghost_free_poses", "linear_darkening",
            "read_clip_light", "revolution_average", "swing_of", "GhostFit", "fit_ghosts",
@@ -239,7 +239,7 @@ def fit_ghosts(light: ClipLight, poses: list[BodyPose | None], swing: Swing,
                covers: dict[int, np.ndarray] | None = None, last: GhostFit | None = None) -> GhostFit:
     """Fit the room light's share and the blur mix (module docstring) on ``FIT_FRAMES`` of the
     frames with a body, spread over the clip, their normal equations accumulated frame by frame
-    (:class:`labkit.vision.strobe_ghost_fit.NormalSums`). The ghost is made first from the frames
+    (:class:`labkit.vision.strobe.room_light_fit.NormalSums`). The ghost is made first from the frames
     themselves, then from the fitted blurred silhouettes (noise in a frame would otherwise be in
     its ghost too and pull ``alpha`` up). ``swing`` holds one entry per pose that is not None;
     ``covers``: the last fit's coverages, the starting edges. ``last``: the previous swing's fit,

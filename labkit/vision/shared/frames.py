@@ -294,7 +294,7 @@ def open_frames(path: str | Path) -> FrameSource:
     if p.stat().st_size == 0:
         raise VideoError(name, "file is empty (0 bytes)")
     if p.suffix.lower() in PHOTO_SUFFIXES:
-        from labkit.vision.image_size import check_image_pixels
+        from labkit.vision.shared.image_size import check_image_pixels
 
         check_image_pixels(name)  # header only: an image bomb never reaches OpenCV
         img = cv2.imread(name, cv2.IMREAD_COLOR)

@@ -6,7 +6,7 @@ rather than by degree, and each has a second reading that the analysis tries onl
 first is not ``ok``, keeping it only if its verdict is better:
 
 * light away from the pattern (a burnt-in timestamp, a stray reflection):
-  :func:`without_stray_light` sets it apart (:mod:`labkit.vision.clusters`);
+  :func:`without_stray_light` sets it apart (:mod:`labkit.vision.laser.stray_light`);
 * light fixed in the frame while the pattern moves: a camera that moves against the screen
   moves everything on the screen in its frames, so light that stays at the same pixels all
   through the clip (a burnt-in timestamp, a mark on the sensor) is not on the screen.
@@ -17,7 +17,7 @@ first is not ``ok``, keeping it only if its verdict is better:
 * a camera that wanders by many line widths: the accumulated trace is a blurred band that no
   curve fits, while each time chunk on its own is sharp. :func:`one_chunk_start` classifies the
   chunk with the most light alone; the fit then starts from it and follows the wander chunk by
-  chunk (:mod:`labkit.vision.wander`).
+  chunk (:mod:`labkit.vision.laser.wander`).
 """
 
 from __future__ import annotations
@@ -26,16 +26,17 @@ from dataclasses import replace
 
 import numpy as np
 
-from labkit.vision.clusters import LINK_WIDTHS, linked_groups, separate_pattern
-from labkit.vision.fit import MIN_POINTS, Classification, classify
-from labkit.vision.nearest import PointTree
+from labkit.vision.laser.nearest import PointTree
+from labkit.vision.laser.pattern_fit import MIN_POINTS, Classification, classify
+from labkit.vision.laser.stray_light import LINK_WIDTHS, linked_groups, separate_pattern
 
 
 def without_stray_light(points: np.ndarray, weights: np.ndarray, times: np.ndarray, band: tuple | None,
                         width: float) -> tuple:
     """The trace without light away from the pattern: points, weights, times, band (its pixels
     near a kept point), and ``(share, rival)``: the share of points left out (0: nothing was) and
-    the largest left-out group's size against the pattern's (:class:`labkit.vision.clusters.Separation`)."""
+    the largest left-out group's size against the pattern's
+    (:class:`labkit.vision.laser.stray_light.Separation`)."""
     sep = separate_pattern(points, width, weights, times)
     if sep.groups == 0:
         return points, weights, times, band, (0.0, 0.0)
@@ -80,7 +81,7 @@ def without_fixed_light(points: np.ndarray, weights: np.ndarray, times: np.ndarr
                         width: float) -> tuple | None:
     """The trace without the light fixed in the frame: points, weights, times, band (its pixels
     near a kept point) and the share of points left out; None when there is none, or too little
-    light is left. Light is taken in groups linked as :mod:`labkit.vision.clusters` links them,
+    light is left. Light is taken in groups linked as :mod:`labkit.vision.laser.stray_light` links them,
     and a group most of whose points are :func:`fixed_in_frame` is left out whole: a timestamp's
     changing digits sit among its fixed characters."""
     fixed = fixed_in_frame(points, times)

@@ -7,7 +7,7 @@ the border; it is measured by moments of a soft mask whose ramp runs from 40 % t
 body's contrast against a ring around it. That ramp keeps edges unbiased (a symmetric edge profile
 keeps its centre) while a flash shadow under 40 % of the contrast does not pull the moments (room
 light's ghost of the revolution is taken out in linear light before the body is measured again,
-see :mod:`labkit.vision.strobe_ghost`). The axis angle comes two
+see :mod:`labkit.vision.strobe.room_light`). The axis angle comes two
 ways: from the second moments (2-fold, for elongated bodies) and four-fold (the sides of a cube's
 square silhouette: the fourth-order complex moment ``sum w (z - z_c)^4``, which is
 ``-|c| e^{4 i alpha}`` for a square at angle alpha), so a square body has an orientation too.
@@ -35,7 +35,7 @@ FLAT_LEVEL = 200.0  # background of a dark-body frame after flattening
 DARK_FLAT_LEVEL = 20.0  # background of a bright-body frame after flattening
 SQUARE_ANISOTROPY = 0.25  # below it the silhouette is too square for a 2-fold moment axis
 LINEAR_WINDOW_PX = 3  # the linear moments' window: the half-coverage region grown by this much
-#: a midline straying more than this (px rms) is a bent silhouette: a rolling shutter (strobe_rolling_use)
+#: a midline straying more than this (px rms) is a bent silhouette: a rolling shutter (rolling_analysis)
 MAX_BEND_PX = 0.4  # midline of a straight body: measured <= 0.27 px with noise, blur and compression
 
 
@@ -112,7 +112,8 @@ def _largest_blob(blur: np.ndarray, t: float):
 @dataclass
 class BodyCrop:
     """Where the body is in a frame and its levels, for the clip's ghost measures
-    (:func:`labkit.vision.strobe.ghost_fraction`, :func:`labkit.vision.strobe_ghost.read_clip_light`)."""
+    (:func:`labkit.vision.strobe.analyse.ghost_fraction`,
+    :func:`labkit.vision.strobe.room_light.read_clip_light`)."""
 
     x0: int
     y0: int
@@ -155,7 +156,7 @@ def linear_moments(cover: np.ndarray, near: np.ndarray) -> tuple[float, float, f
     moments and leaves their axes, and the fourth-order side angle, where they were; the blurred
     image is smooth, so pixel sums sample it without the bias that a mask's steep edge (the soft
     ramp) gets at a small body's rounded corners. A ghost or shadow inside the window pulls these
-    moments, so :func:`labkit.vision.strobe._read_poses` uses them only for clips without a
+    moments, so :func:`labkit.vision.strobe.analyse._read_poses` uses them only for clips without a
     measurable ghost. None when the window holds no weight."""
     half = ((cover > 0.5) & (near > 0)).astype(np.uint8)
     size = 2 * LINEAR_WINDOW_PX + 1
@@ -237,7 +238,7 @@ def measure_flat(flat: np.ndarray) -> BodyPose | None:
 
 def static_light(flat: np.ndarray) -> np.ndarray:
     """The frame as the clip's static light accumulates it (3x3 mean: less noise in the max; see
-    :func:`labkit.vision.strobe.ghost_fraction`)."""
+    :func:`labkit.vision.strobe.analyse.ghost_fraction`)."""
     return cv2.blur(flat, (3, 3))
 
 

@@ -21,25 +21,25 @@ width, fractions of the curve and of the light, the frame's size.
   fills).
 * size: the curve against the frame (a semi-axis larger than the frame is not a pattern).
 * tips lit: how far the fitted curve's outer tips lie from the nearest light, in line widths
-  (:func:`labkit.vision.loops_seen.tip_gap`). A right curve's tips lie on the centre line of the
+  (:func:`labkit.vision.laser.loops_seen.tip_gap`). A right curve's tips lie on the centre line of the
   light (within half a line width, as the residual); a fit whose small loops grew larger than the
   light shows, as on a thick line whose loops are filled in (the opening inside a loop,
-  :func:`labkit.vision.loops_seen.loop_width` less a line width, narrower than the line),
+  :func:`labkit.vision.laser.loops_seen.loop_width` less a line width, narrower than the line),
   reaches past the end of the light while its residual still looks good: its outer extent and
-  b are extrapolated. (Such a fit is first corrected, :func:`labkit.vision.loops_seen.tip_limited`.)
+  b are extrapolated. (Such a fit is first corrected, :func:`labkit.vision.laser.loops_seen.tip_limited`.)
 * conditioning: a trochoid's second term (``b`` x scale) against the line width; under one line
   width the small loops are not formed and ``loops``, ``a`` and ``b`` are not determined.
-* light left out: light set apart as lying away from the pattern (:mod:`labkit.vision.clusters`:
+* light left out: light set apart as lying away from the pattern (:mod:`labkit.vision.laser.stray_light`:
   a burnt-in timestamp, a stray reflection). Small, compact or far light is clearly not the
   pattern, however many points it has (a timestamp is dense text); when its largest part is at
   least half the pattern's size (points x extent), which light is the pattern is a guess.
 * runner-up: how close the best different pattern came, on the score that ranks trochoids
-  (:func:`labkit.vision.fit.two_way_rms`).
+  (:func:`labkit.vision.laser.pattern_fit.two_way_rms`).
 * steadiness: how far each time chunk's trace sits from the fitted curve as a whole (a wandering
   or shaking centre the centre model does not follow): the result is then an average.
 * straight drift: a pattern that moved more than a line width over the clip, in a clip where too
   few time chunks show enough of the pattern to follow the centre chunk by chunk
-  (:mod:`labkit.vision.wander`): its centre and size rest on the assumption of a straight drift.
+  (:mod:`labkit.vision.laser.wander`): its centre and size rest on the assumption of a straight drift.
 """
 
 from __future__ import annotations
@@ -48,11 +48,11 @@ import math
 
 import numpy as np
 
-from labkit.vision.fit import Classification, CurveFit, coverage_rms, two_way_rms
-from labkit.vision.loops_seen import LOOP_SEEN_WIDTHS, TIPS_LIT_WIDTHS, loop_width, tip_gap
-from labkit.vision.nearest import PointTree
-from labkit.vision.quality import Finding, graded, verdict
-from labkit.vision.wander import Wander, chunk_offsets, dense_curve
+from labkit.vision.laser.loops_seen import LOOP_SEEN_WIDTHS, TIPS_LIT_WIDTHS, loop_width, tip_gap
+from labkit.vision.laser.nearest import PointTree
+from labkit.vision.laser.pattern_fit import Classification, CurveFit, coverage_rms, two_way_rms
+from labkit.vision.laser.wander import Wander, chunk_offsets, dense_curve
+from labkit.vision.shared.verdict import Finding, Verdict, graded
 
 MIN_LINE_WIDTH_PX = 2.0  # a trace is never judged against less than this (sub-pixel lines)
 # a different pattern whose score is within this factor of the chosen one's is a real alternative
@@ -73,7 +73,7 @@ def _name(fit: CurveFit) -> str:
 
 
 def _steadiness_px(fit: CurveFit, still: np.ndarray, times: np.ndarray | None, width: float) -> float:
-    """Rms of the chunks' offsets from the fitted curve (see :mod:`labkit.vision.wander`) that the
+    """Rms of the chunks' offsets from the fitted curve (see :mod:`labkit.vision.laser.wander`) that the
     fit's centre model left: 0 for a photo or fewer than 3 chunks."""
     if times is None:
         return 0.0
@@ -90,7 +90,7 @@ def _steadiness_px(fit: CurveFit, still: np.ndarray, times: np.ndarray | None, w
 def laser_evidence(cls: Classification, points: np.ndarray, times: np.ndarray | None,
                    line_width_px: float, frame_size: tuple[int, int], wander: Wander | None = None) -> dict:
     """The measures of the module docstring for the chosen fit ``cls.best`` (JSON-ready);
-    ``wander``: the centre's wander as followed (:func:`labkit.vision.wander.follow_wander`)."""
+    ``wander``: the centre's wander as followed (:func:`labkit.vision.laser.wander.follow_wander`)."""
     best = cls.best
     keep = np.random.default_rng(3).permutation(len(points))[:MAX_EVIDENCE_POINTS]
     pts = np.asarray(points, float)[keep]
@@ -260,10 +260,10 @@ def runner_up_is_close(runner: dict, width: float) -> bool:
 
 def laser_verdict(evidence: dict, frame_size: tuple[int, int]) -> dict:
     """``{"verdict", "reasons", "checks", ...evidence}`` for a fitted pattern."""
-    return {**verdict(laser_findings(evidence, frame_size)), **evidence}
+    return {**Verdict.of(laser_findings(evidence, frame_size)).as_json(), **evidence}
 
 
 def no_pattern_verdict(reason: str) -> dict:
     """The verdict of a usable file without a trace."""
-    return verdict([Finding("trace", "failed", reason)])
+    return Verdict.of([Finding("trace", "failed", reason)]).as_json()
 

@@ -1,10 +1,10 @@
 """Stroboscope analysis (Sec. 5.4.3, Fig. 5.19, 6.14, 6.20; docs/explanation/strobe-analysis.md,
-*Stroboscope*): measure the floating body in every frame (:mod:`labkit.vision.strobe_body`), map frames to
+*Stroboscope*): measure the floating body in every frame (:mod:`labkit.vision.strobe.body`), map frames to
 rotor
-phase (:mod:`labkit.vision.strobe_phase`), fit the tilt amplitude phi, the lateral amplitude beta
+phase (:mod:`labkit.vision.strobe.phase`), fit the tilt amplitude phi, the lateral amplitude beta
 and the offset of the rotation centre from the centre of mass ``delta = beta / tan(phi)`` (Eq.
-5.97) with standard errors (:mod:`labkit.vision.strobe_fit`), and judge the result
-(:mod:`labkit.vision.strobe_quality`).
+5.97) with standard errors (:mod:`labkit.vision.strobe.motion_fit`), and judge the result
+(:mod:`labkit.vision.strobe.checks`).
 
 Tilt is measured about the body's own mean orientation (mod pi, or mod pi/2 for a square
 silhouette), so a rotor axis horizontal in the image or a rolled camera changes nothing; the
@@ -20,10 +20,16 @@ import cv2
 import numpy as np
 
 from labkit.errors import VideoError
-from labkit.vision.curves import a_for_k, ellipse_from_coefficients, trochoid_from_coefficients
-from labkit.vision.fit import CIRCLE_MAX_ELLIPTICITY, MAX_TROCHOID_B, trochoid_beats
-from labkit.vision.frames import open_frames
-from labkit.vision.strobe_body import (
+from labkit.vision.shared.curves import (
+    CIRCLE_MAX_ELLIPTICITY,
+    MAX_TROCHOID_B,
+    a_for_k,
+    ellipse_from_coefficients,
+    trochoid_beats,
+    trochoid_from_coefficients,
+)
+from labkit.vision.shared.frames import open_frames
+from labkit.vision.strobe.body import (
     BodyPose,
     ClipOrientation,
     flatten_illumination,
@@ -32,8 +38,19 @@ from labkit.vision.strobe_body import (
     orient_clip,
     static_light,
 )
-from labkit.vision.strobe_fit import MotionFit, fit_motion, sine_fit
-from labkit.vision.strobe_ghost import (
+from labkit.vision.strobe.checks import strobe_quality
+from labkit.vision.strobe.motion_fit import MotionFit, fit_motion, sine_fit
+from labkit.vision.strobe.phase import (
+    PhaseModel,
+    apparent_cycles_per_frame,
+    choose_phase_model,
+    estimate_cycles_per_frame,
+    explained_fraction,
+    fold,
+)
+from labkit.vision.strobe.result import InMillimetres, StrobeResult
+from labkit.vision.strobe.rolling_analysis import rolling_analysis, rolling_applies
+from labkit.vision.strobe.room_light import (
     ENCODING_GAMMA,
     FIT_FRAMES,
     ClipLight,
@@ -43,16 +60,6 @@ from labkit.vision.strobe_ghost import (
     spread_frames,
     swing_of,
 )
-from labkit.vision.strobe_phase import (
-    PhaseModel,
-    apparent_cycles_per_frame,
-    choose_phase_model,
-    estimate_cycles_per_frame,
-    explained_fraction,
-    fold,
-)
-from labkit.vision.strobe_quality import strobe_quality
-from labkit.vision.strobe_rolling_use import rolling_analysis, rolling_applies
 
 __all__ = ["analyse_strobe", "apparent_cycles_per_frame", "measure_body", "phase_pattern"]
 
@@ -180,7 +187,7 @@ def _measure(poses: list[BodyPose | None], model: PhaseModel) -> _Measured:
 
 
 def _without_room_light(light: ClipLight, first: _Measured, model: PhaseModel) -> tuple[_Measured, dict]:
-    """Take the room light's ghost out (:mod:`labkit.vision.strobe_ghost`) with the swing of the
+    """Take the room light's ghost out (:mod:`labkit.vision.strobe.room_light`) with the swing of the
     previous measurement, measure again, and repeat until the tilt amplitude settles (changes by
     less than ``ROOM_LIGHT_SETTLED`` of itself) or ``ROOM_LIGHT_ROUNDS`` have run. The rounds
     measure only the frames the room light is fitted on (``FIT_FRAMES``, spread over the clip);
@@ -272,23 +279,24 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
                    apparent_hz: float | None = None, mm_per_px: float | None = None,
                    point: str = "tip", on_frame=None, camera_fps: float | None = None,
                    exposure_s: float | None = None, keep_frame: bool = False,
-                   readout_s: float | None = None, encoding_gamma: float = ENCODING_GAMMA) -> dict:
-    """Analyse a stroboscope video; returns the ``labkit analyse strobe`` JSON.
+                   readout_s: float | None = None, encoding_gamma: float = ENCODING_GAMMA) -> StrobeResult:
+    """Analyse a stroboscope video; returns the ``labkit analyse strobe`` result (its JSON:
+    ``.to_json()``).
 
-    Phase (see :mod:`labkit.vision.strobe_phase`): ``rotor_hz`` with ``strobe_hz`` (a lamp,
+    Phase (see :mod:`labkit.vision.strobe.phase`): ``rotor_hz`` with ``strobe_hz`` (a lamp,
     any number of flashes per frame), ``rotor_hz`` alone (the camera's exposure is the strobe),
     ``apparent_hz``, or the signal. ``camera_fps`` overrides the file's frame rate,
     ``exposure_s`` (when known) gives the blur correction. ``point``: the body point whose
     trajectory is classified, ``tip`` (top end of the body axis), ``bottom`` or ``centroid``.
     ``on_frame(index, t_s, bgr)`` is called for every frame (live streams hook in here).
-    ``keep_frame``: return the first frame with a body as ``result["_frame"]`` (index, BGR) for
-    an overlay; the caller removes it before writing JSON. ``readout_s``: the rolling shutter's
+    ``keep_frame``: return the first frame with a body as ``result.overlay_frame`` (index, BGR)
+    for an overlay (no part of the JSON). ``readout_s``: the rolling shutter's
     readout (first to last row) when known, 0 for a global shutter; with the camera as the strobe
     and a rolling shutter the amplitudes come from the per-row model
-    (:mod:`labkit.vision.strobe_rolling_use`), the readout estimated from the footage unless given.
+    (:mod:`labkit.vision.strobe.rolling_analysis`), the readout estimated from the footage unless given.
     ``encoding_gamma``: the camera's encoding exponent (2.2 for sRGB-like cameras, 1 for linear
     ones), with which room light's ghost is taken out in linear light
-    (:mod:`labkit.vision.strobe_ghost`).
+    (:mod:`labkit.vision.strobe.room_light`).
     """
     source, poses, kept, ghost, light = _read_poses(path, on_frame, 0 if keep_frame else None, encoding_gamma)
     fps = camera_fps or source.fps or (strobe_hz or 0.0)
@@ -346,19 +354,21 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
                                                ghost, room, rolling))}
     if rolling is not None:
         _use_rolling(out, rolling)
-    if mm_per_px:
-        out["lateral_amplitude_mm"] = motion.beta * mm_per_px
-        out["rc_offset_mm"] = None if motion.delta is None else motion.delta * mm_per_px
-        out["uncertainty"]["lateral_amplitude_mm"] = motion.beta_se * mm_per_px
-        out["uncertainty"]["rc_offset_mm"] = None if motion.delta_se is None else motion.delta_se * mm_per_px
+    in_mm = None
+    if mm_per_px:  # the amplitudes reported (the per-row model's when it applies), in mm
+        u = out["uncertainty"]
+        in_mm = InMillimetres.scaled(out["lateral_amplitude_px"], out["rc_offset_px"], mm_per_px)
+        se_mm = InMillimetres.scaled(u["lateral_amplitude_px"], u["rc_offset_px"], mm_per_px)
+        u["lateral_amplitude_mm"], u["rc_offset_mm"] = se_mm.lateral_amplitude_mm, se_mm.rc_offset_mm
+    frame = None
     if keep_frame and kept is not None:
         k = kept[0]
         j = int(np.searchsorted(idx, k))
-        out["_frame"] = {"index": k, "bgr": kept[1], "centre": [found[j].x, found[j].y],
-                         "axis": _axis_at(orient, tilt)[j].tolist(), "rest_axis": orient.axis.tolist(),
-                         "half_length_px": half, "point": points[j].tolist(), "track": points.tolist(),
-                         "radius_px": math.sqrt(3 * (found[j].mu20 + found[j].mu02))}
-    return out
+        frame = {"index": k, "bgr": kept[1], "centre": [found[j].x, found[j].y],
+                 "axis": _axis_at(orient, tilt)[j].tolist(), "rest_axis": orient.axis.tolist(),
+                 "half_length_px": half, "point": points[j].tolist(), "track": points.tolist(),
+                 "radius_px": math.sqrt(3 * (found[j].mu20 + found[j].mu02))}
+    return StrobeResult(**out, in_mm=in_mm, overlay_frame=frame)
 
 
 def _per_row(source, poses, found, orient: ClipOrientation, fps: float, readout_s: float | None,
@@ -451,7 +461,7 @@ def phase_pattern(points: np.ndarray, phases: np.ndarray) -> dict:
     """Classify a body point's trajectory with known phase per sample: least squares of
     ``c + A e^{i s psi} + B e^{i s k psi}`` (s = +-1, the sense of rotation) for the ellipse
     (k = -1) and the trochoids of Eq. 6.38 (epitrochoid k = 2..7, hypotrochoid k = -2..-6); the
-    ellipse wins unless :func:`labkit.vision.fit.trochoid_beats` it. Same JSON layout as
+    ellipse wins unless :func:`labkit.vision.shared.curves.trochoid_beats` it. Same JSON layout as
     the laser pattern."""
     z = points[:, 0] + 1j * points[:, 1]
     fits = []

@@ -23,7 +23,7 @@ near it (up to 20 % of the trace points, which pulled the fit hundreds of px off
 What it cannot do: when a pattern is seen only as arcs that do not touch (very short exposures
 at a frame rate commensurate with the pattern) and a timestamp is larger than every arc, the
 timestamp is taken for the pattern. If the camera moved, the timestamp is the light that stayed
-at the same pixels, and :func:`labkit.vision.rescue.without_fixed_light` leaves it out; with a
+at the same pixels, and :func:`labkit.vision.laser.second_reading.without_fixed_light` leaves it out; with a
 still camera the fit fails its checks and says so.
 """
 
@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from labkit.vision.nearest import PointTree
+from labkit.vision.laser.nearest import PointTree
 
 LINK_WIDTHS = 1.5  # points closer than this many line widths belong to one group
 # a group inside the pattern's hull grown by this many line widths is kept, or within this many
@@ -165,8 +165,8 @@ def _on_the_curve(points: np.ndarray, weights: np.ndarray, times: np.ndarray | N
     """Mask of the points within ``ON_CURVE_WIDTHS`` line widths of the curve fitted to the points
     ``keep`` (with its drift at each point's time): arcs of the pattern that the hull missed lie
     on it, a timestamp or a reflection does not."""
-    from labkit.vision.fit import MIN_POINTS, classify
-    from labkit.vision.wander import dense_curve
+    from labkit.vision.laser.pattern_fit import MIN_POINTS, classify
+    from labkit.vision.laser.wander import dense_curve
 
     if keep.sum() < MIN_POINTS:
         return np.zeros(len(points), bool)

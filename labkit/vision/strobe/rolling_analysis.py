@@ -1,6 +1,6 @@
 """When and how ``labkit analyse strobe`` uses the per-row model of
-:mod:`labkit.vision.strobe_rolling` (docs/explanation/strobe-analysis.md, *Rolling shutter with the camera as
-the strobe*), what it reports, and the verdict's checks of it.
+:mod:`labkit.vision.strobe.rolling_model` (docs/explanation/strobe-analysis.md, *Rolling shutter
+with the camera as the strobe*), what it reports, and the verdict's checks of it.
 
 It applies when the camera is the strobe (``--rotor-hz`` without ``--strobe-hz``) and the clip
 shows a rolling shutter: the silhouette is bent (the ``body_bend_px`` evidence) or the user gives
@@ -16,9 +16,9 @@ import math
 import cv2
 import numpy as np
 
-from labkit.vision.strobe_body import MAX_BEND_PX, BodyPose, ClipOrientation
-from labkit.vision.strobe_phase import PhaseModel
-from labkit.vision.strobe_rolling import (
+from labkit.vision.strobe.body import MAX_BEND_PX, BodyPose, ClipOrientation
+from labkit.vision.strobe.phase import PhaseModel
+from labkit.vision.strobe.rolling_model import (
     GRID_STEPS,
     Crops,
     FitInput,
@@ -171,7 +171,7 @@ def rolling_analysis(path: str, poses: list[BodyPose | None], orient: ClipOrient
 
 
 def rolling_checks(v, e: dict) -> None:
-    """The verdict's checks of the per-row fit (``v``: strobe_quality's Verdict; ``e``: the
+    """The verdict's checks of the per-row fit (``v``: the strobe checks' Verdict; ``e``: the
     evidence with ``rolling_shutter``)."""
     r = e["rolling_shutter"]
     if not r["converged"]:

@@ -111,3 +111,20 @@ def rotation_error_deg(a_rad: float, b_rad: float, period_rad: float) -> float:
     """Smallest difference between two angles defined modulo ``period_rad``, in degrees."""
     d = (a_rad - b_rad) % period_rad
     return math.degrees(min(d, period_rad - d))
+
+
+# How a pattern is told, the same for the laser's fit (labkit.vision.laser.pattern_fit) and the
+# strobe's point pattern (labkit.vision.strobe.analyse):
+CIRCLE_MAX_ELLIPTICITY = 0.02  # below this an ellipse is reported as a circle
+SIMPLER_TOLERANCE = 1.12  # a simpler pattern wins unless a trochoid's residual is this much lower
+MIN_GAIN_PX = 0.1  # ... and at least this much lower in absolute terms
+MIN_SECOND_TERM_PX = 1.0  # ... and its second term (b * scale) is visible
+MAX_TROCHOID_B = 1.05  # larger b means the fast term dominates: not a trochoid of Eq. 6.38
+
+
+def trochoid_beats(trochoid_rms: float, second_term_px: float, simpler_rms: float) -> bool:
+    """A trochoid replaces a simpler pattern only if it lowers the residual by the factor
+    ``SIMPLER_TOLERANCE`` and by ``MIN_GAIN_PX``, and its second term (``|B| = b * scale``) is at
+    least ``MIN_SECOND_TERM_PX``: otherwise it is a circle with invisible wiggles fitted to noise."""
+    return (trochoid_rms * SIMPLER_TOLERANCE < simpler_rms and simpler_rms - trochoid_rms > MIN_GAIN_PX
+            and second_term_px >= MIN_SECOND_TERM_PX)

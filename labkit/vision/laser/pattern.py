@@ -1,12 +1,13 @@
-"""The fit side of the laser analysis (:mod:`labkit.vision.laser`): the gathered trace points
--> classification (:mod:`labkit.vision.fit`), the centre's wander (:mod:`labkit.vision.wander`),
-the checks and verdict (:mod:`labkit.vision.laser_checks`) and second readings
-(:mod:`labkit.vision.rescue`) -> the JSON ``pattern`` object and its diagnostics.
+"""The fit side of the laser analysis (:mod:`labkit.vision.laser.analyse`): the gathered trace
+points -> classification (:mod:`labkit.vision.laser.pattern_fit`), the centre's wander
+(:mod:`labkit.vision.laser.wander`), the checks and verdict (:mod:`labkit.vision.laser.checks`) and
+second readings (:mod:`labkit.vision.laser.second_reading`) -> the JSON
+``pattern`` object and its diagnostics.
 
 Kept apart from the frame side so that ``labkit analyse laser`` starts decoding before these
-modules load: :func:`labkit.vision.laser.analyse_laser` imports this module in its worker thread
+modules load: :func:`labkit.vision.laser.analyse.analyse_laser` imports this module in its worker thread
 while the first frames decode (docs/explanation/vision-throughput.md, *The whole command*). Tilt amplitudes
-and the trochoid parameters follow Sec. 5.2.3 and Eq. 6.38 (see :mod:`labkit.vision.curves`).
+and the trochoid parameters follow Sec. 5.2.3 and Eq. 6.38 (see :mod:`labkit.vision.shared.curves`).
 """
 
 from __future__ import annotations
@@ -16,19 +17,19 @@ from dataclasses import replace
 
 import numpy as np
 
-from labkit.vision.curves import a_for_k
-from labkit.vision.fit import MIN_POINTS, Classification, classify, pattern_kind
-from labkit.vision.laser_checks import judged_width, laser_evidence, laser_verdict, no_pattern_verdict
-from labkit.vision.laser_gather import GatheredTrace
-from labkit.vision.loops_seen import tips_in_light
-from labkit.vision.quality import rank
-from labkit.vision.rescue import (
+from labkit.vision.laser.checks import judged_width, laser_evidence, laser_verdict, no_pattern_verdict
+from labkit.vision.laser.gather import GatheredTrace
+from labkit.vision.laser.loops_seen import tips_in_light
+from labkit.vision.laser.pattern_fit import MIN_POINTS, Classification, classify, pattern_kind
+from labkit.vision.laser.second_reading import (
     one_chunk_start,
     pattern_moved_px,
     without_fixed_light,
     without_stray_light,
 )
-from labkit.vision.wander import Wander, follow_wander
+from labkit.vision.laser.wander import Wander, follow_wander
+from labkit.vision.shared.curves import a_for_k
+from labkit.vision.shared.verdict import rank
 
 
 def read_pattern(points: np.ndarray, weights: np.ndarray, times: np.ndarray, drift: bool, band: tuple | None,
@@ -76,13 +77,13 @@ def pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | No
                  frame_size: tuple[int, int] | None = None, left_out: tuple[float, float] = (0.0, 0.0),
                  start: Classification | None = None) -> tuple[dict, dict]:
     """Classify and fit a trace; returns the JSON ``pattern`` object and fit diagnostics, which
-    include the quality verdict (:mod:`labkit.vision.laser_checks`) when ``frame_size`` is given.
+    include the quality verdict (:mod:`labkit.vision.laser.checks`) when ``frame_size`` is given.
     With ``times``, the fitted centre drifts; it is reported at ``centre_time`` (s, e.g. the
     middle of the recording), or at the mean time of the points fitted.
 
     A result refined from ``prior`` (the first part's classification) that the checks do not
     call ``ok`` is done again from scratch, and the fresh result kept unless it ranks worse
-    (:func:`labkit.vision.quality.rank`: a worse verdict, or the same with more checks not ``ok``):
+    (:func:`labkit.vision.shared.verdict.rank`: a worse verdict, or the same with more checks not ``ok``):
     the first part may have shown too little of the pattern."""
     args = (centre_time, line_width_px, frame_size, left_out)
     pattern, diag = _pattern_dict(points, weights, times, band, prior, *args, start)
@@ -138,7 +139,7 @@ def _pattern_dict(points: np.ndarray, weights: np.ndarray, times: np.ndarray | N
 
 def _steadied(cls: Classification, points: np.ndarray, weights: np.ndarray, times: np.ndarray | None,
               band: tuple | None, line_width_px: float) -> tuple[Classification, Wander | None, np.ndarray]:
-    """The classification with the centre's wander followed (:mod:`labkit.vision.wander`), the
+    """The classification with the centre's wander followed (:mod:`labkit.vision.laser.wander`), the
     wander, and the points with it taken out; unchanged (and the wander's offsets zero) when
     following it does not explain the trace clearly better (:attr:`Wander.needed`). A wander over
     half a line width (rms) blurs the accumulated trace enough to mislead the classification:
@@ -164,7 +165,7 @@ def _steadied(cls: Classification, points: np.ndarray, weights: np.ndarray, time
 def _second_readings(pattern: dict, diag: dict, points: np.ndarray, weights: np.ndarray, times: np.ndarray,
                      drift: bool, band: tuple | None, middle: float | None, width: float,
                      size: tuple[int, int]) -> tuple[dict, dict]:
-    """The first fit is not ok: try the readings of :mod:`labkit.vision.rescue` in turn and keep
+    """The first fit is not ok: try the readings of :mod:`labkit.vision.laser.second_reading` in turn and keep
     whichever gives the best verdict, on the same verdict the one with fewer reasons (the first
     fit on a full tie)."""
     def better(candidate: tuple[dict, dict]) -> bool:  # on the same verdict: fewer reasons to doubt

@@ -3,7 +3,7 @@ gave a pattern with verdict ``doubtful`` and exit 0.)
 
 A laser trace is a thin bright line on a dark screen. A stroboscope clip is a body: dark before
 a lit background (the usual set-up), or lit before a dark one. Two measures on the clip's
-accumulated frames (each pixel's brightest value, :func:`labkit.vision.laser.accumulate`), the
+accumulated frames (each pixel's brightest value, :func:`labkit.vision.laser.analyse.accumulate`), the
 light being what is brighter than the middle of the black level and the brightest level
 (99.9th percentile):
 
@@ -24,6 +24,8 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
+
+from labkit.vision.shared.verdict import Verdict
 
 MAX_LIT_SHARE = 0.5
 MAX_THICKNESS_WIDTHS = 3.0
@@ -65,5 +67,6 @@ def strobe_scene_verdict(quality: dict, lit: float, thickness_px: float) -> dict
         return quality
     reason = (f"this looks like a stroboscope clip, not a laser trace: {why}; analyse it with "
               "labkit analyse strobe")
-    return {**quality, "verdict": "failed", "reasons": [reason, *quality.get("reasons", [])],
-            "checks": {**quality.get("checks", {}), "scene": "failed"}}
+    verdict = Verdict.from_json(quality)
+    verdict.fail(reason, "scene")
+    return {**quality, **verdict.as_json()}

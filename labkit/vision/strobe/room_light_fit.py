@@ -2,7 +2,7 @@
 accumulated frame by frame (docs/explanation/strobe-analysis.md, *Room light*;
 docs/explanation/strobe-speed.md; ADR 0016).
 
-The model of :mod:`labkit.vision.strobe_ghost` is ``d = (1 - a) B p + a h`` per pixel, with the
+The model of :mod:`labkit.vision.strobe.room_light` is ``d = (1 - a) B p + a h`` per pixel, with the
 row's share ``a = alpha w``. While no share is clipped, ``(1 - a)^2 = 1 - 2 alpha w + alpha^2 w^2``,
 so the least-squares normal equations for the blur mix ``p`` are a quadratic in ``alpha`` whose
 three coefficient matrices (``B^T B``, ``B^T W B``, ``B^T W^2 B``) and right-hand sides are sums

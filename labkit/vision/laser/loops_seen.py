@@ -30,8 +30,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from labkit.vision.curves import trochoid_from_coefficients
-from labkit.vision.fit import (
+from labkit.vision.laser.nearest import PointTree
+from labkit.vision.laser.pattern_fit import (
     Classification,
     CurveFit,
     FitRows,
@@ -39,8 +39,8 @@ from labkit.vision.fit import (
     newton_parameters,
     prepare_points,
 )
-from labkit.vision.nearest import PointTree
-from labkit.vision.wander import Wander, dense_curve
+from labkit.vision.laser.wander import Wander, dense_curve
+from labkit.vision.shared.curves import trochoid_from_coefficients
 
 
 def loop_width(k: int, b: float, scale: float, samples: int = 4000) -> float:
@@ -72,7 +72,7 @@ def cusp_fit(fit: CurveFit, points: np.ndarray, weights: np.ndarray | None = Non
              times: np.ndarray | None = None, iterations: int = 12, b: float | None = None) -> CurveFit:
     """The trochoid ``fit`` refitted on the same points with ``b`` held at ``1/|k|`` (loops just
     closed) or the given value: ``c + A (e^{it} + b e^{ikt}) (+ v tau)`` is linear in ``c, A, v``
-    for fixed closest-point parameters, so the fit alternates those as :mod:`labkit.vision.fit`
+    for fixed closest-point parameters, so the fit alternates those as :mod:`labkit.vision.laser.pattern_fit`
     does (point-to-line steps). ``times`` as in the fit (mean-centred drift)."""
     z, w, tau = prepare_points(points, weights, times)
     k = fit.k
@@ -99,7 +99,7 @@ def cusp_fit(fit: CurveFit, points: np.ndarray, weights: np.ndarray | None = Non
 def _solve_fixed_shape(z: np.ndarray, sw: np.ndarray, tau: np.ndarray, k: int, b0: float, a: complex,
                        t: np.ndarray, drift: bool, v: complex) -> tuple[complex, complex, complex]:
     """One weighted least-squares step for ``c, A (, v)`` along each point's curve normal (plus a
-    fifth of the tangential residual, as in :func:`labkit.vision.fit._solve_point_to_line`)."""
+    fifth of the tangential residual, as in :func:`labkit.vision.laser.pattern_fit._solve_point_to_line`)."""
     shape = np.exp(1j * t) + b0 * np.exp(1j * k * t)
     tangent = 1j * a * (np.exp(1j * t) + k * b0 * np.exp(1j * k * t))
     tangent = tangent / np.maximum(np.abs(tangent), 1e-12)
@@ -209,7 +209,7 @@ def _where_tips_leave_light(bs: np.ndarray, gaps: np.ndarray, lit: float) -> flo
 
 def tips_in_light(cls: Classification, wander: Wander | None, points: np.ndarray, weights: np.ndarray | None,
                   times: np.ndarray | None, width: float) -> tuple[Classification, Wander | None]:
-    """The classification (and the centre's wander, :mod:`labkit.vision.wander`) with b set by
+    """The classification (and the centre's wander, :mod:`labkit.vision.laser.wander`) with b set by
     where the light ends when :func:`tip_limited` applies, else both unchanged. The new fit's
     centre refers to the mean time of ``times``."""
     limited = tip_limited(cls.best, points, weights, times, width)

@@ -40,8 +40,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from labkit.vision.frames import open_frames
-from labkit.vision.strobe_body import BodyPose, flatten_illumination
+from labkit.vision.shared.frames import open_frames
+from labkit.vision.strobe.body import BodyPose, flatten_illumination
 
 MAX_FIT_FRAMES = 14
 PAD_PX = 26  # model image margin beyond the crop: the halo's reach at its widest (3 x 8.7 px)

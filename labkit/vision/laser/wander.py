@@ -1,6 +1,6 @@
 """A pattern centre that wanders: a camera on a tripod on a bench that shakes, or a rig whose
 mean tilt breathes, moves the whole trace by tens of pixels over a clip, not along a straight
-line. The fit's linear drift (:mod:`labkit.vision.fit`) cannot follow that; this module adds one
+line. The fit's linear drift (:mod:`labkit.vision.laser.pattern_fit`) cannot follow that; this module adds one
 translation per time chunk on top of it.
 
 Each chunk's trace is moved onto the fitted curve by the translation that best cancels its
@@ -20,15 +20,15 @@ from dataclasses import dataclass, replace
 import cv2
 import numpy as np
 
-from labkit.vision.fit import (
-    SIMPLER_TOLERANCE,
+from labkit.vision.laser.nearest import PointTree, xy_points
+from labkit.vision.laser.pattern_fit import (
     Classification,
     CurveFit,
     polish,
     polished_on_band,
     without_outliers,
 )
-from labkit.vision.nearest import PointTree, xy_points
+from labkit.vision.shared.curves import SIMPLER_TOLERANCE
 
 MIN_CHUNKS = 3
 MIN_CHUNK_POINTS = 10
@@ -226,9 +226,9 @@ def follow_wander(cls: Classification, points: np.ndarray, weights: np.ndarray |
     """Alternate chunk offsets and a refit of ``cls.best`` (see the module docstring); None for
     fewer than ``MIN_CHUNKS`` chunks. An ellipse whose wander is :attr:`Wander.needed` is polished
     at the end on every trace pixel ``band`` (points, weights, times), moved by the offsets, as
-    :func:`labkit.vision.fit.classify` does (a thinned centre line ends short of a flat ellipse's
-    tips). A wander that is not needed keeps the straight-drift fit in the analysis
-    (:func:`labkit.vision.laser_pattern._steadied`), so its fit is not polished: that polish is a third of
+    :func:`labkit.vision.laser.pattern_fit.classify` does (a thinned centre line ends short of a flat
+    ellipse's tips). A wander that is not needed keeps the straight-drift fit in the analysis
+    (:func:`labkit.vision.laser.pattern._steadied`), so its fit is not polished: that polish is a third of
     the work after the last frame of a steady clip and would be thrown away (the decision,
     :attr:`Wander.needed`, and the offsets do not depend on it)."""
     mid_times, chunk = np.unique(np.asarray(times, float), return_inverse=True)

@@ -12,7 +12,9 @@ Pure drawing: the analysis hands over the frame and the geometry.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
@@ -61,7 +63,7 @@ def _inset(frame: np.ndarray, drawing: dict, out: np.ndarray, thick: int) -> Non
     out[h - side - 8:h - 8, w - side - 8:w - 8] = view
 
 
-def draw_strobe_overlay(frame: np.ndarray, result: dict, drawing: dict) -> np.ndarray:
+def draw_strobe_overlay(frame: np.ndarray, result: Mapping[str, Any], drawing: dict) -> np.ndarray:
     """The overlay image (BGR). ``drawing``: ``centre``, ``axis`` (unit vector to the top end),
     ``rest_axis``, ``half_length_px``, ``radius_px`` (the body's half diagonal), ``point``,
     ``track`` (points of every frame), in px."""
@@ -93,7 +95,7 @@ def draw_strobe_overlay(frame: np.ndarray, result: dict, drawing: dict) -> np.nd
     return img
 
 
-def write_strobe_overlay(out: str, frame: np.ndarray, result: dict, drawing: dict) -> Path:
+def write_strobe_overlay(out: str, frame: np.ndarray, result: Mapping[str, Any], drawing: dict) -> Path:
     """Draw and write the overlay PNG; raises :class:`VideoError` naming ``out`` if it cannot."""
     img = draw_strobe_overlay(frame, result, drawing)
     path = Path(out)
