@@ -37,6 +37,7 @@ def test_a_real_clock_strobe_sweep_on_the_strobe_sketch_replays_faithfully(firmw
     assert abs(point["rotor_hz"] - 4000 / 60) < 1e-3 and abs(point["apparent_hz"] - 1.0) < 2e-3
     assert point["verdict"] == "ok" and point["strobe_flags"] == []
     lines = [json.loads(x) for x in (session / "readings" / "strobe.jsonl").read_text().splitlines()]
-    assert lines and all(x["raw"].startswith("S,") for x in lines)
+    assert lines[0]["type"] == "descriptor" and lines[0]["unit"] == "Hz"   # the stream declared once
+    assert lines[1:] and all(x["raw"].startswith("S,") for x in lines[1:])
     result = replay_session(session)
     assert result.level == "faithful" and result.identical, result.differences[:5]
