@@ -106,9 +106,9 @@ def choose_level(record: SessionRecord, level: str = "auto") -> str:
 
 def faithful_gap(record: SessionRecord) -> str | None:
     """None when a real-clock session can be replayed faithfully: it kept its speed loop's ticks
-    (``clock.jsonl``) and every cassette names its clock origin; else what it lacks (older
-    real-clock sessions, and a camera's frame index, cannot be put on one time line: they are
-    re-analysed instead)."""
+    (``clock.jsonl``) and every serial cassette names its clock origin (a frame cassette's
+    frames carry their clock readings); else what it lacks (older real-clock sessions cannot be
+    put on one time line: they are re-analysed instead)."""
     import json
 
     from labkit.io.clock import TICKS_FILE
@@ -125,8 +125,7 @@ def faithful_gap(record: SessionRecord) -> str | None:
             gaps.append(f"cassettes/{path.name} has no readable header")
             continue
         if isinstance(header, dict) and header.get("format") == "labkit-frames":
-            return (f"cassettes/{path.name} holds camera frames, which the faithful level does not "
-                    "serve yet")
+            continue  # frames carry their clock readings (t_host): labkit.devices.camera.faithful
         if not isinstance(header, dict) or "clock_origin" not in header:
             gaps.append(f"cassettes/{path.name} names no clock origin (a labkit before 2026-11-27)")
     return gaps[0] if gaps else (None if cassettes else "no cassettes")
