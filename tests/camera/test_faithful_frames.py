@@ -34,7 +34,7 @@ def test_frames_arrive_at_their_recorded_times_on_the_replay_clock():
     clock = VirtualClock(first[0]["t_host"] - 5.0)  # the replayed run reached the burst 5 s early
     camera = open_camera(URL, clock)
     frames = camera.burst(len(first), step="0.0")
-    assert [f.t for f in frames] == [e["t_host"] for e in first]
+    assert [(f.t_host, f.t_device) for f in frames] == [(e["t_host"], e["t_device"]) for e in first]
     assert clock.now() == pytest.approx(first[-1]["t_host"], abs=1e-9)  # it waited for the camera
     assert camera.source.report()["served_late"] == 0
     data = CASSETTE.with_suffix(".mjpeg").read_bytes()
