@@ -5,7 +5,6 @@ code, but its keep-alives and polls are not the recorded ones one for one, so it
 compared within stated tolerances and its *decisions* (steps, settles, drops, interlocks and
 the step of each) must be the same:
 
-* fit parameters within :data:`FIT_RTOL` or :data:`FIT_STDERRS` of their standard errors.
 * :data:`POINT_TOLERANCES`: per result key, relative or absolute; speeds and forces within
   0.5 %; a cone angle within :data:`REPLAY_FIT_RTOL` (its burst's frames are served as
   recorded, so it is the same analysis of the same bytes).
@@ -74,10 +73,6 @@ SPREAD_RTOL = 2 / 3
 #: the quick fit's parameters (from points within 0.5 %) and their uncertainties
 FIT_RTOL = 0.02
 FIT_STDERR_RTOL = 2 / 3
-#: ...or within this many of the recorded parameter's standard errors: a parameter the points
-#: determine poorly (cone-sweep's tau_S/I, a 1 % correction to I omega^2) moves by a sizeable
-#: share of its standard error when the speeds move by 0.01 %, which is no other fit
-FIT_STDERRS = 1.0
 SETTLE_TOL_S = 0.25
 
 _MOTOR_WORDS = (
@@ -101,8 +96,7 @@ def _tolerance(key: str, derived: bool) -> tuple[str, float]:
     if key in POINT_TOLERANCES:
         return POINT_TOLERANCES[key]
     if derived:
-        spread = key == "stderr" or "residual" in key  # a fit's scatter: as the points' spreads
-        return ("rel", FIT_STDERR_RTOL if spread else FIT_RTOL)
+        return ("rel", FIT_STDERR_RTOL if key == "stderr" else FIT_RTOL)
     if "stderr" in key or "_std_" in key or key.endswith("_std"):
         return ("rel", SPREAD_RTOL)
     return ("rel", DEFAULT_RTOL)
@@ -123,17 +117,6 @@ def _number(value: Any) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool)
 
 
-def _fit_parameter_within(a: dict[str, Any], b: dict[str, Any]) -> bool:
-    """Whether ``a`` and ``b`` are one fit parameter (``value``, ``stderr``, ...) whose values
-    differ by at most :data:`FIT_STDERRS` of the recorded standard error (beyond
-    :data:`FIT_RTOL`, which the caller then need not report)."""
-    if set(a) != set(b) or not all(_number(x.get(k)) for x in (a, b) for k in ("value", "stderr")):
-        return False
-    if any(a[k] != b[k] for k in a if k not in ("value", "stderr")):
-        return False
-    return abs(float(a["value"]) - float(b["value"])) <= FIT_STDERRS * abs(float(b["stderr"]))
-
-
 def diff_within(a: Any, b: Any, path: str = "results", key: str = "", derived: bool = False) -> list[str]:
     """Differences between a replay's results ``a`` and the recording's ``b`` beyond the
     faithful tolerances, each line naming the value, both numbers and the tolerance."""
@@ -147,8 +130,6 @@ def diff_within(a: Any, b: Any, path: str = "results", key: str = "", derived: b
     if type(a) is not type(b):
         return [f"{path}: replay {a!r}, recording {b!r}"]
     if isinstance(a, dict):
-        if derived and _fit_parameter_within(a, b):
-            return diff_within(a.get("stderr"), b.get("stderr"), f"{path}.stderr", "stderr", derived)
         out = []
         for k in sorted(set(a) | set(b)):
             if k not in b and k in ADDED_KEYS:
@@ -253,8 +234,6 @@ def diff_results(a: Any, b: Any, path: str = "results", derived: bool = False,
     if type(a) is not type(b):
         return [f"{path}: replay {a!r} != recording {b!r}"]
     if isinstance(a, dict):
-        if derived and _fit_parameter_within(a, b):
-            return diff_within(a.get("stderr"), b.get("stderr"), f"{path}.stderr", "stderr", derived)
         out = []
         for k in sorted(set(a) | set(b)):
             if k not in b and k in ADDED_KEYS:
