@@ -46,6 +46,9 @@ from labkit.session import SessionRecord, load_session
 from labkit.session.integrity import integrity_problems
 
 LEVELS = ("auto", "exact", "faithful", "analysis")
+#: the frame of a clock read's site where the run begins (labkit.io.clock.read_site): a stand-still
+#: in the runner itself (a burst's analysis after a camera's last step) matches whoever called it
+RUN_SITE = f"{Runner.__module__.rsplit('.', 1)[-1]}.py:{Runner.run.__qualname__}+"
 #: events a replay does not read (the control loop's ticks: most of a long session's events.jsonl)
 REPLAY_SKIPS = frozenset({"control"})
 LEVEL_WORDS = {
@@ -226,8 +229,8 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
     points, dropped = check_carried_points(carried, protocol.plan(rig, params))
     done = {int(p["step"]) for p in points}
     faithful = chosen == "faithful"
-    clock = (ReplayClock(faithful_start(record), faithful_schedules(record, rig), recorded_runs(record.path))
-             if faithful else VirtualClock())
+    clock = (ReplayClock(faithful_start(record), faithful_schedules(record, rig), recorded_runs(record.path),
+                         site_root=RUN_SITE) if faithful else VirtualClock())
     collect = _Collect()
     evidence = Evidence(None if points or faithful else record.path / "readings", record.problems,
                         keep_readings=faithful and not points)

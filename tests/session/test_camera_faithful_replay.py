@@ -21,6 +21,10 @@ SESSION = Path(__file__).resolve().parents[2] / "recordings" / "sessions" / "rea
 
 
 def test_a_real_clock_cone_sweep_replays_through_the_protocol(capsys):
+    # the recording's protocol stood still 2.4 s in the runner analysing the last burst (a read
+    # in Runner.run called from labkit run's launcher, SESSION/clock.jsonl): repeated though the
+    # replay calls the runner from labkit replay (ReplayClock.site_root), else the replayed
+    # stop comes 2.4 s early and matches no recorded one
     assert choose_level(load_session(SESSION)) == "faithful"
     assert main(["replay", str(SESSION)]) == 0
     out = capsys.readouterr().out
@@ -80,9 +84,9 @@ def test_a_burst_the_recording_did_not_take_is_named_by_its_step(tmp_path, capsy
 
 
 def test_a_fit_that_does_not_follow_from_the_recorded_points_is_named(tmp_path, capsys):
-    # the replay's own fit is that of its points (each within tolerance) and moves with them: tau_S/I,
-    # a 1 % correction to I omega^2, differs by 6 % in this recording's replay; the recorded fit
-    # is held against the fit of the recorded points instead
+    # the replay's own fit is that of its points (each within tolerance) and moves with them (tau_S/I,
+    # a 1 % correction to I omega^2, by 4 % when a speed moved by 0.02 %): the recorded fit is
+    # held against the fit of the recorded points instead
     session = _copy(tmp_path)
     results = json.loads((session / "results.json").read_text())
     results["fit"]["params"]["tau_C_over_I"]["value"] *= 1.0001
