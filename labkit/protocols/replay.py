@@ -8,7 +8,10 @@
   ``replay://...?mode=faithful`` on a virtual clock started at the recording's clock reading;
   device bytes arrive at their recorded times, writes are matched by content within a
   window, and the run must take the same decisions (:func:`~labkit.protocols.replay_compare.decisions`)
-  with its points within :data:`~labkit.protocols.replay_compare.POINT_TOLERANCES`.
+  with its points within :data:`~labkit.protocols.replay_compare.POINT_TOLERANCES`, and the
+  recorded fit must be the fit of the recorded points (:func:`recorded_fit_diffs`). A camera's
+  frame cassette is served at its recorded times (:mod:`labkit.devices.camera.faithful`;
+  docs/decisions/0036-camera-frames-in-a-faithful-replay.md).
 * **analysis** (any session, also from an older labkit): no protocol run; the recorded
   bytes re-parsed by today's drivers (:mod:`labkit.protocols.reanalyse`).
 
