@@ -29,7 +29,7 @@ MOTOR_WORDS = ("cut the motor", "motor's power", "cut power")
 
 def test_every_shipped_protocol_has_a_real_clock_recording():
     protocols = {json.loads((p / "run.json").read_text())["protocol"] for p in REAL}
-    assert {"speed-sweep", "spin-critical"} <= protocols
+    assert {"speed-sweep", "spin-critical", "cone-sweep"} <= protocols
     for session in REAL:
         assert (session / "clock.jsonl").is_file()
         header = json.loads((session / "cassettes" / "balance.jsonl").read_text().splitlines()[0])
