@@ -44,6 +44,7 @@ SPIN = ["start_rpm=6600", "stop_rpm=9000", "step_pct=15", "max_trials=2", "consi
 SPIN_FIXTURE = ["start_rpm=6600", "stop_rpm=8000", "step_pct=15", "max_trials=2", "consistent_n=2",
                 "consistency_pct=10"]
 STROBE_FIXTURE = ["speeds_rpm=4000:6000:step=1000", "burst_frames=40"]
+CONE_FIXTURE = ["speeds_rpm=6000:10000:step=2000", "burst_frames=10"]
 
 RECORDINGS: dict[str, dict] = {
     # shipped fixtures (recordings/sessions/real-*)
@@ -67,6 +68,11 @@ RECORDINGS: dict[str, dict] = {
     # a pty; no camera: a synthetic clip per step (record_sketch)
     "real-sketch-strobe-sweep": dict(rig="emulated-strobe.toml", protocol="strobe-sweep",
                                      sketch="labkit_strobe", speeds_rpm=[4000.0, 5000.0], divider=4),
+    # the emulated camera renders the model plant in labkit's own process (a camera is no serial
+    # device `labkit emulate` could serve on a pty), so the motor and tachometer driving that
+    # plant run in process too: a real-clock run on sim:// ports
+    "real-cone-sweep": dict(rig="emulated-camera.toml", protocol="cone-sweep", sets=CONE_FIXTURE,
+                            inprocess=True),
     "spin-3-emulate": dict(rig="emulated-fig618.toml", protocol="spin-critical", sets=SPIN),
     # acceptance (the issue's 5-step sweep, 6000-14000 RPM, default averaging), not shipped
     "sweep-5-inprocess": dict(rig="emulated-fig525.toml", protocol="speed-sweep", sets=SWEEP_ACCEPT,
@@ -244,9 +250,36 @@ def record_sketch(spec: dict, workdir: Path, clips: Path,
     return run.returncode, (found[-1] if found else None), err
 
 
-def replay(session: Path) -> tuple[int, str]:
-    done = subprocess.run(labkit("replay", str(session)), capture_output=True, text=True, cwd=REPO)
-    return done.returncode, (done.stdout + done.stderr).strip()
+def replay(session: Path) -> tuple[int, str, dict[str, float]]:
+    """``labkit replay`` of a session: exit status, its output, and the worst relative deviation
+    of each number of the replayed points from results.json (:func:`worst_deviations`)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        report = Path(tmp) / "replay.json"
+        done = subprocess.run(labkit("replay", str(session), "--json", str(report)), capture_output=True,
+                              text=True, cwd=REPO)
+        replayed = json.loads(report.read_text()).get("results") if report.is_file() else None
+    recorded = json.loads((session / "results.json").read_text())
+    return done.returncode, (done.stdout + done.stderr).strip(), worst_deviations(replayed, recorded)
+
+
+def summary(text: str) -> str:
+    """The line of a replay's output saying what it reproduced, with the camera's line."""
+    lines = text.splitlines()
+    said = [x.strip() for x in lines if x.startswith(("replayed", "re-analysed")) or x.strip().startswith(
+        "camera:")]
+    return "; ".join(said) or lines[0]
+
+
+def worst_deviations(replayed: dict | None, recorded: dict) -> dict[str, float]:
+    """Per point key, the largest ``|replay - recording| / |recording|`` over the points."""
+    worst: dict[str, float] = {}
+    for again, point in zip((replayed or {}).get("points", []), recorded.get("points", []), strict=False):
+        for key, value in point.items():
+            other = again.get(key)
+            if isinstance(value, int | float) and isinstance(other, int | float) and value \
+                    and not isinstance(value, bool) and key != "step":
+                worst[key] = max(worst.get(key, 0.0), abs(other - value) / abs(value))
+    return worst
 
 
 def main() -> None:
@@ -260,6 +293,7 @@ def main() -> None:
     out.mkdir(parents=True, exist_ok=True)
     for name in args.names:
         passed = 0
+        worst: dict[str, float] = {}
         for i in range(args.repeat):
             target = out / (name if args.repeat == 1 else f"{name}-{i + 1}")
             with tempfile.TemporaryDirectory() as tmp:
@@ -279,12 +313,16 @@ def main() -> None:
             size = sum(f.stat().st_size for f in target.rglob("*") if f.is_file())
             line = f"{target.name}: run exit {status}, {size / 1e6:.2f} MB"
             if args.replay:
-                code, text = replay(target)
+                code, text, deviations = replay(target)
                 passed += code == 0
-                line += f"; replay exit {code}: {text.splitlines()[0] if code == 0 else text[-400:]}"
+                for key, value in deviations.items():
+                    worst[key] = max(worst.get(key, 0.0), value)
+                line += f"; replay exit {code}: {summary(text) if code == 0 else text[-400:]}"
             print(line, flush=True)
         if args.replay:
             print(f"{name}: {passed}/{args.repeat} replayed with exit 0", flush=True)
+            shown = ", ".join(f"{key} {value:.2e}" for key, value in sorted(worst.items()))
+            print(f"{name}: worst relative deviation of the points' numbers: {shown}", flush=True)
 
 
 if __name__ == "__main__":

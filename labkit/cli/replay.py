@@ -113,6 +113,12 @@ def success_line(session: str, result) -> str:
 
 
 def port_line(port: dict) -> str:
+    if "frames_recorded" in port:  # a camera's frame cassette (labkit.devices.camera.faithful)
+        text = (f"{port['port']}: {port['frames_served']} of {port['frames_recorded']} recorded frames "
+                f"served in {port['bursts']} bursts at their recorded times")
+        if port.get("served_late"):
+            text += f", {port['served_late']} later (at most {port['latest_s'] * 1e3:.0f} ms)"
+        return text
     text = (f"{port['port']}: {port['identical']} of {port['recorded_writes']} recorded writes sent again "
             "as recorded")
     if port.get("near"):

@@ -236,7 +236,14 @@ class SpeedControl:
             self._zero_all()
 
     def check(self) -> None:
-        """Raise :class:`SafetyError` in the caller's thread if an interlock tripped."""
+        """Raise :class:`SafetyError` in the caller's thread if an interlock tripped.
+
+        A check is a moment on the clock: it reads it first, so where the caller computed for
+        long before it (a camera burst's analysis), a real-clock recording marks its stand-still
+        here (``SESSION/clock.jsonl``), and a faithful replay stands still as long, its loop
+        tripping meanwhile what the recorded one tripped, before this check
+        (docs/decisions/0036-camera-frames-in-a-faithful-replay.md)."""
+        self.clock.now()
         if self.tripped is not None:
             raise SafetyError(f"interlock: {self.tripped}; motors commanded to zero")
 

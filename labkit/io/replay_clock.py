@@ -46,8 +46,11 @@ class ReplayClock(VirtualClock):
     """
 
     def __init__(self, start: float = 0.0, schedules: dict[str, list[float]] | None = None,
-                 runs: dict[str, list[tuple[float, float, str]]] | None = None) -> None:
+                 runs: dict[str, list[tuple[float, float, str]]] | None = None, site_root: str = "") -> None:
         super().__init__(start)
+        #: a site's frame where the run begins (``runner.py:Runner.run+``): its callers (``labkit
+        #: run``'s launcher in the recording, ``labkit replay`` here) are not compared
+        self.site_root = site_root
         self._job_time = 0.0
         #: job name -> the times (sorted) it ran in the recording: it runs then, not every period
         self.schedules = {name: (list(times) if name.startswith(STALL_JOB) else sorted(times))
@@ -143,7 +146,7 @@ class ReplayClock(VirtualClock):
         if self._late_next >= len(late):
             return
         began, woke, site = late[self._late_next]
-        if began - LATE_MATCH_S <= now and (not site or _same_site(read_site(), site)):
+        if began - LATE_MATCH_S <= now and (not site or _same_site(read_site(), site, self.site_root)):
             self._late_next += 1
             self.repeated["stood_still"] += 1
             self._standing = True
@@ -170,14 +173,26 @@ class ReplayClock(VirtualClock):
 TIME_EPS_S = 1e-9
 
 
-def _same_site(here: str, recorded: str) -> bool:
+def _same_site(here: str, recorded: str, root: str = "") -> bool:
     """Whether a replayed read is at the recorded site: the same callers, as many as were
-    recorded (a site of fewer frames matches by its first ones). Callers compare by qualified
-    name and line within the function, not by module file: a function moved to another module
-    (``RunContext`` from ``runner.py`` to ``context.py``) still matches a session recorded
-    before the move."""
-    frames = [_without_module(f) for f in recorded.split("<")]
-    return [_without_module(f) for f in here.split("<")][: len(frames)] == frames
+    recorded (a site of fewer frames matches by its first ones), up to the frame starting with
+    ``root`` (where the run begins: a read in the runner itself, between two steps, was called
+    from ``labkit run``'s launcher in the recording and from ``labkit replay`` in the replay).
+    Callers compare by qualified name and line within the function, not by module file: a
+    function moved to another module (``RunContext`` from ``runner.py`` to ``context.py``) still
+    matches a session recorded before the move."""
+    frames = _up_to(recorded.split("<"), root)
+    return _up_to(here.split("<"), root)[: len(frames)] == frames
+
+
+def _up_to(frames: list[str], root: str) -> list[str]:
+    """The frames up to ``root`` (inclusive), each without its module file."""
+    root = _without_module(root)
+    out = [_without_module(f) for f in frames]
+    for i, frame in enumerate(out):
+        if root and frame.startswith(root):
+            return out[: i + 1]
+    return out
 
 
 def _without_module(frame: str) -> str:

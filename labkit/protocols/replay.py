@@ -8,7 +8,10 @@
   ``replay://...?mode=faithful`` on a virtual clock started at the recording's clock reading;
   device bytes arrive at their recorded times, writes are matched by content within a
   window, and the run must take the same decisions (:func:`~labkit.protocols.replay_compare.decisions`)
-  with its points within :data:`~labkit.protocols.replay_compare.POINT_TOLERANCES`.
+  with its points within :data:`~labkit.protocols.replay_compare.POINT_TOLERANCES`, and the
+  recorded fit must be the fit of the recorded points (:func:`recorded_fit_diffs`). A camera's
+  frame cassette is served at its recorded times (:mod:`labkit.devices.camera.faithful`;
+  docs/decisions/0036-camera-frames-in-a-faithful-replay.md).
 * **analysis** (any session, also from an older labkit): no protocol run; the recorded
   bytes re-parsed by today's drivers (:mod:`labkit.protocols.reanalyse`).
 
@@ -46,6 +49,9 @@ from labkit.session import SessionRecord, load_session_record
 from labkit.session.integrity import integrity_problems
 
 LEVELS = ("auto", "exact", "faithful", "analysis")
+#: the frame of a clock read's site where the run begins (labkit.io.clock.read_site): a stand-still
+#: in the runner itself (a burst's analysis after a camera's last step) matches whoever called it
+RUN_SITE = f"{Runner.__module__.rsplit('.', 1)[-1]}.py:{Runner.run.__qualname__}+"
 #: events a replay does not read (the control loop's ticks: most of a long session's events.jsonl)
 REPLAY_SKIPS = frozenset({"control"})
 LEVEL_WORDS = {
@@ -111,9 +117,9 @@ def choose_level(record: SessionRecord, level: str = "auto") -> str:
 
 def faithful_gap(record: SessionRecord) -> str | None:
     """None when a real-clock session can be replayed faithfully: it kept its speed loop's ticks
-    (``clock.jsonl``) and every cassette names its clock origin; else what it lacks (older
-    real-clock sessions, and a camera's frame index, cannot be put on one time line: they are
-    re-analysed instead)."""
+    (``clock.jsonl``) and every serial cassette names its clock origin (a frame cassette's
+    frames carry their clock readings); else what it lacks (older real-clock sessions cannot be
+    put on one time line: they are re-analysed instead)."""
     import json
 
     from labkit.io.clock import TICKS_FILE
@@ -130,8 +136,7 @@ def faithful_gap(record: SessionRecord) -> str | None:
             gaps.append(f"cassettes/{path.name} has no readable header")
             continue
         if isinstance(header, dict) and header.get("format") == "labkit-frames":
-            return (f"cassettes/{path.name} holds camera frames, which the faithful level does not "
-                    "serve yet")
+            continue  # frames carry their clock readings (t_host): labkit.devices.camera.faithful
         if not isinstance(header, dict) or "clock_origin" not in header:
             gaps.append(f"cassettes/{path.name} names no clock origin (a labkit before 2026-11-27)")
     return gaps[0] if gaps else (None if cassettes else "no cassettes")
@@ -182,6 +187,23 @@ def faithful_schedules(record: SessionRecord, rig: Any) -> dict[str, list[float]
     return schedules
 
 
+def recorded_fit_diffs(protocol: Any, recorded: dict[str, Any]) -> list[str]:
+    """A faithful replay's check of the fit: ``results.json``'s fit must be what the protocol's
+    fit gives for ``results.json``'s points (within :data:`~labkit.protocols.replay_compare.REPLAY_FIT_RTOL`,
+    as at the exact level). The replay's own fit is the fit of its points, each within its
+    tolerance, and is not compared with the recorded one: a parameter the points determine
+    poorly moves with them by more than any fixed share (cone-sweep's tau_S/I, a 1 % correction
+    to I omega^2, moved 4 % and two of its standard errors when one speed moved by 0.02 %)."""
+    points = list(recorded.get("points") or [])
+    try:
+        fit = protocol.fit(points)
+    except Exception as exc:  # noqa: BLE001 - as the runner records a failed quick fit
+        fit = {"model": getattr(protocol, "fit_model", "unknown"), "params": {},
+               "error": f"{type(exc).__name__}: {exc}"}
+    return [f"{line} (the fit of results.json's own points)"
+            for line in diff_results(normalise(fit), recorded.get("fit"), "results.fit", derived=True)]
+
+
 def _evidence_diffs(record: Any, evidence: Evidence, tolerant: frozenset[str]) -> list[str]:
     """The session's point events and readings files against what the replay parsed
     (:mod:`labkit.protocols.replay_evidence`; points with a protocol's image-analysis columns
@@ -215,8 +237,8 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
     points, dropped = check_carried_points(carried, protocol.plan(rig, params))
     done = {int(p["step"]) for p in points}
     faithful = chosen == "faithful"
-    clock = (ReplayClock(faithful_start(record), faithful_schedules(record, rig), recorded_runs(record.path))
-             if faithful else VirtualClock())
+    clock = (ReplayClock(faithful_start(record), faithful_schedules(record, rig), recorded_runs(record.path),
+                         site_root=RUN_SITE) if faithful else VirtualClock())
     collect = _Collect()
     evidence = Evidence(None if points or faithful else record.path / "readings", record.problems,
                         keep_readings=faithful and not points)
@@ -247,7 +269,8 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
     if recorded is None:
         diffs.append("recording has no results.json")
     else:
-        diffs += diff_within(replayed, recorded)
+        diffs += diff_within({**replayed, "fit": None}, {**recorded, "fit": None})
+        diffs += recorded_fit_diffs(protocol, recorded)
     if not points:  # a resumed session's readings files also hold the first run's readings
         diffs += faithful_reading_diffs(record, rig, evidence.readings)
     ports = [port.report() for port in runner.ports.values() if hasattr(port, "report")]

@@ -6,7 +6,8 @@ compared within stated tolerances and its *decisions* (steps, settles, drops, in
 the step of each) must be the same:
 
 * :data:`POINT_TOLERANCES`: per result key, relative or absolute; speeds and forces within
-  0.5 %.
+  0.5 %; a cone angle within :data:`REPLAY_FIT_RTOL` (its burst's frames are served as
+  recorded, so it is the same analysis of the same bytes).
 * :func:`decisions`: the decision log of a run from its events; :func:`diff_decisions`
   compares two logs (kinds, steps, causes and reasons exactly, settle times within
   :data:`SETTLE_TOL_S`).
@@ -55,6 +56,10 @@ POINT_TOLERANCES: dict[str, tuple[str, float]] = {
     "k": ("abs", 0.01),                  # v/w - 1: a difference of two 0.5 % numbers
     "drift_n": ("abs", 1e-4),            # N (0.01 g): rest readings of the balance
     "drift_g": ("abs", 0.01),            # the same in grams (a 0.006 g drift moved 0.5 % in a replay)
+    **{key: ("rel", REPLAY_FIT_RTOL) for key in (  # a burst's own frames analysed again: they are the
+        "cone_angle_rad", "cone_angle_deg",      # recorded bytes (labkit.devices.camera.faithful),
+        "cone_angle_stderr_rad", "cone_angle_stderr_deg",  # so only CPU rounding may differ, as at
+        "model_cone_angle_rad")},                # the exact level; the model's angle is the frames' meta
 }
 #: keys a newer labkit adds to a point (docs/decisions/0018-heartbeat-and-drift.md; the trial
 #: spreads of a spin-critical step since issue 27): a recording

@@ -71,18 +71,21 @@ def digest_problems(session: Path, meta: dict[str, Any]) -> list[str]:
 def timeline_problems(path: Path) -> list[str]:
     """A cassette's times against its own order (module docstring); damaged lines are the
     cassette reader's to report."""
+    from labkit.io.cassette_lines import LineDecoder
+
     out: list[str] = []
     last: dict[Any, tuple[float, int]] = {}
     latest: tuple[float, int] | None = None
-    from labkit.io.cassette_lines import LineDecoder
-
-    decoder = LineDecoder("")   # a repeat line ({"t": T, "r": K}) takes the thread of the event it repeats
+    decoder: LineDecoder | None = None
     with path.open(encoding="utf-8", errors="replace") as f:
         for number, line in enumerate(f, start=1):
             try:
                 event = json.loads(line)
-                event = decoder.decode(event) if number > 1 and isinstance(event, dict) else event
-            except (ValueError, RecursionError, TypeError):
+                if number == 1 and isinstance(event, dict) and event.get("schema") == 2:
+                    decoder = LineDecoder(str(event.get("port", "")))  # repeat lines name their thread
+                elif decoder is not None and isinstance(event, dict):
+                    event = decoder.decode(event)
+            except (ValueError, RecursionError, KeyError, TypeError):
                 continue  # a damaged line: the cassette reader names it
             t = event.get("t") if isinstance(event, dict) else None
             if number == 1 or not isinstance(t, int | float) or isinstance(t, bool):

@@ -187,3 +187,19 @@ def test_stand_stills_and_late_deliveries_are_recorded_on_the_real_clock(tmp_pat
     assert site.startswith(f"test_faithful_parts.py:{sys._getframe().f_code.co_name}+")  # this function
     assert runs["tach-reader"] and all(end - start >= 0.01 for start, end, _ in runs["tach-reader"])
     assert LATE_JOB not in recorded_ticks(tmp_path) and "tach-reader" not in recorded_ticks(tmp_path)
+
+
+def test_a_reader_run_a_tick_began_in_is_recorded_though_quick(tmp_path):
+    """A loaded recording: the speed loop ticked 0.6 ms after the tachometer's read, and the
+    reader handed its lines over 1 ms later: the tick saw the tachometer silent. Such a run is
+    recorded (its lines are delivered after the tick in the replay); a quick run no tick began
+    in is not."""
+    clock = RealClock()
+    recorder = record_ticks(clock, tmp_path)
+    assert recorder is not None
+    recorder("speed-control", 100.0)
+    recorder.done("tach-reader", 100.01, 100.0105)    # quick, no tick in it
+    recorder("speed-control", 100.0506)
+    recorder.done("tach-reader", 100.05, 100.0511)    # quick, but the tick began in it
+    recorder.close()
+    assert recorded_runs(tmp_path)["tach-reader"] == [(100.05, 100.0511, "")]

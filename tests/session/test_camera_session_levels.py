@@ -1,8 +1,8 @@
-"""A real-clock camera session is re-analysed, not replayed faithfully (the faithful level serves
-serial cassettes only): cone-sweep's and strobe-sweep's bursts are analysed again from the frame
-cassette (strobe-sweep with the status lines kept in readings/strobe.jsonl); a session the rule
-cannot re-analyse says its points were taken as recorded rather than claiming it recomputed them
-(issue 23)."""
+"""A camera session at the analysis-only level (a real-clock one replays faithfully:
+tests/session/test_camera_faithful_replay.py): cone-sweep's and strobe-sweep's bursts are
+analysed again from the frame cassette (strobe-sweep with the status lines kept in
+readings/strobe.jsonl); a session the rule cannot re-analyse says its points were taken as
+recorded rather than claiming it recomputed them (issue 23)."""
 
 import json
 import shutil
@@ -23,12 +23,11 @@ def _as_real_clock(name: str, tmp_path: Path) -> Path:
     return session
 
 
-def test_a_real_clock_cone_sweep_is_re_analysed_from_its_frames(tmp_path, capsys):
-    session = _as_real_clock("cone-sweep-clean", tmp_path)
-    assert main(["replay", str(session)]) == 0
+def test_a_real_clock_cone_sweep_is_re_analysed_from_its_frames(capsys):
+    assert main(["replay", "--analysis-only", str(SESSIONS / "real-cone-sweep")]) == 0
     captured = capsys.readouterr()
-    assert "cassettes/camera.jsonl holds camera frames" in captured.err
-    assert "6 points and the fit recomputed from the recorded bytes" in captured.out
+    assert "replay level: analysis only" in captured.out
+    assert "3 points and the fit recomputed from the recorded bytes" in captured.out
 
 
 def test_the_re_analysed_cone_angle_is_held_against_results_json(tmp_path, capsys):
@@ -41,7 +40,7 @@ def test_the_re_analysed_cone_angle_is_held_against_results_json(tmp_path, capsy
         if event.get("type") == "point" and event["point"].get("step") == 2:
             event["point"]["cone_angle_rad"] = results["points"][2]["cone_angle_rad"]
     (session / "events.jsonl").write_text("".join(json.dumps(e) + "\n" for e in events))
-    assert main(["replay", str(session)]) == 1
+    assert main(["replay", "--analysis-only", str(session)]) == 1
     assert "points[2].cone_angle_rad" in capsys.readouterr().err
 
 
@@ -55,9 +54,8 @@ def _without_digests(session: Path) -> None:
 
 def test_a_real_clock_strobe_sweep_is_re_analysed_from_its_frames_and_status_lines(tmp_path, capsys):
     session = _as_real_clock("strobe-sweep-clean", tmp_path)
-    assert main(["replay", str(session)]) == 0
+    assert main(["replay", "--analysis-only", str(session)]) == 0
     captured = capsys.readouterr()
-    assert "cassettes/camera.jsonl holds camera frames" in captured.err
     assert "4 points and the fit recomputed from the recorded bytes" in captured.out
     assert "taken as recorded" not in captured.out + captured.err
 
@@ -100,7 +98,7 @@ def test_a_strobe_session_without_status_lines_says_its_points_were_taken_as_rec
     _without_digests(session)
     (session / "readings" / "strobe.jsonl").unlink()
     (session / "readings" / "strobe.parquet").unlink(missing_ok=True)
-    assert main(["replay", str(session)]) == 0
+    assert main(["replay", "--analysis-only", str(session)]) == 0
     captured = capsys.readouterr()
     assert "no strobe status lines in" in captured.err
     assert "points taken as recorded" in captured.out

@@ -100,3 +100,22 @@ def test_repeat_lines_of_two_threads_a_moment_apart_are_no_tampering(tmp_path):
     same = [header, keepalive, reply, {"t": 2.0005, "r": 2}, {"t": 2.0004, "r": 1}]  # the keep-alive twice
     cassette.write_text("".join(json.dumps(line) + "\n" for line in same))
     assert any("goes back from 2.0005 (line 4, the same thread)" in p for p in timeline_problems(cassette))
+
+
+def test_repeat_lines_of_a_compact_cassette_are_checked_in_their_own_thread(tmp_path):
+    # schema 2 writes an event seen recently as {"t": T, "r": K}: its thread is the repeated
+    # event's, so a keep-alive's repeat a little after the control thread's line is no time going
+    # back (it was named "the same thread" in a loaded real-clock recording), a control repeat
+    # going back from the control thread's own last line is
+    from labkit.session.integrity import timeline_problems
+
+    cassette = tmp_path / "m.jsonl"
+    _write(cassette, [json.dumps({"format": "labkit-cassette", "schema": 2, "port": "m"}),
+                      '{"t":1.0,"dir":"ctl","event":"reset_input_buffer","th":"control"}',
+                      '{"t":1.05,"dir":"tx","data":"x","th":"keepalive"}',
+                      '{"t":1.1,"r":1}',
+                      '{"t":1.08,"r":2}',
+                      '{"t":1.07,"r":1}'])
+    problems = timeline_problems(cassette)
+    assert len(problems) == 1, problems
+    assert f"{cassette}:6: time 1.07 goes back from 1.08 (line 5, the same thread)" in problems[0]

@@ -1,7 +1,8 @@
 """The camera device: a frame source behind a grab thread, opened from a URL like every device.
 
 :func:`open_camera` turns a rig-file port URL into a :class:`Camera` (``record://`` wraps a
-source and stores every frame handed to the run; ``replay://`` serves a frame cassette).
+source and stores every frame handed to the run; ``replay://`` serves a frame cassette, with
+``?mode=faithful`` at its recorded times, burst by burst: :mod:`labkit.devices.camera.faithful`).
 
 Live sources (a webcam, an MJPEG stream) are drained all the time by a grab thread: OpenCV's
 queued buffers would otherwise hand a slow reader frames several periods old. Frames that arrive
@@ -23,6 +24,7 @@ from typing import Any, ClassVar
 
 from labkit.devices.base import Device
 from labkit.devices.camera.cassette import FrameCassetteWriter, ReplaySource
+from labkit.devices.camera.faithful import FaithfulFrameSource
 from labkit.devices.camera.frames import CameraSettings, Frame
 from labkit.devices.camera.sources import HttpMjpegSource, SourceStopped, V4l2Source
 from labkit.devices.camera.urls import DEFAULT_TIMEOUT_S, parse_camera_url
@@ -124,6 +126,9 @@ class Camera(Device):
         if n < 1:
             raise ValueError("a burst needs at least one frame")
         limit = self.timeout_s if timeout_s is None else timeout_s
+        begin = getattr(self.source, "begin_burst", None)
+        if begin is not None:  # a faithful replay matches the burst to the recording's
+            begin(n, step)
         frames = self._pull(n, limit) if not self.source.live else self._wait(n, limit)
         if self.recorder is not None:
             self.recorder.write(frames, step)
@@ -220,7 +225,8 @@ def open_camera(url: str, clock: Clock, name: str = "camera", **options: Any) ->
     timeout = DEFAULT_TIMEOUT_S
     if scheme == "replay":
         spec = parse_replay_url(url)
-        source: Any = ReplaySource(spec.cassette, spec.mode)
+        source: Any = (FaithfulFrameSource(spec.cassette) if spec.mode == "faithful"
+                       else ReplaySource(spec.cassette, spec.mode))
     else:
         inner = url
         if scheme == "record":
