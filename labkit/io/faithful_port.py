@@ -219,6 +219,13 @@ class FaithfulSerial(ClockedSerial):
                 "identical": count["identical"], "near": count["near"], "repeats": self._repeats,
                 "not_repeated": count["pending"], "held_up": self._held_writes + self._stalls}
 
+    def holding(self) -> dict[str, int]:
+        """What the port holds in memory now: recorded writes (read ahead of the clock and not
+        yet left behind by the window) and device items scheduled; flat in the cassette's length."""
+        with self._lock:
+            writes = len(self._session.writes) if self._session is not None else 0
+            return {"writes": writes, "due": len(self._due) + len(self._held)}
+
     # -- the time line ------------------------------------------------------------------
     def _push(self, at: float, item: DeviceBytes) -> None:
         heapq.heappush(self._due, (at, item.index, next(self._seq), item))
