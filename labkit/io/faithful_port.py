@@ -35,6 +35,10 @@ recorded device behaved, on one time line:
   recording read them (a ``record://`` port's ``read_at``), so drivers timestamp a line
   (:func:`labkit.io.calls.read_time`) as the recording did, not at their next poll.
 
+The cassette is read as the clock goes (:mod:`labkit.io.faithful_sessions`): to
+:data:`~labkit.io.faithful_sessions.LOOKAHEAD_S` past the clock, its writes forgotten once the
+window has left them behind, so memory is flat in the recording's length.
+
 A write with no counterpart within the window that the recording sent later (within
 :data:`HELD_UP_S`) waits for that time: the recording's program was held up there. Any other
 write with no recorded counterpart within the window raises

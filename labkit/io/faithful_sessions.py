@@ -28,9 +28,10 @@ from labkit.io.cassette import CassetteReader
 from labkit.io.replay_stream import EventQueue, event_kind, is_open
 
 #: how far (s) past the clock a session is read: beyond every write a write at the clock may
-#: match or wait for (labkit.io.faithful_port.SETPOINT_WINDOW_S, HELD_UP_S) and a reply's
-#: usual latency
-LOOKAHEAD_S = 4.0
+#: match or wait for (labkit.io.faithful_port.SETPOINT_WINDOW_S, HELD_UP_S) and beyond a
+#: stalled recording's late reply (a stall is measured when its write is matched, from the
+#: reply read by then)
+LOOKAHEAD_S = 10.0
 #: writes older than the match window by this much (s) are forgotten
 FORGET_MARGIN_S = 1.0
 #: how many recent writes a reading thread's bytes are paired against (its own last write)
