@@ -216,7 +216,11 @@ class FaithfulSerial(ClockedSerial):
         dropped. Reads the rest of the cassette (its writes not sent again): call it last."""
         count: Counter[str] = Counter()
         with self._lock:
-            for session in [*self._used, *(self._sessions or ())]:
+            for session in self._used:
+                session.skip_rest()
+                count += session.states()
+            # the sessions never opened, each read to its end before the next is taken
+            for session in self._sessions or ():
                 session.skip_rest()
                 count += session.states()
         return {"port": self.port_name, "recorded_writes": sum(count.values()),

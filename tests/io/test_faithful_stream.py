@@ -13,13 +13,19 @@ from labkit.io.faithful_sessions import FORGET_MARGIN_S, LOOKAHEAD_S
 from labkit.io.ports import open_port
 from labkit.io.replay_clock import ReplayClock
 
-MOTOR = Path(__file__).resolve().parents[2] / "recordings/sessions/real-speed-sweep/cassettes/rotor_motor.jsonl"
+RECORDING = Path(__file__).resolve().parents[2] / "recordings/sessions/real-speed-sweep"
+MOTOR = RECORDING / "cassettes" / "rotor_motor.jsonl"
 
 
 def recorded_writes(path: Path) -> tuple[float, list[tuple[float, bytes]]]:
     reader = CassetteReader(path)
     origin = float(reader.header["clock_origin"])
     return origin, [(origin + e["t"], e["bytes"]) for e in reader if e["dir"] == "tx"]
+
+
+def reopened(path: Path) -> float:
+    """The cassette time of the port's second open."""
+    return [e["t"] for e in CassetteReader(path) if e["dir"] == "ctl" and e.get("event") == "open"][1]
 
 
 def most_in_any_span(times: list[float], span: float) -> int:
@@ -66,3 +72,36 @@ def test_a_replay_that_stops_early_still_counts_every_recorded_write():
     assert report["recorded_writes"] == len(writes)
     assert report["identical"] == len(half)
     assert report["not_repeated"] == len(writes) - len(half)
+
+
+def test_the_report_counts_the_writes_of_sessions_the_replay_never_opened(tmp_path):
+    """A balance recorded in two open/close sessions (and a third open), replayed through its
+    first only: the report still counts the writes of the other two, read from the cassette."""
+    import labkit.emulators  # noqa: F401 - registers sim://
+    from labkit.devices.registry import driver_class
+    from labkit.io.clock import RealClock
+
+    cassette = tmp_path / "balance.jsonl"
+    url = f"record://sim://mtsics?seed=3&cassette={cassette}&port=balance"
+    real = RealClock()
+    port = open_port(url, clock=real, baudrate=9600, timeout=0.5)
+    balance = driver_class("balance", "mtsics")(port, real, name="balance")
+    recorded = [balance.read() for _ in range(3)]
+    for _ in range(2):
+        port.close()
+        port.open()
+        balance.read()
+    port.close()
+    origin, writes = recorded_writes(cassette)
+    clock = ReplayClock(origin)
+    port = open_port(f"replay://{cassette}?mode=faithful", clock=clock, baudrate=9600, timeout=0.5)
+    balance = driver_class("balance", "mtsics")(port, clock, name="balance")
+    replayed = [balance.read() for _ in range(3)]
+    report = port.report()
+    port.close()
+    assert [r.value for r in replayed] == [r.value for r in recorded]
+    second_open = reopened(cassette)
+    first_session = sum(1 for e in CassetteReader(cassette) if e["dir"] == "tx" and e["t"] < second_open)
+    assert report["recorded_writes"] == len(writes)
+    assert report["identical"] == first_session
+    assert report["not_repeated"] == len(writes) - first_session >= 2
