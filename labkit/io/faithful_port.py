@@ -35,6 +35,10 @@ recorded device behaved, on one time line:
   recording read them (a ``record://`` port's ``read_at``), so drivers timestamp a line
   (:func:`labkit.io.calls.read_time`) as the recording did, not at their next poll.
 
+The cassette is read as the clock goes (:mod:`labkit.io.faithful_sessions`): to
+:data:`~labkit.io.faithful_sessions.LOOKAHEAD_S` past the clock, its writes forgotten once the
+window has left them behind, so memory is flat in the recording's length.
+
 A write with no counterpart within the window that the recording sent later (within
 :data:`HELD_UP_S`) waits for that time: the recording's program was held up there. Any other
 write with no recorded counterpart within the window raises
@@ -44,15 +48,25 @@ recording holds around it. :meth:`FaithfulSerial.report` counts what was matched
 
 from __future__ import annotations
 
-import bisect
 import heapq
+import itertools
 import threading
+from collections import Counter
+from collections.abc import Iterator
 from typing import Any
 
 from labkit.errors import ReplayMismatch
-from labkit.io.cassette import Cassette, load_cassette
+from labkit.io.cassette import CassetteReader
 from labkit.io.clocked import LINE_SETTINGS, REAL_POLL_S, VIRTUAL_POLL_S, ClockedSerial, poll_step
-from labkit.io.faithful_sessions import DeviceBytes, FaithfulSession, faithful_sessions
+from labkit.io.faithful_sessions import (
+    FORGET_MARGIN_S,
+    LOOKAHEAD_S,
+    DeviceBytes,
+    FaithfulSession,
+    RecordedWrite,
+    open_sessions,
+    typical_latencies,
+)
 from labkit.io.replay_port import rebuild_error, render_bytes
 from labkit.io.urls import parse_replay_url
 
@@ -97,20 +111,22 @@ def same_command(a: bytes, b: bytes) -> bool:
 
 
 class FaithfulSerial(ClockedSerial):
-    """A port serving a real-clock cassette faithfully (see the module docstring)."""
+    """A port serving a real-clock cassette faithfully (see the module docstring), read as the
+    clock goes (:mod:`labkit.io.faithful_sessions`)."""
 
     def __init__(self, *args, **kwargs) -> None:
-        self.cassette: Cassette | None = None
+        self.cassette_path = ""
         self.port_name = ""
         self.stream = False
         self.setpoints = False
         self.window = WINDOW_S
         self.origin: float | None = None
-        self.sessions: list[FaithfulSession] = []
-        self._next_session = 0
+        self._sessions: Iterator[FaithfulSession] | None = None
+        self._used: list[FaithfulSession] = []  # the sessions opened so far (their counts)
         self._session: FaithfulSession | None = None
-        self._times: list[float] = []
-        self._due: list[tuple[float, int]] = []   # (arrival time, device item) heap
+        self._due: list[tuple[float, int, int, DeviceBytes]] = []  # (arrival, item, seq, item) heap
+        self._seq = itertools.count()
+        self._held: list[DeviceBytes] = []
         self._buffer = bytearray()
         self._dead: dict[str, Any] | None = None
         #: when the bytes the last read returned arrived (labkit.io.calls.read_time)
@@ -126,26 +142,16 @@ class FaithfulSerial(ClockedSerial):
     def open(self) -> None:
         self._require_openable()
         clock = self._resolve_clock()
-        if self.cassette is None:
-            spec = parse_replay_url(self.portstr)
-            self.stream, self.setpoints = spec.stream, spec.setpoints
-            default = SETPOINT_WINDOW_S if self.setpoints else WINDOW_S
-            self.window = spec.window if spec.window is not None else default
-            self.cassette = load_cassette(spec.cassette)
-            self.port_name = self.cassette.port
-            origin = self.cassette.header.get("clock_origin")
-            if not isinstance(origin, int | float):  # an older cassette: aligned at its open
-                first_open = next((e["t"] for e in self.cassette.events
-                                   if e["dir"] == "ctl" and e.get("event") == "open"), 0.0)
-                origin = clock.now() - float(first_open)
-            self.origin = float(origin)
-            self.sessions = faithful_sessions(self.cassette, self.origin, self.stream)
-        if self._next_session >= len(self.sessions):
+        if self._sessions is None:
+            self._sessions = self._load(clock.now())
+        if self._session is not None:
+            self._session.skip_rest()
+        session = next(self._sessions, None)
+        if session is None:
             raise ReplayMismatch(
-                f"replay port {self.port_name!r} ({self.cassette.path}): opened "
-                f"{self._next_session + 1} times but the recording opened it {len(self.sessions)} time(s)")
-        session = self.sessions[self._next_session]
-        self._next_session += 1
+                f"replay port {self.port_name!r} ({self._path()}): opened "
+                f"{len(self._used) + 1} times but the recording opened it {len(self._used)} time(s)")
+        self._used.append(session)
         origin = self.origin
         assert origin is not None  # set with the cassette on the first open, above
         opened_at = origin + float((session.open_event or {}).get("t", 0.0))
@@ -157,19 +163,38 @@ class FaithfulSerial(ClockedSerial):
             raise rebuild_error(session.open_error)
         self.is_open = True
 
+    def _load(self, now: float) -> Iterator[FaithfulSession]:
+        """The cassette's sessions, read as the replay goes (a polled port's typical reply
+        latencies first, from a pass over the whole cassette)."""
+        spec = parse_replay_url(self.portstr)
+        self.stream, self.setpoints = spec.stream, spec.setpoints
+        default = SETPOINT_WINDOW_S if self.setpoints else WINDOW_S
+        self.window = spec.window if spec.window is not None else default
+        reader = CassetteReader(spec.cassette)
+        self.cassette_path, self.port_name = str(reader.path), reader.port
+        origin = reader.header.get("clock_origin")
+        if not isinstance(origin, int | float):  # an older cassette: aligned at its open
+            first_open = next((e["t"] for e in CassetteReader(spec.cassette)
+                               if e["dir"] == "ctl" and e.get("event") == "open"), 0.0)
+            origin = now - float(first_open)
+        self.origin = float(origin)
+        polled = not (self.stream or self.setpoints)  # only a polled port's stalls are measured
+        return open_sessions(reader, self.origin, self.stream,
+                             typical_latencies(spec.cassette) if polled else None)
+
     def _start_session(self, session: FaithfulSession) -> None:
         self._session = session
-        self._times = [w.t for w in session.writes]
         self._buffer = bytearray()
-        self._held: list[int] = []
+        self._held = []
         self._dead = None
-        first_write = session.writes[0].before if session.writes else len(session.device)
+        self._due = []
         now = self._resolve_clock().now()
-        # on a polled port, what the device said before the first command (a power-on
-        # banner) was there when the program began to talk
-        self._due = [(min(session.device[i].t, now) if not self.stream and i < first_write
-                      else session.device[i].t, i) for i in session.unsolicited]
-        heapq.heapify(self._due)
+        if not self.stream:
+            # on a polled port, what the device said before the first command (a power-on
+            # banner) was there when the program began to talk
+            for item in session.read_to_first_write():
+                self._push(min(item.t, now), item)
+        self._advance(now)
 
     def _check_settings(self, session: FaithfulSession) -> None:
         recorded = (session.open_event or {}).get("serial") or {}
@@ -181,45 +206,81 @@ class FaithfulSerial(ClockedSerial):
                     f"{actual[key]!r} but the recording used {key}={recorded[key]!r}")
 
     def _path(self) -> str:
-        return str(self.cassette.path) if self.cassette else self.portstr
+        return self.cassette_path or self.portstr
 
     def close(self) -> None:  # what was not sent again is counted (report), not an error
         self.is_open = False
 
     def report(self) -> dict[str, Any]:
-        """What this port's replay matched: writes identical / near / not repeated, replies dropped."""
-        writes = [w for s in self.sessions for w in s.writes]
-        count = {state: sum(1 for w in writes if w.state == state)
-                 for state in ("identical", "near", "pending")}
-        return {"port": self.port_name, "recorded_writes": len(writes), "identical": count["identical"],
-                "near": count["near"], "repeats": self._repeats, "not_repeated": count["pending"],
-                "held_up": self._held_writes + self._stalls}
+        """What this port's replay matched: writes identical / near / not repeated, replies
+        dropped. Reads the rest of the cassette (its writes not sent again): call it last."""
+        count: Counter[str] = Counter()
+        with self._lock:
+            for session in self._used:
+                session.skip_rest()
+                count += session.states()
+            # the sessions never opened, each read to its end before the next is taken
+            for session in self._sessions or ():
+                session.skip_rest()
+                count += session.states()
+        return {"port": self.port_name, "recorded_writes": sum(count.values()),
+                "identical": count["identical"], "near": count["near"], "repeats": self._repeats,
+                "not_repeated": count["pending"], "held_up": self._held_writes + self._stalls}
+
+    def holding(self) -> dict[str, int]:
+        """What the port holds in memory now: recorded writes (read ahead of the clock and not
+        yet left behind by the window) and device items scheduled; flat in the cassette's length."""
+        with self._lock:
+            writes = len(self._session.writes) if self._session is not None else 0
+            return {"writes": writes, "due": len(self._due) + len(self._held)}
 
     # -- the time line ------------------------------------------------------------------
-    def _arrive(self, now: float) -> None:
-        """Move every device item due by ``now`` into the input buffer (or kill the port)."""
+    def _push(self, at: float, item: DeviceBytes) -> None:
+        heapq.heappush(self._due, (at, item.index, next(self._seq), item))
+
+    def _advance(self, now: float) -> None:
+        """Read the cassette to :data:`LOOKAHEAD_S` past ``now``, schedule the device bytes read
+        (unasked ones at their time, a reply to a write matched already as if read with it) and
+        forget the writes the window has left behind."""
         session = self._session
         assert session is not None
+        for item in session.read_until(now + LOOKAHEAD_S):
+            if item.asked is None:
+                self._push(item.t, item)
+            elif item.asked.accepted_at is not None:
+                self._push(self._reply_arrival(item.asked, item, item.asked.accepted_at, True), item)
+        session.forget_before(now - self.window - FORGET_MARGIN_S)
+
+    def _arrive(self, now: float) -> None:
+        """Move every device item due by ``now`` into the input buffer (or kill the port)."""
+        self._advance(now)
         while self._due and self._due[0][0] <= now + TIME_EPS and self._dead is None:
-            due, index = heapq.heappop(self._due)
-            item = session.device[index]
+            due, _, _, item = heapq.heappop(self._due)
             if item.gate is not None and self._held_back(item, now):
-                self._held.append(index)  # not before the command it may answer (stream ports)
+                self._held.append(item)  # not before the command it may answer (stream ports)
                 continue
-            self._due_now(index, due)
-        for index in [i for i in self._held if not self._held_back(session.device[i], now)]:
-            self._held.remove(index)
-            self._due_now(index, now)
+            self._due_now(item, due)
+        for item in [i for i in self._held if not self._held_back(i, now)]:
+            self._held.remove(item)
+            self._due_now(item, now)
 
     def _held_back(self, item: DeviceBytes, now: float) -> bool:
         """A stream port's bytes recorded within the window after a write wait for that write
         (the reply to a configuration command), at most the window past their time."""
-        assert self._session is not None and item.gate is not None
-        write = self._session.writes[item.gate]
+        write = item.gate
+        assert write is not None
         return write.state == "pending" and item.t - write.t <= self.window and now < item.t + self.window
 
     def _next_arrival(self) -> float | None:
-        return self._due[0][0] if self._due and self._dead is None else None
+        """When the next device bytes arrive: the earliest scheduled, or the end of what was
+        read of the cassette (bytes not read yet come after it)."""
+        if self._dead is not None:
+            return None
+        session = self._session
+        ahead = session.frontier if session is not None and not session.ended else None
+        due = self._due[0][0] if self._due else None
+        return min((t for t in (due, ahead) if t is not None), default=None)
+
     def _raise_if_dead(self) -> None:
         if self._dead is not None and not self._buffer:
             raise rebuild_error(self._dead)
@@ -229,8 +290,10 @@ class FaithfulSerial(ClockedSerial):
         self._require_open()
         data = bytes(data)
         clock = self._resolve_clock()
-        now = clock.now()
-        later = self._held_up(data, now)
+        with self._lock:
+            now = clock.now()
+            self._advance(now)
+            later = self._held_up(data, now)
         if later is not None and clock.is_virtual:
             self._held_writes += 1
             clock.sleep_until(later)  # the recording's program sent it then: it was held up
@@ -239,31 +302,28 @@ class FaithfulSerial(ClockedSerial):
             self._arrive(now)
             if self._dead is not None:
                 raise rebuild_error(self._dead)
-            index, how = self._match(data, now)
-            if index is None:
+            write, how = self._match(data, now)
+            if write is None:
                 raise ReplayMismatch(self._mismatch_text(data, now))
-            session = self._session
-            assert session is not None  # an open port is in one of the recording's sessions
-            first = session.writes[index].state == "pending"
-            self._accept(index, how, now)
-            stalled = self._stall(index) if first and not self.setpoints else 0.0
+            first = write.state == "pending"
+            self._accept(write, how, now)
+            stalled = self._stall(write) if first and not self.setpoints else 0.0
         if stalled > 0 and clock.is_virtual:
             self._stalls += 1
             clock.sleep(stalled)  # the recording's program stood still here (see _stall)
         return len(data)
 
-    def _stall(self, index: int) -> float:
+    def _stall(self, write: RecordedWrite) -> float:
         """How long the recording's program stood still after this write: its reply took longer
         than this command's typical reply by more than :data:`STALL_S` (a loaded PC did not run
         the reading thread). The replay stands still as long, so the driver, on the replay's
         clock, does not time out and send the command again where the recording's did not."""
         session = self._session
         assert session is not None
-        write = session.writes[index]
         if not write.replies:
             return 0.0
         typical = session.typical_latency.get(write.data)
-        latency = session.device[write.replies[0]].t - write.t
+        latency = write.replies[0].t - write.t
         extra = latency - typical if typical is not None else 0.0
         return extra if extra > STALL_S else 0.0
 
@@ -274,19 +334,18 @@ class FaithfulSerial(ClockedSerial):
         motor reply was late), and the replay waits as it did."""
         session = self._session
         assert session is not None
-        lo = bisect.bisect_left(self._times, now - self.window)
-        hi = bisect.bisect_right(self._times, now + self.window)
         # an instrument's poll is served once (each recorded reply counts in an average); a
         # motor controller's keep-alives and status polls may repeat
-        for w in session.writes[lo:hi]:
+        for w in session.within(now - self.window, now + self.window):
             if w.data == data and (self.setpoints or w.state == "pending"):
                 return None
             if self.setpoints and not w.replies and same_command(w.data, data):
                 return None
-        end = bisect.bisect_right(self._times, now + HELD_UP_S)
-        later = next((w.t for w in session.writes[hi:end] if w.data == data and w.state == "pending"), None)
+        later = next((w.t for w in session.within(now + self.window, now + HELD_UP_S, after=True)
+                      if w.data == data and w.state == "pending"), None)
         return None if later is None else later - self.window / 2
-    def _match(self, data: bytes, now: float) -> tuple[int | None, str]:
+
+    def _match(self, data: bytes, now: float) -> tuple[RecordedWrite | None, str]:
         """The recorded write within the window with the same bytes: on a setpoint port the
         nearest (one not matched yet wins a tie; an earlier match again is a keep-alive or
         status poll sent more often than recorded), else the earliest not matched yet (an
@@ -294,67 +353,62 @@ class FaithfulSerial(ClockedSerial):
         port then the nearest write of the same command with another value that had no reply."""
         session = self._session
         assert session is not None
-        lo = bisect.bisect_left(self._times, now - self.window)
-        hi = bisect.bisect_right(self._times, now + self.window)
         # sort keys: (distance in time, served already, index) for a motor controller's write,
         # (served already, time or distance, index) for an instrument's poll
-        same: tuple[float, float, int] | None = None
-        near: tuple[float, float, int] | None = None
-        for i in range(lo, hi):
-            write = session.writes[i]
+        same: tuple[float, float, int, RecordedWrite] | None = None
+        near: tuple[float, float, int, RecordedWrite] | None = None
+        for write in session.within(now - self.window, now + self.window):
             # a motor controller's write: the nearest; an instrument's poll: the earliest not
             # served yet (its replies keep the recording's order and pace)
             pending = write.state == "pending"
-            key: tuple[float, float, int] = ((abs(write.t - now), not pending, i) if self.setpoints
-                   else (not pending, write.t if pending else abs(write.t - now), i))
+            key = ((abs(write.t - now), not pending, write.index, write) if self.setpoints
+                   else (not pending, write.t if pending else abs(write.t - now), write.index, write))
             if write.data == data:
-                same = key if same is None or key < same else same
+                same = key if same is None or key[:3] < same[:3] else same
             elif self.setpoints and not write.replies and same_command(write.data, data):
-                near = key if near is None or key < near else near
+                near = key if near is None or key[:3] < near[:3] else near
         if same is not None:
-            return same[2], "identical"
+            return same[3], "identical"
         if near is not None:
-            return near[2], "near"
+            return near[3], "near"
         return None, ""
 
-    def _accept(self, index: int, how: str, now: float) -> None:
-        session = self._session
-        assert session is not None
-        write = session.writes[index]
+    def _reply_arrival(self, write: RecordedWrite, item: DeviceBytes, now: float, first: bool) -> float:
+        """When a reply to ``write``, matched at ``now``, arrives (module docstring)."""
+        # an instrument's reply arrives whole with its first bytes: lines the recording's
+        # program read only later (a stale duplicate it dropped before its next command)
+        # must not turn up after that command
+        recorded = (item if self.setpoints else write.replies[0]).t
+        if self.setpoints:
+            return now + min(recorded - write.t, STATUS_REPLY_S)
+        if first:
+            return reply_time(now, write.t, recorded)
+        return now + recorded - write.t
+
+    def _accept(self, write: RecordedWrite, how: str, now: float) -> None:
         first = write.state == "pending"
         if first:
             write.state = how
+            write.accepted_at = now
         else:
             self._repeats += 1
         if self.stream:  # bytes held back for this write come after it
-            for i in [i for i in self._held if session.device[i].gate == index]:
-                self._held.remove(i)
-                heapq.heappush(self._due, (now + session.device[i].t - write.t, i))
+            for item in [i for i in self._held if i.gate is write]:
+                self._held.remove(item)
+                self._push(now + item.t - write.t, item)
         else:  # what the device said before this command was read before it
-            early = [(t, i) for t, i in self._due if i < write.before]
+            early = [e for e in self._due if e[1] < write.before]
             if early:
-                self._due = [(t, i) for t, i in self._due if i >= write.before]
+                self._due = [e for e in self._due if e[1] >= write.before]
                 heapq.heapify(self._due)
-                for _, i in sorted(early, key=lambda e: e[1]):
-                    self._due_now(i, now)
+                for entry in sorted(early, key=lambda e: (e[1], e[2])):
+                    self._due_now(entry[3], now)
         for item in write.replies:
-            # an instrument's reply arrives whole with its first bytes: lines the recording's
-            # program read only later (a stale duplicate it dropped before its next command)
-            # must not turn up after that command
-            recorded = session.device[item if self.setpoints else write.replies[0]].t
-            if self.setpoints:
-                arrive = now + min(recorded - write.t, STATUS_REPLY_S)
-            elif first:
-                arrive = reply_time(now, write.t, recorded)
-            else:
-                arrive = now + recorded - write.t
-            heapq.heappush(self._due, (arrive, item))
+            self._push(self._reply_arrival(write, item, now, first), item)
 
-    def _due_now(self, index: int, at: float) -> None:
-        """Device item ``index`` arrives at ``at`` (the newest arrival is what ``read_at``
+    def _due_now(self, item: DeviceBytes, at: float) -> None:
+        """Device item ``item`` arrives at ``at`` (the newest arrival is what ``read_at``
         reports: the recording's read of it was no earlier)."""
-        assert self._session is not None
-        item = self._session.device[index]
         if self._dead is not None:
             return
         if item.kind == "error":
@@ -366,9 +420,7 @@ class FaithfulSerial(ClockedSerial):
     def _mismatch_text(self, data: bytes, now: float) -> str:
         session = self._session
         assert session is not None
-        lo = bisect.bisect_left(self._times, now - self.window)
-        hi = bisect.bisect_right(self._times, now + self.window)
-        around = session.writes[lo:hi]
+        around = session.within(now - self.window, now + self.window)
         kinds: dict[bytes, int] = {}
         for w in around:
             kinds[w.data] = kinds.get(w.data, 0) + 1

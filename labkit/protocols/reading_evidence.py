@@ -23,6 +23,8 @@ from __future__ import annotations
 
 import bisect
 import math
+from array import array
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -38,20 +40,23 @@ MAX_LISTED = 5
 class RxStream:
     """A cassette's received bytes as one stream, each byte's arrival on the recording's clock."""
 
-    def __init__(self, cassette: Any) -> None:
-        origin = cassette.header.get("clock_origin")
+    def __init__(self, path: Path) -> None:
+        from labkit.io.cassette import CassetteReader
+
+        reader = CassetteReader(path)  # read as a stream: the bytes and 24 bytes per chunk kept
+        origin = reader.header.get("clock_origin")
         self.origin = float(origin) if isinstance(origin, int | float) else 0.0
-        chunks = [e for e in cassette.events if e["dir"] == "rx"]
-        self.data = b"".join(e["bytes"] for e in chunks)
-        self.ends: list[int] = []   # offset after each chunk's last byte
-        self.times: list[float] = []
-        self.lines: list[int] = []
-        end = 0
-        for e in chunks:
-            end += len(e["bytes"])
-            self.ends.append(end)
-            self.times.append(self.origin + float(e["t"]))
-            self.lines.append(int(e.get("line", 0)))
+        data = bytearray()
+        self.ends = array("q")   # offset after each chunk's last byte
+        self.times = array("d")
+        self.lines = array("q")
+        for e in reader:
+            if e["dir"] == "rx":
+                data += e["bytes"]
+                self.ends.append(len(data))
+                self.times.append(self.origin + float(e["t"]))
+                self.lines.append(int(e.get("line", 0)))
+        self.data = bytes(data)
 
     def arrival(self, end: int) -> tuple[float, int]:
         """When the byte before offset ``end`` arrived, and the cassette line that brought it."""
@@ -70,10 +75,6 @@ class RxStream:
                 return at + len(raw)
             at = self.data.find(raw, at + 1)
         return None
-
-
-def _parsed_values(replayed: list[dict[str, Any]]) -> dict[str, tuple[Any, Any]]:
-    return {str(r.get("raw")): (r.get("value"), r.get("unit")) for r in replayed}
 
 
 def _same_number(a: Any, b: Any) -> bool:
@@ -96,18 +97,18 @@ def _expected(rec: dict[str, Any], parsed: dict[str, tuple[Any, Any]],
     return (again.value, again.unit)
 
 
-def diff_readings_faithful(device: Any, replayed: list[dict[str, Any]], recorded: list[dict[str, Any]],
-                           cassette_path: Path, file: str) -> list[str]:
-    """Each recorded reading of ``device`` against its cassette (module docstring)."""
-    from labkit.io.cassette import load_cassette
+def diff_readings_faithful(device: Any, parsed: dict[str, tuple[Any, Any]],
+                           recorded: Iterable[tuple[int, dict[str, Any]]], cassette_path: Path,
+                           file: str) -> list[str]:
+    """Each recorded reading of ``device`` (``(file line, reading)``, read as they come) against
+    its cassette (module docstring); ``parsed``: the replay's value and unit by raw bytes."""
     from labkit.protocols.reanalyse import REPARSERS
 
-    stream = RxStream(load_cassette(cassette_path))
-    parsed = _parsed_values(replayed)
+    stream = RxStream(cassette_path)
     reparse = REPARSERS.get(device.protocol)
     out: list[str] = []
     start = 0
-    for line, rec in enumerate(recorded, start=1):
+    for line, rec in recorded:
         raw, t = rec.get("raw"), rec.get("t")
         if not isinstance(raw, str) or not raw or not isinstance(t, int | float):
             continue  # a reading without its bytes (an older labkit): nothing to hold it against
@@ -130,14 +131,19 @@ def diff_readings_faithful(device: Any, replayed: list[dict[str, Any]], recorded
     return out
 
 
-def faithful_reading_diffs(record: Any, rig: Any, replayed: dict[str, list[dict[str, Any]]]) -> list[str]:
-    """Every device's readings file against its cassette; ``replayed``: the replay's readings by
-    device (:class:`labkit.protocols.replay_evidence.Evidence`)."""
+def faithful_reading_diffs(record: Any, rig: Any, parsed: dict[str, dict[str, tuple[Any, Any]]]) -> list[str]:
+    """Every device's readings file against its cassette, both read as streams; ``parsed``: by
+    device, the value and unit the replay parsed from each reading's raw bytes
+    (:attr:`labkit.protocols.replay_evidence.Evidence.parsed`)."""
+    from labkit.session.paths import session_file
+    from labkit.session.reader import iter_jsonl_lines
+
     out: list[str] = []
     for role, dev in sorted(rig.devices.items()):
         file = record.path / "readings" / f"{role}.jsonl"
         cassette = record.path / "cassettes" / f"{role}.jsonl"
         if file.is_file() and cassette.is_file():
-            out += diff_readings_faithful(dev, replayed.get(role, []), record.readings(role), cassette,
-                                          str(file))
+            path = session_file(record.path, "readings", f"{role}.jsonl")
+            recorded = iter_jsonl_lines(path, record.problems)
+            out += diff_readings_faithful(dev, parsed.get(role, {}), recorded, cassette, str(file))
     return out

@@ -170,19 +170,19 @@ def faithful_start(record: SessionRecord) -> float:
 def faithful_schedules(record: SessionRecord, rig: Any) -> dict[str, list[float]]:
     """When the recording's jobs ran (clock readings): each stream reader at the reads it made
     (the cassette's ``rx`` events of its thread), the speed loop at its ticks (``clock.jsonl``)."""
-    from labkit.io.cassette import load_cassette
+    from labkit.io.cassette import CassetteReader
 
     schedules: dict[str, list[float]] = {}
     for role, dev in rig.devices.items():
         path = record.path / "cassettes" / f"{role}.jsonl"
         if not path.is_file() or not streams_unasked(dev.kind, dev.protocol):
             continue
-        cassette = load_cassette(path)
-        origin = cassette.header.get("clock_origin")
+        reader = CassetteReader(path)  # read as a stream: only the reads' times are kept
+        origin = reader.header.get("clock_origin")
         if isinstance(origin, int | float):
             job = f"{role}-reader"
-            schedules[job] = [origin + e["t"] for e in cassette.events
-                              if e["dir"] == "rx" and e.get("th") == job]
+            schedules[job] = [origin + e["t"] for e in reader if e["dir"] == "rx" and e.get("th") == job]
+        reader.close()
     schedules.update(recorded_ticks(record.path))
     return schedules
 
@@ -272,7 +272,7 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
         diffs += diff_within({**replayed, "fit": None}, {**recorded, "fit": None})
         diffs += recorded_fit_diffs(protocol, recorded)
     if not points:  # a resumed session's readings files also hold the first run's readings
-        diffs += faithful_reading_diffs(record, rig, evidence.readings)
+        diffs += faithful_reading_diffs(record, rig, evidence.parsed)
     ports = [port.report() for port in runner.ports.values() if hasattr(port, "report")]
     return ReplayOutcome(outcome, recorded, not diffs, diffs, warnings, "faithful", ports, replay_decisions,
                          dict(clock.repeated) if isinstance(clock, ReplayClock) else {})

@@ -30,8 +30,9 @@ class Evidence:
     """Sink keeping the replay's points, and comparing each reading the replay parses with the
     recorded one of the same device as it comes (:class:`ReadingsCheck`; ``readings_dir`` None:
     readings not compared), so memory does not grow with the readings. ``keep_readings``: also
-    keep every parsed reading by device (``readings``), for a faithful replay's check against
-    the cassettes' times (:func:`labkit.protocols.reading_evidence.faithful_reading_diffs`)."""
+    keep, by device, the value and unit parsed from each reading's raw bytes (``parsed``), for a
+    faithful replay's check against the cassettes
+    (:func:`labkit.protocols.reading_evidence.faithful_reading_diffs`)."""
 
     def __init__(self, readings_dir: Path | None = None, problems: list[str] | None = None,
                  keep_readings: bool = False) -> None:
@@ -40,7 +41,7 @@ class Evidence:
         self.problems = problems
         self.checks: dict[str, ReadingsCheck] = {}
         self.keep_readings = keep_readings
-        self.readings: dict[str, list[dict[str, Any]]] = {}
+        self.parsed: dict[str, dict[str, tuple[Any, Any]]] = {}
 
     def on_event(self, event: Any) -> None:
         kind = event.get("type")
@@ -51,7 +52,8 @@ class Evidence:
             if self.readings_dir is not None:
                 self._check(str(event.get("device"))).add(parsed)
             if self.keep_readings:
-                self.readings.setdefault(str(event.get("device")), []).append(parsed)
+                by_raw = self.parsed.setdefault(str(event.get("device")), {})
+                by_raw[str(parsed.get("raw"))] = (parsed.get("value"), parsed.get("unit"))
 
     def _check(self, device: str) -> ReadingsCheck:
         check = self.checks.get(device)
