@@ -135,6 +135,7 @@ def faithful_reading_diffs(record: Any, rig: Any, parsed: dict[str, dict[str, tu
     """Every device's readings file against its cassette, both read as streams; ``parsed``: by
     device, the value and unit the replay parsed from each reading's raw bytes
     (:attr:`labkit.protocols.replay_evidence.Evidence.parsed`)."""
+    from labkit.readings import declared
     from labkit.session.paths import session_file
     from labkit.session.reader import iter_jsonl_lines
 
@@ -144,6 +145,6 @@ def faithful_reading_diffs(record: Any, rig: Any, parsed: dict[str, dict[str, tu
         cassette = record.path / "cassettes" / f"{role}.jsonl"
         if file.is_file() and cassette.is_file():
             path = session_file(record.path, "readings", f"{role}.jsonl")
-            recorded = iter_jsonl_lines(path, record.problems)
+            recorded = declared(iter_jsonl_lines(path, record.problems))   # units from the descriptor
             out += diff_readings_faithful(dev, parsed.get(role, {}), recorded, cassette, str(file))
     return out

@@ -35,6 +35,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+from labkit.documents import FramesTaken
 from labkit.errors import LabkitError
 from labkit.protocols.context import RunContext
 from labkit.protocols.definition import ProtocolDef, Step
@@ -92,6 +93,11 @@ def strobe_frequencies(statuses: list[Any]) -> dict[str, Any]:
         out["problem"] = ("strobe flags during the burst: " + "; ".join(
             f"{f} ({STROBE_FLAGS[f][1] if f in STROBE_FLAGS else 'unknown flag'})" for f in bad))
     return out
+
+
+#: the ``device`` of the ``frames`` document a step writes for a recorded clip: its ``times`` are
+#: the window of status lines and speeds the clip was analysed with (no frames of a camera)
+CLIP_DEVICE = "clips"
 
 
 def burst_lines(statuses: list[Any], first: float, last: float) -> list[Any]:
@@ -330,8 +336,13 @@ class StrobeSweep(ProtocolDef):
             return burst_shot(frames, lines, speeds, (settings.fps, settings.size, settings.exposure_s),
                               mm_per_px)
         clip = _clip_of(Path(str(p["clips"])), step.index)
-        return {**clip_shot(str(clip), lines, speeds, float(p["exposure_s"]) or None, mm_per_px),
+        shot = {**clip_shot(str(clip), lines, speeds, float(p["exposure_s"]) or None, mm_per_px),
                 "clip": str(clip)}
+        # the window of status lines and speeds the clip was analysed with, kept in events.jsonl
+        # so the analysis-only level can analyse the clip again with the same lines
+        ctx.emit(FramesTaken(t=ctx.now(), device=CLIP_DEVICE, index=step.index, take=take,
+                             times=[first, last], verdict=str(shot["verdict"])))
+        return shot
 
     def run_step(self, ctx: RunContext, step: Step) -> dict[str, Any]:
         ctx.set(rotor=step.targets_rad_s["rotor"])
@@ -358,11 +369,10 @@ class StrobeSweep(ProtocolDef):
         recorded = point_event(events)
         if recorded is None:
             return None
-        if recorded.get("clip") is not None or "camera" not in run.rig.devices:
-            raise NotImplementedError(f"step {step} analysed a recorded clip ({recorded.get('clip')}) over a "
-                                      "window of the strobe's status lines the session does not record")
         statuses = recorded_statuses(run.record, run.params, run.notes)
         speeds_of = run.readings.get("rotor_tach", [])
+        if recorded.get("clip") is not None or "camera" not in run.rig.devices:
+            return self._reanalyse_clip(run, step, events, recorded, statuses, speeds_of)
         bursts = run.bursts()
         camera = (bursts.fps, bursts.size, bursts.exposure_s)
         mm_per_px = float(run.params["mm_per_px"]) or float(self._camera_scale(run.rig) or 0.0)
@@ -382,6 +392,33 @@ class StrobeSweep(ProtocolDef):
                 break
         retaken = take == 1
         return {"step": step, **step_point(recorded.get("target_rpm"), run.params, shot or {}, retaken)}
+
+    def _reanalyse_clip(self, run: Any, step: int, events: list[dict[str, Any]], recorded: dict[str, Any],
+                        statuses: list[Any], speeds_of: list[Any]) -> dict[str, Any]:
+        """A step that analysed a recorded clip: the clip analysed again with the status lines and
+        speeds of the window the run recorded (its ``frames`` documents of device
+        :data:`CLIP_DEVICE`), the retake too; a session recorded before those windows were kept
+        cannot be re-analysed and says so."""
+        windows = {int(e.get("take", 0)): e["times"] for e in events if e.get("type") == "frames"
+                   and e.get("device") == CLIP_DEVICE and len(e.get("times", [])) == 2}
+        clip = recorded.get("clip")
+        if not windows or clip is None:
+            raise NotImplementedError(f"step {step} analysed a recorded clip ({clip}) over a window of the "
+                                      "strobe's status lines this session does not record (recorded before "
+                                      "labkit kept it)")
+        if not Path(str(clip)).is_file():
+            raise NotImplementedError(f"step {step}'s clip {clip} is not there (a clip path is relative to "
+                                      "the folder the run started in)")
+        mm_per_px = float(run.params["mm_per_px"]) or float(self._camera_scale(run.rig) or 0.0)
+        exposure = float(run.params["exposure_s"]) or None
+        shot: dict[str, Any] = {}
+        for take in sorted(windows):
+            first, last = (float(x) for x in windows[take])
+            shot = {**clip_shot(str(clip), burst_lines(statuses, first, last),
+                                burst_speeds(speeds_of, first, last), exposure, mm_per_px), "clip": str(clip)}
+            if shot["verdict"] == "ok":
+                break
+        return {"step": step, **step_point(recorded.get("target_rpm"), run.params, shot, take == 1)}
 
     def fit(self, points: list[dict[str, Any]]) -> dict[str, Any]:
         from labkit.errors import FitError

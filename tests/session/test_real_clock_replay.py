@@ -84,9 +84,33 @@ def test_the_unplugged_tachometer_trips_the_same_interlock_in_the_same_step():
 @pytest.mark.parametrize("session", ALL, ids=[p.name for p in ALL])
 def test_analysis_only_recomputes_points_and_fit_of_every_shipped_recording(session, capsys):
     assert main(["replay", "--analysis-only", str(session)]) == 0
-    assert "replay level: analysis only" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "replay level: analysis only" in out
+    assert "recomputed from the recorded bytes" in out and "taken as recorded" not in out
     result = replay_session(session, level="analysis")
+    assert result.recomputed
     assert len(result.outcome.results["points"]) == len(load_session_record(session).results["points"])
+
+
+def test_a_clip_analysed_again_names_an_edited_phi(tmp_path, capsys):
+    """real-sketch-strobe-sweep analysed recorded clips (no camera): the run kept each clip's
+    window of status lines, so the analysis-only level analyses the clip again and an edited phi
+    (in results.json and events.jsonl, run.json's digests dropped) is named."""
+    copy = tmp_path / "edited"
+    shutil.copytree(RECORDINGS / "real-sketch-strobe-sweep", copy)
+    meta = json.loads((copy / "run.json").read_text())
+    meta.pop("digests", None)
+    (copy / "run.json").write_text(json.dumps(meta))
+    results = json.loads((copy / "results.json").read_text())
+    results["points"][1]["phi_rad"] *= 1.05
+    (copy / "results.json").write_text(json.dumps(results))
+    events = [json.loads(line) for line in (copy / "events.jsonl").read_text().splitlines()]
+    for event in events:
+        if event.get("type") == "point" and event["point"].get("step") == 1:
+            event["point"]["phi_rad"] = results["points"][1]["phi_rad"]
+    (copy / "events.jsonl").write_text("".join(json.dumps(e) + "\n" for e in events))
+    assert main(["replay", "--analysis-only", str(copy)]) == 1
+    assert "points[1].phi_rad" in capsys.readouterr().err
 
 
 def test_a_replay_that_diverges_names_the_step_and_no_motor_instruction(tmp_path, capsys):
