@@ -15,7 +15,7 @@ import pytest
 from labkit.cli import main
 from labkit.protocols.replay import choose_level, replay_session
 from labkit.protocols.replay_compare import REPLAY_FIT_RTOL, decisions
-from labkit.session import load_session
+from labkit.session import load_session_record
 
 SESSION = Path(__file__).resolve().parents[2] / "recordings" / "sessions" / "real-cone-sweep"
 
@@ -25,7 +25,7 @@ def test_a_real_clock_cone_sweep_replays_through_the_protocol(capsys):
     # in Runner.run called from labkit run's launcher, SESSION/clock.jsonl): repeated though the
     # replay calls the runner from labkit replay (ReplayClock.site_root), else the replayed
     # stop comes 2.4 s early and matches no recorded one
-    assert choose_level(load_session(SESSION)) == "faithful"
+    assert choose_level(load_session_record(SESSION)) == "faithful"
     assert main(["replay", str(SESSION)]) == 0
     out = capsys.readouterr().out
     assert "replay level: faithful" in out
@@ -34,7 +34,7 @@ def test_a_real_clock_cone_sweep_replays_through_the_protocol(capsys):
 
 
 def test_its_steps_speeds_and_cone_angles_are_the_recorded_ones():
-    record = load_session(SESSION)
+    record = load_session_record(SESSION)
     result = replay_session(SESSION)
     assert result.level == "faithful" and result.identical, result.differences[:5]
     assert [(d["decision"], d["step"]) for d in result.decisions] == \
