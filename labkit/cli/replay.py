@@ -104,12 +104,12 @@ def success_line(session: str, result) -> str:
                 "recomputed from them within tolerance of results.json")
     if result.level == "analysis":
         return (f"re-analysed {session}: {n} points and the fit recomputed from the recorded bytes, "
-                "within tolerance of results.json (speed and force 0.5 %)")
+                "within tolerance of results.json (measured values 0.5 %)")
     steps = sum(1 for d in result.decisions if d["decision"] == "step")
     ended = [d for d in result.decisions if d["decision"] in ("interlock", "fault")]
     how = f"; {ended[0]['decision']} in step {ended[0]['step'] + 1} as recorded" if ended else ""
-    return (f"replayed {session}: {n} points within tolerance of results.json (speed and force 0.5 %), "
-            f"the same decisions in {steps} steps{how}")
+    return (f"replayed {session}: {n} points within tolerance of results.json (measured values 0.5 %, "
+            f"image analyses 1e-6), the same decisions in {steps} steps{how}")
 
 
 def port_line(port: dict) -> str:
