@@ -167,9 +167,11 @@ def _labkit(*argv: str, **kw) -> subprocess.Popen:
 
 
 def test_ctrl_c_of_predict_does_not_speak_of_motors():
-    # a full prediction with its simulation check takes several seconds: Ctrl-C lands mid-work
+    # a prediction with a 200 000-cycle simulation check takes over 10 s: Ctrl-C lands
+    # mid-work however late this process wakes from its sleep on a loaded machine (with the
+    # default 2 000 cycles, about 3 s, a loaded CI box once saw predict finish first)
     proc = _labkit("predict", "--rotator", "cylinder:6x3mm", "--floator", "sphere:10mm", "--speed-rpm",
-                   "25000", stdout=subprocess.DEVNULL)
+                   "25000", "--verify-cycles", "200000", stdout=subprocess.DEVNULL)
     try:
         line = proc.stderr.readline().decode()
         assert "computing" in line
