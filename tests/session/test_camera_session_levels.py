@@ -8,6 +8,8 @@ import json
 import shutil
 from pathlib import Path
 
+from session_edits import scale_point, without_digests
+
 from labkit.cli import main
 
 SESSIONS = Path(__file__).resolve().parents[2] / "recordings" / "sessions"
@@ -32,24 +34,9 @@ def test_a_real_clock_cone_sweep_is_re_analysed_from_its_frames(capsys):
 
 def test_the_re_analysed_cone_angle_is_held_against_results_json(tmp_path, capsys):
     session = _as_real_clock("cone-sweep-clean", tmp_path)
-    results = json.loads((session / "results.json").read_text())
-    results["points"][2]["cone_angle_rad"] *= 1.05  # not what the frames give, in both files
-    (session / "results.json").write_text(json.dumps(results))
-    events = [json.loads(line) for line in (session / "events.jsonl").read_text().splitlines()]
-    for event in events:
-        if event.get("type") == "point" and event["point"].get("step") == 2:
-            event["point"]["cone_angle_rad"] = results["points"][2]["cone_angle_rad"]
-    (session / "events.jsonl").write_text("".join(json.dumps(e) + "\n" for e in events))
+    scale_point(session, 2, "cone_angle_rad", 1.05)  # not what the frames give
     assert main(["replay", "--analysis-only", str(session)]) == 1
     assert "points[2].cone_angle_rad" in capsys.readouterr().err
-
-
-def _without_digests(session: Path) -> None:
-    """As a session from before digests, or one whose editor fixed run.json too: only the
-    analysis rule can then see an edit."""
-    meta = json.loads((session / "run.json").read_text())
-    meta.pop("digests", None)
-    (session / "run.json").write_text(json.dumps(meta))
 
 
 def test_a_real_clock_strobe_sweep_is_re_analysed_from_its_frames_and_status_lines(tmp_path, capsys):
@@ -62,15 +49,8 @@ def test_a_real_clock_strobe_sweep_is_re_analysed_from_its_frames_and_status_lin
 
 def test_an_edited_phi_is_named_by_the_strobe_rule(tmp_path, capsys):
     session = _as_real_clock("strobe-sweep-clean", tmp_path)
-    _without_digests(session)
-    results = json.loads((session / "results.json").read_text())
-    results["points"][2]["phi_rad"] *= 1.05  # not what the frames give, in both files
-    (session / "results.json").write_text(json.dumps(results))
-    events = [json.loads(line) for line in (session / "events.jsonl").read_text().splitlines()]
-    for event in events:
-        if event.get("type") == "point" and event["point"].get("step") == 2:
-            event["point"]["phi_rad"] = results["points"][2]["phi_rad"]
-    (session / "events.jsonl").write_text("".join(json.dumps(e) + "\n" for e in events))
+    without_digests(session)
+    scale_point(session, 2, "phi_rad", 1.05)  # not what the frames give
     assert main(["replay", "--analysis-only", str(session)]) == 1
     assert "points[2].phi_rad" in capsys.readouterr().err
 
@@ -79,7 +59,7 @@ def test_an_edited_strobe_status_line_is_named(tmp_path, capsys):
     """The rotor frequency of every status line raised by 1 Hz in readings/strobe.jsonl (value
     untouched): the re-analysis uses the lines' bytes, so the points' f_rot no longer match."""
     session = _as_real_clock("strobe-sweep-clean", tmp_path)
-    _without_digests(session)
+    without_digests(session)
     path = session / "readings" / "strobe.jsonl"
     rows = [json.loads(line) for line in path.read_text().splitlines()]
     for row in rows:
@@ -95,7 +75,7 @@ def test_a_strobe_session_without_status_lines_says_its_points_were_taken_as_rec
     """A strobe-sweep recorded before labkit kept the status lines cannot be re-analysed: it says
     so rather than claiming it recomputed its points."""
     session = _as_real_clock("strobe-sweep-clean", tmp_path)
-    _without_digests(session)
+    without_digests(session)
     (session / "readings" / "strobe.jsonl").unlink()
     (session / "readings" / "strobe.parquet").unlink(missing_ok=True)
     assert main(["replay", "--analysis-only", str(session)]) == 0

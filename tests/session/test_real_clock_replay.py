@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from session_edits import scale_point, without_digests
 
 from labkit.cli import main
 from labkit.io.clock import RealClock, VirtualClock
@@ -98,17 +99,8 @@ def test_a_clip_analysed_again_names_an_edited_phi(tmp_path, capsys):
     (in results.json and events.jsonl, run.json's digests dropped) is named."""
     copy = tmp_path / "edited"
     shutil.copytree(RECORDINGS / "real-sketch-strobe-sweep", copy)
-    meta = json.loads((copy / "run.json").read_text())
-    meta.pop("digests", None)
-    (copy / "run.json").write_text(json.dumps(meta))
-    results = json.loads((copy / "results.json").read_text())
-    results["points"][1]["phi_rad"] *= 1.05
-    (copy / "results.json").write_text(json.dumps(results))
-    events = [json.loads(line) for line in (copy / "events.jsonl").read_text().splitlines()]
-    for event in events:
-        if event.get("type") == "point" and event["point"].get("step") == 1:
-            event["point"]["phi_rad"] = results["points"][1]["phi_rad"]
-    (copy / "events.jsonl").write_text("".join(json.dumps(e) + "\n" for e in events))
+    without_digests(copy)
+    scale_point(copy, 1, "phi_rad", 1.05)
     assert main(["replay", "--analysis-only", str(copy)]) == 1
     assert "points[1].phi_rad" in capsys.readouterr().err
 
