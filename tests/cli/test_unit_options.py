@@ -166,12 +166,19 @@ def _labkit(*argv: str, **kw) -> subprocess.Popen:
                             **kw)
 
 
+def _ctrl_c_reaches_python() -> None:
+    """In the child: SIGINT at its default, so Python installs its KeyboardInterrupt handler.
+    A shell without job control starts background commands with SIGINT ignored (`.ci/run &`),
+    and an ignored SIGINT is inherited: predict would never see this test's Ctrl-C."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def test_ctrl_c_of_predict_does_not_speak_of_motors():
-    # a prediction with a 200 000-cycle simulation check takes over 10 s: Ctrl-C lands
-    # mid-work however late this process wakes from its sleep on a loaded machine (with the
-    # default 2 000 cycles, about 3 s, a loaded CI box once saw predict finish first)
+    # a prediction with a 200 000-cycle simulation check takes over 10 s: Ctrl-C lands mid-work
+    # however late this process wakes from its sleep on a loaded machine
     proc = _labkit("predict", "--rotator", "cylinder:6x3mm", "--floator", "sphere:10mm", "--speed-rpm",
-                   "25000", "--verify-cycles", "200000", stdout=subprocess.DEVNULL)
+                   "25000", "--verify-cycles", "200000", stdout=subprocess.DEVNULL,
+                   preexec_fn=_ctrl_c_reaches_python)
     try:
         line = proc.stderr.readline().decode()
         assert "computing" in line
