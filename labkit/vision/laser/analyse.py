@@ -36,7 +36,7 @@ from labkit.vision.shared.frames import FrameSource, open_frames
 from labkit.vision.shared.verdict import Verdict
 
 if TYPE_CHECKING:
-    from concurrent.futures import Future
+    from concurrent.futures import Future, ThreadPoolExecutor
 
     from labkit.vision.laser.pattern_fit import Classification
 
@@ -260,7 +260,7 @@ class _Worker:
     the ``logging`` it imports (6 ms) load while frames decode, not before the first frame."""
 
     def __init__(self) -> None:
-        self._pool = None
+        self._pool: ThreadPoolExecutor | None = None
 
     def submit(self, fn: Callable, *args) -> Future:
         if self._pool is None:
@@ -351,7 +351,8 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
         check_exposure(sum(h.result() for h in histograms), source.path, source.levels)
         traces = [futures[id(c)].result() for c in chunks]
         preliminary = prior["fit"].result() if "fit" in prior else None
-    points, weights, times, band, peak, noise = gathered.result()
+    points, weights, times, gathered_band, peak, noise = gathered.result()
+    band: tuple[np.ndarray, np.ndarray, np.ndarray | None] | None = gathered_band
     if on_trace is not None:
         from labkit.vision.laser.overlay import accumulated_trace
 

@@ -64,7 +64,7 @@ class GatheredTrace:
             keep = self._rng.choice(len(points), MAX_POINTS_PER_CHUNK, replace=False)
             points, weights = points[keep], weights[keep]
         t_mid = 0.5 * (chunk.first + chunk.last) / self.fps if self.fps else 0.0
-        if trace.band is not None and len(trace.band):
+        if trace.band is not None and trace.band_weights is not None and len(trace.band):
             keep = self._rng.choice(len(trace.band), min(len(trace.band), 2 * MAX_POINTS_PER_CHUNK),
                                     replace=False)
             band = (trace.band[keep], trace.band_weights[keep], np.full(len(keep), t_mid))
@@ -82,7 +82,11 @@ class GatheredTrace:
         if not parts:
             return Gathered(np.zeros((0, 2)), np.zeros(0), np.zeros(0), None, peak, noise)
         points, weights, times = (np.concatenate(column) for column in zip(*parts, strict=True))
-        band = tuple(np.concatenate(column) for column in zip(*bands, strict=True)) if bands else None
+        band = None
+        if bands:
+            band_points, band_weights, band_times = (np.concatenate(column)
+                                                     for column in zip(*bands, strict=True))
+            band = (band_points, band_weights, band_times)
         return Gathered(points, weights, times, band, peak, noise)
 
 

@@ -82,12 +82,14 @@ def cusp_fit(fit: CurveFit, points: np.ndarray, weights: np.ndarray | None = Non
     sw = np.sqrt(w)
     samples = np.array([200 * abs(k)])
     drift = times is not None
-    t = None
+    t: np.ndarray | None = None
     for it in range(iterations):
         rows = FitRows(np.array([k]), np.array([c]), np.array([a]), np.array([b0 * a]), np.array([v]))
         centred = (z - c - v * tau)[None, :]
-        t = (closest_parameters(centred, rows, samples) if it % 6 == 0
-             else newton_parameters(centred, rows, t, 2))[0:1]
+        if it % 6 == 0 or t is None:  # t is set at iteration 0
+            t = closest_parameters(centred, rows, samples)[0:1]
+        else:
+            t = newton_parameters(centred, rows, t, 2)[0:1]
         c, a, v = _solve_fixed_shape(z, sw, tau, k, b0, a, t[0], drift, v)
     rows = FitRows(np.array([k]), np.array([c]), np.array([a]), np.array([b0 * a]), np.array([v]))
     t = closest_parameters((z - c - v * tau)[None, :], rows, samples)[0]

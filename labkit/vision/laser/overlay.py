@@ -54,7 +54,7 @@ def draw_overlay(trace: np.ndarray, result: Mapping[str, Any]) -> np.ndarray:
     """BGR image: ``trace`` (grey or BGR, full frame) dimmed, the fitted curve, its centre and the
     verdict of ``result`` (a ``labkit analyse laser`` result)."""
     grey = trace if trace.ndim == 2 else cv2.cvtColor(trace, cv2.COLOR_BGR2GRAY)
-    grey = cv2.normalize(grey, None, 0, 200, cv2.NORM_MINMAX)
+    grey = cv2.normalize(grey, None, 0, 200, cv2.NORM_MINMAX)  # type: ignore[call-overload]  # stubs: dst None allocates
     image = cv2.cvtColor(grey, cv2.COLOR_GRAY2BGR)
     h, w = grey.shape
     thick = max(1, round(max(w, h) / 640))
@@ -66,7 +66,7 @@ def draw_overlay(trace: np.ndarray, result: Mapping[str, Any]) -> np.ndarray:
         cx, cy = result["pattern"]["center_px"]
         size = 6 * thick
         cv2.drawMarker(image, (round(cx), round(cy)), CENTRE_BGR, cv2.MARKER_CROSS, size, thick, cv2.LINE_AA)
-    colour = VERDICT_BGR.get((result.get("quality") or {}).get("verdict"), (255, 255, 255))
+    colour = VERDICT_BGR.get(str((result.get("quality") or {}).get("verdict")), (255, 255, 255))
     scale = 0.45 * max(1.0, max(w, h) / 640)
     y = round(22 * scale / 0.45)
     for line in _label(result):

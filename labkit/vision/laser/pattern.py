@@ -146,7 +146,7 @@ def _steadied(cls: Classification, points: np.ndarray, weights: np.ndarray, time
     the steadied points are then classified again and the wander followed anew."""
     width = judged_width(line_width_px)
     wander = follow_wander(cls, points, weights, times, width, band) if times is not None else None
-    if wander is None:
+    if wander is None or times is None:   # a wander is followed only with the points' times
         return cls, None, points
     if wander.rms_px > 0.5 * width:
         again = classify(wander.moved(points, times), weights, times)
@@ -186,11 +186,13 @@ def _second_readings(pattern: dict, diag: dict, points: np.ndarray, weights: np.
     fixed_share = None
     moved = without_fixed_light(*everything, width) if drift and diag["verdict"] != "ok" else None
     if moved is not None:  # light fixed in the frame, if the pattern moved, is not on the screen
-        *kept, share = moved
-        fixed = pattern_dict(*kept, None, middle, width, size, (share, 0.0))
-        if pattern_moved_px(fixed[1], kept[2]) > width and better(fixed):
+        kept_points, kept_weights, kept_times, kept_band, share = moved
+        fixed = pattern_dict(kept_points, kept_weights, kept_times, kept_band, None, middle, width, size,
+                             (share, 0.0))
+        if pattern_moved_px(fixed[1], kept_times) > width and better(fixed):
             pattern, diag = fixed
-            (points, weights, times, band), left_out, fixed_share = kept, (share, 0.0), share
+            points, weights, times, band = kept_points, kept_weights, kept_times, kept_band
+            left_out, fixed_share = (share, 0.0), share
     start = one_chunk_start(points, weights, times) if drift and diag["verdict"] != "ok" else None
     if start is not None:
         third = pattern_dict(points, weights, times, band, None, middle, width, size, left_out, start=start)

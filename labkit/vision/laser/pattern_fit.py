@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import cv2
 import numpy as np
@@ -174,6 +175,7 @@ def _icp_rows(z: np.ndarray, w: np.ndarray, tau: np.ndarray, rows: FitRows, iter
         if it % 6 == 0:
             t = closest_parameters(centred(), rows, samples)
         else:
+            assert t is not None  # set at iteration 0 (it % 6 == 0)
             t = newton_parameters(centred(), rows, t, 2)
         sol = _solve_point_to_line(z[None, :], sw, tau, rows, t, fit_drift)
         c, a, b = sol[:, 0], sol[:, 1], sol[:, 2]
@@ -360,7 +362,7 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
         ellipse = polished_on_band(ellipse, band, full, 2 * max_points)
         residuals["ellipse"] = ellipse.rms_residual
         beats = trochoid_wins()
-    best = without_outliers(trochoid, *full) if beats else ellipse
+    best = without_outliers(trochoid, *full) if beats and trochoid is not None else ellipse  # beats: one
     if prior is not None and not (
             best.rms_residual <= PRIOR_RMS_FACTOR * prior.best.rms_residual + PRIOR_RMS_SLACK_PX):
         return classify(points, weights, times, max_points, screen_points, trochoid_loops, band)
@@ -373,7 +375,7 @@ def polished_on_band(ellipse: CurveFit, band: tuple, full: tuple, max_points: in
     trochoids'). Centres refer to the mean time of the points fitted, so the band fit's centre is
     moved to the centre line's."""
     idx = _subsample(len(band[0]), max_points, seed=2)
-    subset = [None if a is None else np.asarray(a)[idx] for a in band]
+    subset: list[Any] = [None if a is None else np.asarray(a)[idx] for a in band]  # times may be None
     polished = without_outliers(polish(ellipse, *subset), *subset)
     shift = polished.drift * (_mean_time(full[2]) - _mean_time(subset[2]))
     z, w, tau = prepare_points(*full)

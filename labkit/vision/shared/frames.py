@@ -90,12 +90,19 @@ class FrameSource:
             self.truncated = (f"decoded {self.frames_read} of {self.frame_count} advertised frames "
                               "(truncated file?)")
 
+    def _video(self) -> cv2.VideoCapture:
+        """The open capture (a video's source has one; a photo's yields its image before any
+        decoding)."""
+        if self._cap is None:
+            raise VideoError(self.path, "not an opened video")
+        return self._cap
+
     def _decode(self, stride: int, reuse: bool, luma: bool = False, choose_luma: LumaChooser | None = None,
                 probe: int = 8) -> Iterator[tuple[int, np.ndarray]]:
-        if luma and choose_luma is not None and self._cap.getBackendName() == "FFMPEG":
+        if luma and choose_luma is not None and self._video().getBackendName() == "FFMPEG":
             yield from self._decode_auto(stride, reuse, choose_luma, probe)
             return
-        cap, position = self._cap, [0]
+        cap, position = self._video(), [0]
         luma = luma and self._luma_plane_available()
         level = cv2.utils.logging.getLogLevel()
         if luma:
@@ -122,7 +129,7 @@ class FrameSource:
         most ``HELD_FRAMES``) and yielded if luma is chosen; otherwise (colour chosen, or no
         planar luma from this codec) they are dropped and the converting reader, already some
         frames in, carries on as the colour source."""
-        cap, converted = self._cap, cv2.VideoCapture(self.path, cv2.CAP_FFMPEG)
+        cap, converted = self._video(), cv2.VideoCapture(self.path, cv2.CAP_FFMPEG)
         head: list[np.ndarray] = []
         held: list[tuple[int, np.ndarray]] = []
         plane_ok, planes_ready = threading.Event(), threading.Event()
@@ -155,7 +162,8 @@ class FrameSource:
         cap.set(cv2.CAP_PROP_CONVERT_RGB, 0)
         judge_thread = threading.Thread(target=judge, name="labkit-frame-path", daemon=True)
         judge_thread.start()
-        position, first = [0], None
+        position: list[int] = [0]
+        first: np.ndarray | None = None
         try:
             try:
                 while judge_thread.is_alive() and len(held) < HELD_FRAMES:
@@ -184,7 +192,7 @@ class FrameSource:
                 planes_ready.set()
                 judge_thread.join()
             luma = verdict["plane"] and verdict.get("luma", False)
-            if verdict["plane"] and head:
+            if verdict["plane"] and head and first is not None:   # a plane was seen: first is it
                 self.luma_chosen = luma
                 self._set_levels(first, head[0])
             if luma:
