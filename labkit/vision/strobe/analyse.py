@@ -124,8 +124,7 @@ def _read_poses(path: str, on_frame, keep_frame: int | None = None, gamma: float
     w, h = source.size  # a clip too big to keep is read again (frame count 0: unknown, keep till full)
     grays: list[np.ndarray] | None = [] if source.frame_count * w * h <= KEEP_GREY_BYTES else None
     lo, hi, kept = 255, 0, None
-    brightest: np.ndarray | None = None
-    darkest: np.ndarray | None = None
+    brightest = darkest = None
     for index, frame in source.frames():
         if on_frame is not None:
             on_frame(index, index / source.fps if source.fps else 0.0, frame)
@@ -151,8 +150,7 @@ def _read_poses(path: str, on_frame, keep_frame: int | None = None, gamma: float
     found = [p for p in poses if p is not None]
     ghost, light = 0.0, None
     if found:
-        # both were set at the first frame with a pose, and found holds at least one
-        assert brightest is not None and darkest is not None
+        assert brightest is not None and darkest is not None  # set at every pose; found holds one
         dark = sum(p.measured_crop().dark for p in found) * 2 >= len(found)
         ghost = ghost_fraction(found, brightest if dark else darkest, dark)
         if ghost > GHOST_FLOOR:
@@ -380,12 +378,10 @@ def _per_row(source, poses, found, orient: ClipOrientation, fps: float, readout_
     """The per-row model's result when the camera is the strobe and the shutter rolls, else None.
     ``given``: rotor, strobe and apparent frequencies, camera fps and exposure as the user gave
     them (the phase model is built afresh: the per-frame path may have replaced its frequency)."""
-    rotor_hz = given[0]
-    model = choose_phase_model(*given, source.fps)
+    rotor_hz, model = given[0], choose_phase_model(*given, source.fps)
     bend_px = float(np.median([p.bend_px for p in found]))
-    # rolling_applies is False without a model or a rotor frequency; the two checks narrow the types
     if model is None or rotor_hz is None or not rolling_applies(model, rotor_hz, readout_s, bend_px):
-        return None
+        return None  # (rolling_applies is False too without a model or a rotor frequency)
     return rolling_analysis(source.path, poses, orient, model, rotor_hz, fps, source.size[1], readout_s)
 
 
