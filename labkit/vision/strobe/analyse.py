@@ -84,13 +84,13 @@ def ghost_fraction(found: list[BodyPose], static: np.ndarray, dark: bool) -> flo
     h, w = static.shape
     union = np.zeros((h, w), np.uint8)
     count = np.zeros((h, w), np.uint16)
-    for p in found:
-        c = p.crop
+    crops = [p.measured_crop() for p in found]
+    for c in crops:
         rh, rw = c.region.shape
         union[c.y0:c.y0 + rh, c.x0:c.x0 + rw] |= c.region
         count[c.y0:c.y0 + rh, c.x0:c.x0 + rw] += c.region > 0
-    body = float(np.median([p.crop.body_level for p in found]))
-    bg = float(np.median([p.crop.bg_level for p in found]))
+    body = float(np.median([c.body_level for c in crops]))
+    bg = float(np.median([c.bg_level for c in crops]))
     full = abs(bg - body)
     core = np.abs(static - body) < 0.5 * full
     swept = (union > 0) & ~core
@@ -138,9 +138,9 @@ def _read_poses(path: str, on_frame, keep_frame: int | None = None, gamma: float
         pose = measure_flat(flat)
         poses.append(pose)
         if pose is not None:
-            light = static_light(flat)
-            brightest = light if brightest is None else np.maximum(brightest, light)
-            darkest = light if darkest is None else np.minimum(darkest, light)
+            frame_light = static_light(flat)
+            brightest = frame_light if brightest is None else np.maximum(brightest, frame_light)
+            darkest = frame_light if darkest is None else np.minimum(darkest, frame_light)
         if keep_frame is not None and pose is not None and kept is None:
             kept = (index, frame.copy())  # the reader may reuse its buffer
     if hi < 16:
@@ -150,7 +150,8 @@ def _read_poses(path: str, on_frame, keep_frame: int | None = None, gamma: float
     found = [p for p in poses if p is not None]
     ghost, light = 0.0, None
     if found:
-        dark = sum(p.crop.dark for p in found) * 2 >= len(found)
+        assert brightest is not None and darkest is not None  # set at every pose; found holds one
+        dark = sum(p.measured_crop().dark for p in found) * 2 >= len(found)
         ghost = ghost_fraction(found, brightest if dark else darkest, dark)
         if ghost > GHOST_FLOOR:
             light = read_clip_light(path, poses, dark, source.size, gamma, grays)
@@ -372,14 +373,15 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
 
 
 def _per_row(source, poses, found, orient: ClipOrientation, fps: float, readout_s: float | None,
-             given: tuple) -> dict | None:
+             given: tuple[float | None, float | None, float | None, float | None, float | None],
+             ) -> dict | None:
     """The per-row model's result when the camera is the strobe and the shutter rolls, else None.
     ``given``: rotor, strobe and apparent frequencies, camera fps and exposure as the user gave
     them (the phase model is built afresh: the per-frame path may have replaced its frequency)."""
-    rotor_hz = given[0]
-    model = choose_phase_model(*given, source.fps)
-    if not rolling_applies(model, rotor_hz, readout_s, float(np.median([p.bend_px for p in found]))):
-        return None
+    rotor_hz, model = given[0], choose_phase_model(*given, source.fps)
+    bend_px = float(np.median([p.bend_px for p in found]))
+    if model is None or rotor_hz is None or not rolling_applies(model, rotor_hz, readout_s, bend_px):
+        return None  # (rolling_applies is False too without a model or a rotor frequency)
     return rolling_analysis(source.path, poses, orient, model, rotor_hz, fps, source.size[1], readout_s)
 
 

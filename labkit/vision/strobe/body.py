@@ -61,6 +61,14 @@ class BodyPose:
     crop: BodyCrop | None = field(default=None, repr=False, compare=False)
     linear: tuple[float, float, float] | None = None  # angle2, angle4, anisotropy (see linear_moments)
 
+    def measured_crop(self) -> BodyCrop:
+        """The crop :func:`measure_flat` kept; the ghost measures read it before the clip's light
+        drops it (a pose without one cannot say where its body was)."""
+        if self.crop is None:
+            raise ValueError(f"body pose at ({self.x:.1f}, {self.y:.1f}) px has no crop: only poses from "
+                             "measure_flat carry one, and the clip's light drops it once read")
+        return self.crop
+
     def with_linear_angles(self) -> BodyPose:
         """This pose with the axis angles of :func:`linear_moments` (for clips without a ghost)."""
         if self.linear is None:
@@ -202,7 +210,8 @@ def measure_body(frame: np.ndarray) -> BodyPose | None:
 def measure_flat(flat: np.ndarray) -> BodyPose | None:
     """:func:`measure_body` on a frame already through :func:`flatten_illumination`."""
     blur = cv2.GaussianBlur(flat, (5, 5), 0)
-    scaled = cv2.normalize(blur, None, 0, 255, cv2.NORM_MINMAX).astype(np.uint8)
+    # opencv's stubs type dst as required; None (a new array) is the documented Python call
+    scaled = cv2.normalize(blur, None, 0, 255, cv2.NORM_MINMAX).astype(np.uint8)  # type: ignore[call-overload]
     t8, _ = cv2.threshold(scaled, 0, 255, cv2.THRESH_BINARY | cv2.THRESH_OTSU)
     lo_v, hi_v = float(blur.min()), float(blur.max())
     best = _largest_blob(blur, lo_v + (hi_v - lo_v) * t8 / 255.0)

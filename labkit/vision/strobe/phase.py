@@ -190,7 +190,7 @@ def estimate_cycles_per_frame(frames: np.ndarray, series: list[np.ndarray]) -> S
             a = c1
     best = 0.5 * (a + b)
     far = np.abs(grid - best) > 2.0 / n
-    runner = (None, None)
+    runner: tuple[float, float] | tuple[None, None] = (None, None)
     if far.any():
         runner = (float(grid[far][int(np.argmax(power[far]))]), float(power[far].max()))
     return SignalFrequency(best, explained_fraction(k, best, series), *runner)

@@ -129,7 +129,8 @@ def rolling_analysis(path: str, poses: list[BodyPose | None], orient: ClipOrient
         np.median([p.angle2_rad for p in found]))
     half = (float(np.median([p.half_length_along(angle) for p in found])),
             float(np.median([p.half_length_along(angle + math.pi / 2) for p in found])))
-    centre = tuple(float(v) for v in np.mean([[p.x, p.y] for p in found], axis=0))
+    mean_x, mean_y = np.mean([[p.x, p.y] for p in found], axis=0)
+    centre = (float(mean_x), float(mean_y))
     given = FitInput(model.cycles_per_frame, rotor_hz, fps, height, angle, half, centre, readout_s)
     omega_max = 2 * math.pi * rotor_hz / (fps * max(1, height - 1))
     omegas = (np.linspace(0.0, omega_max, GRID_STEPS) if readout_s is None

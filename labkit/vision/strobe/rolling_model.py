@@ -74,7 +74,8 @@ class Crops:
 
 
 def slice_intervals(y: np.ndarray, cx: np.ndarray, cy: np.ndarray, alpha: np.ndarray,
-                    half_length: float, half_width: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+                    half_length: np.ndarray | float,
+                    half_width: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
     """Left and right ends (x) of the slice of a rectangle by the horizontal lines at ``y``: centre
     (cx, cy), axis at ``alpha`` (from image +x towards +y), half sizes along and across it. Rows
     that miss it get ``lo > hi``. All arguments broadcast."""
@@ -183,10 +184,11 @@ def tone_residual(model: np.ndarray, values: np.ndarray) -> np.ndarray:
 def collect_crops(path: str, poses: list[BodyPose | None], max_frames: int = MAX_FIT_FRAMES) -> Crops:
     """Read the video again and keep flattened crops around the body in up to ``max_frames``
     frames with a body, evenly spread over the clip."""
-    found = [i for i, p in enumerate(poses) if p is not None]
+    measured = {i: p for i, p in enumerate(poses) if p is not None}
+    found = list(measured)
     pick = sorted(set(found[int(j)] for j in np.linspace(0, len(found) - 1, min(max_frames, len(found)))))
-    centres = np.array([[poses[i].x, poses[i].y] for i in found])
-    radius = float(np.median([math.sqrt(3 * (poses[i].mu20 + poses[i].mu02)) for i in found]))
+    centres = np.array([[p.x, p.y] for p in measured.values()])
+    radius = float(np.median([math.sqrt(3 * (p.mu20 + p.mu02)) for p in measured.values()]))
     reach = 1.3 * radius + float(np.ptp(centres, axis=0).max()) / 2 + MARGIN_PX
     mid = np.median(centres, axis=0)
     source = open_frames(path)
@@ -285,7 +287,7 @@ def initial_guess(crops: Crops, c: float, omegas: np.ndarray) -> Start:
     yr = y - ym
     still = np.column_stack([onehot, yr])  # a straight midline, no motion
     total = float(np.sum((x - still @ np.linalg.lstsq(still, x, rcond=None)[0]) ** 2))
-    best = None
+    best: tuple[float, float, np.ndarray] | None = None
     rss_global = None
     for omega in omegas:
         psi = 2 * math.pi * c * k + omega * y
@@ -297,6 +299,8 @@ def initial_guess(crops: Crops, c: float, omegas: np.ndarray) -> Start:
             rss_global = rss
         if best is None or rss < best[0]:
             best = (rss, omega, coef)
+    if best is None:
+        raise ValueError("initial_guess needs at least one omega on its grid, got none")
     rss, omega, coef = best
     slope, ay, by, ac, bc = coef[len(frames):]
     gain = 1 + slope ** 2

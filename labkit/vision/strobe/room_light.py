@@ -105,7 +105,8 @@ def remove_smooth_background(stack: np.ndarray, body_zone: np.ndarray) -> np.nda
     stack = stack.astype(np.float32, copy=False)
     for d in stack:  # in place, a frame at a time: memory is the stack, not three of it
         coef = (solve * d.ravel()[outside]).sum(axis=1)  # elementwise: no BLAS threads (strobe_ghost_fit)
-        d -= sum(float(c) * basis[:, i] for i, c in enumerate(coef)).reshape(h, w)
+        # sum() starts from the int 0, which numpy's stubs keep in the type; the value is an array
+        d -= np.asarray(sum(float(c) * basis[:, i] for i, c in enumerate(coef))).reshape(h, w)
     return stack
 
 
@@ -116,10 +117,11 @@ def read_clip_light(path: str, poses: list[BodyPose | None], dark: bool, size: t
     them (decoded once), else the clip is read again."""
     found = [p for p in poses if p is not None]
     w, h = size
-    x0 = max(0, min(p.crop.x0 for p in found) - PAD_PX)
-    y0 = max(0, min(p.crop.y0 for p in found) - PAD_PX)
-    x1 = min(w, max(p.crop.x0 + p.crop.region.shape[1] for p in found) + PAD_PX)
-    y1 = min(h, max(p.crop.y0 + p.crop.region.shape[0] for p in found) + PAD_PX)
+    crops = [p.measured_crop() for p in found]
+    x0 = max(0, min(c.x0 for c in crops) - PAD_PX)
+    y0 = max(0, min(c.y0 for c in crops) - PAD_PX)
+    x1 = min(w, max(c.x0 + c.region.shape[1] for c in crops) + PAD_PX)
+    y1 = min(h, max(c.y0 + c.region.shape[0] for c in crops) + PAD_PX)
     frames = np.empty((len(poses), y1 - y0, x1 - x0), np.float32)
     rows: list[np.ndarray] = []
     again = grays if grays is not None else (f for _, f in open_frames(path).frames())
@@ -130,8 +132,7 @@ def read_clip_light(path: str, poses: list[BodyPose | None], dark: bool, size: t
         frames[len(rows)], light = linear_darkening(gray, dark, gamma, (x0, y0, x1, y1))
         rows.append(light)
     zone = np.zeros((y1 - y0, x1 - x0), np.uint8)
-    for p in found:
-        c = p.crop
+    for c in crops:
         rh, rw = c.region.shape
         zone[c.y0 - y0:c.y0 - y0 + rh, c.x0 - x0:c.x0 - x0 + rw] |= c.region
     zone = cv2.dilate(zone, np.ones((PAD_PX + 1, PAD_PX + 1), np.uint8)) > 0
