@@ -151,10 +151,11 @@ def burst_shot(frames: list[Any], lines: list[Any], speeds: list[float],
 
 def clip_shot(clip: str, lines: list[Any], speeds: list[float], exposure_s: float | None,
               mm_per_px: float) -> dict[str, Any]:
-    """A recorded clip analysed with the frequencies of the status lines read meanwhile."""
+    """A recorded clip analysed with the frequencies of the status lines read meanwhile (the
+    clip's path in the shot's ``clip``)."""
     freqs = strobe_frequencies(lines)
     problem = freqs.pop("problem")
-    shot: dict[str, Any] = {"speeds": speeds, "frames": 0, "dropped": 0, **freqs}
+    shot: dict[str, Any] = {"speeds": speeds, "frames": 0, "dropped": 0, **freqs, "clip": clip}
     if freqs["rotor_hz"] is None:
         return {**shot, "phi_rad": None, "verdict": "failed", "reasons": [problem]}
     return {**shot, **_with_problem(analyse_burst(clip, freqs, None, exposure_s, mm_per_px), problem)}
@@ -292,8 +293,10 @@ class StrobeSweep(ProtocolDef):
         ctx.strobe("strobe").lamp(True)
 
     # ---- one step ----------------------------------------------------------------------
-    def _mm_per_px(self, ctx: RunContext) -> float:
-        return float(ctx.params["mm_per_px"]) or float(self._camera_scale(ctx.rig) or 0.0)
+    @classmethod
+    def _mm_per_px(cls, params: dict[str, Any], rig: Rig) -> float:
+        """The scale the analyses use: ``mm_per_px`` if given, else the emulated camera's."""
+        return float(params["mm_per_px"]) or float(cls._camera_scale(rig) or 0.0)
 
     def _wait_lock(self, ctx: RunContext, since: float) -> None:
         """Until a status line after ``since`` says the flashes are locked (at most LOCK_TIMEOUT_S;
@@ -330,14 +333,13 @@ class StrobeSweep(ProtocolDef):
         lines = self._lines_over(ctx, first, last)
         ctx.log_tach_readings()  # the line closing the burst too, before the run may end
         speeds = burst_speeds(ctx.tach_readings("rotor_tach", first), first, last)
-        mm_per_px = self._mm_per_px(ctx)
+        mm_per_px = self._mm_per_px(ctx.params, ctx.rig)
         if frames:
             settings = camera.settings
             return burst_shot(frames, lines, speeds, (settings.fps, settings.size, settings.exposure_s),
                               mm_per_px)
         clip = _clip_of(Path(str(p["clips"])), step.index)
-        shot = {**clip_shot(str(clip), lines, speeds, float(p["exposure_s"]) or None, mm_per_px),
-                "clip": str(clip)}
+        shot = clip_shot(str(clip), lines, speeds, float(p["exposure_s"]) or None, mm_per_px)
         # the window of status lines and speeds the clip was analysed with, kept in events.jsonl
         # so the analysis-only level can analyse the clip again with the same lines
         ctx.emit(FramesTaken(t=ctx.now(), device=CLIP_DEVICE, index=step.index, take=take,
@@ -375,7 +377,7 @@ class StrobeSweep(ProtocolDef):
             return self._reanalyse_clip(run, step, events, recorded, statuses, speeds_of)
         bursts = run.bursts()
         camera = (bursts.fps, bursts.size, bursts.exposure_s)
-        mm_per_px = float(run.params["mm_per_px"]) or float(self._camera_scale(run.rig) or 0.0)
+        mm_per_px = self._mm_per_px(run.params, run.rig)
         shot: dict[str, Any] | None = None
         for take in (0, 1):
             frames = bursts.frames(step, take)
@@ -409,13 +411,13 @@ class StrobeSweep(ProtocolDef):
         if not Path(str(clip)).is_file():
             raise NotImplementedError(f"step {step}'s clip {clip} is not there (a clip path is relative to "
                                       "the folder the run started in)")
-        mm_per_px = float(run.params["mm_per_px"]) or float(self._camera_scale(run.rig) or 0.0)
+        mm_per_px = self._mm_per_px(run.params, run.rig)
         exposure = float(run.params["exposure_s"]) or None
         shot: dict[str, Any] = {}
         for take in sorted(windows):
             first, last = (float(x) for x in windows[take])
-            shot = {**clip_shot(str(clip), burst_lines(statuses, first, last),
-                                burst_speeds(speeds_of, first, last), exposure, mm_per_px), "clip": str(clip)}
+            shot = clip_shot(str(clip), burst_lines(statuses, first, last),
+                             burst_speeds(speeds_of, first, last), exposure, mm_per_px)
             if shot["verdict"] == "ok":
                 break
         return {"step": step, **step_point(recorded.get("target_rpm"), run.params, shot, take == 1)}
