@@ -13,7 +13,7 @@ given (tests/devices pins them):
   locked write per packet, exact-length reads with a deadline, a quiet check for garbled
   replies.
 * :class:`ReplyQueue` - commands to a device that streams on its own (the tachometers): a
-  background :class:`~labkit.devices.framing.StreamReader` owns the input and hands reply
+  background :class:`~labkit.devices.stream_reader.StreamReader` owns the input and hands reply
   lines here; the caller waits for them on the clock.
 * :class:`ReadingBuffer` - the one buffer of a streaming device's readings.
 """
@@ -28,7 +28,7 @@ from typing import Any, TypeVar
 
 import serial
 
-from labkit.devices.framing import LineFramer
+from labkit.devices.stream_reader import LineFramer
 from labkit.errors import DeviceDisconnected, DeviceError, DeviceTimeout
 from labkit.io.calls import port_call, read_time
 from labkit.io.clock import Clock
@@ -336,7 +336,7 @@ class PacketLink:
 class ReplyQueue:
     """Commands to a device that also talks on its own (a streaming tachometer).
 
-    The device's :class:`~labkit.devices.framing.StreamReader` owns the input: its frame parser
+    The device's :class:`~labkit.devices.stream_reader.StreamReader` owns the input: its frame parser
     hands reply lines to :meth:`put`. :meth:`write` sends a command (a dead port:
     DeviceDisconnected naming it); :meth:`wait` polls the reader (which raises what it hit,
     e.g. an unplug) until ``ready(replies)`` or the clock deadline, and says if it timed out.

@@ -1,5 +1,5 @@
 """Continuous balance output (MT-SICS ``SIR``, A&D stream/``SIR``, HX711 sketches) read by
-one :class:`~labkit.devices.framing.StreamReader` per balance into a timestamped buffer.
+one :class:`~labkit.devices.stream_reader.StreamReader` per balance into a timestamped buffer.
 
 On a real clock the reader is a thread, so a slow motor write never blocks the balance
 (docs/explanation/architecture.md#streaming-devices); on a virtual clock the clock pumps it while time
@@ -15,7 +15,7 @@ from contextlib import contextmanager
 
 import serial
 
-from labkit.devices.framing import LineFramer, StreamReader
+from labkit.devices.stream_reader import LineFramer, StreamReader
 from labkit.devices.link import FrameError, LineLink, ReadingBuffer
 from labkit.errors import DeviceError, DeviceTimeout
 from labkit.io.clock import Clock

@@ -2,7 +2,7 @@
 docs/reference/devices-strobe.md): device kind ``strobe``, protocol ``labkit_strobe``.
 
 The strobe talks on its own (a status line every 1/RATE s): one
-:class:`~labkit.devices.framing.StreamReader` cuts lines, status lines go into a buffer that
+:class:`~labkit.devices.stream_reader.StreamReader` cuts lines, status lines go into a buffer that
 ``latest()``, ``statuses_since(t)`` and ``wait_status(timeout)`` read, replies (``OK``,
 ``ERR ..``, ``ID ..``) to the command waiting for them. On open (which resets an Arduino)
 the driver waits for the banner or a status line, then sends its settings; after a reset
@@ -18,7 +18,7 @@ from typing import Any
 import serial
 
 from labkit.devices.base import Device
-from labkit.devices.framing import LineFramer, StreamReader
+from labkit.devices.stream_reader import LineFramer, StreamReader
 from labkit.devices.link import ReplyQueue
 from labkit.devices.registry import register_driver, register_parser_benchmark
 from labkit.devices.sketch_commands import SketchCommands, is_reply

@@ -1,6 +1,6 @@
 """The part every streaming tachometer shares: a reader job filling a timestamped buffer.
 
-A tachometer talks without being asked. One :class:`~labkit.devices.framing.StreamReader`
+A tachometer talks without being asked. One :class:`~labkit.devices.stream_reader.StreamReader`
 per device (a thread on a real clock, a clock job on a virtual one) cuts the bytes into
 frames and hands each to :meth:`StreamingTachometer.parse_frame`; accepted readings go into
 a :class:`~labkit.devices.link.ReadingBuffer` that ``latest()``, ``readings_since(t)`` and
@@ -16,7 +16,7 @@ from typing import Any
 import serial
 
 from labkit.devices.base import Tachometer
-from labkit.devices.framing import StreamReader
+from labkit.devices.stream_reader import StreamReader
 from labkit.devices.link import ReadingBuffer
 from labkit.io.clock import Clock
 from labkit.readings import Reading
