@@ -16,6 +16,9 @@ given (tests/devices pins them):
   background :class:`~labkit.devices.stream_reader.StreamReader` owns the input and hands reply
   lines here; the caller waits for them on the clock.
 * :class:`ReadingBuffer` - the one buffer of a streaming device's readings.
+* :class:`LineFramer` - bytes cut into frames at a terminator, for a link and for a
+  :class:`~labkit.devices.stream_reader.StreamReader` alike (the Lutron and VESC framers live
+  with their drivers; :class:`Framer` is what each provides).
 """
 
 from __future__ import annotations
@@ -24,11 +27,10 @@ import bisect
 import threading
 from collections import deque
 from collections.abc import Callable
-from typing import Any, TypeVar
+from typing import Any, Protocol, TypeVar
 
 import serial
 
-from labkit.devices.stream_reader import LineFramer
 from labkit.errors import DeviceDisconnected, DeviceError, DeviceTimeout
 from labkit.io.calls import port_call, read_time
 from labkit.io.clock import Clock
@@ -40,8 +42,8 @@ except ImportError:  # pragma: no cover - Windows
     _TermiosError = OSError  # type: ignore[assignment,misc]
 
 __all__ = [
-    "PORT_ERRORS", "FrameError", "LineLink", "LinkTailMixin", "PacketLink", "ReadingBuffer",
-    "ReplyQueue", "describe_serial", "eol_bytes", "port_settings",
+    "PORT_ERRORS", "FrameError", "Framer", "LineFramer", "LineLink", "LinkTailMixin", "PacketLink",
+    "ReadingBuffer", "ReplyQueue", "describe_serial", "eol_bytes", "port_settings",
 ]
 
 T = TypeVar("T")
@@ -88,6 +90,44 @@ class LinkTailMixin:
     @last_bytes.setter
     def last_bytes(self, value: bytes) -> None:
         pass
+
+
+class Framer(Protocol):
+    """Turns the bytes read so far into whole frames (:class:`LineFramer`, the Lutron and VESC
+    framers)."""
+
+    def feed(self, data: bytes) -> list[bytes]: ...
+
+
+class LineFramer:
+    """Cuts a byte stream at a terminator (default LF; CR-only devices pass ``b"\\r"``).
+
+    Lines are returned without the terminator and with a trailing CR stripped. A line
+    longer than ``max_len`` is dropped (garbage, or wrong baud) and counted.
+    """
+
+    def __init__(self, terminator: bytes = b"\n", max_len: int = 256) -> None:
+        self.terminator = terminator
+        self.max_len = max_len
+        self.buffer = bytearray()
+        self.dropped = 0
+
+    def feed(self, data: bytes) -> list[bytes]:
+        self.buffer += data
+        lines: list[bytes] = []
+        while True:
+            idx = self.buffer.find(self.terminator)
+            if idx < 0:
+                if len(self.buffer) > self.max_len:
+                    self.buffer.clear()
+                    self.dropped += 1
+                return lines
+            line = bytes(self.buffer[:idx])
+            del self.buffer[: idx + len(self.terminator)]
+            if len(line) > self.max_len:
+                self.dropped += 1
+                continue
+            lines.append(line.rstrip(b"\r"))
 
 
 def eol_bytes(eol: str) -> bytes:

@@ -1,7 +1,7 @@
 """Reading unsolicited device output into a timestamped buffer without blocking anyone.
 
 A :class:`StreamReader` owns one port's input. ``pump()`` reads whatever bytes are there
-(never waiting), cuts them into frames with a framer and hands each frame with its
+(never waiting), cuts them into frames with a framer (a :class:`~labkit.devices.link.Framer`) and hands each frame with its
 receive time to a callback. On a real clock a periodic job (its own thread) pumps
 continuously, so a slow motor write never blocks a fast sensor
 (docs/explanation/architecture.md#streaming-devices); on a
@@ -13,51 +13,13 @@ from __future__ import annotations
 import threading
 from collections import deque
 from collections.abc import Callable
-from typing import Protocol
 
 import serial
 
+from labkit.devices.link import Framer
 from labkit.errors import DeviceDisconnected
 from labkit.io.calls import read_time
 from labkit.io.clock import Clock, PeriodicJob
-
-
-class Framer(Protocol):
-    """Turns the bytes read so far into whole frames (:class:`LineFramer`, the Lutron and VESC
-    framers)."""
-
-    def feed(self, data: bytes) -> list[bytes]: ...
-
-
-class LineFramer:
-    """Cuts a byte stream at a terminator (default LF; CR-only devices pass ``b"\\r"``).
-
-    Lines are returned without the terminator and with a trailing CR stripped. A line
-    longer than ``max_len`` is dropped (garbage, or wrong baud) and counted.
-    """
-
-    def __init__(self, terminator: bytes = b"\n", max_len: int = 256) -> None:
-        self.terminator = terminator
-        self.max_len = max_len
-        self.buffer = bytearray()
-        self.dropped = 0
-
-    def feed(self, data: bytes) -> list[bytes]:
-        self.buffer += data
-        lines: list[bytes] = []
-        while True:
-            idx = self.buffer.find(self.terminator)
-            if idx < 0:
-                if len(self.buffer) > self.max_len:
-                    self.buffer.clear()
-                    self.dropped += 1
-                return lines
-            line = bytes(self.buffer[:idx])
-            del self.buffer[: idx + len(self.terminator)]
-            if len(line) > self.max_len:
-                self.dropped += 1
-                continue
-            lines.append(line.rstrip(b"\r"))
 
 
 class StreamReader:

@@ -5,7 +5,8 @@ from __future__ import annotations
 import pytest
 import serial
 
-from labkit.devices.stream_reader import LineFramer, StreamReader
+from labkit.devices.link import LineFramer
+from labkit.devices.stream_reader import StreamReader
 from labkit.emulators.base import DISCONNECT_MESSAGE
 from labkit.errors import ReplayMismatch
 from labkit.io.cassette import CassetteReader

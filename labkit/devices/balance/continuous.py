@@ -15,8 +15,8 @@ from contextlib import contextmanager
 
 import serial
 
-from labkit.devices.stream_reader import LineFramer, StreamReader
-from labkit.devices.link import FrameError, LineLink, ReadingBuffer
+from labkit.devices.link import FrameError, LineFramer, LineLink, ReadingBuffer
+from labkit.devices.stream_reader import StreamReader
 from labkit.errors import DeviceError, DeviceTimeout
 from labkit.io.clock import Clock
 from labkit.readings import Reading

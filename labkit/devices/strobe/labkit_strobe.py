@@ -18,10 +18,10 @@ from typing import Any
 import serial
 
 from labkit.devices.base import Device
-from labkit.devices.stream_reader import LineFramer, StreamReader
-from labkit.devices.link import ReplyQueue
+from labkit.devices.link import LineFramer, ReplyQueue
 from labkit.devices.registry import register_driver, register_parser_benchmark
 from labkit.devices.sketch_commands import SketchCommands, is_reply
+from labkit.devices.stream_reader import StreamReader
 from labkit.devices.strobe.protocol import (
     StrobeStatus,
     format_command,

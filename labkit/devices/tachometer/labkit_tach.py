@@ -28,8 +28,7 @@ import threading
 from dataclasses import dataclass
 from typing import Any
 
-from labkit.devices.stream_reader import LineFramer
-from labkit.devices.link import ReplyQueue
+from labkit.devices.link import LineFramer, ReplyQueue
 from labkit.devices.registry import register_driver, register_parser_benchmark
 from labkit.devices.sketch_commands import (
     SketchCommands,

@@ -16,8 +16,8 @@ from typing import Any
 import serial
 
 from labkit.devices.base import Tachometer
-from labkit.devices.stream_reader import StreamReader
 from labkit.devices.link import ReadingBuffer
+from labkit.devices.stream_reader import StreamReader
 from labkit.io.clock import Clock
 from labkit.readings import Reading
 
