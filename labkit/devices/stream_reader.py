@@ -1,11 +1,11 @@
 """Reading unsolicited device output into a timestamped buffer without blocking anyone.
 
 A :class:`StreamReader` owns one port's input. ``pump()`` reads whatever bytes are there
-(never waiting), cuts them into frames with a framer (a :class:`~labkit.devices.link.Framer`) and hands each frame with its
-receive time to a callback. On a real clock a periodic job (its own thread) pumps
-continuously, so a slow motor write never blocks a fast sensor
-(docs/explanation/architecture.md#streaming-devices); on a
-virtual clock the clock runs the same job while time advances, so replay is deterministic.
+(never waiting), cuts them into frames with a framer (a :class:`~labkit.devices.link.Framer`)
+and hands each frame with its receive time to a callback. On a real clock a periodic job (its
+own thread) pumps continuously, so a slow motor write never blocks a fast sensor
+(docs/explanation/architecture.md#streaming-devices); on a virtual clock the clock runs the
+same job while time advances, so replay is deterministic.
 """
 
 from __future__ import annotations
