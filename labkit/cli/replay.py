@@ -96,9 +96,11 @@ def main(args: argparse.Namespace) -> int:
 def success_line(session: str, result) -> str:
     """One line saying what the replay reproduced, in the level's own terms."""
     n = len((result.outcome.results or {}).get("points", []))
+    ended = [d for d in result.decisions if d["decision"] in ("interlock", "fault")]
+    how = f"; {ended[0]['decision']} in step {ended[0]['step'] + 1} as recorded" if ended else ""
     if result.level == "exact":
         return (f"replayed {session}: {n} points, results identical to results.json "
-                "(points exact; fits and image-analysis numbers within relative 1e-6)")
+                f"(points exact; fits and image-analysis numbers within relative 1e-6){how}")
     if result.level == "analysis" and not result.recomputed:
         return (f"re-analysed {session}: {n} points taken as recorded (the warning above says why), the fit "
                 "recomputed from them within tolerance of results.json")
@@ -106,8 +108,6 @@ def success_line(session: str, result) -> str:
         return (f"re-analysed {session}: {n} points and the fit recomputed from the recorded bytes, "
                 "within tolerance of results.json (measured values 0.5 %)")
     steps = sum(1 for d in result.decisions if d["decision"] == "step")
-    ended = [d for d in result.decisions if d["decision"] in ("interlock", "fault")]
-    how = f"; {ended[0]['decision']} in step {ended[0]['step'] + 1} as recorded" if ended else ""
     return (f"replayed {session}: {n} points within tolerance of results.json (measured values 0.5 %, "
             f"image analyses 1e-6), the same decisions in {steps} steps{how}")
 
@@ -116,6 +116,8 @@ def port_line(port: dict) -> str:
     if "frames_recorded" in port:  # a camera's frame cassette (labkit.devices.camera.faithful)
         text = (f"{port['port']}: {port['frames_served']} of {port['frames_recorded']} recorded frames "
                 f"served in {port['bursts']} bursts at their recorded times")
+        if port.get("failed_bursts"):
+            text += f", {port['failed_bursts']} failed as the recorded camera failed it"
         if port.get("served_late"):
             text += f", {port['served_late']} later (at most {port['latest_s'] * 1e3:.0f} ms)"
         return text

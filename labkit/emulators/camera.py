@@ -60,6 +60,9 @@ class SimCameraSource:
         self.mm_per_px = float(opts.get("mm_per_px", DEFAULTS["mm_per_px"]))
         if self.exposure_s > 1.0 / self.fps:
             raise SourceStopped(f"exposure_s={self.exposure_s:g} is longer than a frame at {self.fps:g} fps")
+        #: the camera's fault: it stops sending after this many frames (``stop_after=N``), as a
+        #: webcam whose USB link dropped; None never
+        self.stop_after = int(opts["stop_after"]) if "stop_after" in opts else None
         self.scene_name = opts.get("scene", "laser")
         if self.scene_name not in ("laser", "strobe"):
             raise SourceStopped(f"scene={self.scene_name!r}: expected laser or strobe")
@@ -67,6 +70,7 @@ class SimCameraSource:
         if self.scene_name == "strobe":
             self.strobe_scene = StrobeScene(self, opts)
         self.k = 0
+        self.sent = 0
         self.t0 = 0.0
         self.clock: Any = None
 
@@ -92,6 +96,9 @@ class SimCameraSource:
         # driver's buffers): a reader a little late (a control tick's serial traffic on a virtual
         # clock) gets every frame; one that fell further behind, or was idle, goes on from the
         # next slot not yet started (the slots between: drops, or discarded between bursts)
+        if self.stop_after is not None and self.sent >= self.stop_after:
+            raise SourceStopped(f"stopped delivering frames (emulated fault: stop_after={self.stop_after})")
+        self.sent += 1
         period = 1.0 / self.fps
         now = self.clock.now()
         if self.k < math.floor((now - self.t0 - self.exposure_s) / period + 1e-9) - QUEUE_FRAMES + 1:

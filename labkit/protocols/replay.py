@@ -258,14 +258,15 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
     replayed = normalise(outcome.results)
     recorded = record.results
     warnings = record.problems + dropped
+    replay_decisions = decisions(collect.events)  # the same steps, faults and ending, at both levels
+    diffs = tampered + diff_decisions(replay_decisions, decisions(record.events))
     if not faithful:
         tolerant = DERIVED_KEYS | analysis_keys(protocol.row)  # their last digits follow the CPU
-        diffs = tampered + (diff_results(replayed, recorded, derived_keys=tolerant) if recorded is not None
-                            else ["no results.json recorded"])
+        diffs += (diff_results(replayed, recorded, derived_keys=tolerant) if recorded is not None
+                  else ["no results.json recorded"])
         diffs += _evidence_diffs(record, evidence, tolerant)
-        return ReplayOutcome(outcome, recorded, not diffs, diffs, warnings, "exact")
-    replay_decisions = decisions(collect.events)
-    diffs = tampered + diff_decisions(replay_decisions, decisions(record.events))
+        return ReplayOutcome(outcome, recorded, not diffs, diffs, warnings, "exact",
+                             decisions=replay_decisions)
     if recorded is None:
         diffs.append("recording has no results.json")
     else:

@@ -4,13 +4,16 @@
   "settings"}`` (the settings the camera *accepted*), then one line per frame handed to the run:
   ``seq``, ``t_host``, ``t_device``, ``trusted``, ``dropped_before``, ``length``, ``fmt``,
   ``offset`` (into the sidecar), ``step`` (the burst's label, e.g. the speed step) and ``meta``
-  if the source adds any (the emulated camera: the model's cone angle at that frame);
+  if the source adds any (the emulated camera: the model's cone angle at that frame); a burst
+  the camera failed ends, after the frames it did send, in a fault line ``{"fault": "DeviceTimeout"
+  or "DeviceError", "device", "reason", "step", "frames_asked", "t_host"}``;
 * ``ROLE.mjpeg`` - the sidecar: the frames' bytes concatenated, exactly as the camera sent them
   when it sends JPEG (MJPEG webcams, phones, the emulated camera), else encoded once at record
   time (:func:`labkit.devices.camera.sources.encode_jpeg`).
 
 Replay (:class:`ReplaySource`) serves exactly the stored bytes, in the stored order, so an
-analysis of a replayed burst sees what the live analysis saw. ``mode=timed`` also waits on the
+analysis of a replayed burst sees what the live analysis saw, and a recorded fault fails the
+replayed burst as it failed the run (:class:`RecordedFault`). ``mode=timed`` also waits on the
 clock until each frame's recorded time.
 """
 
@@ -22,10 +25,29 @@ from typing import Any
 
 from labkit.devices.camera.frames import CameraSettings, Frame
 from labkit.devices.camera.sources import RawFrame, SourceStopped
-from labkit.errors import CassetteError
+from labkit.errors import CassetteError, DeviceError, DeviceTimeout
 
 FORMAT = "labkit-frames"
 VERSION = 1
+#: the camera faults a frame cassette records, by the name stored in its fault lines
+FAULTS: dict[str, type[DeviceError]] = {"DeviceError": DeviceError, "DeviceTimeout": DeviceTimeout}
+
+
+class RecordedFault(Exception):
+    """A replayed source reached the fault line of a burst the camera failed: ``kind`` (a class
+    of :data:`FAULTS`), the recorded camera's ``device`` name (its URL, not the replay's) and
+    the recorded ``reason``, raised again by the camera as recorded."""
+
+    def __init__(self, kind: type[DeviceError], device: str | None, reason: str) -> None:
+        super().__init__(reason)
+        self.kind = kind
+        self.device = device
+        self.reason = reason
+
+
+def is_fault(entry: dict[str, Any]) -> bool:
+    """A fault line (a failed burst's end), not a frame."""
+    return "fault" in entry
 
 
 def sidecar_path(index: str | Path) -> Path:
@@ -53,6 +75,14 @@ class FrameCassetteWriter:
             self.offset += len(frame.payload)
             self.index.write(json.dumps(entry) + "\n")
         self.data.flush()
+        self.index.flush()
+
+    def write_fault(self, error: DeviceError, step: Any, frames_asked: int, t_host: float) -> None:
+        """The burst labelled ``step`` ended in ``error`` at ``t_host`` (its frames written before)."""
+        kind = type(error).__name__ if type(error).__name__ in FAULTS else "DeviceError"
+        entry = {"fault": kind, "device": error.device, "reason": error.reason, "step": step,
+                 "frames_asked": frames_asked, "t_host": t_host}
+        self.index.write(json.dumps(entry) + "\n")
         self.index.flush()
 
     def close(self) -> None:
@@ -93,6 +123,9 @@ def read_cassette(index: str | Path) -> tuple[dict[str, Any], list[dict[str, Any
     except OSError as exc:
         raise CassetteError(str(data_path), 0, f"cannot read frame bytes: {exc.strerror or exc}") from None
     for n, e in enumerate(entries, 2):
+        if is_fault(e):
+            _check_fault(p, n, e)
+            continue
         try:
             end = int(e["offset"]) + int(e["length"])
             float(e["t_host"])
@@ -104,6 +137,17 @@ def read_cassette(index: str | Path) -> tuple[dict[str, Any], list[dict[str, Any
             raise CassetteError(str(p), n, f"frame bytes {e['offset']}..{end} beyond {data_path.name} "
                                            f"({len(data)} bytes): truncated sidecar")
     return header, entries, data
+
+
+def _check_fault(path: Path, line: int, entry: dict[str, Any]) -> None:
+    try:
+        float(entry["t_host"])
+        usable = entry["fault"] in FAULTS and isinstance(entry["reason"], str)
+    except (KeyError, TypeError, ValueError, OverflowError):
+        usable = False
+    if not usable:
+        raise CassetteError(str(path), line, f"fault line without a known fault ({', '.join(FAULTS)}), "
+                                             "a reason and a numeric t_host")
 
 
 class ReplaySource:
@@ -130,6 +174,8 @@ class ReplaySource:
         self.next += 1
         if self.mode == "timed":
             self.clock.sleep_until(float(e["t_host"]))
+        if is_fault(e):
+            raise RecordedFault(FAULTS[e["fault"]], e.get("device"), e["reason"])
         start = int(e["offset"])
         return RawFrame(self.data[start:start + int(e["length"])], e.get("t_device"), e.get("seq"),
                         t_host=float(e["t_host"]), dropped_before=int(e.get("dropped_before") or 0),

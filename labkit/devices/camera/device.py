@@ -12,7 +12,9 @@ virtual clock must not be slept on by two threads).
 
 Every wait has a timeout (``timeout_s`` in the URL, default 2 s): a camera that sends nothing
 for that long ends the burst with a one-line :class:`~labkit.errors.DeviceTimeout` naming the
-camera, its URL and what it stopped doing; it never hangs a run.
+camera, its URL and what it stopped doing; it never hangs a run. When recording, a failed
+burst's frames and its fault are written to the frame cassette, so a replay fails the same burst
+the same way.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ from dataclasses import replace
 from typing import Any, ClassVar
 
 from labkit.devices.base import Device
-from labkit.devices.camera.cassette import FrameCassetteWriter, ReplaySource
+from labkit.devices.camera.cassette import FrameCassetteWriter, RecordedFault, ReplaySource
 from labkit.devices.camera.faithful import FaithfulFrameSource
 from labkit.devices.camera.frames import CameraSettings, Frame
 from labkit.devices.camera.sources import HttpMjpegSource, SourceStopped, V4l2Source
@@ -129,13 +131,22 @@ class Camera(Device):
         begin = getattr(self.source, "begin_burst", None)
         if begin is not None:  # a faithful replay matches the burst to the recording's
             begin(n, step)
-        frames = self._pull(n, limit) if not self.source.live else self._wait(n, limit)
+        frames: list[Frame] = []
+        try:
+            if self.source.live:
+                self._wait(n, limit, frames)
+            else:
+                self._pull(n, limit, frames)
+        except DeviceError as exc:
+            if self.recorder is not None:  # the frames it did send, then how the burst ended
+                self.recorder.write(frames, step)
+                self.recorder.write_fault(exc, step, n, self.clock.now())
+            raise
         if self.recorder is not None:
             self.recorder.write(frames, step)
         return frames
 
-    def _pull(self, n: int, limit: float) -> list[Frame]:
-        out: list[Frame] = []
+    def _pull(self, n: int, limit: float, out: list[Frame]) -> None:
         self._collect = out
         try:
             while len(out) < n:
@@ -143,6 +154,9 @@ class Camera(Device):
                     raw = self.source.read(limit)
                 except SourceStopped as exc:
                     raise self._fault(str(exc), len(out), n) from None
+                except RecordedFault as fault:  # a replayed burst the recorded camera failed
+                    device = fault.device or f"camera {self.name} at {self.url}"
+                    raise fault.kind(device, "burst", b"", fault.reason) from None
                 frame = self._stamp(raw)
                 if not out and frame.dropped_before:  # slots that passed while no burst was taken:
                     self.discarded += frame.dropped_before  # not read, as a grab thread discards them
@@ -150,10 +164,8 @@ class Camera(Device):
                 self._accept(frame)
         finally:
             self._collect = None
-        return out
 
-    def _wait(self, n: int, limit: float) -> list[Frame]:
-        out: list[Frame] = []
+    def _wait(self, n: int, limit: float, out: list[Frame]) -> None:
         with self._cond:
             self._collect = out
             start = time.monotonic()
@@ -168,7 +180,6 @@ class Camera(Device):
                     self._cond.wait(timeout=min(0.1, limit - silent))
             finally:
                 self._collect = None
-        return out
 
     def latest(self) -> Frame | None:
         """The newest frame received (live sources), or None."""

@@ -20,6 +20,9 @@ This source does the same for a camera, for any protocol that takes bursts
   otherwise the replayed run took another decision than the recorded one, and
   :class:`~labkit.errors.ReplayMismatch` says which burst the replay took and which the
   recording took next, in the protocol's terms (step and take), with the cassette's line.
+* **Faults as recorded.** A burst the recorded camera failed (its frame cassette's fault line,
+  after the frames it did send) fails again at its recorded time with the recorded fault, so the
+  replayed run ends, or goes on, as the recorded one did.
 """
 
 from __future__ import annotations
@@ -28,7 +31,7 @@ import re
 from pathlib import Path
 from typing import Any
 
-from labkit.devices.camera.cassette import ReplaySource
+from labkit.devices.camera.cassette import ReplaySource, is_fault
 from labkit.devices.camera.sources import RawFrame
 from labkit.errors import ReplayMismatch
 
@@ -50,6 +53,7 @@ class FaithfulFrameSource(ReplaySource):
     def __init__(self, index: str | Path) -> None:
         super().__init__(index, "faithful")
         self.bursts = 0
+        self.faults = 0
         self.late = 0
         self.latest_s = 0.0
 
@@ -62,10 +66,13 @@ class FaithfulFrameSource(ReplaySource):
                                  f"at {burst_words(label)}, but the recording took no more bursts "
                                  f"(all {len(self.entries)} frames served)")
         recorded = self.entries[start].get("step")
-        length = 0
+        length, failed = 0, False
         while start + length < len(self.entries) and self.entries[start + length].get("step") == recorded:
+            if is_fault(self.entries[start + length]):
+                failed = True  # the burst the camera failed: its frames, then the fault
+                break
             length += 1
-        if str(recorded) != str(label) or length < n:
+        if str(recorded) != str(label) or (length < n and not failed):
             line = start + 2  # the header is line 1
             raise ReplayMismatch(
                 f"camera cassette {self.path}: the replayed run took a burst of {n} frames at "
@@ -73,6 +80,7 @@ class FaithfulFrameSource(ReplaySource):
                 f"{burst_words(recorded)} (frame cassette line {line}): the run decided otherwise "
                 "than the recorded one before this burst")
         self.bursts += 1
+        self.faults += failed
 
     def read(self, timeout_s: float) -> RawFrame:
         due = float(self.entries[self.next]["t_host"]) if self.next < len(self.entries) else None
@@ -87,6 +95,7 @@ class FaithfulFrameSource(ReplaySource):
 
     def report(self) -> dict[str, Any]:
         """What the replay served: frames and bursts of the recording's, how many late and by how much."""
-        return {"port": Path(self.path).stem, "frames_recorded": len(self.entries),
-                "frames_served": self.next, "bursts": self.bursts, "served_late": self.late,
-                "latest_s": round(self.latest_s, 6)}
+        frames = [not is_fault(e) for e in self.entries]
+        return {"port": Path(self.path).stem, "frames_recorded": sum(frames),
+                "frames_served": sum(frames[:self.next]), "bursts": self.bursts, "failed_bursts": self.faults,
+                "served_late": self.late, "latest_s": round(self.latest_s, 6)}

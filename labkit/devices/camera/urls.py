@@ -21,7 +21,8 @@ from labkit.errors import PortURLError
 from labkit.io.urls import split_query, split_scheme
 
 SETTING_KEYS = ("size", "fps", "fourcc", "exposure_s", "timeout_s")
-SIM_KEYS = ("seed", "plant", "role", "screen_mm", "mm_per_px", "scene", "strobe", "body_mm", "ambient")
+SIM_KEYS = ("seed", "plant", "role", "screen_mm", "mm_per_px", "scene", "strobe", "body_mm", "ambient",
+            "stop_after")
 #: an MJPEG stream's keys besides timeout_s: the rate set in the phone's app, to count drops by
 HTTP_KEYS = ("nominal_fps",)
 MAX_SIDE_PX = 8192
