@@ -212,6 +212,11 @@ def _evidence_diffs(record: Any, evidence: Evidence, tolerant: frozenset[str]) -
     return diff_points(evidence.points, record.point_events(), tolerant) + evidence.reading_diffs()
 
 
+def events_damaged(record: SessionRecord) -> bool:
+    """events.jsonl had damaged lines (a crash's), skipped while reading it."""
+    return any("events.jsonl:" in problem for problem in record.problems)
+
+
 def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str = "auto") -> ReplayOutcome:
     """Replay a session at ``level`` (auto: exact for a virtual-clock session, faithful for a
     real-clock one) and compare it with the recording."""
@@ -259,7 +264,12 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
     recorded = record.results
     warnings = record.problems + dropped
     replay_decisions = decisions(collect.events)  # the same steps, faults and ending, at both levels
-    diffs = tampered + diff_decisions(replay_decisions, decisions(record.events))
+    diffs = list(tampered)
+    if faithful or not events_damaged(record):
+        diffs += diff_decisions(replay_decisions, decisions(record.events))
+    else:  # the bytes and results.json carry the exact level; a crash's damaged events cannot
+        warnings.append(f"{record.path / 'events.jsonl'}: damaged lines, so the run's decisions were not "
+                        "compared (the points and results were, with every byte)")
     if not faithful:
         tolerant = DERIVED_KEYS | analysis_keys(protocol.row)  # their last digits follow the CPU
         diffs += (diff_results(replayed, recorded, derived_keys=tolerant) if recorded is not None

@@ -255,6 +255,10 @@ def test_damaged_event_lines_are_warnings_naming_file_and_line(name, complete, t
     out, err = capsys.readouterr()
     assert code == 0, (code, err[-500:])
     lines = err.splitlines()
+    # a replay says it could not compare the run's decisions with events.jsonl's damaged lines
+    unseen = [line for line in lines if "decisions were not compared" in line]
+    assert len(unseen) == (1 if "replay" in name and "events" in name else 0), err[-2000:]
     assert lines and all(
-        "warning" in line and needle in line and "damaged line skipped" in line for line in lines
+        "warning" in line and needle in line and "damaged line skipped" in line
+        for line in lines if line not in unseen
     ), err[-2000:]
