@@ -196,10 +196,10 @@ class RunContext:
                 return took
             if self.clock.now() - start > timeout:
                 snaps = self.control.snapshots()
-                state = ", ".join(
+                state = ", ".join(  # the duty too: at 1.00 the motor gives all it has there
                     f"{n}: target {rad_s_to_rpm(s.target_rad_s):.0f} RPM, measured "
                     + ("none" if s.measured_rad_s is None else f"{rad_s_to_rpm(s.measured_rad_s):.0f} RPM")
-                    for n, s in snaps.items())
+                    + f", duty {s.duty:.2f}" for n, s in snaps.items())
                 raise LabkitError(f"speed did not settle within {timeout:.0f} s ({state}); motors at zero")
             self.clock.sleep(self.control.period_s)
             self._control_event()
