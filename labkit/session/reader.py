@@ -7,7 +7,7 @@ with a size bound, and never raises anything but :class:`SessionError` naming th
   unreadable (bad bytes, bad JSON, nested deeper than :data:`MAX_JSON_DEPTH`) is an error.
 * ``events.jsonl`` and ``readings/ROLE.jsonl``: one JSON object per line. A torn last line
   (a crash mid-write: no newline at its end) is skipped silently. Any other damaged line (not
-  UTF-8, not JSON, not an object, longer than :data:`MAX_LINE_BYTES`) is skipped and reported as
+  UTF-8, not JSON, not an object, longer than :func:`line_limit`) is skipped and reported as
   ``file:line: damaged line skipped (reason)`` in :attr:`SessionRecord.problems`. A skipped
   event is never guessed at: a point it held is missing, so ``--resume`` measures that step
   again. Documented in docs/reference/protocols.md (Resume).
@@ -27,7 +27,10 @@ from labkit.session.paths import session_file
 
 MAX_JSON_BYTES = 64_000_000        # run.json, results.json
 MAX_JSONL_BYTES = 4_000_000_000    # events.jsonl, readings/ROLE.jsonl
-MAX_LINE_BYTES = 1_000_000         # one event or reading
+MAX_LINE_BYTES = 1_000_000         # one reading, or any line of a file but events.jsonl
+#: one event: the results event repeats results.json (2.5 MB for a 4 736-point sweep), so its
+#: line may be as long as that file may be
+MAX_EVENT_LINE_BYTES = MAX_JSON_BYTES
 MAX_JSON_DEPTH = 64                # nesting of any document or line
 
 
@@ -91,26 +94,41 @@ def read_json_file(path: Path, limit: int = MAX_JSON_BYTES) -> Any:
         raise SessionError(f"{path}: unreadable: {exc}") from None
 
 
+def line_limit(path: Path) -> int:
+    """The longest line a session file may hold: :data:`MAX_EVENT_LINE_BYTES` in events.jsonl,
+    else :data:`MAX_LINE_BYTES`."""
+    return MAX_EVENT_LINE_BYTES if path.name == "events.jsonl" else MAX_LINE_BYTES
+
+
+def _skip_line(f: Any) -> None:
+    """Read past the rest of an over-long line, a megabyte at a time."""
+    while True:
+        chunk = f.readline(1 << 20)
+        if not chunk or chunk.endswith(b"\n"):
+            return
+
+
 def iter_jsonl_lines(path: Path, problems: list[str] | None = None,
                      limit: int = MAX_JSONL_BYTES) -> Iterator[tuple[int, dict[str, Any]]]:
     """``(line number, object)`` for each good line of a JSONL file, read as it is asked for
     (see the module docstring). Damaged lines are skipped; each is reported in ``problems`` as
     ``file:line: reason``."""
     _regular_file(path, limit)
+    longest = line_limit(path)
     try:
         with open(path, "rb") as f:
             number = 0
             while True:
-                raw = f.readline(MAX_LINE_BYTES + 1)
+                raw = f.readline(longest + 1)
                 if not raw:
                     break
                 number += 1
                 torn = not raw.endswith(b"\n")
-                if torn and len(raw) > MAX_LINE_BYTES:
-                    f.readline()  # skip the rest of the over-long line (bounded by the file size)
+                if torn and len(raw) > longest:
+                    _skip_line(f)
                     if problems is not None:
                         problems.append(f"{path}:{number}: damaged line skipped "
-                                        f"(longer than {MAX_LINE_BYTES} bytes)")
+                                        f"(longer than {longest} bytes)")
                     continue
                 if not raw.strip():
                     continue
