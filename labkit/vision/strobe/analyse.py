@@ -14,7 +14,7 @@ lateral position is taken across that rest axis.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -259,9 +259,9 @@ def _pick_phase(model: PhaseModel | None, idx: np.ndarray, series: list[np.ndarr
     if signal.explained > 0.5 and (1 - given) > 2 * (1 - signal.explained) + 0.02 and \
             abs(fold(model.cycles_per_frame) - signal.cycles_per_frame) > 1e-6:
         sign = -1.0 if (model.cycles_per_frame % 1.0) > 0.5 else 1.0
-        model.cycles_per_frame = sign * signal.cycles_per_frame
-        model.apparent_hz = model.cycles_per_frame * (model.camera_fps or fps)
-        model.source += "; frequency from the footage (the given one disagrees)"
+        cycles = sign * signal.cycles_per_frame
+        model = replace(model, cycles_per_frame=cycles, apparent_hz=cycles * (model.camera_fps or fps),
+                        source=model.source + "; frequency from the footage (the given one disagrees)")
         ev["model_disagrees"] = True
     return model, ev
 

@@ -31,7 +31,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 
-@dataclass
+@dataclass(frozen=True)
 class PhaseModel:
     """How frame index maps to rotor phase: ``psi_k = 2 pi cycles_per_frame k`` (P1)."""
 
