@@ -52,14 +52,14 @@ def main(folder: Path) -> None:
         for wander in WANDER_PX:
             path, truth = clip(name, wander, folder)
             result = analyse_laser(str(path))
-            failures, errors = score_laser(result, truth)
-            verdict = result["quality"]["verdict"]
+            failures, errors = score_laser(result.to_json(), truth)
+            verdict = result.quality.verdict
             moved = np.ptp(np.array(truth["camera_offset_px"]), axis=0)
             passed += not failures
             ok_wrong += bool(failures) and verdict == "ok"
             outcome = "pass" if not failures else "FAIL " + ",".join(failures)
             print(f"{path.stem:32s} camera moved {moved[0]:3.0f} x {moved[1]:3.0f} px  -> "
-                  f"{result['pattern']['type']:12s} {verdict:9s} {outcome}"
+                  f"{result.pattern.type:12s} {verdict:9s} {outcome}"
                   f"  centre {errors.get('centre_px', float('nan')):.2f} px (tolerance "
                   f"{errors.get('centre_tolerance_px', float('nan')):.2f})")
     total = len(CASES) * len(WANDER_PX)

@@ -43,9 +43,9 @@ def main() -> None:
     print(f"{args.size} {args.body} body {clip.extent_px()[0]:.0f}x{clip.extent_px()[1]:.0f} px, room light "
           f"{args.room_light / (1 + args.room_light):.0%} of the light, {clip.duration_s:.1f} s clip: "
           f"{cpu:.2f} CPU-s ({cpu / clip.duration_s:.2f}x the clip)")
-    print(f"tilt {r['tilt_amplitude_rad']:.4f} rad (truth {truth['tilt_amplitude_rad']:.4f}), lateral "
-          f"{r['lateral_amplitude_px']:.2f} px (truth {truth['lateral_amplitude_px']:.2f}), verdict "
-          f"{r['quality']['verdict']}; room-light model: {r['quality']['room_light_model']}")
+    print(f"tilt {r.tilt_amplitude_rad:.4f} rad (truth {truth['tilt_amplitude_rad']:.4f}), lateral "
+          f"{r.lateral_amplitude_px:.2f} px (truth {truth['lateral_amplitude_px']:.2f}), verdict "
+          f"{r.quality.verdict}; room-light model: {r.quality.evidence['room_light_model']}")
     pstats.Stats(profile).sort_stats("cumtime").print_stats(args.top)
 
 

@@ -55,8 +55,8 @@ def _overlay(folder: Path, name: str, spec, post=None) -> np.ndarray:
                       "mp4v", laser_truth(spec))
     traces: list[np.ndarray] = []
     result = analyse_laser(str(path), on_trace=traces.append)
-    q = result["quality"]
-    print(f"{name}: {result['pattern']['type']} {q['verdict']} {q['reasons']}")
+    q = result.quality
+    print(f"{name}: {result.pattern.type} {q.verdict} {list(q.reasons)}")
     return draw_overlay(traces[0], result)
 
 

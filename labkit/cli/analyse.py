@@ -25,9 +25,9 @@ from labkit.cli.progress import ProgressLines
 from labkit.errors import LabkitError, VideoError
 
 if TYPE_CHECKING:
-    from labkit.vision.laser.result import LaserResult
+    from labkit.vision.laser.result import LaserPattern, LaserResult
     from labkit.vision.shared.result import AnalysisResult
-    from labkit.vision.strobe.result import StrobeResult
+    from labkit.vision.strobe.result import OverlayFrame, StrobeResult
 
 R = TypeVar("R", bound="AnalysisResult")
 
@@ -249,7 +249,7 @@ def run_laser(args: argparse.Namespace) -> int:
             raise VideoError(args.path, str(exc)) from None
         result = record_speeds(result, args.speed_rpm, args.spin_rad_s)
         if stream:
-            stream.result(result)
+            stream.result(result.to_json())
         if traces:
             _laser_overlay(traces[0], result, args.overlay, stream)
     finally:
@@ -291,11 +291,11 @@ def _laser_overlay(trace, result: LaserResult, out: str | None, stream) -> None:
                                   "(use a .png or .jpg name in a writable folder)")
 
 
-def _loops_in_words(p: dict) -> str:
+def _loops_in_words(p: LaserPattern) -> str:
     """What ``loops`` counts (Sec. 6.5): an epitrochoid's main loop and its small loops, a
     hypotrochoid's arms."""
-    n = p["loops"]
-    return f"main loop + {n - 1} small" if p["type"] == "epitrochoid" else f"{n} arms"
+    n = p.loops or 0
+    return f"main loop + {n - 1} small" if p.type == "epitrochoid" else f"{n} arms"
 
 
 def _print_laser(r: LaserResult) -> None:
@@ -304,36 +304,36 @@ def _print_laser(r: LaserResult) -> None:
     p = r.pattern
     rate = f"{r.fps:.3g} fps" if r.fps else "photo"
     print(f"{r.source}: {r.frames} frames, {r.size[0]}x{r.size[1]}, {rate}")
-    q = r.quality
-    if q.get("frame_path") == "colour" and q.get("cnr_luma") is not None:
-        print(f"frames: colour (the trace's contrast-to-noise is {q['cnr_luma']:.1f} in luma vs "
-              f"{q['cnr_colour']:.1f} in colour on the first frames: too little kept in luma)")
-    if p["type"] == "none":
-        print(f"pattern: none ({p['reason']})")
+    q, e = r.quality, r.quality.evidence
+    if e.get("frame_path") == "colour" and e.get("cnr_luma") is not None:
+        print(f"frames: colour (the trace's contrast-to-noise is {e['cnr_luma']:.1f} in luma vs "
+              f"{e['cnr_colour']:.1f} in colour on the first frames: too little kept in luma)")
+    if not p.found or p.center_px is None or p.semi_axes_px is None:
+        print(f"pattern: none ({p.reason})")
         print(f"quality: {in_words(q)}")
         return
-    cx, cy = p["center_px"]
-    major, minor = p["semi_axes_px"]
+    cx, cy = p.center_px
+    major, minor = p.semi_axes_px
     print(
-        f"pattern: {p['type']}  centre ({cx:.2f}, {cy:.2f}) px  semi-axes {major:.2f} / {minor:.2f} px  "
-        f"rotation {p['rotation_deg']:.2f} deg  ellipticity {_fmt(p['ellipticity'], 3)}  "
-        f"rms residual {p['rms_residual_px']:.2f} px"
+        f"pattern: {p.type}  centre ({cx:.2f}, {cy:.2f}) px  semi-axes {major:.2f} / {minor:.2f} px  "
+        f"rotation {p.rotation_deg:.2f} deg  ellipticity {_fmt(p.ellipticity, 3)}  "
+        f"rms residual {p.rms_residual_px:.2f} px"
     )
-    if p["trochoid"]:
-        t = p["trochoid"]
+    if p.trochoid:
+        t = p.trochoid
         print(
-            f"trochoid (Eq. 6.38): loops {p['loops']} ({_loops_in_words(p)}), "
-            f"{p['symmetry']}-fold symmetry  a {t['a']:.4f}  b {t['b']:.3f}  "
-            f"scale {t['scale_px']:.2f} px  rotation {t['rotation_deg']:.2f} deg"
+            f"trochoid (Eq. 6.38): loops {p.loops} ({_loops_in_words(p)}), "
+            f"{p.symmetry}-fold symmetry  a {t.a:.4f}  b {t.b:.3f}  "
+            f"scale {t.scale_px:.2f} px  rotation {t.rotation_deg:.2f} deg"
         )
     if r.tilt_rad:
-        t = r.tilt_rad
+        tilt = r.tilt_rad
         print(
-            f"tilt amplitude: major {t['major']:.5f} rad ({math.degrees(t['major']):.3f} deg), "
-            f"minor {t['minor']:.5f} rad ({math.degrees(t['minor']):.3f} deg)"
+            f"tilt amplitude: major {tilt.major:.5f} rad ({math.degrees(tilt.major):.3f} deg), "
+            f"minor {tilt.minor:.5f} rad ({math.degrees(tilt.minor):.3f} deg)"
         )
-    if q.get("truncated"):
-        print(f"warning: {q['truncated']}")
+    if e.get("truncated"):
+        print(f"warning: {e['truncated']}")
     if _speed_line(r):
         print(_speed_line(r))
     print(f"quality: {in_words(q)}")
@@ -376,7 +376,7 @@ def run_strobe(args: argparse.Namespace) -> int:
         drawing = found.overlay_frame
         result = record_speeds(replace(found, overlay_frame=None), speed_rpm, args.spin_rad_s)
         if stream:
-            stream.result(result)
+            stream.result(result.to_json())
         if drawing is not None:
             _strobe_overlay(drawing, result, args.overlay, stream)
     finally:
@@ -385,12 +385,12 @@ def run_strobe(args: argparse.Namespace) -> int:
     return _finish("strobe", args, result, _print_strobe, "no reason")
 
 
-def _strobe_overlay(drawing: dict, result: StrobeResult, out: str | None, stream) -> None:
+def _strobe_overlay(drawing: OverlayFrame, result: StrobeResult, out: str | None, stream) -> None:
     """Draw the strobe overlay; write it to ``out`` (if given) and hand it to the rerun stream
     (``stream.overlay(bgr)``, when the stream offers it)."""
     from labkit.vision.strobe.overlay import draw_strobe_overlay, write_strobe_overlay
 
-    frame = drawing.pop("bgr")
+    frame = drawing.bgr
     if out:
         write_strobe_overlay(out, frame, result, drawing)
     if stream is not None and hasattr(stream, "overlay"):
@@ -405,32 +405,32 @@ def _print_strobe(r: StrobeResult) -> None:
     from labkit.vision.shared.verdict import describe
 
     q, u, pm = r.quality, r.uncertainty, r.phase_model
-    print(f"{r.source}: {r.frames} frames ({q['frames_with_body']} with a body), "
+    print(f"{r.source}: {r.frames} frames ({q.evidence['frames_with_body']} with a body), "
           f"phase from {r.phase_source}")
     extra = ""
-    if pm.get("flashes_per_frame") is not None and pm["kind"] == "lamp":
-        up_to = "up to " if pm["cycles_per_exposure"] is None else ""  # exposure not given
-        extra = f"  {up_to}{pm['flashes_per_frame']:.3g} flashes per frame, harmonic m = {pm['harmonic_m']}"
-    print(f"apparent frequency {r.apparent_hz:.4f} Hz ({pm['cycles_per_frame']:+.4f} cycles per frame at "
+    if pm.flashes_per_frame is not None and pm.kind == "lamp":
+        up_to = "up to " if pm.cycles_per_exposure is None else ""  # exposure not given
+        extra = f"  {up_to}{pm.flashes_per_frame:.3g} flashes per frame, harmonic m = {pm.harmonic_m}"
+    print(f"apparent frequency {r.apparent_hz:.4f} Hz ({pm.cycles_per_frame:+.4f} cycles per frame at "
           f"{r.fps:.4g} fps){extra}")
     body = r.body
-    print(f"body: rest axis {body['rest_axis_deg']:.1f} deg from image +x, "
-          f"{'square (tilt mod 90 deg)' if body['symmetry'] == 4 else 'elongated (tilt mod 180 deg)'}, "
-          f"half length {body['half_length_px']:.1f} px")
-    print(f"tilt amplitude {_pm(r.tilt_amplitude_rad, u['tilt_amplitude_rad'], 4)} rad "
+    print(f"body: rest axis {body.rest_axis_deg:.1f} deg from image +x, "
+          f"{'square (tilt mod 90 deg)' if body.symmetry == 4 else 'elongated (tilt mod 180 deg)'}, "
+          f"half length {body.half_length_px:.1f} px")
+    print(f"tilt amplitude {_pm(r.tilt_amplitude_rad, u.tilt_amplitude_rad, 4)} rad "
           f"({math.degrees(r.tilt_amplitude_rad):.2f} deg)  lateral amplitude "
-          f"{_pm(r.lateral_amplitude_px, u['lateral_amplitude_px'], 2)} px  RC offset (Eq. 5.97) "
-          f"{_pm(r.rc_offset_px, u['rc_offset_px'], 2)} px {r.rc_offset_direction or ''}".rstrip())
+          f"{_pm(r.lateral_amplitude_px, u.lateral_amplitude_px, 2)} px  RC offset (Eq. 5.97) "
+          f"{_pm(r.rc_offset_px, u.rc_offset_px, 2)} px {r.rc_offset_direction or ''}".rstrip())
     rolling = r.rolling_shutter
     if rolling:
-        given = "given" if rolling["readout_given"] else "from the footage"
+        given = "given" if rolling.readout_given else "from the footage"
         print(f"rolling shutter, camera as the strobe: per-row phase model, readout "
-              f"{rolling['readout_s'] * 1e3:.2f} ms ({given})")
+              f"{rolling.readout_s * 1e3:.2f} ms ({given})")
     room = r.room_light
     if room:
-        print(f"room light: {room['fraction_of_light']:.0%} of the light, its ghost of the revolution taken "
-              f"out in linear light (tilt {room['tilt_amplitude_uncorrected_rad']:.4f} rad without)")
-    print(f"{q['point']} trajectory: {r.point_pattern['type']}")
+        print(f"room light: {room.fraction_of_light:.0%} of the light, its ghost of the revolution taken "
+              f"out in linear light (tilt {room.tilt_amplitude_uncorrected_rad:.4f} rad without)")
+    print(f"{q.evidence['point']} trajectory: {r.point_pattern.type}")
     if _speed_line(r):
         print(_speed_line(r))
     print(describe(q))

@@ -113,6 +113,7 @@ def _spread(values: list[float]) -> str:
 
 
 def _errors(result: dict, truth: dict) -> str:
+    """The pattern's errors against the truth, from the result's JSON."""
     from labkit.vision.shared.curves import rotation_error_deg
 
     p, t = result["pattern"], truth["pattern"]
@@ -229,7 +230,7 @@ def run_laser(args: argparse.Namespace) -> int:
         for name, _ in jobs:
             best, result = min(times[name]), results[name]
             fixed = f"{_fixed_cost(result):7.3f}" if isinstance(result, LaserResult) else f"{'':7s}"
-            accuracy = _errors(result, truth) if isinstance(result, LaserResult) else ""
+            accuracy = _errors(result.to_json(), truth) if isinstance(result, LaserResult) else ""
             print(f"{name:46s} {best:7.3f} {n / best:6.0f} {_spread(ratios[name]):>22s} {fixed}  {accuracy}")
         print()
         print("target: full analysis >= 0.8x decode-only (VideoCapture.read, BGR) on the same file;")
@@ -238,4 +239,4 @@ def run_laser(args: argparse.Namespace) -> int:
 
 
 def _fixed_cost(result: LaserResult) -> float:
-    return float(result.quality.get("fit_s", 0.0))
+    return float(result.quality.evidence.get("fit_s", 0.0))

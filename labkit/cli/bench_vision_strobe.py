@@ -30,10 +30,11 @@ path, rotor, strobe = sys.argv[1], float(sys.argv[2]), float(sys.argv[3])
 cpu, wall = time.process_time(), time.perf_counter()
 r = analyse_strobe(path, rotor_hz=rotor, strobe_hz=strobe)
 cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
-room = r.get("room_light") or {}
-print(json.dumps({"cpu_s": cpu, "wall_s": wall, "tilt": r["tilt_amplitude_rad"],
-                  "lateral": r["lateral_amplitude_px"], "verdict": r["quality"]["verdict"],
-                  "ghost": r["quality"]["ghost_fraction"], "room": room.get("fraction_of_light")}))
+room = r.room_light
+print(json.dumps({"cpu_s": cpu, "wall_s": wall, "tilt": r.tilt_amplitude_rad,
+                  "lateral": r.lateral_amplitude_px, "verdict": r.verdict,
+                  "ghost": r.quality.evidence["ghost_fraction"],
+                  "room": None if room is None else room.fraction_of_light}))
 """
 
 

@@ -100,7 +100,8 @@ def _rel(got: float | None, want: float) -> float:
 
 
 def score_laser(result: dict, truth: dict) -> tuple[list[str], dict]:
-    """Failed checks and errors of a ``labkit analyse laser`` result against a laser truth."""
+    """Failed checks and errors of a ``labkit analyse laser`` result's JSON (``to_json()``, or a file
+    the command wrote) against a laser truth."""
     p, t = result.get("pattern") or {}, truth["pattern"]
     fails, err = [], {}
     kind = p.get("type", "none")
@@ -133,7 +134,8 @@ def score_laser(result: dict, truth: dict) -> tuple[list[str], dict]:
 
 
 def score_strobe(result: dict, truth: dict) -> tuple[list[str], dict]:
-    """Failed checks and errors of a ``labkit analyse strobe`` result against a strobe truth."""
+    """Failed checks and errors of a ``labkit analyse strobe`` result's JSON (``to_json()``, or a
+    file the command wrote) against a strobe truth."""
     fails, err = [], {}
     phi, beta = result.get("tilt_amplitude_rad"), result.get("lateral_amplitude_px")
     phi_t, beta_t = truth["tilt_amplitude_rad"], truth["lateral_amplitude_px"]
@@ -155,7 +157,7 @@ def analysis_inputs(truth: dict) -> dict:
     return inputs
 
 
-def _call(fn, path: Path, inputs: dict) -> dict:
+def _call(fn, path: Path, inputs: dict):
     """Call an analysis with the inputs a user would give, keeping those it accepts."""
     accepted = inspect.signature(fn).parameters
     return fn(str(path), **{k: v for k, v in inputs.items() if k in accepted and v is not None})
@@ -178,14 +180,14 @@ def evaluate_case(case: CaseSpec, cache: Path | None = None) -> Outcome:
         return Outcome(case, False, "error", "failed", ["analysis refused the file"], message=str(exc))
     verdict = result.verdict
     if strobe:
-        fails, err = score_strobe(result, truth)
+        fails, err = score_strobe(result.to_json(), truth)
         reported = "strobe"
     else:
-        fails, err = score_laser(result, truth)
+        fails, err = score_laser(result.to_json(), truth)
         p = result.pattern
-        reported = p.get("type", "none")
+        reported = p.type
         if reported in ("epitrochoid", "hypotrochoid"):
-            reported = f"{reported}-{p.get('loops')}"
+            reported = f"{reported}-{p.loops}"
     return Outcome(case, not fails, reported, verdict, fails, err)
 
 

@@ -52,9 +52,9 @@ def burst_cone_angle(frames: list[Any], fps: float, size: tuple[int, int], scree
         video = write_mjpeg_avi(Path(work) / "burst.avi", [f.payload for f in frames], fps, size)
         result = analyse_laser(str(video), screen_distance_mm=screen_mm, mm_per_px=mm_per_px)
     tilt = result.tilt_rad
-    angle = 0.5 * (tilt["major"] + tilt["minor"]) if tilt else None
+    angle = 0.5 * (tilt.major + tilt.minor) if tilt else None
     return {"cone_angle_rad": angle, "verdict": result.verdict, "reasons": result.reasons,
-            "pattern": result.pattern}
+            "pattern": result.pattern.to_json()}
 
 
 def pattern_at_angles(pattern: dict[str, Any] | None, angle_rad: float | None, screen_mm: float,

@@ -61,13 +61,13 @@ def analyse_burst(video: str, freqs: dict[str, Any], fps: float | None, exposure
                            exposure_s=exposure_s, mm_per_px=mm_per_px)
     except VideoError as exc:
         return {"phi_rad": None, "verdict": "failed", "reasons": [str(exc)]}
-    u, in_mm = r.uncertainty, r.in_mm
-    assert in_mm is not None  # mm_per_px was given
-    phi, phi_se = r.tilt_amplitude_rad, u["tilt_amplitude_rad"]
+    u, in_mm, se_mm = r.uncertainty, r.in_mm, r.uncertainty.in_mm
+    assert in_mm is not None and se_mm is not None  # mm_per_px was given
+    phi, phi_se = r.tilt_amplitude_rad, u.tilt_amplitude_rad
     return {"phi_rad": phi, "phi_stderr_rad": phi_se, "phi_deg": math.degrees(phi),
             "phi_stderr_deg": math.degrees(phi_se), "beta_px": r.lateral_amplitude_px,
-            "beta_mm": in_mm.lateral_amplitude_mm, "beta_stderr_mm": u["lateral_amplitude_mm"],
-            "delta_mm": in_mm.rc_offset_mm, "delta_stderr_mm": u["rc_offset_mm"],
+            "beta_mm": in_mm.lateral_amplitude_mm, "beta_stderr_mm": se_mm.lateral_amplitude_mm,
+            "delta_mm": in_mm.rc_offset_mm, "delta_stderr_mm": se_mm.rc_offset_mm,
             "rc_offset_direction": r.rc_offset_direction, "analysed_apparent_hz": r.apparent_hz,
             "verdict": r.verdict, "reasons": r.reasons}
 

@@ -153,9 +153,9 @@ def describe(result: Mapping[str, Any]) -> str:
         parts.append(f"tilt amplitude {result['tilt_amplitude_rad']:.4f} rad")
     quality = result.get("quality") or {}
     if quality.get("verdict"):
-        from labkit.vision.shared.verdict import in_words
+        from labkit.vision.shared.verdict import QualityReport, in_words
 
-        parts.append(in_words(quality))
+        parts.append(in_words(QualityReport.from_json(quality)))
     return ", ".join(parts)
 
 

@@ -78,7 +78,7 @@ def laser_cone_angle(phi: float, work: Path, seed: int, clip: int) -> float:
                      Lighting(level=0.03), frames=30, power=1.2, seed=1000 * seed + clip)
     path = write_footage(work / f"laser-{clip}.mp4", render_laser(shot), FPS, laser_truth(shot))
     tilt = analyse_laser(str(path), screen_distance_mm=SCREEN_MM, mm_per_px=mm_per_px).tilt_rad
-    return 0.5 * (tilt["major"] + tilt["minor"])
+    return 0.5 * (tilt.major + tilt.minor)
 
 
 def strobe_swing(phi: float, delta_m: float, body_mm: tuple[float, float], work: Path, seed: int,

@@ -48,7 +48,7 @@ def test_laser_analysis_reports_its_frames_as_it_reads_them():
     result = analyse_laser(str(CLIP), on_progress=lambda done, total: seen.append((done, total)))
     assert len(seen) >= 2, seen
     done = [d for d, _ in seen]
-    assert done == sorted(done) and done[-1] == result["quality"]["frames_analysed"]
+    assert done == sorted(done) and done[-1] == result.quality.evidence["frames_analysed"]
     assert all(total == seen[0][1] > 0 for _, total in seen)
 
 

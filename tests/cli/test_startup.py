@@ -77,7 +77,7 @@ def on_frame(index, t_s, bgr):
         seen.append(sorted(m for m in sys.modules if m.split(".")[0] in ("scipy", "pykdtree")))
 result = analyse_laser(sys.argv[1], on_frame=on_frame)
 after = sorted(m for m in sys.modules if m.split(".")[0] in ("scipy", "pykdtree"))
-print(json.dumps({"at_first_frame": seen[0], "after": after, "pattern": result["pattern"]["type"]}))
+print(json.dumps({"at_first_frame": seen[0], "after": after, "pattern": result.pattern.type}))
 """
 
 

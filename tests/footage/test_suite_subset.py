@@ -129,9 +129,9 @@ def test_a_camera_wandering_six_times_as_far_as_the_hard_preset_is_followed(tmp_
     truth = laser_truth(shot)
     path = write_footage(tmp_path / "wander.mp4", render_laser(shot), shot.camera.fps, truth)
     result = analyse_laser(str(path))
-    failures, errors = score_laser(result, truth)
+    failures, errors = score_laser(result.to_json(), truth)
     assert failures == [], errors
-    assert result["quality"]["verdict"] != "failed"
+    assert result.quality.verdict != "failed"
 
 
 @pytest.mark.parametrize("name", SMALL_BLURRED)

@@ -23,23 +23,23 @@ def laser_case(name: str) -> dict:
     from labkit.vision.laser.analyse import analyse_laser
 
     r = analyse_laser(str(VIDEOS / name), screen_distance_mm=SCREEN_MM, mm_per_px=MM_PER_PX)
-    p = r["pattern"]
-    numbers = {"tilt_major_rad": r["tilt_rad"]["major"], "centre_x_px": p["center_px"][0],
-               "centre_y_px": p["center_px"][1]}
-    return {"verdict": r["quality"]["verdict"], "reasons": r["quality"]["reasons"], "type": p["type"],
-            "loops": p["loops"], "numbers": numbers}
+    p = r.pattern
+    numbers = {"tilt_major_rad": r.tilt_rad.major, "centre_x_px": p.center_px[0],
+               "centre_y_px": p.center_px[1]}
+    return {"verdict": r.quality.verdict, "reasons": list(r.quality.reasons), "type": p.type,
+            "loops": p.loops, "numbers": numbers}
 
 
 def strobe_case(path: str, rotor_hz: float, strobe_hz: float) -> dict:
     from labkit.vision.strobe.analyse import analyse_strobe
 
     r = analyse_strobe(path, rotor_hz=rotor_hz, strobe_hz=strobe_hz)
-    room = r.get("room_light") or {}
-    return {"verdict": r["quality"]["verdict"], "reasons": r["quality"]["reasons"],
-            "room_light_settled": room.get("settled"),
-            "numbers": {"tilt_amplitude_rad": r["tilt_amplitude_rad"],
-                        "lateral_amplitude_px": r["lateral_amplitude_px"],
-                        "room_light_fraction": room.get("fraction_of_light", 0.0)}}
+    room = r.room_light
+    return {"verdict": r.quality.verdict, "reasons": list(r.quality.reasons),
+            "room_light_settled": None if room is None else room.settled,
+            "numbers": {"tilt_amplitude_rad": r.tilt_amplitude_rad,
+                        "lateral_amplitude_px": r.lateral_amplitude_px,
+                        "room_light_fraction": 0.0 if room is None else room.fraction_of_light}}
 
 
 def all_cases() -> dict:

@@ -22,11 +22,11 @@ SIZE = (640, 480)
 
 
 def _within_bounds(result: dict, truth: dict) -> bool:
-    got, want = result["pattern"], truth["pattern"]
-    if got["center_px"] is None or got["type"] not in ("circle", "ellipse"):
+    got, want = result.pattern, truth["pattern"]
+    if got.center_px is None or got.type not in ("circle", "ellipse"):
         return False
-    axes = all(abs(g / w - 1) < 0.02 for g, w in zip(got["semi_axes_px"], want["semi_axes_px"], strict=True))
-    return math.dist(got["center_px"], want["center_px"]) < 1.0 and axes
+    axes = all(abs(g / w - 1) < 0.02 for g, w in zip(got.semi_axes_px, want["semi_axes_px"], strict=True))
+    return math.dist(got.center_px, want["center_px"]) < 1.0 and axes
 
 
 @pytest.fixture(scope="module")
@@ -43,11 +43,11 @@ def faint_red_on_warm_screen(tmp_path_factory):
 def test_auto_keeps_luma_where_it_is_adequate(laser_clips):
     path, truth = laser_clips["03-ellipse-medium-640x480"]
     result = analyse_laser(str(path))
-    q = result["quality"]
-    assert q["frame_path"] == "luma"
-    assert q["settings"]["luma"] is None
+    q = result.quality
+    assert q.evidence["frame_path"] == "luma"
+    assert q.evidence["settings"]["luma"] is None
     # the decoder's luma planes alone show the trace clearly: colour is not even decoded
-    assert q["cnr_luma"] >= AMPLE_LUMA_CNR and q["cnr_colour"] is None
+    assert q.evidence["cnr_luma"] >= AMPLE_LUMA_CNR and q.evidence["cnr_colour"] is None
     assert _within_bounds(result, truth)
 
 
@@ -69,19 +69,20 @@ def test_luma_planes_and_converted_grey_score_alike(laser_clips):
 def test_auto_falls_back_to_colour_for_a_faint_red_trace_on_a_warm_screen(faint_red_on_warm_screen):
     path, truth = faint_red_on_warm_screen
     auto = analyse_laser(path)
-    q = auto["quality"]
-    assert q["frame_path"] == "colour"
-    assert q["cnr_luma"] < 0.5 * q["cnr_colour"]
+    q = auto.quality
+    assert q.evidence["frame_path"] == "colour"
+    assert q.evidence["cnr_luma"] < 0.5 * q.evidence["cnr_colour"]
     assert _within_bounds(auto, truth)
     forced = analyse_laser(path, quality=LaserQuality(luma=True))
-    assert forced["quality"]["frame_path"] == "luma"
+    assert forced.quality.evidence["frame_path"] == "luma"
     assert not _within_bounds(forced, truth)  # what the fallback saves the user from
 
 
 def test_forcing_colour_skips_the_measurement(faint_red_on_warm_screen):
     path, _ = faint_red_on_warm_screen
-    q = analyse_laser(path, quality=LaserQuality(luma=False))["quality"]
-    assert q["frame_path"] == "colour" and q["cnr_luma"] is None and q["cnr_colour"] is None
+    q = analyse_laser(path, quality=LaserQuality(luma=False)).quality
+    e = q.evidence
+    assert e["frame_path"] == "colour" and e["cnr_luma"] is None and e["cnr_colour"] is None
 
 
 def test_measurement_on_frames_with_known_contrast():

@@ -64,12 +64,12 @@ def test_luma_and_colour_analyses_both_meet_the_acceptance_bounds(tmp_path, code
                        ellipticity=0.4, rotation_deg=62)
     t = truth["pattern"]
     for luma in (True, False):
-        p = analyse_laser(str(path), quality=LaserQuality(luma=luma))["pattern"]
-        assert p["type"] == "ellipse"
-        assert math.dist(p["center_px"], t["center_px"]) < 1.0
-        for got, want in zip(p["semi_axes_px"], t["semi_axes_px"], strict=True):
+        p = analyse_laser(str(path), quality=LaserQuality(luma=luma)).pattern
+        assert p.type == "ellipse"
+        assert math.dist(p.center_px, t["center_px"]) < 1.0
+        for got, want in zip(p.semi_axes_px, t["semi_axes_px"], strict=True):
             assert abs(got / want - 1) < 0.02
-        assert abs((p["rotation_deg"] - t["rotation_deg"] + 90) % 180 - 90) < 2.0
+        assert abs((p.rotation_deg - t["rotation_deg"] + 90) % 180 - 90) < 2.0
 
 
 def test_cli_frame_path_options_are_recorded(capsys, tmp_path):

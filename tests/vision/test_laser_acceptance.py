@@ -17,26 +17,26 @@ NAMES = [name for name, _ in laser_test_set()]
 def test_laser_pattern_within_acceptance_bounds(laser_clips, name):
     path, truth = laser_clips[name]
     result = analyse_laser(str(path))
-    got, want = result["pattern"], truth["pattern"]
-    assert math.dist(got["center_px"], want["center_px"]) < 1.0
+    got, want = result.pattern, truth["pattern"]
+    assert math.dist(got.center_px, want["center_px"]) < 1.0
     if want["type"] in ("circle", "ellipse"):
-        assert got["type"] in ("circle", "ellipse")
+        assert got.type in ("circle", "ellipse")
         if want["ellipticity"] >= 0.05:
-            assert got["type"] == "ellipse"
-        for g, w in zip(got["semi_axes_px"], want["semi_axes_px"], strict=True):
+            assert got.type == "ellipse"
+        for g, w in zip(got.semi_axes_px, want["semi_axes_px"], strict=True):
             assert abs(g / w - 1) < 0.02
         if want["ellipticity"] > 0.1:
-            err = rotation_error_deg(math.radians(got["rotation_deg"]), math.radians(want["rotation_deg"]),
+            err = rotation_error_deg(math.radians(got.rotation_deg), math.radians(want["rotation_deg"]),
                                      math.pi)
             assert err < 2.0
-        assert got["trochoid"] is None
+        assert got.trochoid is None
     else:
-        assert got["type"] == want["type"]
-        assert got["loops"] == want["loops"]
-        assert abs(got["trochoid"]["a"] - want["trochoid"]["a"]) < 0.05
-        assert abs(got["trochoid"]["b"] - want["trochoid"]["b"]) < 0.05
-    assert result["frames"] == truth["frames"]
-    assert result["size"] == truth["size"]
+        assert got.type == want["type"]
+        assert got.loops == want["loops"]
+        assert abs(got.trochoid.a - want["trochoid"]["a"]) < 0.05
+        assert abs(got.trochoid.b - want["trochoid"]["b"]) < 0.05
+    assert result.frames == truth["frames"]
+    assert result.size == truth["size"]
 
 
 def test_tilt_from_a_simulated_cone(tmp_path):
@@ -54,10 +54,10 @@ def test_tilt_from_a_simulated_cone(tmp_path):
     spec = laser_preset("medium", (320, 240), seed=5)
     path = write_clip(tmp_path / "cone.mp4", render_laser(spec, pos), spec.fps, "mp4v", None)
     result = analyse_laser(str(path), screen_distance_mm=L, mm_per_px=S)
-    assert result["pattern"]["type"] == "circle"
-    assert result["pattern"]["semi_axes_px"][0] == pytest.approx(L * math.tan(2 * phi) / S, rel=0.02)
-    assert result["tilt_rad"]["major"] == pytest.approx(phi, rel=0.02)
-    assert result["tilt_rad"]["minor"] == pytest.approx(phi, rel=0.02)
+    assert result.pattern.type == "circle"
+    assert result.pattern.semi_axes_px[0] == pytest.approx(L * math.tan(2 * phi) / S, rel=0.02)
+    assert result.tilt_rad.major == pytest.approx(phi, rel=0.02)
+    assert result.tilt_rad.minor == pytest.approx(phi, rel=0.02)
 
 
 def test_frame_hook_sees_every_analysed_frame(laser_clips):
@@ -85,12 +85,12 @@ def test_long_clip_is_classified_from_its_first_half_and_refined(tmp_path):
     truth = laser_truth(spec)
     path = write_clip(tmp_path / "long.mp4", render_laser(spec), spec.fps, "mp4v", truth)
     result = analyse_laser(str(path))
-    got, want = result["pattern"], truth["pattern"]
-    assert result["quality"]["chunks"] >= 4
-    assert any(k.endswith("(first part)") for k in result["quality"]["candidate_residuals_px"])
-    assert got["type"] == "hypotrochoid" and got["loops"] == 5
-    assert abs(got["trochoid"]["b"] - 0.45) < 0.05
-    assert math.dist(got["center_px"], want["center_px"]) < 1.0
+    got, want = result.pattern, truth["pattern"]
+    assert result.quality.evidence["chunks"] >= 4
+    assert any(k.endswith("(first part)") for k in result.quality.evidence["candidate_residuals_px"])
+    assert got.type == "hypotrochoid" and got.loops == 5
+    assert abs(got.trochoid.b - 0.45) < 0.05
+    assert math.dist(got.center_px, want["center_px"]) < 1.0
 
 
 def test_hard_720p_epitrochoid_with_barely_looped_small_loops(tmp_path):
@@ -111,10 +111,10 @@ def test_hard_720p_epitrochoid_with_barely_looped_small_loops(tmp_path):
     truth = laser_truth(spec)
     path = write_clip(tmp_path / "epi4-hard-720p.mp4", render_laser(spec), spec.fps, "mp4v", truth)
     for stride in (1, 2):
-        got = analyse_laser(str(path), quality=LaserQuality(stride=stride))["pattern"]
-        assert got["type"] == "epitrochoid" and got["loops"] == 4
-        assert math.dist(got["center_px"], truth["pattern"]["center_px"]) < 1.0
-        assert abs(got["trochoid"]["b"] - 0.3) < 0.1
+        got = analyse_laser(str(path), quality=LaserQuality(stride=stride)).pattern
+        assert got.type == "epitrochoid" and got.loops == 4
+        assert math.dist(got.center_px, truth["pattern"]["center_px"]) < 1.0
+        assert abs(got.trochoid.b - 0.3) < 0.1
 
 
 def test_centre_of_a_fast_drifting_long_clip_is_reported_at_the_middle_of_the_recording(tmp_path):
@@ -133,8 +133,8 @@ def test_centre_of_a_fast_drifting_long_clip_is_reported_at_the_middle_of_the_re
     truth = laser_truth(spec)
     path = write_clip(tmp_path / "drift.mp4", render_laser(spec), spec.fps, "mp4v", truth)
     result = analyse_laser(str(path))
-    assert result["quality"]["chunks"] == LaserQuality().max_chunks == 12
-    assert result["quality"]["drift_px_s"] == pytest.approx([4.0, -3.0], abs=0.1)
-    assert math.dist(result["pattern"]["center_px"], truth["pattern"]["center_px"]) < 0.35
-    for g, w in zip(result["pattern"]["semi_axes_px"], truth["pattern"]["semi_axes_px"], strict=True):
+    assert result.quality.evidence["chunks"] == LaserQuality().max_chunks == 12
+    assert result.quality.evidence["drift_px_s"] == pytest.approx([4.0, -3.0], abs=0.1)
+    assert math.dist(result.pattern.center_px, truth["pattern"]["center_px"]) < 0.35
+    for g, w in zip(result.pattern.semi_axes_px, truth["pattern"]["semi_axes_px"], strict=True):
         assert abs(g / w - 1) < 0.02

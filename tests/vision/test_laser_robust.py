@@ -38,9 +38,9 @@ def suite_cache(tmp_path_factory):
 def test_independent_footage_within_tolerance_and_ok(suite_cache, name):
     path, truth = render_case(SUITE[name], suite_cache)
     result = analyse_laser(str(path))
-    failures, errors = score_laser(result, truth)
+    failures, errors = score_laser(result.to_json(), truth)
     assert failures == [], errors
-    assert result["quality"]["verdict"] == "ok", result["quality"]["reasons"]
+    assert result.quality.verdict == "ok", result.quality.reasons
 
 
 def test_arcs_beside_a_larger_timestamp_read_right_and_say_what_was_left_out(suite_cache):
@@ -50,11 +50,11 @@ def test_arcs_beside_a_larger_timestamp_read_right_and_say_what_was_left_out(sui
     screen. The result stays doubtful (most of the curve extrapolated, drift assumed straight)."""
     path, truth = render_case(SUITE["hypotrochoid-4-06-medium"], suite_cache)
     result = analyse_laser(str(path))
-    failures, errors = score_laser(result, truth)
+    failures, errors = score_laser(result.to_json(), truth)
     assert failures == [], errors
-    q = result["quality"]
-    assert q["light_fixed_in_frame"] > 0.3
-    assert q["verdict"] == "doubtful" and any("extrapolated" in r for r in q["reasons"])
+    q = result.quality
+    assert q.evidence["light_fixed_in_frame"] > 0.3
+    assert q.verdict == "doubtful" and any("extrapolated" in r for r in q.reasons)
 
 
 def _synth(tmp_path, size, level, seed, kind, loops, b, arc, cycle_hz=9.0, **extra):
@@ -67,15 +67,15 @@ def _synth(tmp_path, size, level, seed, kind, loops, b, arc, cycle_hz=9.0, **ext
 
 
 def _judge(result: dict, want: dict, b_tolerance: float = 0.05) -> None:
-    got, q = result["pattern"], result["quality"]
-    assert (got["type"], got["loops"], got["symmetry"]) == (want["type"], want["loops"],
+    got, q = result.pattern, result.quality
+    assert (got.type, got.loops, got.symmetry) == (want["type"], want["loops"],
                                                             round(1 / abs(want["trochoid"]["a"])))
-    assert abs(got["semi_axes_px"][0] / want["semi_axes_px"][0] - 1) < 0.02
-    assert math.dist(got["center_px"], want["center_px"]) < 0.01 * 2 * want["semi_axes_px"][0]
-    b_error = abs(got["trochoid"]["b"] - want["trochoid"]["b"])
+    assert abs(got.semi_axes_px[0] / want["semi_axes_px"][0] - 1) < 0.02
+    assert math.dist(got.center_px, want["center_px"]) < 0.01 * 2 * want["semi_axes_px"][0]
+    b_error = abs(got.trochoid.b - want["trochoid"]["b"])
     assert b_error < 2 * b_tolerance
     if b_error > b_tolerance:  # outside the issue's tolerance: the verdict must not say ok
-        assert q["verdict"] != "ok"
+        assert q.verdict != "ok"
 
 
 def test_six_loop_epitrochoid_in_short_arcs_is_not_read_as_a_hypotrochoid(tmp_path):

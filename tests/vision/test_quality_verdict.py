@@ -21,7 +21,7 @@ def test_the_verdict_is_the_worst_finding_and_lists_the_reasons_of_the_others():
     alone = Verdict.of([Finding("a", "ok")]).as_json()
     assert alone == {"verdict": "ok", "reasons": [], "checks": {"a": "ok"}}
     assert worst([]) == "ok" and worst(["ok", "doubtful"]) == "doubtful"
-    assert in_words(v) == "result failed: c is wrong; b is shaky"
+    assert in_words(Verdict.of(found)) == "result failed: c is wrong; b is shaky"
 
 
 def test_checks_made_one_by_one_give_the_same_verdict_type():
@@ -35,7 +35,7 @@ def test_checks_made_one_by_one_give_the_same_verdict_type():
     assert v.as_json() == {"verdict": "failed", "reasons": ["f1", "d1", "d2"]}
     v.fail("f2")
     assert v.reasons[:2] == ["f2", "f1"]
-    assert describe(v.as_json()) == "quality: FAILED\n  - f2\n  - f1\n  - d1\n  - d2"
+    assert describe(v) == "quality: FAILED\n  - f2\n  - f1\n  - d1\n  - d2"
 
 
 def test_a_later_stage_adds_to_a_verdict_read_back_from_its_json():

@@ -56,19 +56,19 @@ def test_linear_moments_keep_a_small_blurred_bars_axis(sigma, angle):
 def test_clean_clip_uses_linear_moments_and_a_faint_ghost_is_taken_out(tmp_path):
     clean = Scene(seed=31)
     r = analyse_strobe(write(clean, tmp_path / "clean.avi"), **_given(clean))
-    assert r["quality"]["axis_method"] == "linear moments" and r["room_light"] is None
+    assert r.quality.evidence["axis_method"] == "linear moments" and r.room_light is None
     faint = Scene(ghost=0.12, seed=32)
     r = analyse_strobe(write(faint, tmp_path / "faint.avi"), **_given(faint))
-    assert 0.01 < r["quality"]["ghost_fraction"] <= 0.08
-    assert r["quality"]["axis_method"] == "linear moments, room light taken out"
-    assert r["tilt_amplitude_rad"] == pytest.approx(faint.phi_rad, rel=0.05)
+    assert 0.01 < r.quality.evidence["ghost_fraction"] <= 0.08
+    assert r.quality.evidence["axis_method"] == "linear moments, room light taken out"
+    assert r.tilt_amplitude_rad == pytest.approx(faint.phi_rad, rel=0.05)
 
 
 def _evidence(tmp_path) -> dict:
     s = Scene(seed=33)
-    q = analyse_strobe(write(s, tmp_path / "base.avi"), **_given(s))["quality"]
-    assert q["verdict"] == "ok"
-    return {k: v for k, v in q.items() if k not in ("verdict", "reasons")}
+    q = analyse_strobe(write(s, tmp_path / "base.avi"), **_given(s)).quality
+    assert q.verdict == "ok"
+    return dict(q.evidence)
 
 
 def test_room_light_whose_removal_matters_did_not_settle_or_outweighs_the_body_is_doubtful(tmp_path):

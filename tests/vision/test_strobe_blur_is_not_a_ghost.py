@@ -36,9 +36,9 @@ def test_blurred_body_without_room_light_is_measured_as_ghost_free(mm_per_px, tm
                       (320.0, 240.0), lighting=Lighting(level=0.0), ambient=0.0, frames=60, seed=3)
     path = write_footage(tmp_path / "still.mp4", render_strobe(shot), FPS, strobe_truth(shot))
     result = analyse_strobe(str(path), rotor_hz=rotor_hz, strobe_hz=FPS)
-    quality = result["quality"]
-    assert quality["ghost_fraction"] <= GHOST_FLOOR, quality
-    assert quality["axis_method"] == "linear moments"
-    assert abs(result["tilt_amplitude_rad"] - PHI) <= max(0.05 * PHI, 0.005), result["tilt_amplitude_rad"]
-    assert quality["verdict"] == "ok", quality["reasons"]
-    assert math.isfinite(result["lateral_amplitude_px"])
+    quality = result.quality
+    assert quality.evidence["ghost_fraction"] <= GHOST_FLOOR, quality
+    assert quality.evidence["axis_method"] == "linear moments"
+    assert abs(result.tilt_amplitude_rad - PHI) <= max(0.05 * PHI, 0.005), result.tilt_amplitude_rad
+    assert quality.verdict == "ok", quality.reasons
+    assert math.isfinite(result.lateral_amplitude_px)

@@ -36,17 +36,17 @@ def test_amplitudes_within_the_acceptance_for_every_body_size(tmp_path, body, ro
     path = write_clip(clip, tmp_path / f"{body}.avi")
     r = analyse_strobe(path, rotor_hz=clip.rotor_hz, strobe_hz=clip.strobe_hz)
     truth = clip.truth()
-    assert tilt_ok(r["tilt_amplitude_rad"], truth["tilt_amplitude_rad"]), (r["tilt_amplitude_rad"], truth)
-    assert lateral_ok(r["lateral_amplitude_px"], truth["lateral_amplitude_px"]), (
-        r["lateral_amplitude_px"], truth)
-    quality = r["quality"]
-    assert quality["verdict"] != "failed", quality["reasons"]
+    assert tilt_ok(r.tilt_amplitude_rad, truth["tilt_amplitude_rad"]), (r.tilt_amplitude_rad, truth)
+    assert lateral_ok(r.lateral_amplitude_px, truth["lateral_amplitude_px"]), (
+        r.lateral_amplitude_px, truth)
+    quality = r.quality
+    assert quality.verdict != "failed", quality.reasons
     if room:
-        assert r["room_light"]["fraction_of_light"] == pytest.approx(room / (1 + room), abs=0.06)
-        assert quality["ghost_fraction"] > GHOST_FLOOR
+        assert r.room_light.fraction_of_light == pytest.approx(room / (1 + room), abs=0.06)
+        assert quality.evidence["ghost_fraction"] > GHOST_FLOOR
     else:  # the cheap test said no ghost: the room-light model did not run, and says so
-        assert r["room_light"] is None and quality["ghost_fraction"] <= GHOST_FLOOR
-        assert "not run" in quality["room_light_model"]
+        assert r.room_light is None and quality.evidence["ghost_fraction"] <= GHOST_FLOOR
+        assert "not run" in quality.evidence["room_light_model"]
 
 
 def test_the_renderer_draws_what_its_truth_says():

@@ -33,12 +33,12 @@ def axis_error_deg(a, b):
 
 
 def assert_matches_truth(pattern, truth):
-    assert pattern["type"] == "ellipse"  # a flat arc: ellipticity ~1
-    assert math.dist(pattern["center_px"], truth["center_px"]) < CENTRE_PX
-    assert pattern["semi_axes_px"][0] == pytest.approx(truth["semi_axes_px"][0], rel=MAJOR_REL)
-    assert pattern["semi_axes_px"][1] < MINOR_PX
-    assert axis_error_deg(pattern["rotation_deg"], truth["rotation_deg"]) < ROTATION_DEG
-    assert pattern["rms_residual_px"] == pytest.approx(truth["rms_residual_px"], abs=RMS_PX)
+    assert pattern.type == "ellipse"  # a flat arc: ellipticity ~1
+    assert math.dist(pattern.center_px, truth["center_px"]) < CENTRE_PX
+    assert pattern.semi_axes_px[0] == pytest.approx(truth["semi_axes_px"][0], rel=MAJOR_REL)
+    assert pattern.semi_axes_px[1] < MINOR_PX
+    assert axis_error_deg(pattern.rotation_deg, truth["rotation_deg"]) < ROTATION_DEG
+    assert pattern.rms_residual_px == pytest.approx(truth["rms_residual_px"], abs=RMS_PX)
 
 
 @pytest.mark.parametrize("point", ["tip", "bottom", "centroid"])
@@ -46,16 +46,16 @@ def assert_matches_truth(pattern, truth):
 def test_point_pattern_matches_the_true_trajectory(strobe_clips, level, point):
     path, truth, spec = strobe_clips[level]
     r = analyse_strobe(str(path), rotor_hz=spec.rotor_hz, strobe_hz=spec.strobe_hz, point=point)
-    assert r["quality"]["point"] == point
-    assert_matches_truth(r["point_pattern"], truth["point_truth"][point])
+    assert r.quality.evidence["point"] == point
+    assert_matches_truth(r.point_pattern, truth["point_truth"][point])
 
 
 def test_point_pattern_with_phase_from_the_signal(strobe_clips):
     """The recovered phase may run mirrored; the trajectory (a point set) is the same."""
     path, truth, _ = strobe_clips["medium"]
     r = analyse_strobe(str(path), point="tip")
-    assert r["phase_source"] == "signal"
-    assert_matches_truth(r["point_pattern"], truth["point_truth"]["tip"])
+    assert r.phase_source == "signal"
+    assert_matches_truth(r.point_pattern, truth["point_truth"]["tip"])
 
 
 @pytest.mark.parametrize("spec", [StrobeSpec(),

@@ -44,31 +44,31 @@ def clips(tmp_path_factory):
 def test_within_tolerance_with_the_lamp_and_rotor_frequencies(clips, name):
     s = CASES[name]
     r = analyse_strobe(clips[name], **_given(s))
-    assert tilt_ok(r["tilt_amplitude_rad"], s.phi_rad), (r["tilt_amplitude_rad"], s.phi_rad)
-    assert lateral_ok(r["lateral_amplitude_px"], s.beta_px), (r["lateral_amplitude_px"], s.beta_px)
-    assert r["apparent_hz"] == pytest.approx(abs(s.rotor_hz - round(s.rotor_hz / s.strobe_hz) * s.strobe_hz))
-    assert r["quality"]["verdict"] == "ok", r["quality"]["reasons"]
-    assert r["quality"]["model_disagrees"] is False
+    assert tilt_ok(r.tilt_amplitude_rad, s.phi_rad), (r.tilt_amplitude_rad, s.phi_rad)
+    assert lateral_ok(r.lateral_amplitude_px, s.beta_px), (r.lateral_amplitude_px, s.beta_px)
+    assert r.apparent_hz == pytest.approx(abs(s.rotor_hz - round(s.rotor_hz / s.strobe_hz) * s.strobe_hz))
+    assert r.quality.verdict == "ok", r.quality.reasons
+    assert r.quality.evidence["model_disagrees"] is False
 
 
 @pytest.mark.parametrize("name", ["horizontal-axis", "cube", "flat-plate"])
 def test_within_tolerance_with_the_phase_from_the_footage(clips, name):
     s = CASES[name]
     r = analyse_strobe(clips[name])
-    assert r["phase_model"]["kind"] == "signal"
-    assert tilt_ok(r["tilt_amplitude_rad"], s.phi_rad)
-    assert lateral_ok(r["lateral_amplitude_px"], s.beta_px)
+    assert r.phase_model.kind == "signal"
+    assert tilt_ok(r.tilt_amplitude_rad, s.phi_rad)
+    assert lateral_ok(r.lateral_amplitude_px, s.beta_px)
 
 
 def test_rest_axis_and_symmetry_are_reported(clips):
     r = analyse_strobe(clips["horizontal-axis"], **_given(CASES["horizontal-axis"]))
-    assert min(abs(r["body"]["rest_axis_deg"] - 3.0), abs(r["body"]["rest_axis_deg"] - 183.0)) < 1.0
-    assert r["body"]["symmetry"] == 2
+    assert min(abs(r.body.rest_axis_deg - 3.0), abs(r.body.rest_axis_deg - 183.0)) < 1.0
+    assert r.body.symmetry == 2
     cube = analyse_strobe(clips["cube"], **_given(CASES["cube"]))
-    assert cube["body"]["symmetry"] == 4
+    assert cube.body.symmetry == 4
     plate = analyse_strobe(clips["flat-plate"], **_given(CASES["flat-plate"]))
     # the plate's long side lies at 80 - 90 = -10 deg; its magnet axis (short side) at 80 deg
-    assert abs(plate["body"]["rest_axis_deg"] - 80.0) < 1.5
+    assert abs(plate.body.rest_axis_deg - 80.0) < 1.5
 
 
 def test_camera_as_strobe_with_a_rolled_camera(tmp_path):
@@ -76,11 +76,11 @@ def test_camera_as_strobe_with_a_rolled_camera(tmp_path):
     the camera is rolled by 30 deg. ``--rotor-hz`` alone selects this model."""
     s = Scene(strobe_hz=None, fps=15.15, rotor_hz=240.0, exposure_s=0.0003, rest_deg=120.0, frames=60, seed=7)
     r = analyse_strobe(write(s, tmp_path / "camera.avi"), rotor_hz=s.rotor_hz, exposure_s=s.exposure_s)
-    assert r["phase_model"]["kind"] == "camera"
-    assert r["apparent_hz"] == pytest.approx(abs(240.0 - 16 * 15.15), rel=1e-6)
-    assert tilt_ok(r["tilt_amplitude_rad"], s.phi_rad)
-    assert lateral_ok(r["lateral_amplitude_px"], s.beta_px)
-    assert r["quality"]["verdict"] == "ok", r["quality"]["reasons"]
+    assert r.phase_model.kind == "camera"
+    assert r.apparent_hz == pytest.approx(abs(240.0 - 16 * 15.15), rel=1e-6)
+    assert tilt_ok(r.tilt_amplitude_rad, s.phi_rad)
+    assert lateral_ok(r.lateral_amplitude_px, s.beta_px)
+    assert r.quality.verdict == "ok", r.quality.reasons
 
 
 def test_camera_fps_overrides_a_lying_header(tmp_path):
@@ -89,20 +89,20 @@ def test_camera_fps_overrides_a_lying_header(tmp_path):
     s = Scene(seed=8)
     path = write(s, tmp_path / "slowmo.avi", fps_in_file=60.0)
     good = analyse_strobe(path, **_given(s), camera_fps=30.0)
-    assert good["quality"]["model_disagrees"] is False
-    assert tilt_ok(good["tilt_amplitude_rad"], s.phi_rad)
-    assert lateral_ok(good["lateral_amplitude_px"], s.beta_px)
+    assert good.quality.evidence["model_disagrees"] is False
+    assert tilt_ok(good.tilt_amplitude_rad, s.phi_rad)
+    assert lateral_ok(good.lateral_amplitude_px, s.beta_px)
     bad = analyse_strobe(path, **_given(s))
-    assert bad["quality"]["model_disagrees"] is True
-    assert bad["quality"]["verdict"] == "doubtful"
-    assert any("--camera-fps" in reason for reason in bad["quality"]["reasons"])
+    assert bad.quality.evidence["model_disagrees"] is True
+    assert bad.quality.verdict == "doubtful"
+    assert any("--camera-fps" in reason for reason in bad.quality.reasons)
 
 
 def test_wrong_rotor_frequency_is_doubtful_not_silent(clips):
     s = CASES["lamp-several-flashes"]
     r = analyse_strobe(clips["lamp-several-flashes"], rotor_hz=201.5, strobe_hz=s.strobe_hz)
-    assert r["quality"]["verdict"] == "doubtful"
-    assert any("predict 2 Hz apparent" in reason for reason in r["quality"]["reasons"])
+    assert r.quality.verdict == "doubtful"
+    assert any("predict 2 Hz apparent" in reason for reason in r.quality.reasons)
 
 
 def test_clip_shorter_than_a_cycle_fails(tmp_path):
@@ -110,32 +110,32 @@ def test_clip_shorter_than_a_cycle_fails(tmp_path):
     determined, and the verdict fails."""
     s = Scene(frames=12, seed=9)
     r = analyse_strobe(write(s, tmp_path / "short.avi"), **_given(s))
-    assert r["quality"]["verdict"] == "failed"
-    assert "too little of the cycle" in r["quality"]["reasons"][0]
+    assert r.quality.verdict == "failed"
+    assert "too little of the cycle" in r.quality.reasons[0]
 
 
 def test_ambient_ghost_is_measured_and_taken_out(tmp_path):
     """Room light 40 % of the exposure: the ghost is measured, taken out, and the share found."""
     s = Scene(ghost=0.4, seed=10)
     r = analyse_strobe(write(s, tmp_path / "ghost.avi"), **_given(s))
-    assert r["quality"]["ghost_fraction"] > 0.08
-    assert r["room_light"]["settled"] and r["room_light"]["fraction_of_light"] > 0.2
+    assert r.quality.evidence["ghost_fraction"] > 0.08
+    assert r.room_light.settled and r.room_light.fraction_of_light > 0.2
     # this scene mixes its light in grey levels, as a linear camera would: said with --gamma 1
     # (docs/explanation/strobe-analysis.md, What labkit cannot see: the encoding curve)
     linear = analyse_strobe(write(s, tmp_path / "ghost.avi"), **_given(s), encoding_gamma=1.0)
-    assert linear["room_light"]["fraction_of_light"] == pytest.approx(s.ghost, abs=0.08)
-    assert tilt_ok(linear["tilt_amplitude_rad"], s.phi_rad)
-    assert tilt_ok(r["tilt_amplitude_rad"], s.phi_rad) and lateral_ok(r["lateral_amplitude_px"], s.beta_px)
+    assert linear.room_light.fraction_of_light == pytest.approx(s.ghost, abs=0.08)
+    assert tilt_ok(linear.tilt_amplitude_rad, s.phi_rad)
+    assert tilt_ok(r.tilt_amplitude_rad, s.phi_rad) and lateral_ok(r.lateral_amplitude_px, s.beta_px)
 
 
 def test_flash_shadow_does_not_pull_the_body(tmp_path):
     s = Scene(shadow=0.4, seed=11)
     r = analyse_strobe(write(s, tmp_path / "shadow.avi"), **_given(s))
-    assert tilt_ok(r["tilt_amplitude_rad"], s.phi_rad) and lateral_ok(r["lateral_amplitude_px"], s.beta_px)
+    assert tilt_ok(r.tilt_amplitude_rad, s.phi_rad) and lateral_ok(r.lateral_amplitude_px, s.beta_px)
 
 
 def test_rc_offset_direction_and_value(clips):
     s = CASES["horizontal-axis"]
     r = analyse_strobe(clips["horizontal-axis"], **_given(s))
-    assert r["rc_offset_px"] == pytest.approx(s.delta_px, rel=0.05)
-    assert math.isfinite(r["uncertainty"]["rc_offset_px"]) and r["uncertainty"]["rc_offset_px"] > 0
+    assert r.rc_offset_px == pytest.approx(s.delta_px, rel=0.05)
+    assert math.isfinite(r.uncertainty.rc_offset_px) and r.uncertainty.rc_offset_px > 0

@@ -52,23 +52,23 @@ def rolling_clip(tmp_path_factory):
 
 def test_rolling_camera_strobe_clip_is_within_tolerance(rolling_clip):
     truth, result = rolling_clip
-    failures, errors = score_strobe(result, truth)
+    failures, errors = score_strobe(result.to_json(), truth)
     assert failures == [], errors
     assert result.verdict != "failed"
     rolling = result.rolling_shutter
     assert rolling is not None
     # the readout was not given: the footage tells it (renderer: 26.2 ms)
-    assert not rolling["readout_given"]
-    assert rolling["readout_s"] == pytest.approx(truth["readout_s"], rel=0.05)
+    assert not rolling.readout_given
+    assert rolling.readout_s == pytest.approx(truth["readout_s"], rel=0.05)
     # the per-frame model would have been far off: the result's per-frame series is the smear's
-    assert rolling["rows_explained"] > 0.9 > rolling["rows_explained_one_phase_per_frame"] + 0.3
+    assert rolling.rows_explained > 0.9 > rolling.rows_explained_one_phase_per_frame + 0.3
     # the millimetres are the per-row model's amplitudes too, not the per-frame fit's (which were
     # 7.6 times smaller on this clip before the result was typed)
     in_mm, u = result.in_mm, result.uncertainty
     assert in_mm is not None and result.rc_offset_px is not None
     assert in_mm.lateral_amplitude_mm == pytest.approx(result.lateral_amplitude_px * MM_PER_PX, rel=1e-12)
     assert in_mm.rc_offset_mm == pytest.approx(result.rc_offset_px * MM_PER_PX, rel=1e-12)
-    assert u["lateral_amplitude_mm"] == pytest.approx(u["lateral_amplitude_px"] * MM_PER_PX, rel=1e-12)
+    assert u.in_mm.lateral_amplitude_mm == pytest.approx(u.lateral_amplitude_px * MM_PER_PX, rel=1e-12)
 
 
 def test_row_slices_match_an_independent_rectangle_coverage():
@@ -163,10 +163,10 @@ def test_rows_along_the_body_are_doubtful_and_name_the_rolling_shutter(rows_alon
     given = analysis_inputs(truth)
     # a horizontal body hardly bends: the per-frame analysis runs, and its verdict names the cause
     plain = analyse_strobe(path, **given)
-    assert plain["quality"]["verdict"] != "ok"
-    assert any("rolling shutter" in r for r in plain["quality"]["reasons"])
+    assert plain.quality.verdict != "ok"
+    assert any("rolling shutter" in r for r in plain.quality.reasons)
     # given the readout, the per-row model runs and says it is poorly conditioned
     per_row = analyse_strobe(path, **given, readout_s=truth["readout_s"])
-    assert per_row["rolling_shutter"]["long_side_from_rows_deg"] < 30
-    assert per_row["quality"]["verdict"] != "ok"
-    assert any("rows run along the body" in r for r in per_row["quality"]["reasons"])
+    assert per_row.rolling_shutter.long_side_from_rows_deg < 30
+    assert per_row.quality.verdict != "ok"
+    assert any("rows run along the body" in r for r in per_row.quality.reasons)

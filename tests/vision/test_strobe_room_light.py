@@ -30,17 +30,17 @@ def room_lit(tmp_path_factory):
 
 def test_room_light_is_taken_out_within_tolerance(room_lit):
     _, truth, result = room_lit
-    failures, errors = score_strobe(result, truth)
+    failures, errors = score_strobe(result.to_json(), truth)
     assert failures == [], errors
     room = result.room_light
-    assert room["settled"] and result.quality["axis_method"] == "linear moments, room light taken out"
+    assert room.settled and result.quality.evidence["axis_method"] == "linear moments, room light taken out"
 
 
 def test_the_room_light_found_is_the_scenes(room_lit):
     """The renderer adds room light at 0.3 of the lamp's light: 0.23 of all the light."""
     shot, _, result = room_lit
     share = shot.ambient / (1 + shot.ambient)
-    assert result.room_light["fraction_of_light"] == pytest.approx(share, abs=0.06)
+    assert result.room_light.fraction_of_light == pytest.approx(share, abs=0.06)
 
 
 def test_without_the_correction_the_swing_comes_out_smaller(room_lit):
@@ -48,6 +48,6 @@ def test_without_the_correction_the_swing_comes_out_smaller(room_lit):
     further from the truth, on the low side."""
     _, truth, result = room_lit
     phi = truth["tilt_amplitude_rad"]
-    uncorrected = result.room_light["tilt_amplitude_uncorrected_rad"]
+    uncorrected = result.room_light.tilt_amplitude_uncorrected_rad
     assert uncorrected < phi
     assert abs(result.tilt_amplitude_rad - phi) < abs(uncorrected - phi)

@@ -28,12 +28,12 @@ from labkit.vision.laser.frame_path import (
     measure_frame_path,
 )
 from labkit.vision.laser.gather import MAX_POINTS_PER_CHUNK, GatheredTrace, gather  # noqa: F401 (API)
-from labkit.vision.laser.result import LaserResult
+from labkit.vision.laser.result import LaserPattern, LaserResult, TiltAngles
 from labkit.vision.laser.scene_kind import scene_measures, strobe_scene_verdict
 from labkit.vision.laser.trace import TracePoints, trace_points
 from labkit.vision.shared.exposure import check_exposure, grey_histogram
 from labkit.vision.shared.frames import FrameSource, open_frames
-from labkit.vision.shared.verdict import Verdict
+from labkit.vision.shared.verdict import QualityReport, Verdict
 
 if TYPE_CHECKING:
     from concurrent.futures import Future, ThreadPoolExecutor
@@ -380,8 +380,8 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
         tilt = None
         if screen_distance_mm and mm_per_px:
             major, minor = pattern["semi_axes_px"]
-            tilt = {"major": tilt_from_semi_axis(major, mm_per_px, screen_distance_mm),
-                    "minor": tilt_from_semi_axis(minor, mm_per_px, screen_distance_mm)}
+            tilt = TiltAngles(tilt_from_semi_axis(major, mm_per_px, screen_distance_mm),
+                              tilt_from_semi_axis(minor, mm_per_px, screen_distance_mm))
             doubt = tilt_geometry_doubt(major, mm_per_px, screen_distance_mm)
             if doubt is not None:
                 verdict = Verdict.from_json(qual)
@@ -392,4 +392,5 @@ def analyse_laser(path: str, screen_distance_mm: float | None = None, mm_per_px:
     qual["elapsed_s"] = time.perf_counter() - t_start
     qual["fit_s"] = time.perf_counter() - t_frames  # work left after the last frame: mostly the fit
     return LaserResult(source=source.path, frames=source.frames_read, fps=fps, size=list(source.size),
-                       pattern=pattern, tilt_rad=tilt, quality=qual)
+                       pattern=LaserPattern.from_json(pattern), tilt_rad=tilt,
+                       quality=QualityReport.from_json(qual))

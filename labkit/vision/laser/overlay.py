@@ -10,12 +10,11 @@ amber doubtful, red failed).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from typing import Any
 
 import cv2
 import numpy as np
 
+from labkit.vision.laser.result import LaserResult
 from labkit.vision.shared.curves import Pattern
 
 VERDICT_BGR = {"ok": (80, 200, 60), "doubtful": (0, 170, 255), "failed": (40, 40, 230)}
@@ -40,17 +39,15 @@ def pattern_curve(pattern: dict, samples: int = 2000) -> np.ndarray | None:
     return shape.points(np.linspace(0.0, 2.0 * math.pi, samples))
 
 
-def _label(result: Mapping[str, Any]) -> list[str]:
-    p, q = result.get("pattern") or {}, result.get("quality") or {}
-    kind = p.get("type", "none")
-    head = kind if kind in ("none", "circle", "ellipse") else f"{kind}, {p.get('loops')} loops"
-    verdict = q.get("verdict", "?")
-    lines = [f"{head}: {verdict}"]
-    lines += [r if len(r) <= 90 else r[:87] + "..." for r in (q.get("reasons") or [])[:2]]
+def _label(result: LaserResult) -> list[str]:
+    p, q = result.pattern, result.quality
+    head = p.type if p.type in ("none", "circle", "ellipse") else f"{p.type}, {p.loops} loops"
+    lines = [f"{head}: {q.verdict}"]
+    lines += [r if len(r) <= 90 else r[:87] + "..." for r in q.reasons[:2]]
     return lines
 
 
-def draw_overlay(trace: np.ndarray, result: Mapping[str, Any]) -> np.ndarray:
+def draw_overlay(trace: np.ndarray, result: LaserResult) -> np.ndarray:
     """BGR image: ``trace`` (grey or BGR, full frame) dimmed, the fitted curve, its centre and the
     verdict of ``result`` (a ``labkit analyse laser`` result)."""
     grey = trace if trace.ndim == 2 else cv2.cvtColor(trace, cv2.COLOR_BGR2GRAY)
@@ -59,14 +56,14 @@ def draw_overlay(trace: np.ndarray, result: Mapping[str, Any]) -> np.ndarray:
     h, w = grey.shape
     thick = max(1, round(max(w, h) / 640))
     shift = 4  # sub-pixel drawing: coordinates in 1/16 px
-    curve = pattern_curve(result.get("pattern") or {})
-    if curve is not None:
+    curve = pattern_curve(result.pattern.to_json())
+    if curve is not None and result.pattern.center_px is not None:
         pts = np.round(curve * (1 << shift)).astype(np.int32).reshape(-1, 1, 2)
         cv2.polylines(image, [pts], True, CURVE_BGR, thick, cv2.LINE_AA, shift)
-        cx, cy = result["pattern"]["center_px"]
+        cx, cy = result.pattern.center_px
         size = 6 * thick
         cv2.drawMarker(image, (round(cx), round(cy)), CENTRE_BGR, cv2.MARKER_CROSS, size, thick, cv2.LINE_AA)
-    colour = VERDICT_BGR.get(str((result.get("quality") or {}).get("verdict")), (255, 255, 255))
+    colour = VERDICT_BGR.get(result.verdict, (255, 255, 255))
     scale = 0.45 * max(1.0, max(w, h) / 640)
     y = round(22 * scale / 0.45)
     for line in _label(result):

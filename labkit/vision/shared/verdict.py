@@ -14,8 +14,9 @@ them. The JSON shape is
     "quality": {"verdict": "ok" | "doubtful" | "failed", "reasons": [...], ["checks": {...}],
                 ...evidence...}
 
-at the top level of the result; ``checks`` (each named check's verdict) is the laser's. Pure
-functions, no I/O.
+at the top level of the result; ``checks`` (each named check's verdict) is the laser's. In a
+result it is a :class:`QualityReport`: the verdict's fields typed, the evidence an open mapping.
+Pure functions, no I/O.
 """
 
 from __future__ import annotations
@@ -109,19 +110,57 @@ class Verdict:
         return out
 
 
-def in_words(quality: Mapping[str, Any]) -> str:
+#: the evidence behind a verdict: what each check measured, by name. Its keys differ per check
+#: and per pipeline (docs/reference/vision-json.md lists them), so it stays an open mapping of
+#: JSON values (ADR 0034)
+Evidence = Mapping[str, Any]
+
+
+@dataclass(frozen=True)
+class QualityReport:
+    """A result's ``quality`` object: the :class:`Verdict` it came to (``verdict``, ``reasons``,
+    ``checks`` when the checks are named) and the evidence the checks read. The JSON is
+    ``{"verdict", "reasons", ["checks"], ...evidence}``."""
+
+    verdict: str
+    reasons: tuple[str, ...]
+    checks: Mapping[str, str] | None
+    evidence: Evidence
+
+    @classmethod
+    def of(cls, verdict: Verdict, evidence: Evidence) -> QualityReport:
+        return cls(verdict.verdict, tuple(verdict.reasons), None if verdict.checks is None
+                   else dict(verdict.checks), dict(evidence))
+
+    @classmethod
+    def from_json(cls, quality: Mapping[str, Any]) -> QualityReport:
+        """From a ``quality`` object whose verdict keys come first (as every analysis writes it)."""
+        head = [k for k in quality if k in ("verdict", "reasons", "checks")]
+        if list(quality)[:len(head)] != head:
+            raise ValueError(f"a quality object starts with its verdict, reasons and checks, got "
+                             f"{list(quality)}")
+        return cls.of(Verdict.from_json(quality), {k: v for k, v in quality.items() if k not in head})
+
+    def as_verdict(self) -> Verdict:
+        """A fresh :class:`Verdict` with the same verdict, reasons and checks (to add findings to)."""
+        return Verdict(self.verdict, list(self.reasons), None if self.checks is None else dict(self.checks))
+
+    def to_json(self) -> dict[str, Any]:
+        return {**self.as_verdict().as_json(), **self.evidence}
+
+
+def in_words(quality: Verdict | QualityReport) -> str:
     """The verdict as one sentence for the terminal: ``result ok`` or ``result doubtful: r1; r2``."""
-    v = quality.get("verdict", OK)
-    reasons = quality.get("reasons") or []
-    return f"result {v}" + (": " + "; ".join(reasons) if reasons else "")
+    reasons = quality.reasons
+    return f"result {quality.verdict}" + (": " + "; ".join(reasons) if reasons else "")
 
 
-def describe(quality: Mapping[str, Any]) -> str:
+def describe(quality: Verdict | QualityReport) -> str:
     """The verdict as a list for the terminal: a head line and one line per reason."""
-    if quality["verdict"] == OK:
+    if quality.verdict == OK:
         return "quality: ok (every check passed; numbers within the stated tolerances by their own scatter)"
-    head = "quality: DOUBTFUL, check before use" if quality["verdict"] == DOUBTFUL else "quality: FAILED"
-    return "\n".join([head, *(f"  - {r}" for r in quality["reasons"])])
+    head = "quality: DOUBTFUL, check before use" if quality.verdict == DOUBTFUL else "quality: FAILED"
+    return "\n".join([head, *(f"  - {r}" for r in quality.reasons)])
 
 
 def rank(quality: Mapping[str, Any]) -> tuple[int, int]:

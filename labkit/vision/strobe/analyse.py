@@ -14,7 +14,7 @@ lateral position is taken across that rest axis.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -48,7 +48,7 @@ from labkit.vision.strobe.phase import (
     explained_fraction,
     fold,
 )
-from labkit.vision.strobe.result import InMillimetres, StrobeResult
+from labkit.vision.strobe.result import InMillimetres, OverlayFrame, StrobeResult
 from labkit.vision.strobe.rolling_analysis import rolling_analysis, rolling_applies
 from labkit.vision.strobe.room_light import (
     ENCODING_GAMMA,
@@ -259,9 +259,9 @@ def _pick_phase(model: PhaseModel | None, idx: np.ndarray, series: list[np.ndarr
     if signal.explained > 0.5 and (1 - given) > 2 * (1 - signal.explained) + 0.02 and \
             abs(fold(model.cycles_per_frame) - signal.cycles_per_frame) > 1e-6:
         sign = -1.0 if (model.cycles_per_frame % 1.0) > 0.5 else 1.0
-        model.cycles_per_frame = sign * signal.cycles_per_frame
-        model.apparent_hz = model.cycles_per_frame * (model.camera_fps or fps)
-        model.source += "; frequency from the footage (the given one disagrees)"
+        cycles = sign * signal.cycles_per_frame
+        model = replace(model, cycles_per_frame=cycles, apparent_hz=cycles * (model.camera_fps or fps),
+                        source=model.source + "; frequency from the footage (the given one disagrees)")
         ev["model_disagrees"] = True
     return model, ev
 
@@ -346,7 +346,7 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
            "per_frame": {"index": idx.tolist(), "tilt_rad": [float(v) for v in tilt],
                          "lateral_px": [float(v) for v in lateral]},
            "point_pattern": point_pattern,
-           "rc_offset_direction": direction, "phase_source": model.source, "phase_model": model.to_dict(),
+           "rc_offset_direction": direction, "phase_source": model.source, "phase_model": model,
            "body": {"rest_axis_deg": (orient.rest_axis_deg - math.degrees(motion.tilt.coef[0])) % 180.0,
                     "symmetry": orient.symmetry,
                     "half_length_px": half},
@@ -355,21 +355,20 @@ def analyse_strobe(path: str, rotor_hz: float | None = None, strobe_hz: float | 
                                                ghost, room, rolling))}
     if rolling is not None:
         _use_rolling(out, rolling)
-    in_mm = None
+    in_mm = se_mm = None
     if mm_per_px:  # the amplitudes reported (the per-row model's when it applies), in mm
         u = out["uncertainty"]
         in_mm = InMillimetres.scaled(out["lateral_amplitude_px"], out["rc_offset_px"], mm_per_px)
         se_mm = InMillimetres.scaled(u["lateral_amplitude_px"], u["rc_offset_px"], mm_per_px)
-        u["lateral_amplitude_mm"], u["rc_offset_mm"] = se_mm.lateral_amplitude_mm, se_mm.rc_offset_mm
     frame = None
     if keep_frame and kept is not None:
         k = kept[0]
         j = int(np.searchsorted(idx, k))
-        frame = {"index": k, "bgr": kept[1], "centre": [found[j].x, found[j].y],
-                 "axis": _axis_at(orient, tilt)[j].tolist(), "rest_axis": orient.axis.tolist(),
-                 "half_length_px": half, "point": points[j].tolist(), "track": points.tolist(),
-                 "radius_px": math.sqrt(3 * (found[j].mu20 + found[j].mu02))}
-    return StrobeResult(**out, in_mm=in_mm, overlay_frame=frame)
+        frame = OverlayFrame(index=k, bgr=kept[1], centre=[found[j].x, found[j].y],
+                             axis=_axis_at(orient, tilt)[j].tolist(), rest_axis=orient.axis.tolist(),
+                             half_length_px=half, point=points[j].tolist(), track=points.tolist(),
+                             radius_px=math.sqrt(3 * (found[j].mu20 + found[j].mu02)))
+    return StrobeResult.of(out, in_mm, se_mm, frame)
 
 
 def _per_row(source, poses, found, orient: ClipOrientation, fps: float, readout_s: float | None,

@@ -31,7 +31,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 
-@dataclass
+@dataclass(frozen=True)
 class PhaseModel:
     """How frame index maps to rotor phase: ``psi_k = 2 pi cycles_per_frame k`` (P1)."""
 
@@ -56,7 +56,8 @@ class PhaseModel:
             return 1.0
         return math.sin(math.pi * u) / (math.pi * u)
 
-    def to_dict(self) -> dict:
+    def to_json(self) -> dict:
+        """The result's ``phase_model`` object: the fields and ``blur_factor``."""
         out = asdict(self)
         out["blur_factor"] = self.blur_factor
         return out
