@@ -7,16 +7,18 @@ in process, on a pool of N processes and on the N Dask workers, and prints each 
 over the in-process map, measured in one run. Every engine is warmed first (numba's compiled
 kernels loaded in every process) so that the table compares the sweep, not the start-up; each
 timed region is one ``run_sweep`` call as a user makes it (the pool's processes started, the
-Dask client connected and ``evaluate`` scattered inside it).
+Dask client connected and ``evaluate`` scattered inside it), writing its own results store as
+``labkit sweep --out`` does. The three engines run interleaved ``--repeats`` times (the order
+reversed every other repeat) and the table gives medians and ranges with the load; the command
+exits 1 unless the pool's and Dask's stores hold exactly the in-process rows.
 
 Beside the wall times the table gives the CPU seconds each engine's processes used (the pool's
 processes; Dask's workers, scheduler and this process's client), which a loaded machine does
-not blur: the work is the same, what Dask adds is its processes' own housekeeping. Dask's
-event loops check themselves every 20 ms, and each worker samples its memory every 100 ms and
-its threads every 10 ms: ~1.5-2 % of a core per process, idle or not, which on two shared cores
-is the whole gap to the pool. The cluster is started with :data:`QUIET_DASK` (those checks
-every few seconds, the profiler off), the settings the docs give for a compute cluster;
-``--dask-defaults`` starts it with Dask's own.
+not blur: the work is the same, what Dask adds is its processes' own housekeeping. With Dask's
+defaults its event loops check themselves every 20 ms, and each worker samples its memory every
+100 ms and its threads every 10 ms: ~1.5-2 % of a core per process, idle or not. The cluster is
+started with :data:`QUIET_DASK` (those checks every few seconds, the profiler off), the settings
+the docs give for a compute cluster; ``--dask-defaults`` starts it with Dask's own.
 """
 
 from __future__ import annotations
