@@ -133,8 +133,10 @@ def _one(R, l, a, jc, js, phase, n_periods, n_steps, every, weights, zen, jac):
                 jac[k] = _jacobi(R, l, a, jc, js, s, phase)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _batch(R0, l0, a, jc, js, phase, n_periods, n_steps, every, weights, zen, jac):
+    # nogil: the batch writes only its own arrays, so the GIL is released while it runs and a
+    # multi-threaded Dask worker (or its event loop) is not held up by it
     for b in range(R0.shape[0]):
         R = R0[b].copy()
         l = l0[b].copy()

@@ -15,7 +15,8 @@ Where the chunks run:
 * ``scheduler="tcp://host:8786"``: a ``dask.distributed`` cluster (optional dependency
   ``dask[distributed]``); a scheduler that does not answer within ``timeout_s`` is a clear
   :class:`SweepError`, not a hang. ``evaluate`` is sent to every worker once
-  (``Client.scatter(..., broadcast=True)``), not pickled into each task.
+  (``Client.scatter(..., broadcast=True)``), not pickled into each task, and a task returns
+  its rows as one pickled blob (:func:`_evaluate_packed`, docs/decisions/0038-dask-results-as-one-blob.md).
 
 ``chunk=None`` (the default) sizes the chunks from the pending points and the slots that run
 them (worker threads of the cluster, pool processes): about ``TASKS_PER_SLOT`` tasks per slot,
@@ -31,6 +32,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import pickle
 from collections.abc import Callable, Iterable
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
@@ -117,6 +119,15 @@ def _evaluate_keyed(evaluate: Evaluate, chunk: list[tuple[str, dict]]) -> list[d
     if len(results) != len(chunk):
         raise SweepError(f"evaluate returned {len(results)} results for {len(chunk)} points")
     return [_clean_nan({"key": k, **p, **r}) for (k, p), r in zip(chunk, results, strict=True)]
+
+
+def _evaluate_packed(evaluate: Evaluate, chunk: list[tuple[str, dict]]) -> bytes:
+    """:func:`_evaluate_keyed` with its rows pickled into one blob: what a Dask task returns.
+    Dask serialises a returned list item by item (a pickle call, a dispatch lookup and metrics
+    per row, on the worker's event loop, which waits for the GIL the computing thread holds);
+    one ``bytes`` object is one frame, sent as it is. The blob is unpickled by the client, which
+    trusts its workers as Dask itself does (it unpickles whatever they return)."""
+    return pickle.dumps(_evaluate_keyed(evaluate, chunk), protocol=pickle.HIGHEST_PROTOCOL)
 
 
 def connect(scheduler: str, timeout_s: float = 10.0):
@@ -223,12 +234,12 @@ def _execute(chunks, evaluate: Evaluate, workers: int, client):
         from distributed import as_completed as dask_completed
 
         shared = client.scatter(evaluate, broadcast=True, hash=False)
-        futures = client.map(_evaluate_keyed, [shared] * len(chunks), chunks, pure=False)
+        futures = client.map(_evaluate_packed, [shared] * len(chunks), chunks, pure=False)
         # results travel with the completion notice (one gather per batch of finished tasks, not
         # one round trip per task), and each future is dropped once its rows are out
-        for fut, rows in dask_completed(futures, with_results=True, loop=client.loop):
+        for fut, blob in dask_completed(futures, with_results=True, loop=client.loop):
             fut.release()
-            yield rows
+            yield pickle.loads(blob)
         return
     if workers > 1:
         with ProcessPoolExecutor(max_workers=workers) as pool:
