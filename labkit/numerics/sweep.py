@@ -9,8 +9,8 @@ on disk (a torn last line is ignored and its points are run again).
 Where the chunks run:
 
 * by default in this process, one chunk after the other
-(docs/explanation/numerics-notes.md#one-process-by-default: on a 2-core machine a
-  process pool buys ~1.0x; the batch kernel is what makes a sweep fast);
+(docs/explanation/numerics-notes.md#one-process-by-default: the batch kernel is what
+  makes a sweep fast; on a quiet 2-core machine a pool of 2 buys about 1.9x);
 * ``workers > 1``: a local process pool;
 * ``scheduler="tcp://host:8786"``: a ``dask.distributed`` cluster (optional dependency
   ``dask[distributed]``); a scheduler that does not answer within ``timeout_s`` is a clear
