@@ -30,9 +30,10 @@ class FrameBursts:
     with their stored bytes and ``meta``."""
 
     def __init__(self, record: SessionRecord, role: str = "camera") -> None:
-        from labkit.devices.camera.cassette import read_cassette
+        from labkit.devices.camera.cassette import is_fault, read_cassette
 
         header, entries, data = read_cassette(record.path / "cassettes" / f"{role}.jsonl")
+        entries = [e for e in entries if not is_fault(e)]  # a failed burst's fault line: no point was made
         self.settings: dict[str, Any] = dict(header.get("settings") or {})
         width, height = (int(v) for v in str(self.settings["size"]).split("x"))
         self.size = (width, height)

@@ -130,3 +130,12 @@ def test_a_real_camera_that_fell_silent_is_replayed_falling_silent(tmp_path, cap
     out = capsys.readouterr().out
     assert "replay level: faithful" in out and "fault in step 1 as recorded" in out
     assert "1 failed as the recorded camera failed it" in out
+
+
+def test_re_analysis_and_shrink_keep_the_failed_burst(failed_virtual_session, tmp_path, capsys):
+    assert main(["replay", "--analysis-only", str(failed_virtual_session)]) == 0
+    assert "1 points and the fit recomputed from the recorded bytes" in capsys.readouterr().out
+    shrunk = tmp_path / "shrunk"
+    assert main(["shrink", "--quality", "95", str(failed_virtual_session), str(shrunk)]) == 0
+    lines = _lines(shrunk)
+    assert [e["step"] for e in lines] == ["0.0"] * 10 + ["1.0"] * 5 + ["1.0"] and "fault" in lines[-1]

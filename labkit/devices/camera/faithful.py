@@ -64,7 +64,7 @@ class FaithfulFrameSource(ReplaySource):
         if start >= len(self.entries):
             raise ReplayMismatch(f"camera cassette {self.path}: the replayed run took a burst of {n} frames "
                                  f"at {burst_words(label)}, but the recording took no more bursts "
-                                 f"(all {len(self.entries)} frames served)")
+                                 f"(all {sum(not is_fault(e) for e in self.entries)} frames served)")
         recorded = self.entries[start].get("step")
         length, failed = 0, False
         while start + length < len(self.entries) and self.entries[start + length].get("step") == recorded:

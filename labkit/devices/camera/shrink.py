@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from labkit.devices.camera.cassette import read_cassette, sidecar_path
+from labkit.devices.camera.cassette import is_fault, read_cassette, sidecar_path
 
 
 @dataclass(frozen=True)
@@ -70,7 +70,9 @@ def shrink_cassette(index: str | Path, how: Shrink) -> dict[str, Any]:
     """Rewrite the frame cassette ``index`` (and its sidecar) in place; returns sizes before/after."""
     how.check()
     p = Path(index)
-    header, entries, data = read_cassette(p)
+    header, everything, data = read_cassette(p)
+    entries = [e for e in everything if not is_fault(e)]
+    faults = [e for e in everything if is_fault(e)]  # kept, each after its burst's kept frames
     before = p.stat().st_size + len(data)
     out_entries: list[dict[str, Any]] = []
     blob = bytearray()
@@ -95,7 +97,10 @@ def shrink_cassette(index: str | Path, how: Shrink) -> dict[str, Any]:
     header = {**header, "settings": settings,
               "shrunk": {"every": how.every, "scale": how.scale, "crop": list(how.crop) if how.crop else None,
                          "quality": how.quality, "frames_before": len(entries)}}
+    for fault in faults:
+        after = [k for k, e in enumerate(out_entries) if e.get("step") == fault.get("step")]
+        out_entries.insert(after[-1] + 1 if after else len(out_entries), fault)
     sidecar_path(p).write_bytes(bytes(blob))
     p.write_text("".join(json.dumps(x) + "\n" for x in [header, *out_entries]), encoding="utf-8")
-    return {"cassette": str(p), "frames": [len(entries), len(out_entries)],
+    return {"cassette": str(p), "frames": [len(entries), len(out_entries) - len(faults)],
             "bytes": [before, p.stat().st_size + len(blob)]}
