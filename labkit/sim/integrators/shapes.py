@@ -113,9 +113,10 @@ def stage_turns(weights, h, src, fld) -> np.ndarray:
 
 
 @njit(cache=True, _nrt=False)
-def _top_torque(M, bf, src, fld, flags, x, ft, ph):
+def _top_torque(M, bf, src, fld, flags, x, ft, ph, tilts):
     """Force and torque about the CM on the one body (into ``ft[0:6]``) with the drive phases
-    ``ph`` (:func:`_drive_phases`); fused, no loops over bodies."""
+    ``ph`` (:func:`_drive_phases`) and each source's ``tilts`` (:func:`_source_tilts`); fused, no
+    loops over bodies."""
     mx = M[0, 0] * bf[0, B_M] + M[0, 1] * bf[0, B_M + 1] + M[0, 2] * bf[0, B_M + 2]
     my = M[1, 0] * bf[0, B_M] + M[1, 1] * bf[0, B_M + 1] + M[1, 2] * bf[0, B_M + 2]
     mz = M[2, 0] * bf[0, B_M] + M[2, 1] * bf[0, B_M + 1] + M[2, 2] * bf[0, B_M + 2]
@@ -133,8 +134,8 @@ def _top_torque(M, bf, src, fld, flags, x, ft, ph):
         px, py, pz = x[0, 0] + ox, x[0, 1] + oy, x[0, 2] + oz
         for s in range(src.shape[0]):
             c, sn = ph[1 + s, 0], ph[1 + s, 1]  # Eq. 5.25, as source_state
-            mom, tilt = src[s, S_MOM], src[s, S_TILT]
-            m0y, m0z = -mom * math.cos(tilt), mom * math.sin(tilt)
+            mom = src[s, S_MOM]
+            m0y, m0z = -mom * tilts[s, 0], mom * tilts[s, 1]
             sx, sy, sz = src[s, S_SHIFT], src[s, S_SHIFT + 1], src[s, S_SHIFT + 2]
             spx = src[s, S_AXIS] + c * sx - sn * sy
             spy = src[s, S_AXIS + 1] + sn * sx + c * sy
@@ -147,6 +148,14 @@ def _top_torque(M, bf, src, fld, flags, x, ft, ph):
             ty += f[4] + oz * f[0] - ox * f[2]
             tz += f[5] + ox * f[1] - oy * f[0]
     ft[0], ft[1], ft[2], ft[3], ft[4], ft[5] = fx, fy, fz, tx, ty, tz
+
+
+@njit(cache=True, _nrt=False)
+def _source_tilts(src, tilts):
+    """cos and sin of each source's tilt, once per run (they are constants of the scene; the same
+    values :func:`_top_torque` took per stage before, so the results are bit for bit the same)."""
+    for s in range(src.shape[0]):
+        tilts[s, 0], tilts[s, 1] = math.cos(src[s, S_TILT]), math.sin(src[s, S_TILT])
 
 
 @njit(cache=True, _nrt=False)
@@ -174,9 +183,11 @@ def run_fixed_top(state, t0, h, n_steps, sample_every, weights, args, out, turn)
     ft = np.zeros(6)
     base = np.empty((1 + src.shape[0], 2))
     ph = np.empty((1 + src.shape[0], 2))
+    tilts = np.empty((src.shape[0], 2))
+    _source_tilts(src, tilts)
     t = t0
     _drive_phases(t, src, fld, ph)
-    _top_torque(M, bf, src, fld, flags, x, ft, ph)
+    _top_torque(M, bf, src, fld, flags, x, ft, ph, tilts)
     n_force = 1
     n_s = store_sample(0, t, x, v, R, L, 0.0, out)
     status = ST_OK
@@ -193,7 +204,7 @@ def run_fixed_top(state, t0, h, n_steps, sample_every, weights, args, out, turn)
             _top_rotation(M, L, i_r, i_a, hw)
             t += hw
             _advance_phases(base, turn, i, t, src, ph)
-            _top_torque(M, bf, src, fld, flags, x, ft, ph)
+            _top_torque(M, bf, src, fld, flags, x, ft, ph, tilts)
             n_force += 1
             for k in range(3):
                 L[0, k] += half * ft[3 + k]
