@@ -47,6 +47,7 @@ from labkit.protocols.runner import Runner, normalise
 from labkit.rig import load_rig
 from labkit.session import SessionRecord, load_session_record
 from labkit.session.integrity import integrity_problems
+from labkit.session.paths import session_file
 
 LEVELS = ("auto", "exact", "faithful", "analysis")
 #: the frame of a clock read's site where the run begins (labkit.io.clock.read_site): a stand-still
@@ -213,8 +214,11 @@ def _evidence_diffs(record: Any, evidence: Evidence, tolerant: frozenset[str]) -
 
 
 def events_damaged(record: SessionRecord) -> bool:
-    """events.jsonl had damaged lines (a crash's), skipped while reading it."""
-    return any("events.jsonl:" in problem for problem in record.problems)
+    """events.jsonl had damaged lines (a crash's), skipped while reading it: a problem the reader
+    reported as ``EVENTS_PATH:LINE: ...`` (a readings file of a device role named "events" is not
+    it)."""
+    prefix = f"{session_file(record.path, 'events.jsonl')}:"
+    return any(problem.startswith(prefix) for problem in record.problems)
 
 
 def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str = "auto") -> ReplayOutcome:

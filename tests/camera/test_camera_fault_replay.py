@@ -6,6 +6,7 @@ recorded camera raised it. Without the fault line a replay names the difference.
 from __future__ import annotations
 
 import json
+import shutil
 import threading
 from pathlib import Path
 
@@ -37,6 +38,7 @@ def _lines(session: Path) -> list[dict]:
 
 
 def _without_digests(session: Path) -> None:
+    # tests/session/session_edits.py's without_digests, which a test package here cannot import
     meta = json.loads((session / "run.json").read_text())
     meta.pop("digests", None)  # the edit below is the point, not the files' digests
     (session / "run.json").write_text(json.dumps(meta))
@@ -77,8 +79,6 @@ def test_its_replay_fails_the_same_burst_the_same_way(failed_virtual_session, ca
 
 
 def test_without_the_fault_line_the_replay_names_the_difference(failed_virtual_session, tmp_path, capsys):
-    import shutil
-
     session = tmp_path / "no-fault-line"
     shutil.copytree(failed_virtual_session, session)
     _without_digests(session)

@@ -11,6 +11,7 @@ import shutil
 from pathlib import Path
 
 import pytest
+from session_edits import without_digests
 
 from labkit.cli import main
 from labkit.protocols.replay import choose_level, replay_session
@@ -51,9 +52,7 @@ def test_its_steps_speeds_and_cone_angles_are_the_recorded_ones():
 def _copy(tmp_path: Path) -> Path:
     session = tmp_path / SESSION.name
     shutil.copytree(SESSION, session)
-    meta = json.loads((session / "run.json").read_text())
-    meta.pop("digests", None)  # the edits below are the point, not the files' digests
-    (session / "run.json").write_text(json.dumps(meta))
+    without_digests(session)  # the edits below are the point, not the files' digests
     return session
 
 
