@@ -7,7 +7,7 @@ in process, on a pool of N processes and on the N Dask workers, and prints each 
 over the in-process map, measured in one run. Every engine is warmed first (numba's compiled
 kernels loaded in every process) so that the table compares the sweep, not the start-up; each
 timed region is one ``run_sweep`` call as a user makes it (the pool's processes started, the
-Dask client connected and ``evaluate`` scattered inside it), writing its own results store as
+Dask client connected inside it), writing its own results store as
 ``labkit sweep --out`` does. The three engines run interleaved ``--repeats`` times (the order
 reversed every other repeat) and the table gives medians and ranges with the load; the command
 exits 1 unless the pool's and Dask's stores hold exactly the in-process rows.

@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 
 from labkit.cli import main
 from labkit.numerics import stability_map
-from labkit.numerics.sweep import MIN_CHUNK, TASKS_PER_SLOT, auto_chunk
+from labkit.numerics.sweep import MIN_CHUNK, TASKS_PER_SLOT, auto_chunk, interleaved_chunks
 
 
 @given(st.integers(0, 10**6), st.integers(1, 512), st.none() | st.integers(1, 10**4))
@@ -22,6 +22,17 @@ def test_auto_chunk_covers_the_slots_and_respects_the_memory_limit(pending, slot
     tasks = math.ceil(pending / size) if pending else 0
     # at most TASKS_PER_SLOT tasks per slot, unless the tasks would be tiny or too large to fit
     assert tasks <= slots * TASKS_PER_SLOT or size in (MIN_CHUNK, limit)
+
+
+@given(st.integers(0, 3000), st.integers(1, 600))
+def test_interleaved_tasks_hold_every_point_once_and_differ_by_at_most_one(pending, chunk):
+    points = list(range(pending))
+    tasks = interleaved_chunks(points, chunk)
+    assert len(tasks) == math.ceil(pending / chunk)
+    assert sorted(p for task in tasks for p in task) == points
+    assert all(0 < len(task) <= chunk for task in tasks)
+    if tasks:
+        assert max(map(len, tasks)) - min(map(len, tasks)) <= 1
 
 
 def test_a_16_worker_map_gets_tasks_of_about_a_sixtyfourth():

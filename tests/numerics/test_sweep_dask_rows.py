@@ -27,6 +27,10 @@ def test_dask_workers_store_the_in_process_rows(tmp_path):
     with LoopbackCluster(2, 60.0, QUIET_DASK) as cluster:
         remote = run_sweep(points, evaluate, store=tmp_path / "dask.jsonl", chunk=4,
                            scheduler=cluster.address, timeout_s=60.0, progress=False)
+        # a closure plain pickle cannot size goes to the workers by scatter, and gives the same rows
+        scattered = run_sweep(points, lambda chunk: evaluate(chunk), chunk=4,
+                              scheduler=cluster.address, timeout_s=60.0, progress=False)
+    assert scattered.results == local.results
     assert remote.computed == len(points) == len(local.results)
     assert {r["verdict"] for r in local.results} == {"stable", "unstable"}
     stored_local, stored_dask = load_store(tmp_path / "local.jsonl"), load_store(tmp_path / "dask.jsonl")
