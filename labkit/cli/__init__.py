@@ -15,23 +15,27 @@ import importlib
 import sys
 
 from labkit import __version__
+from labkit.cli.summaries import COMMAND_SUMMARIES
 from labkit.errors import LabkitError
 
-COMMANDS = [
-    "demo", "ports", "probe", "emulate", "run", "replay", "analyse", "synth",
-    "fit", "simulate", "bench", "reproduce", "report", "sweep", "predict", "rig", "twin", "shrink",
-]
+COMMANDS = list(COMMAND_SUMMARIES)  # the order of `labkit --help`
 
 
-def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+def build_parser(only: str | None = None, summaries_only: bool = False) -> argparse.ArgumentParser:
     """The full parser, or (``only``) one with just that command: importing every command
-    module costs seconds (numba, matplotlib, rerun), so a run imports only its own."""
+    module costs seconds (numba, matplotlib, rerun), so a run imports only its own.
+    ``summaries_only``: every command as a name and its one line (:mod:`labkit.cli.summaries`)
+    without its options, what ``labkit`` and ``labkit --help`` print; no command module is
+    imported."""
     parser = argparse.ArgumentParser(
         prog="labkit", description="labkit: measure, replay and model PFR / MBS rigs"
     )
     parser.add_argument("--version", action="version", version=f"labkit {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMANDS if only is None else [only]:
+        if summaries_only:
+            sub.add_parser(name, help=COMMAND_SUMMARIES[name])
+            continue
         module_name = f"labkit.cli.{name}"
         try:
             module = importlib.import_module(module_name)
@@ -102,7 +106,7 @@ def end_quickly() -> None:
 
 def _run(argv: list[str]) -> int:
     only = argv[0] if argv and argv[0] in COMMANDS else None
-    parser = build_parser(only)
+    parser = build_parser(only, summaries_only=only is None)
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help()

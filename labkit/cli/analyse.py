@@ -22,6 +22,7 @@ from labkit.cli.numbers import number
 from labkit.cli.output import add_json_argument, write_json
 from labkit.cli.parsers import command_parser
 from labkit.cli.progress import ProgressLines
+from labkit.cli.summaries import COMMAND_SUMMARIES
 from labkit.errors import LabkitError, VideoError
 
 if TYPE_CHECKING:
@@ -101,7 +102,7 @@ def _add_speed_arguments(parser: argparse.ArgumentParser, rotor_hz_note: str = "
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    parser = command_parser(sub, "analyse", "analyse laser-trace or stroboscope video", __doc__)
+    parser = command_parser(sub, "analyse", COMMAND_SUMMARIES["analyse"], __doc__)
     kinds = parser.add_subparsers(dest="kind", metavar="KIND")
 
     laser = kinds.add_parser("laser", help="circle/ellipse/trochoid pattern of a reflected laser beam")

@@ -8,11 +8,13 @@ from __future__ import annotations
 import argparse
 import importlib
 
+from labkit.cli.summaries import COMMAND_SUMMARIES
+
 BENCHES = ["io", "sim", "vision", "run", "sweep", "camera"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    parser = sub.add_parser("bench", help="benchmarks (ratios measured in one run)")
+    parser = sub.add_parser("bench", help=COMMAND_SUMMARIES["bench"])
     benches = parser.add_subparsers(dest="bench", metavar="BENCH")
     for name in BENCHES:
         module_name = f"labkit.cli.bench_{name}"

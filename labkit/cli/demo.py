@@ -21,6 +21,7 @@ from labkit.cli.run import (
     sinks_for,
     stream_session_to_rerun,
 )
+from labkit.cli.summaries import COMMAND_SUMMARIES
 from labkit.protocols.launch import execute, prepare_run
 from labkit.rig import bundled_rig_path
 from labkit.stream import parse_rerun_spec
@@ -29,7 +30,7 @@ from labkit.stream import parse_rerun_spec
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "demo",
-        help="run the Fig. 5.25 sweep on the emulated rig (about 10 s)",
+        help=COMMAND_SUMMARIES["demo"],
         description=__doc__.split("\n\n")[1] if __doc__ else None,
     )
     add_set_argument(p, "speed-sweep parameter, e.g. speeds_rpm=6000:20000:2000")

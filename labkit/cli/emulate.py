@@ -24,6 +24,7 @@ import sys
 import threading
 from typing import Any
 
+from labkit.cli.summaries import COMMAND_SUMMARIES
 from labkit.emulators.base import TIMED_FAULTS
 from labkit.emulators.sim_port import build_emulator
 from labkit.errors import PortURLError
@@ -186,7 +187,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    parser = sub.add_parser("emulate", help="serve a rig's emulated devices on /dev/pts/N",
+    parser = sub.add_parser("emulate", help=COMMAND_SUMMARIES["emulate"],
                             description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("rig", nargs="?", help="rig file (its sim:// devices are emulated)")
     parser.add_argument("--device", action="append", metavar="ROLE=sim://...",

@@ -21,6 +21,7 @@ from labkit.cli.names import FIT_MODELS, PAPER_OMEGA_C
 from labkit.cli.numbers import number
 from labkit.cli.output import add_json_argument, announce_rerun_file, announce_written, write_json
 from labkit.cli.progress import ProgressLines
+from labkit.cli.summaries import COMMAND_SUMMARIES
 from labkit.errors import FitError
 from labkit.stream.core import add_rerun_argument
 
@@ -31,7 +32,7 @@ BOOTSTRAP_WHY = "resamples; 10 000 give the 95 % interval to about 1 %"
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("fit", help="fit data against the PFR model (Eq. 5.24, 5.81, 5.85, 6.13, 6.37)",
+    p = sub.add_parser("fit", help=COMMAND_SUMMARIES["fit"],
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("input", nargs="+",
                    help="session directory, results JSON, CSV with a header row, or `labkit analyse "

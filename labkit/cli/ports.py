@@ -14,6 +14,8 @@ import json
 import re
 from typing import Any
 
+from labkit.cli.summaries import COMMAND_SUMMARIES
+
 NO_PORTS = (
     "no serial ports found. Plug in the USB-serial adapter and run again; on Linux check "
     "`dmesg | tail` and that you are in the 'dialout' group. For emulated devices use "
@@ -95,7 +97,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    parser = sub.add_parser("ports", help="list attached serial ports and cameras, with rig-file URLs",
+    parser = sub.add_parser("ports", help=COMMAND_SUMMARIES["ports"],
                             description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--json", action="store_true", help="print a JSON list instead of a table")
     parser.set_defaults(func=run)

@@ -30,6 +30,7 @@ from labkit.cli.predict_inputs import (
     magnets_from_rig,
 )
 from labkit.cli.progress import ProgressLines
+from labkit.cli.summaries import COMMAND_SUMMARIES
 
 if TYPE_CHECKING:  # the modules behind these import scipy and numba: loaded when a command runs
     from labkit.predict.estimate import Estimate
@@ -43,7 +44,7 @@ ORDER = ("bound", "r_eq_mm", "axial_stiffness_N_m", "axial_stiffness_sim_N_m", "
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("predict", help="predict a rotator/floator pair: bound state, stiffness, speeds",
+    p = sub.add_parser("predict", help=COMMAND_SUMMARIES["predict"],
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("rig", nargs="?", help="rig file (only its [bodies] are read) or bundled rig name")
     p.add_argument("--rotator", metavar="SPEC",

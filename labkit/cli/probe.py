@@ -21,6 +21,7 @@ from typing import Any
 
 import serial
 
+from labkit.cli.summaries import COMMAND_SUMMARIES
 from labkit.device_kinds import DEVICE_KINDS, OLD_KIND_WORDS, canonical_kind
 from labkit.devices.base import Device
 from labkit.devices.registry import driver_class, known_drivers
@@ -39,7 +40,7 @@ except ImportError:  # pragma: no cover - Windows
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
-        "probe", help="check that a device talks: identify it and print N readings as JSON lines",
+        "probe", help=COMMAND_SUMMARIES["probe"],
         description=__doc__.split("\n\n")[1] if __doc__ else None,
     )
     p.add_argument("kind", choices=KINDS, help="device kind (tach: the older word for tachometer)")

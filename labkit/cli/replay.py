@@ -17,6 +17,7 @@ from pathlib import Path
 
 from labkit.cli.output import add_json_argument, announce_rerun_file, write_json
 from labkit.cli.run import close_sinks
+from labkit.cli.summaries import COMMAND_SUMMARIES
 from labkit.protocols.events import FlagTally
 from labkit.protocols.replay import LEVEL_WORDS, LEVELS, replay_session
 from labkit.session import export_csv, load_session_record
@@ -26,7 +27,7 @@ from labkit.stream import add_rerun_argument
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "replay",
-        help="re-run a session against its cassettes and check its results",
+        help=COMMAND_SUMMARIES["replay"],
         description=__doc__.split("\n\n")[1] if __doc__ else None,
     )
     p.add_argument("session", help="session directory")

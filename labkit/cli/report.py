@@ -13,10 +13,11 @@ from pathlib import Path
 
 from labkit.cli.names import FIT_MODELS
 from labkit.cli.output import add_json_argument, write_json
+from labkit.cli.summaries import COMMAND_SUMMARIES
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("report", help="write a report folder (markdown + PNG) for a session or result",
+    p = sub.add_parser("report", help=COMMAND_SUMMARIES["report"],
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("source", help="session directory, results JSON, CSV, or video analysis JSON")
     p.add_argument("--out", help="output folder (default: SESSION/report or RESULT-report)")

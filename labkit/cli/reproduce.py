@@ -13,13 +13,14 @@ import sys
 import time
 
 from labkit.cli.output import add_json_argument, write_json
+from labkit.cli.summaries import COMMAND_SUMMARIES
 from labkit.errors import LabkitError
 from labkit.reproduce import SUITES, Row, run
 from labkit.reproduce.paper_data import MISPRINTS
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    parser = sub.add_parser("reproduce", help="reproduce the paper's numbers and compare",
+    parser = sub.add_parser("reproduce", help=COMMAND_SUMMARIES["reproduce"],
                             description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--only", action="append", metavar="PREFIX",
                         help="only rows whose id starts with PREFIX (repeatable), e.g. table5.7")

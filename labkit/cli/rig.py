@@ -14,6 +14,7 @@ import sys
 from importlib import resources
 from pathlib import Path
 
+from labkit.cli.summaries import COMMAND_SUMMARIES
 from labkit.errors import LabkitError
 
 
@@ -46,7 +47,7 @@ def write_template(kind: str, out: str | Path) -> Path:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("rig", help="write a rig-file template (rig new balance my-rig.toml) or check one",
+    p = sub.add_parser("rig", help=COMMAND_SUMMARIES["rig"],
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     actions = p.add_subparsers(dest="action", metavar="ACTION")
     new = actions.add_parser("new", help="write a commented template for real hardware")

@@ -14,6 +14,7 @@ from typing import Any
 
 from labkit.cli.confirm import CONFIRM_STEPS, add_yes_argument, confirm_size
 from labkit.cli.output import add_json_argument, announce_rerun_file, write_json
+from labkit.cli.summaries import COMMAND_SUMMARIES
 from labkit.errors import LabkitError
 from labkit.protocols import PROTOCOLS, ProgressSink
 from labkit.protocols.events import FlagTally
@@ -52,7 +53,7 @@ def add_set_argument(p: argparse.ArgumentParser, help: str) -> None:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "run",
-        help="run a measurement protocol on a rig (speed-sweep, spin-critical, cone-sweep, strobe-sweep)",
+        help=COMMAND_SUMMARIES["run"],
         description=__doc__.split("\n\n")[1] if __doc__ else None,
     )
     p.add_argument("rig", nargs="?", help="rig file (rigs/*.toml) or a bundled rig name")

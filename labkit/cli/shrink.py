@@ -18,11 +18,12 @@ import shutil
 from pathlib import Path
 from typing import Any
 
+from labkit.cli.summaries import COMMAND_SUMMARIES
 from labkit.errors import LabkitError
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("shrink", help="shrink a session's camera frames for a CI fixture; results recomputed",
+    p = sub.add_parser("shrink", help=COMMAND_SUMMARIES["shrink"],
                        description=__doc__.split("\n\n")[1] if __doc__ else None)
     p.add_argument("session", help="a recorded session folder")
     p.add_argument("out", help="new session folder (must not exist)")

@@ -17,13 +17,14 @@ import sys
 from labkit.cli.numbers import number
 from labkit.cli.output import add_json_argument, note_first_compile, write_json
 from labkit.cli.parsers import command_parser
+from labkit.cli.summaries import COMMAND_SUMMARIES
 from labkit.sim.integrators import DEFAULT_INTEGRATOR, INTEGRATORS
 
 SINK_MODULE = "labkit.stream.sim_sink"
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = command_parser(sub, "simulate", "simulate a scene (rigid magnetic bodies, rotators, fields)", __doc__)
+    p = command_parser(sub, "simulate", COMMAND_SUMMARIES["simulate"], __doc__)
     p.add_argument("scene", nargs="?", help="scene TOML file or bundled scene name")
     p.add_argument(
         "--cycles", type=number(0, low_open=True), default=None,

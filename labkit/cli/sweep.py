@@ -19,6 +19,7 @@ import sys
 
 from labkit.cli.confirm import CONFIRM_SWEEP_POINTS, add_yes_argument, confirm_size
 from labkit.cli.parsers import command_parser
+from labkit.cli.summaries import COMMAND_SUMMARIES
 from labkit.numerics.checks import NumericsError
 
 DEFAULT_RATIOS = "0:0.6:n=13"
@@ -27,7 +28,7 @@ FIG_5_12_KS = "-1.5:0.25:n=15"
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = command_parser(sub, "sweep", "parameter sweeps (stability maps), local or on a Dask cluster", __doc__)
+    p = command_parser(sub, "sweep", COMMAND_SUMMARIES["sweep"], __doc__)
     p.add_argument("problem", choices=["table5.3", "fig5.12"], help="what to sweep")
     p.add_argument("--rows", action="store_true", help="the 36 rows of Table 5.3 instead of a map")
     p.add_argument(

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 from labkit.cli.numbers import number
 from labkit.cli.output import add_json_argument, write_json
 from labkit.cli.parsers import command_parser
+from labkit.cli.summaries import COMMAND_SUMMARIES
 from labkit.errors import VideoError
 
 if TYPE_CHECKING:  # numpy loads when a clip is written, not for --help
@@ -64,7 +65,7 @@ def _bgr(text: str) -> tuple[float, float, float]:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    parser = command_parser(sub, "synth", "synthetic laser-screen and stroboscope footage with ground truth",
+    parser = command_parser(sub, "synth", COMMAND_SUMMARIES["synth"],
                             __doc__)
     kinds = parser.add_subparsers(dest="kind", metavar="KIND")
 

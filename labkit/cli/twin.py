@@ -19,10 +19,11 @@ import sys
 from pathlib import Path
 
 from labkit.cli.output import add_json_argument, write_json
+from labkit.cli.summaries import COMMAND_SUMMARIES
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("twin", help="run a rig file's virtual twin and compare recovered with put-in values",
+    p = sub.add_parser("twin", help=COMMAND_SUMMARIES["twin"],
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("rig", help="rig file (or a bundled rig name, e.g. emulated-fig525)")
     p.add_argument("--out", type=Path, default=Path("twin"), help="report folder (default ./twin)")
