@@ -55,8 +55,6 @@ from labkit.sim.integrators.splitting import (
     ST_OK,
     free_rotation,
     health,
-    rotate_axis_angle,
-    rotate_body_columns,
     step_event,
     store_sample,
 )
@@ -89,7 +87,7 @@ def _drive_phases(t, src, fld, ph):
         ph[1 + s, 0], ph[1 + s, 1] = math.cos(th), math.sin(th)
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline="always")
 def _advance_phases(base, turn, i, t, src, ph):
     """Drive phases at stage ``i`` of a step: the step's ``base`` phases turned by the stage's
     precomputed angle (``turn[d, i]``: cos, sin of rate x stage offset), two products instead
@@ -113,16 +111,58 @@ def stage_turns(weights, h, src, fld) -> np.ndarray:
 
 
 @njit(cache=True, _nrt=False)
-def _top_torque(M, bf, src, fld, flags, x, ft, ph, tilts):
-    """Force and torque about the CM on the one body (into ``ft[0:6]``) with the drive phases
-    ``ph`` (:func:`_drive_phases`) and each source's ``tilts`` (:func:`_source_tilts`); fused, no
-    loops over bodies."""
-    mx = M[0, 0] * bf[0, B_M] + M[0, 1] * bf[0, B_M + 1] + M[0, 2] * bf[0, B_M + 2]
-    my = M[1, 0] * bf[0, B_M] + M[1, 1] * bf[0, B_M + 1] + M[1, 2] * bf[0, B_M + 2]
-    mz = M[2, 0] * bf[0, B_M] + M[2, 1] * bf[0, B_M + 1] + M[2, 2] * bf[0, B_M + 2]
-    ox = M[0, 0] * bf[0, B_OFF] + M[0, 1] * bf[0, B_OFF + 1] + M[0, 2] * bf[0, B_OFF + 2]
-    oy = M[1, 0] * bf[0, B_OFF] + M[1, 1] * bf[0, B_OFF + 1] + M[1, 2] * bf[0, B_OFF + 2]
-    oz = M[2, 0] * bf[0, B_OFF] + M[2, 1] * bf[0, B_OFF + 1] + M[2, 2] * bf[0, B_OFF + 2]
+def _source_tilts(src, tilts):
+    """cos and sin of each source's tilt, once per run (they are constants of the scene; the same
+    values :func:`_top_torque` took per stage before, so the results are bit for bit the same)."""
+    for s in range(src.shape[0]):
+        tilts[s, 0], tilts[s, 1] = math.cos(src[s, S_TILT]), math.sin(src[s, S_TILT])
+
+
+@njit(cache=True, _nrt=False, inline="always")
+def _top_turn(m00, m01, m02, m10, m11, m12, m20, m21, m22, lx, ly, lz, i_r, k_a, h):
+    """Exact free rotation of a symmetric top over ``h`` on the rotation held in scalars (the
+    arithmetic of :func:`..splitting.free_rotation`, kind 0, in the same order); ``k_a`` is
+    ``1/I_A - 1/I_R``. Returns the nine entries of the turned rotation, row by row."""
+    ln = math.sqrt(lx * lx + ly * ly + lz * lz)
+    l3 = m02 * lx + m12 * ly + m22 * lz
+    c = l3 * k_a
+    if c != 0.0:  # right-multiply by the rotation about body z by h c (rotate_body_columns)
+        angle = h * c
+        cz, sz = math.cos(angle), math.sin(angle)
+        m00, m01 = cz * m00 + sz * m01, -sz * m00 + cz * m01
+        m10, m11 = cz * m10 + sz * m11, -sz * m10 + cz * m11
+        m20, m21 = cz * m20 + sz * m21, -sz * m20 + cz * m21
+    if ln > 0.0:  # left-multiply by the rotation about L by h |L| / I_R (rotate_axis_angle)
+        ax, ay, az = lx / ln, ly / ln, lz / ln
+        angle = h * ln / i_r
+        co = math.cos(angle)
+        s = math.sin(angle)
+        t = 1.0 - co
+        r00 = co + ax * ax * t
+        r01 = ax * ay * t - az * s
+        r02 = ax * az * t + ay * s
+        r10 = ay * ax * t + az * s
+        r11 = co + ay * ay * t
+        r12 = ay * az * t - ax * s
+        r20 = az * ax * t - ay * s
+        r21 = az * ay * t + ax * s
+        r22 = co + az * az * t
+        m00, m10, m20 = (r00 * m00 + r01 * m10 + r02 * m20, r10 * m00 + r11 * m10 + r12 * m20,
+                         r20 * m00 + r21 * m10 + r22 * m20)
+        m01, m11, m21 = (r00 * m01 + r01 * m11 + r02 * m21, r10 * m01 + r11 * m11 + r12 * m21,
+                         r20 * m01 + r21 * m11 + r22 * m21)
+        m02, m12, m22 = (r00 * m02 + r01 * m12 + r02 * m22, r10 * m02 + r11 * m12 + r12 * m22,
+                         r20 * m02 + r21 * m12 + r22 * m22)
+    return m00, m01, m02, m10, m11, m12, m20, m21, m22
+@njit(cache=True, _nrt=False, inline="always")
+def _top_force(m00, m01, m02, m10, m11, m12, m20, m21, m22, bf, src, fld, flags, x, ph, tilts):
+    """Force and torque about the CM on the one body with the rotation held in scalars, the
+    drive phases ``ph`` (:func:`_drive_phases`) and each source's ``tilts``
+    (:func:`_source_tilts`); fused, no loops over bodies. Returns ``(Fx, Fy, Fz, tx, ty, tz)``."""
+    bm0, bm1, bm2 = bf[0, B_M], bf[0, B_M + 1], bf[0, B_M + 2]
+    mx = m00 * bm0 + m01 * bm1 + m02 * bm2
+    my = m10 * bm0 + m11 * bm1 + m12 * bm2
+    mz = m20 * bm0 + m21 * bm1 + m22 * bm2
     fx = fy = fz = tx = ty = tz = 0.0
     if flags[F_FIELD]:  # Eq. 5.21 (rotating or static) or Eq. 5.481 (oscillating), as uniform_field
         c, sn = ph[0, 0], ph[0, 1]
@@ -131,6 +171,10 @@ def _top_torque(M, bf, src, fld, flags, x, ft, ph, tilts):
         ty += mz * bx - mx * bz
         tz += mx * by - my * bx
     if flags[F_SOURCES]:
+        bo0, bo1, bo2 = bf[0, B_OFF], bf[0, B_OFF + 1], bf[0, B_OFF + 2]
+        ox = m00 * bo0 + m01 * bo1 + m02 * bo2
+        oy = m10 * bo0 + m11 * bo1 + m12 * bo2
+        oz = m20 * bo0 + m21 * bo1 + m22 * bo2
         px, py, pz = x[0, 0] + ox, x[0, 1] + oy, x[0, 2] + oz
         for s in range(src.shape[0]):
             c, sn = ph[1 + s, 0], ph[1 + s, 1]  # Eq. 5.25, as source_state
@@ -147,47 +191,32 @@ def _top_torque(M, bf, src, fld, flags, x, ft, ph, tilts):
             tx += f[3] + oy * f[2] - oz * f[1]
             ty += f[4] + oz * f[0] - ox * f[2]
             tz += f[5] + ox * f[1] - oy * f[0]
-    ft[0], ft[1], ft[2], ft[3], ft[4], ft[5] = fx, fy, fz, tx, ty, tz
-
-
-@njit(cache=True, _nrt=False)
-def _source_tilts(src, tilts):
-    """cos and sin of each source's tilt, once per run (they are constants of the scene; the same
-    values :func:`_top_torque` took per stage before, so the results are bit for bit the same)."""
-    for s in range(src.shape[0]):
-        tilts[s, 0], tilts[s, 1] = math.cos(src[s, S_TILT]), math.sin(src[s, S_TILT])
-
-
-@njit(cache=True, _nrt=False)
-def _top_rotation(M, L, i_r, i_a, h):
-    """Exact free rotation of a symmetric top (as :func:`..splitting.free_rotation`, kind 0)."""
-    lx, ly, lz = L[0, 0], L[0, 1], L[0, 2]
-    ln = math.sqrt(lx * lx + ly * ly + lz * lz)
-    l3 = M[0, 2] * lx + M[1, 2] * ly + M[2, 2] * lz
-    c = l3 * (1.0 / i_a - 1.0 / i_r)
-    if c != 0.0:
-        rotate_body_columns(M, 2, h * c)
-    if ln > 0.0:
-        rotate_axis_angle(M, lx / ln, ly / ln, lz / ln, h * ln / i_r)
+    return fx, fy, fz, tx, ty, tz
 
 
 @njit(cache=True)
 def run_fixed_top(state, t0, h, n_steps, sample_every, weights, args, out, turn):
     """The ``fixed_top`` kernel; ``state = (x, v, R, L)`` updated in place; ``turn`` from
-    :func:`stage_turns` (the drive phases of each stage relative to its step's start)."""
+    :func:`stage_turns` (the drive phases of each stage relative to its step's start). The
+    rotation, angular momentum, force, torque and impulse stay in local scalars between samples."""
     x, v, R, L = state
     bf, bi, src, fld, flags, g, axis, r_escape, wz = args
     impulse = out[6]
-    M = R[0]
     i_r, i_a = bf[0, B_I], bf[0, B_I + 2]
-    ft = np.zeros(6)
+    k_a = 1.0 / i_a - 1.0 / i_r
     base = np.empty((1 + src.shape[0], 2))
     ph = np.empty((1 + src.shape[0], 2))
     tilts = np.empty((src.shape[0], 2))
     _source_tilts(src, tilts)
+    m00, m01, m02 = R[0, 0, 0], R[0, 0, 1], R[0, 0, 2]
+    m10, m11, m12 = R[0, 1, 0], R[0, 1, 1], R[0, 1, 2]
+    m20, m21, m22 = R[0, 2, 0], R[0, 2, 1], R[0, 2, 2]
+    lx, ly, lz = L[0, 0], L[0, 1], L[0, 2]
+    p0, p1, p2 = impulse[0, 0], impulse[0, 1], impulse[0, 2]
     t = t0
     _drive_phases(t, src, fld, ph)
-    _top_torque(M, bf, src, fld, flags, x, ft, ph, tilts)
+    fx, fy, fz, tx, ty, tz = _top_force(m00, m01, m02, m10, m11, m12, m20, m21, m22, bf, src, fld, flags, x,
+                                        ph, tilts)
     n_force = 1
     n_s = store_sample(0, t, x, v, R, L, 0.0, out)
     status = ST_OK
@@ -198,31 +227,42 @@ def run_fixed_top(state, t0, h, n_steps, sample_every, weights, args, out, turn)
         for i in range(weights.shape[0]):
             hw = weights[i] * h
             half = 0.5 * hw
-            for k in range(3):
-                L[0, k] += half * ft[3 + k]
-                impulse[0, k] += half * ft[k]
-            _top_rotation(M, L, i_r, i_a, hw)
+            lx, ly, lz = lx + half * tx, ly + half * ty, lz + half * tz
+            p0, p1, p2 = p0 + half * fx, p1 + half * fy, p2 + half * fz
+            m00, m01, m02, m10, m11, m12, m20, m21, m22 = _top_turn(m00, m01, m02, m10, m11, m12, m20, m21,
+                                                                    m22, lx, ly, lz, i_r, k_a, hw)
             t += hw
             _advance_phases(base, turn, i, t, src, ph)
-            _top_torque(M, bf, src, fld, flags, x, ft, ph, tilts)
+            fx, fy, fz, tx, ty, tz = _top_force(m00, m01, m02, m10, m11, m12, m20, m21, m22, bf, src, fld,
+                                                flags, x, ph, tilts)
             n_force += 1
-            for k in range(3):
-                L[0, k] += half * ft[3 + k]
-                impulse[0, k] += half * ft[k]
+            lx, ly, lz = lx + half * tx, ly + half * ty, lz + half * tz
+            p0, p1, p2 = p0 + half * fx, p1 + half * fy, p2 + half * fz
         t = t0 + (step + 1) * h
         steps_done = step + 1
-        lx, ly, lz = L[0, 0], L[0, 1], L[0, 2]
         if not (math.isfinite(lx) and math.isfinite(ly) and math.isfinite(lz)):
             status, event_time = ST_NONFINITE, t
             break
-        if math.sqrt(lx * lx + ly * ly + lz * lz) / bf[0, B_I] > 1e9:
+        if math.sqrt(lx * lx + ly * ly + lz * lz) / i_r > 1e9:
             status, event_time = ST_BLOWUP, t
             break
         if (step + 1) % sample_every == 0:
+            _put_top(R, L, m00, m01, m02, m10, m11, m12, m20, m21, m22, lx, ly, lz)
             n_s = store_sample(n_s, t, x, v, R, L, 0.0, out)
+    _put_top(R, L, m00, m01, m02, m10, m11, m12, m20, m21, m22, lx, ly, lz)
+    impulse[0, 0], impulse[0, 1], impulse[0, 2] = p0, p1, p2
     if status != ST_OK or steps_done % sample_every != 0:
         n_s = store_sample(n_s, t, x, v, R, L, 0.0, out)
     return status, steps_done, n_s, event_time, n_force
+
+
+@njit(cache=True, _nrt=False)
+def _put_top(R, L, m00, m01, m02, m10, m11, m12, m20, m21, m22, lx, ly, lz):
+    """Write the rotation and angular momentum held in scalars back into the state arrays."""
+    R[0, 0, 0], R[0, 0, 1], R[0, 0, 2] = m00, m01, m02
+    R[0, 1, 0], R[0, 1, 1], R[0, 1, 2] = m10, m11, m12
+    R[0, 2, 0], R[0, 2, 1], R[0, 2, 2] = m20, m21, m22
+    L[0, 0], L[0, 1], L[0, 2] = lx, ly, lz
 
 
 @njit(cache=True, _nrt=False)
