@@ -265,7 +265,7 @@ def _put_top(R, L, m00, m01, m02, m10, m11, m12, m20, m21, m22, lx, ly, lz):
     L[0, 0], L[0, 1], L[0, 2] = lx, ly, lz
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline="always")
 def _pair_forces(x, R, bf, F, T, mp):
     """Dipole-dipole force and torque (about each CM) between the two bodies; ``mp`` scratch (4, 3):
     lab moments and dipole positions. The arithmetic of :func:`..kernels.compute_forces`, fused."""
@@ -284,7 +284,7 @@ def _pair_forces(x, R, bf, F, T, mp):
     _set_force(0, fa, x, mp, F, T)
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline="always")
 def _pair_force_torque(ax, ay, az, bx, by, bz, rx, ry, rz):
     """Eq. 4.2-4.3 for both dipoles of a pair at once (``r`` from a to b): the force on a is minus
     the force on b; the torques share ``a x b`` and the projections on ``u = r / |r|``. Returns
@@ -310,7 +310,7 @@ def _pair_force_torque(ax, ay, az, bx, by, bz, rx, ry, rz):
     return (fx, fy, fz, tbx, tby, tbz), (-fx, -fy, -fz, tax, tay, taz)
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline="always")
 def _set_force(b, f, x, mp, F, T):
     ox, oy, oz = mp[2 + b, 0] - x[b, 0], mp[2 + b, 1] - x[b, 1], mp[2 + b, 2] - x[b, 2]
     F[b, 0], F[b, 1], F[b, 2] = f[0], f[1], f[2]
@@ -319,7 +319,7 @@ def _set_force(b, f, x, mp, F, T):
     T[b, 2] = f[5] + ox * f[1] - oy * f[0]
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline="always")
 def _pair_kick(v, L, F, T, inv_m0, inv_m1, h, impulse):
     for k in range(3):
         v[0, k] += h * F[0, k] * inv_m0
