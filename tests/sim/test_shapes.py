@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import tomllib
+from pathlib import Path
+
 import numpy as np
 import pytest
 
+import labkit
 from labkit.sim import compile_scene, load_scene, scene_from_dict, simulate
 from labkit.sim.integrators import splitting_run
 from labkit.sim.integrators.shapes import scene_shape
@@ -97,3 +101,37 @@ def test_every_status_has_a_label_and_a_message():
     assert set(LABELS) == set(MESSAGES) == set(Status)
     text = MESSAGES[Status.ESCAPE].format(r_escape=0.5, message="")
     assert text == "a body went beyond 0.5 m from the others"
+
+
+def _pair_released(z_mm: float, vz_m_s: float, escape_mm: float | None = None) -> dict:
+    """``mbs_fig6_1`` with its floator released on the axis at ``z_mm`` moving at ``vz_m_s``."""
+    data = tomllib.loads((Path(labkit.__file__).parent / "data/scenes/mbs_fig6_1.toml").read_text())
+    initial = data["body"][1]["initial"]
+    del initial["equilibrium"]
+    initial["position_mm"] = [0.0, 0.0, z_mm]
+    initial["velocity_m_s"] = [0.0, 0.0, vz_m_s]
+    if escape_mm is not None:
+        data["scene"]["escape_radius_mm"] = escape_mm
+    return data
+
+
+@pytest.mark.parametrize(("released", "status"), [((20.0, -2.0), Status.CONTACT),
+                                                  ((40.0, 3.0, 100.0), Status.ESCAPE)])
+def test_free_pair_kernel_ends_at_the_general_kernels_event(released, status):
+    """The free_pair kernel keeps its state in local variables within a step; the contact and
+    escape checks after each step must still see it (same event, time and last state)."""
+    system = compile_scene(scene_from_dict(_pair_released(*released)))
+    assert scene_shape(system) == "free_pair"
+    weights = COMPOSITIONS["kahanli8"][0]
+    h = system.period / 32
+    n = 32 * 50
+    (s_g, e_g, n_g, t_g, g), (s_f, e_f, n_f, t_f, f) = [
+        splitting_run._integrate_rigid(system, weights, kernel, 0.0, h, n, 8, n // 8 + 2)
+        for kernel in ("general", "free_pair")]
+    assert s_g == s_f == status
+    assert n_g == n_f < len(weights) * n
+    assert e_f == pytest.approx(e_g, rel=1e-12)
+    assert np.array_equal(t_g, t_f)
+    assert _relative(g["x"], f["x"]) <= 1e-12
+    assert _relative(g["v"], f["v"]) <= 1e-12
+    assert np.max(np.abs(g["R"] - f["R"])) < 1e-12

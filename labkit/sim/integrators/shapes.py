@@ -60,7 +60,6 @@ from labkit.sim.integrators.splitting import (
     ST_BLOWUP,
     ST_NONFINITE,
     ST_OK,
-    free_rotation,
     health,
     step_event,
     store_sample,
@@ -273,25 +272,6 @@ def _put_top(R, L, m00, m01, m02, m10, m11, m12, m20, m21, m22, lx, ly, lz):
 
 
 @njit(cache=True, _nrt=False, inline="always")
-def _pair_forces(x, R, bf, F, T, mp):
-    """Dipole-dipole force and torque (about each CM) between the two bodies; ``mp`` scratch (4, 3):
-    lab moments and dipole positions. The arithmetic of :func:`..kernels.compute_forces`, fused."""
-    for b in range(2):
-        for i in range(3):
-            acc_m = 0.0
-            acc_p = 0.0
-            for j in range(3):
-                acc_m += R[b, i, j] * bf[b, B_M + j]
-                acc_p += R[b, i, j] * bf[b, B_OFF + j]
-            mp[b, i] = acc_m
-            mp[2 + b, i] = x[b, i] + acc_p
-    rx, ry, rz = mp[3, 0] - mp[2, 0], mp[3, 1] - mp[2, 1], mp[3, 2] - mp[2, 2]
-    fb, fa = _pair_force_torque(mp[0, 0], mp[0, 1], mp[0, 2], mp[1, 0], mp[1, 1], mp[1, 2], rx, ry, rz)
-    _set_force(1, fb, x, mp, F, T)
-    _set_force(0, fa, x, mp, F, T)
-
-
-@njit(cache=True, _nrt=False, inline="always")
 def _pair_force_torque(ax, ay, az, bx, by, bz, rx, ry, rz):
     """Eq. 4.2-4.3 for both dipoles of a pair at once (``r`` from a to b): the force on a is minus
     the force on b; the torques share ``a x b`` and the projections on ``u = r / |r|``. Returns
@@ -318,37 +298,97 @@ def _pair_force_torque(ax, ay, az, bx, by, bz, rx, ry, rz):
 
 
 @njit(cache=True, _nrt=False, inline="always")
-def _set_force(b, f, x, mp, F, T):
-    ox, oy, oz = mp[2 + b, 0] - x[b, 0], mp[2 + b, 1] - x[b, 1], mp[2 + b, 2] - x[b, 2]
-    F[b, 0], F[b, 1], F[b, 2] = f[0], f[1], f[2]
-    T[b, 0] = f[3] + oy * f[2] - oz * f[1]
-    T[b, 1] = f[4] + oz * f[0] - ox * f[2]
-    T[b, 2] = f[5] + ox * f[1] - oy * f[0]
+def _lab_dipole(r, xb, mb, ob):
+    """Lab moment and dipole position of a body with rotation ``r`` (9-tuple, row by row) at CM
+    ``xb``; ``mb``, ``ob`` its body-frame moment and offset. Sums in the order of
+    :func:`..kernels.body_dipoles` (from 0.0, column by column)."""
+    m = (0.0 + r[0] * mb[0] + r[1] * mb[1] + r[2] * mb[2],
+         0.0 + r[3] * mb[0] + r[4] * mb[1] + r[5] * mb[2],
+         0.0 + r[6] * mb[0] + r[7] * mb[1] + r[8] * mb[2])
+    p = (xb[0] + (0.0 + r[0] * ob[0] + r[1] * ob[1] + r[2] * ob[2]),
+         xb[1] + (0.0 + r[3] * ob[0] + r[4] * ob[1] + r[5] * ob[2]),
+         xb[2] + (0.0 + r[6] * ob[0] + r[7] * ob[1] + r[8] * ob[2]))
+    return m, p
 
 
 @njit(cache=True, _nrt=False, inline="always")
-def _pair_kick(v, L, F, T, inv_m0, inv_m1, h, impulse):
+def _about_cm(f, p, xb):
+    """Force and torque about the CM ``xb`` from a dipole's force and torque ``f`` at ``p``."""
+    ox, oy, oz = p[0] - xb[0], p[1] - xb[1], p[2] - xb[2]
+    return (f[0], f[1], f[2]), (f[3] + oy * f[2] - oz * f[1], f[4] + oz * f[0] - ox * f[2],
+                                f[5] + ox * f[1] - oy * f[0])
+
+
+@njit(cache=True, _nrt=False, inline="always")
+def _pair_forces(r0, r1, x0, x1, body):
+    """Dipole-dipole force and torque (about each CM) on both bodies: ``(F0, T0, F1, T1)``;
+    ``body`` holds each body's moment and offset. The arithmetic of
+    :func:`..kernels.compute_forces`, fused."""
+    m0, p0 = _lab_dipole(r0, x0, body[0], body[1])
+    m1, p1 = _lab_dipole(r1, x1, body[2], body[3])
+    fb, fa = _pair_force_torque(m0[0], m0[1], m0[2], m1[0], m1[1], m1[2], p1[0] - p0[0], p1[1] - p0[1],
+                                p1[2] - p0[2])
+    f1, t1 = _about_cm(fb, p1, x1)
+    f0, t0 = _about_cm(fa, p0, x0)
+    return f0, t0, f1, t1
+
+
+@njit(cache=True, _nrt=False, inline="always")
+def _kick(vb, lb, pb, fb, tb, inv_m, h):
+    """Half kick of one body: velocity, angular momentum and impulse, as 3-tuples."""
+    return ((vb[0] + h * fb[0] * inv_m, vb[1] + h * fb[1] * inv_m, vb[2] + h * fb[2] * inv_m),
+            (lb[0] + h * tb[0], lb[1] + h * tb[1], lb[2] + h * tb[2]),
+            (pb[0] + h * fb[0], pb[1] + h * fb[1], pb[2] + h * fb[2]))
+
+
+@njit(cache=True, _nrt=False, inline="always")
+def _drift(xb, vb, r, lb, i_r, k_a, h):
+    """Free flight of the CM and exact free rotation (:func:`_top_turn`) of one body over ``h``."""
+    return ((xb[0] + h * vb[0], xb[1] + h * vb[1], xb[2] + h * vb[2]),
+            _top_turn(r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], lb[0], lb[1], lb[2], i_r, k_a, h))
+
+
+@njit(cache=True, _nrt=False)
+def _put_body(b, x, v, L, xb, vb, lb):
     for k in range(3):
-        v[0, k] += h * F[0, k] * inv_m0
-        v[1, k] += h * F[1, k] * inv_m1
-        L[0, k] += h * T[0, k]
-        L[1, k] += h * T[1, k]
-        impulse[0, k] += h * F[0, k]
-        impulse[1, k] += h * F[1, k]
+        x[b, k], v[b, k], L[b, k] = xb[k], vb[k], lb[k]
+
+
+@njit(cache=True, _nrt=False, inline="always")
+def _rotation(R, b):
+    """Body ``b``'s rotation as a 9-tuple, row by row."""
+    return (R[b, 0, 0], R[b, 0, 1], R[b, 0, 2], R[b, 1, 0], R[b, 1, 1], R[b, 1, 2], R[b, 2, 0], R[b, 2, 1],
+            R[b, 2, 2])
+
+
+@njit(cache=True, _nrt=False)
+def _put_rotation(b, R, r):
+    for i in range(3):
+        for j in range(3):
+            R[b, i, j] = r[3 * i + j]
 
 
 @njit(cache=True)
-def run_free_pair(state, t0, h, n_steps, sample_every, weights, args, out, scratch):
-    """The ``free_pair`` kernel; ``state = (x, v, R, L)`` in place; ``scratch`` (8, 3): F, T, mp."""
+def run_free_pair(state, t0, h, n_steps, sample_every, weights, args, out):
+    """The ``free_pair`` kernel; ``state = (x, v, R, L)`` in place. Within a step the state, forces
+    and impulse are local tuples; x, v and L go back to the arrays after each step (the health and
+    event checks read them), R at samples."""
     x, v, R, L = state
     bf, bi, src, fld, flags, g, axis, r_escape, wz = args
     impulse = out[6]
-    F, T, mp = scratch[0:2], scratch[2:4], scratch[4:8]
     xp, vp = np.empty((2, 3)), np.empty((2, 3))
-    pi = np.empty(3)
     inv_m0, inv_m1 = 1.0 / bf[0, B_MASS], 1.0 / bf[1, B_MASS]
+    i_r0, i_r1 = bf[0, B_I], bf[1, B_I]
+    k_a0, k_a1 = 1.0 / bf[0, B_I + 2] - 1.0 / i_r0, 1.0 / bf[1, B_I + 2] - 1.0 / i_r1
+    body = ((bf[0, B_M], bf[0, B_M + 1], bf[0, B_M + 2]), (bf[0, B_OFF], bf[0, B_OFF + 1], bf[0, B_OFF + 2]),
+            (bf[1, B_M], bf[1, B_M + 1], bf[1, B_M + 2]), (bf[1, B_OFF], bf[1, B_OFF + 1], bf[1, B_OFF + 2]))
+    x0, x1 = (x[0, 0], x[0, 1], x[0, 2]), (x[1, 0], x[1, 1], x[1, 2])
+    v0, v1 = (v[0, 0], v[0, 1], v[0, 2]), (v[1, 0], v[1, 1], v[1, 2])
+    l0, l1 = (L[0, 0], L[0, 1], L[0, 2]), (L[1, 0], L[1, 1], L[1, 2])
+    q0, q1 = (impulse[0, 0], impulse[0, 1], impulse[0, 2]), (impulse[1, 0], impulse[1, 1], impulse[1, 2])
+    r0, r1 = _rotation(R, 0), _rotation(R, 1)
     t = t0
-    _pair_forces(x, R, bf, F, T, mp)
+    f0, tq0, f1, tq1 = _pair_forces(r0, r1, x0, x1, body)
     n_force = 1
     n_s = store_sample(0, t, x, v, R, L, 0.0, out)
     status = ST_OK
@@ -359,17 +399,19 @@ def run_free_pair(state, t0, h, n_steps, sample_every, weights, args, out, scrat
         vp[:] = v
         for w in weights:
             hw = w * h
-            _pair_kick(v, L, F, T, inv_m0, inv_m1, 0.5 * hw, impulse)
-            for b in range(2):
-                for k in range(3):
-                    x[b, k] += hw * v[b, k]
-                free_rotation(R, L, bf, bi, b, hw, pi)
+            v0, l0, q0 = _kick(v0, l0, q0, f0, tq0, inv_m0, 0.5 * hw)
+            v1, l1, q1 = _kick(v1, l1, q1, f1, tq1, inv_m1, 0.5 * hw)
+            x0, r0 = _drift(x0, v0, r0, l0, i_r0, k_a0, hw)
+            x1, r1 = _drift(x1, v1, r1, l1, i_r1, k_a1, hw)
             t += hw
-            _pair_forces(x, R, bf, F, T, mp)
+            f0, tq0, f1, tq1 = _pair_forces(r0, r1, x0, x1, body)
             n_force += 1
-            _pair_kick(v, L, F, T, inv_m0, inv_m1, 0.5 * hw, impulse)
+            v0, l0, q0 = _kick(v0, l0, q0, f0, tq0, inv_m0, 0.5 * hw)
+            v1, l1, q1 = _kick(v1, l1, q1, f1, tq1, inv_m1, 0.5 * hw)
         t = t0 + (step + 1) * h
         steps_done = step + 1
+        _put_body(0, x, v, L, x0, v0, l0)
+        _put_body(1, x, v, L, x1, v1, l1)
         status = health(x, v, L, bf)
         if status == ST_OK:
             status, event_time = step_event(x, v, xp, vp, bf, bi, src, r_escape, t, h)
@@ -378,7 +420,13 @@ def run_free_pair(state, t0, h, n_steps, sample_every, weights, args, out, scrat
         if status != ST_OK:
             break
         if (step + 1) % sample_every == 0:
+            _put_rotation(0, R, r0)
+            _put_rotation(1, R, r1)
             n_s = store_sample(n_s, t, x, v, R, L, 0.0, out)
+    _put_rotation(0, R, r0)
+    _put_rotation(1, R, r1)
+    for k in range(3):
+        impulse[0, k], impulse[1, k] = q0[k], q1[k]
     if status != ST_OK or steps_done % sample_every != 0:
         n_s = store_sample(n_s, t, x, v, R, L, 0.0, out)
     return status, steps_done, n_s, event_time, n_force
