@@ -17,13 +17,15 @@ source fused into the stage and no loop over bodies or flags. R, L, the force, t
 impulse stay in local scalars between samples and the stage's helpers are inlined into the step
 loop (``inline="always"``), with no arrays the compiler must assume may alias and no calls that
 pass each array as a dozen scalars: a stage of conical_5_1 takes 60 ns instead of 84
-(docs/reference/simulator.md), with results bit for bit the same. The same terms as the general kernel; the
-drive phases are turned by products (:func:`stage_turns`) where the general kernel takes cos and
-sin of each stage's time, so results agree with it to round-off growth.
+(docs/reference/simulator.md, docs/decisions/0042-kernel-state-in-local-variables.md), with results
+bit for bit the same. The same terms as the general kernel; the drive phases are turned by
+products (:func:`stage_turns`) where the general kernel takes cos and sin of each stage's time,
+so results agree with it to round-off growth.
 
 ``free_pair``: two free symmetric tops with dipoles and nothing else (no field, rotator, gravity or
-damping; the bound state of Fig. 6.1): the pair's force and torque fused and inlined with the
-kicks, no flag checks.
+damping; the bound state of Fig. 6.1): the pair's force and torque fused, no flag checks. Within
+a step both bodies' state, forces and impulse are local tuples, the helpers inlined; x, v and L
+go back to the arrays after each step for the health and event checks, R at samples.
 """
 
 from __future__ import annotations
