@@ -120,8 +120,8 @@ def stage_turns(weights, h, src, fld) -> np.ndarray:
 
 @njit(cache=True, _nrt=False)
 def _source_tilts(src, tilts):
-    """cos and sin of each source's tilt, once per run (they are constants of the scene; the same
-    values :func:`_top_torque` took per stage before, so the results are bit for bit the same)."""
+    """cos and sin of each source's tilt, once per run (constants of the scene, read by
+    :func:`_top_force` at every stage)."""
     for s in range(src.shape[0]):
         tilts[s, 0], tilts[s, 1] = math.cos(src[s, S_TILT]), math.sin(src[s, S_TILT])
 
