@@ -45,7 +45,7 @@ def main() -> int:
         stages = n * len(weights)
         cells = "  ".join(f"{k} {v * 1e9 / stages:5.1f}" for k, v in best.items())
         print(f"  {name:12s} {cells}")
-    print("1e4 cycles, default integrator (splitting4, automatic N), CPU seconds of the run (min of 3):")
+    print("1e4 cycles, default integrator (auto), CPU seconds of the run (min of 3):")
     for name in ("conical_5_1", "mbs_fig6_1"):
         scene = load_scene(name)
         system = compile_scene(scene)
@@ -56,7 +56,8 @@ def main() -> int:
             res = simulate(scene, 10_000, system=system, samples_per_period=1)
             best = min(best, time.process_time() - start)
         setting = res.setting
-        print(f"  {name:12s} {best:.3f} s  (N={setting['steps_per_period']}, kernel {setting['kernel']}, "
+        print(f"  {name:12s} {best:.3f} s  ({setting['composition']} N={setting['steps_per_period']}, "
+              f"kernel {setting['kernel']}, "
               f"drift {res.invariant_drift:.2g})")
     return 0
 

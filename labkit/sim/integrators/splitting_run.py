@@ -148,7 +148,7 @@ def _integrate_rigid(
         turn = stage_turns(weights, h, system.src, system.fld)
         result = run_fixed_top(state, t0, h, n_steps, sample_every, weights, args, out, turn)
     elif shape == "free_pair":
-        result = run_free_pair(state, t0, h, n_steps, sample_every, weights, args, out, np.zeros((8, 3)))
+        result = run_free_pair(state, t0, h, n_steps, sample_every, weights, args, out)
     else:
         check_events = bool(system.bi[:, 0].any())
         result = run_rigid(state, t0, h, n_steps, sample_every, weights, args, out, check_events)
