@@ -9,6 +9,7 @@ import json
 import shutil
 from pathlib import Path
 
+import pytest
 from session_edits import scale_point, without_digests
 
 from labkit.cli import main
@@ -22,9 +23,21 @@ SESSIONS = Path(__file__).resolve().parents[2] / "recordings" / "sessions"
 OLDER = LASER_ANALYSIS.version - 1
 
 
-def _copy(name: str, tmp_path: Path, laser_version: int | None) -> Path:
-    session = tmp_path / name
-    shutil.copytree(SESSIONS / name, session)
+@pytest.fixture(scope="module")
+def fresh(tmp_path_factory) -> Path:
+    """A cone sweep recorded now (virtual clock, 2 speeds, bursts of 10 frames): made by today's
+    laser analysis."""
+    root = tmp_path_factory.mktemp("fresh")
+    assert main(["run", "emulated-camera", "cone-sweep", "--sessions", str(root), "--no-progress",
+                 "--set", "speeds_rpm=5000,6000", "--set", "burst_frames=10", "--set", "halves=false"]) == 0
+    (session,) = root.glob("*-cone-sweep")
+    return session
+
+
+def _copy(name: str | Path, tmp_path: Path, laser_version: int | None) -> Path:
+    source = name if isinstance(name, Path) else SESSIONS / name
+    session = tmp_path / source.name
+    shutil.copytree(source, session)
     without_digests(session)  # the edits below change events.jsonl
     if laser_version is not None:
         meta = json.loads((session / "run.json").read_text())
@@ -50,25 +63,41 @@ def test_a_session_without_versions_is_version_1():
     assert recorded_version({"analyses": {"laser": 3}}, "laser") == 3
 
 
-def test_an_older_version_replays_within_its_stated_accuracy_and_says_so(tmp_path, capsys):
-    session = _copy("cone-sweep-clean", tmp_path, OLDER)
-    _move_cone_angle(session, 2, 1 + 1e-4)  # 100x the 1e-6 of the same analysis, 1 % of 1 %
+def test_a_new_session_records_its_version_and_replays_within_1e_6(fresh, capsys):
+    assert json.loads((fresh / "run.json").read_text())["analyses"] == {"laser": LASER_ANALYSIS.version}
+    assert main(["replay", str(fresh)]) == 0
+    out = capsys.readouterr().out
+    assert "points, results identical to results.json" in out and "recorded with" not in out
+
+
+def test_by_the_same_version_a_change_beyond_1e_6_fails(fresh, tmp_path, capsys):
+    session = _copy(fresh, tmp_path, None)
+    _move_cone_angle(session, 1, 1 + 1e-4)  # 100x the 1e-6 of the same analysis, 1 % of 1 %
+    assert main(["replay", str(session)]) == 1
+    captured = capsys.readouterr()
+    assert "results.points[1].cone_angle_rad" in captured.err and "points[0]" not in captured.err
+    assert "beyond relative tolerance 1e-06" in captured.err
+    assert "recorded with" not in captured.out
+
+
+def test_the_same_change_in_a_session_of_an_older_version_passes_and_says_so(fresh, tmp_path, capsys):
+    session = _copy(fresh, tmp_path, OLDER)
+    _move_cone_angle(session, 1, 1 + 1e-4)
     assert main(["replay", str(session)]) == 0
     out = capsys.readouterr().out
-    assert (f"analysis laser {LASER_ANALYSIS.version}, recorded with {OLDER}: compared within its stated "
+    assert f"analysis laser {LASER_ANALYSIS.version}, recorded with {OLDER}: compared within" in out
+
+
+def test_a_version_1_recording_replays_within_its_stated_accuracy_and_says_so(tmp_path, capsys):
+    """cone-sweep-clean was made by laser analysis version 1 (no versions in its run.json)."""
+    session = _copy("cone-sweep-clean", tmp_path, None)
+    _move_cone_angle(session, 2, 1 + 1e-4)
+    assert main(["replay", str(session)]) == 0
+    out = capsys.readouterr().out
+    assert (f"analysis laser {LASER_ANALYSIS.version}, recorded with 1: compared within its stated "
             "accuracy (tilt 1 %") in out
     assert "image-analysis numbers within the analysis's stated accuracy" in out
     assert "points, results identical" not in out
-
-
-def test_by_the_same_version_the_same_change_fails(tmp_path, capsys):
-    session = _copy("cone-sweep-clean", tmp_path, LASER_ANALYSIS.version)
-    _move_cone_angle(session, 2, 1 + 1e-4)
-    assert main(["replay", str(session)]) == 1
-    captured = capsys.readouterr()
-    assert "results.points[2].cone_angle_rad" in captured.err
-    assert "beyond relative tolerance 1e-06" in captured.err
-    assert "recorded with" not in captured.out
 
 
 def test_a_change_beyond_the_stated_accuracy_fails_across_versions(tmp_path, capsys):
@@ -91,16 +120,16 @@ def test_a_verdict_that_flips_fails_across_versions(tmp_path, capsys):
     assert "results.points[4].verdict: replay 'ok', recording 'doubtful'" in capsys.readouterr().err
 
 
-def test_the_analysis_only_level_compares_across_versions_too(tmp_path, capsys):
+def test_the_analysis_only_level_compares_across_versions_too(fresh, tmp_path, capsys):
     session = _copy("real-cone-sweep", tmp_path, OLDER)
     _move_cone_angle(session, 1, 1 + 1e-4)
     assert main(["replay", "--analysis-only", str(session)]) == 0
     assert f"recorded with {OLDER}" in capsys.readouterr().out
-    meta = json.loads((session / "run.json").read_text())
-    meta["analyses"] = {"laser": LASER_ANALYSIS.version}
-    (session / "run.json").write_text(json.dumps(meta))
-    assert main(["replay", "--analysis-only", str(session)]) == 1
-    assert "points[1].cone_angle_rad" in capsys.readouterr().err
+    today = _copy(fresh, tmp_path, None)  # made by today's version: 1e-6
+    _move_cone_angle(today, 1, 1 + 1e-4)
+    assert main(["replay", "--analysis-only", str(today)]) == 1
+    err = capsys.readouterr().err
+    assert "points[1].cone_angle_rad" in err and "points[0]" not in err
 
 
 def test_every_image_analysis_column_names_a_quantity_its_analysis_states():
