@@ -43,12 +43,19 @@ class Column:
 
     ``analysis``: the value comes out of an image analysis (OpenCV, least squares) whose last
     digits depend on the CPU's floating-point path (SIMD kernels, BLAS), so a replay compares it
-    within a relative 1e-6 instead of exactly (:func:`analysis_keys`)."""
+    within a relative 1e-6 instead of exactly (:func:`analysis_keys`).
+
+    ``accuracy``: the quantity of the protocol's image analysis (``ProtocolDef.image_analysis``,
+    e.g. ``tilt`` of the laser analysis) whose stated accuracy holds this value when a replay
+    compares it with a session made by another version of the analysis; ``accuracy_of``: the
+    key of the same row that accuracy is a share of (a standard error against its angle)."""
 
     name: str
     unit: str = ""
     doc: str = ""
     analysis: bool = False
+    accuracy: str = ""
+    accuracy_of: str = ""
 
 
 def analysis_keys(row: tuple[Column, ...]) -> frozenset[str]:

@@ -69,6 +69,7 @@ def main(args: argparse.Namespace) -> int:
     write_json({"session": str(args.session), "level": result.level, "identical": result.identical,
                 "differences": result.differences, "status": out.status, "reason": out.reason,
                 "warnings": result.warnings, "ports": result.ports, "timing": result.timing,
+                "analysis_note": result.analysis_note,
                 "results": out.results},
                args.json, "replay")
     print(f"replay level: {LEVEL_WORDS[result.level]}")
@@ -77,6 +78,8 @@ def main(args: argparse.Namespace) -> int:
     if out.status != "completed" and out.error is not None and result.recorded is None:
         print(f"labkit replay: {out.status}: {out.reason}", file=sys.stderr)
         return 2
+    if result.analysis_note:  # a session made by another version of its image analysis
+        print(result.analysis_note)
     if result.identical:
         print(success_line(args.session, result))
         for port in result.ports:
@@ -99,6 +102,9 @@ def success_line(session: str, result) -> str:
     n = len((result.outcome.results or {}).get("points", []))
     ended = [d for d in result.decisions if d["decision"] in ("interlock", "fault")]
     how = f"; {ended[0]['decision']} in step {ended[0]['step'] + 1} as recorded" if ended else ""
+    if result.level == "exact" and result.analysis_note:
+        return (f"replayed {session}: {n} points, results as in results.json (every byte and decision as "
+                f"recorded; image-analysis numbers within the analysis's stated accuracy){how}")
     if result.level == "exact":
         return (f"replayed {session}: {n} points, results identical to results.json "
                 f"(points exact; fits and image-analysis numbers within relative 1e-6){how}")
@@ -109,8 +115,9 @@ def success_line(session: str, result) -> str:
         return (f"re-analysed {session}: {n} points and the fit recomputed from the recorded bytes, "
                 "within tolerance of results.json (measured values 0.5 %)")
     steps = sum(1 for d in result.decisions if d["decision"] == "step")
+    images = "image analyses within their stated accuracy" if result.analysis_note else "image analyses 1e-6"
     return (f"replayed {session}: {n} points within tolerance of results.json (measured values 0.5 %, "
-            f"image analyses 1e-6), the same decisions in {steps} steps{how}")
+            f"{images}), the same decisions in {steps} steps{how}")
 
 
 def port_line(port: dict) -> str:

@@ -34,6 +34,7 @@ from labkit.protocols.paper_figures import CONE_SWEEP_ROW, EQ_5_24
 from labkit.protocols.params import ParamError
 from labkit.rig import Rig
 from labkit.units import rad_s_to_rpm, rpm_to_rad_s
+from labkit.vision.laser.version import LASER_ANALYSIS
 
 
 def burst_fps(frames: list[Any], nominal: float | None) -> float:
@@ -79,6 +80,7 @@ class ConeSweep(ProtocolDef):
     summary = "cone angle vs rotor speed from the filmed laser trace (Eq. 5.24)"
     fit_model = "cone-angle"
     row = CONE_SWEEP_ROW
+    image_analysis = LASER_ANALYSIS
     hints = EQ_5_24
     defaults: dict[str, Any] = {
         "speeds_rpm": [5000.0 + 1000.0 * i for i in range(6)],  # 5000:10000:1000

@@ -18,6 +18,7 @@ if TYPE_CHECKING:
     from labkit.protocols.context import RunContext
     from labkit.protocols.reanalysis import RecordedRun
     from labkit.rig import Rig
+    from labkit.vision.shared.versions import AnalysisVersion
 
 
 @dataclass
@@ -43,6 +44,9 @@ class ProtocolDef:
     bounds: dict[str, tuple[float | None, float | None]] = {}
     row: tuple[Column, ...] = ()
     hints: Hints | None = None
+    #: the image analysis a step runs on its frames, if any: its version goes into run.json and
+    #: the replay compares its row's ``Column.accuracy`` keys by it (labkit.protocols.analysis_versions)
+    image_analysis: AnalysisVersion | None = None
 
     def plan(self, rig: Rig, params: dict[str, Any]) -> list[Step]:  # pragma: no cover - interface
         raise NotImplementedError

@@ -19,6 +19,7 @@ from typing import Any
 
 from labkit.errors import LabkitError
 from labkit.io.clock import Clock, RealClock, VirtualClock, use_clock
+from labkit.protocols.analysis_versions import RUN_KEY, versions_of
 from labkit.protocols.definition import ProtocolDef
 from labkit.protocols.events import Sink
 from labkit.protocols.params import resolve_params
@@ -188,6 +189,8 @@ def _execute(prep: PreparedRun, session_root: str | Path | None, notes: str,
             resumed_from=str(prep.resumed_from.path) if prep.resumed_from else None, run_id=runner.run_id)
         session.update_meta(carried_points=prep.carried_points,
                             steps_planned=len(runner.steps), resume_warnings=prep.warnings)
+        if versions_of(prep.protocol):  # the image analysis that makes its points, by version
+            session.update_meta(**{RUN_KEY: versions_of(prep.protocol)})
         runner.session = session
         runner.bus.add(session)
         if on_session is not None:

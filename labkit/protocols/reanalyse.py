@@ -31,6 +31,7 @@ from labkit.devices.balance.mtsics import parse_weight
 from labkit.devices.strobe.protocol import parse_status_line
 from labkit.devices.strobe.protocol import strip_junk as strip_strobe_junk
 from labkit.devices.tachometer.labkit_tach import parse_tach_sample, strip_junk
+from labkit.protocols.analysis_versions import cross_version, recorded_fit_diffs
 from labkit.protocols.params import resolve_params
 from labkit.protocols.reanalysis import Parsed, RecordedRun, point_event
 from labkit.protocols.registry import get_protocol
@@ -139,10 +140,18 @@ def reanalyse_session(record: SessionRecord) -> Any:
                "error": f"{type(exc).__name__}: {exc}"}
     results = normalise({"protocol": protocol.name, "points": points, "fit": fit})
     recorded = record.results
-    diffs = diff_within(results, recorded) if recorded is not None else ["no results.json recorded"]
+    cross = cross_version(protocol, record.meta) if why_not is None else None
+    if recorded is None:
+        diffs = ["no results.json recorded"]
+    elif cross is None:
+        diffs = diff_within(results, recorded)
+    else:  # another version of the image analysis: its numbers within its stated accuracy
+        diffs = diff_within({**results, "fit": None}, {**recorded, "fit": None}, cross=cross)
+        diffs += recorded_fit_diffs(protocol, recorded)
     outcome = RunOutcome("completed", None, record.path, results)
     if why_not is not None:
         notes.append(f"{why_not}: the points of {protocol.name} are taken as recorded, only the fit is "
                      "recomputed from them")
+    note = cross.note() if cross is not None else None
     return ReplayOutcome(outcome, recorded, not diffs, diffs, record.problems + notes, "analysis",
-                         recomputed=why_not is None)
+                         recomputed=why_not is None, analysis_note=note)

@@ -27,6 +27,7 @@ from labkit.errors import CassetteError, LabkitError
 from labkit.hints import analysis_keys
 from labkit.io.clock import VirtualClock, recorded_runs, recorded_ticks, use_clock
 from labkit.io.replay_clock import ReplayClock
+from labkit.protocols.analysis_versions import CrossVersion, cross_version, recorded_fit_diffs
 from labkit.protocols.events import Sink
 from labkit.protocols.params import resolve_params
 from labkit.protocols.reading_evidence import faithful_reading_diffs
@@ -188,29 +189,14 @@ def faithful_schedules(record: SessionRecord, rig: Any) -> dict[str, list[float]
     return schedules
 
 
-def recorded_fit_diffs(protocol: Any, recorded: dict[str, Any]) -> list[str]:
-    """A faithful replay's check of the fit: ``results.json``'s fit must be what the protocol's
-    fit gives for ``results.json``'s points (within :data:`~labkit.protocols.replay_compare.REPLAY_FIT_RTOL`,
-    as at the exact level). The replay's own fit is the fit of its points, each within its
-    tolerance, and is not compared with the recorded one: a parameter the points determine
-    poorly moves with them by more than any fixed share (cone-sweep's tau_S/I, a 1 % correction
-    to I omega^2, moved 4 % and two of its standard errors when one speed moved by 0.02 %)."""
-    points = list(recorded.get("points") or [])
-    try:
-        fit = protocol.fit(points)
-    except Exception as exc:  # noqa: BLE001 - as the runner records a failed quick fit
-        fit = {"model": getattr(protocol, "fit_model", "unknown"), "params": {},
-               "error": f"{type(exc).__name__}: {exc}"}
-    return [f"{line} (the fit of results.json's own points)"
-            for line in diff_results(normalise(fit), recorded.get("fit"), "results.fit", derived=True)]
-
-
-def _evidence_diffs(record: Any, evidence: Evidence, tolerant: frozenset[str]) -> list[str]:
+def _evidence_diffs(record: Any, evidence: Evidence, tolerant: frozenset[str],
+                    cross: CrossVersion | None) -> list[str]:
     """The session's point events and readings files against what the replay parsed
     (:mod:`labkit.protocols.replay_evidence`; points with a protocol's image-analysis columns
-    within tolerance; readings compared as they came, only for a session that was not resumed:
+    within tolerance, or within the analysis's stated accuracy for a session made by another
+    version of it; readings compared as they came, only for a session that was not resumed:
     a resumed session's files also hold the first run's readings)."""
-    return diff_points(evidence.points, record.point_events(), tolerant) + evidence.reading_diffs()
+    return diff_points(evidence.points, record.point_events(), tolerant, cross) + evidence.reading_diffs()
 
 
 def events_damaged(record: SessionRecord) -> bool:
@@ -274,20 +260,28 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
     else:  # the bytes and results.json carry the exact level; a crash's damaged events cannot
         warnings.append(f"{record.path / 'events.jsonl'}: damaged lines, so the run's decisions were not "
                         "compared (the points and results were, with every byte)")
+    cross = cross_version(protocol, record.meta)  # another version of the image analysis made it
+    note = cross.note() if cross is not None else None
     if not faithful:
         tolerant = DERIVED_KEYS | analysis_keys(protocol.row)  # their last digits follow the CPU
-        diffs += (diff_results(replayed, recorded, derived_keys=tolerant) if recorded is not None
-                  else ["no results.json recorded"])
-        diffs += _evidence_diffs(record, evidence, tolerant)
+        if recorded is None:
+            diffs.append("no results.json recorded")
+        elif cross is None:
+            diffs += diff_results(replayed, recorded, derived_keys=tolerant)
+        else:  # points within the stated accuracy; the recorded fit must follow from its points
+            diffs += diff_results({**replayed, "fit": None}, {**recorded, "fit": None}, derived_keys=tolerant,
+                                  cross=cross)
+            diffs += recorded_fit_diffs(protocol, recorded)
+        diffs += _evidence_diffs(record, evidence, tolerant, cross)
         return ReplayOutcome(outcome, recorded, not diffs, diffs, warnings, "exact",
-                             decisions=replay_decisions)
+                             decisions=replay_decisions, analysis_note=note)
     if recorded is None:
         diffs.append("recording has no results.json")
     else:
-        diffs += diff_within({**replayed, "fit": None}, {**recorded, "fit": None})
+        diffs += diff_within({**replayed, "fit": None}, {**recorded, "fit": None}, cross=cross)
         diffs += recorded_fit_diffs(protocol, recorded)
     if not points:  # a resumed session's readings files also hold the first run's readings
         diffs += faithful_reading_diffs(record, rig, evidence.parsed)
     ports = [port.report() for port in runner.ports.values() if hasattr(port, "report")]
     return ReplayOutcome(outcome, recorded, not diffs, diffs, warnings, "faithful", ports, replay_decisions,
-                         dict(clock.repeated) if isinstance(clock, ReplayClock) else {})
+                         dict(clock.repeated) if isinstance(clock, ReplayClock) else {}, analysis_note=note)

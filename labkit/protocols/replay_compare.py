@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    from labkit.protocols.analysis_versions import CrossVersion
     from labkit.protocols.runner import RunOutcome
 
 #: Derived numbers may differ between CPUs in their last digits: BLAS and LAPACK pick different
@@ -118,9 +119,12 @@ def _number(value: Any) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool)
 
 
-def diff_within(a: Any, b: Any, path: str = "results", key: str = "", derived: bool = False) -> list[str]:
+def diff_within(a: Any, b: Any, path: str = "results", key: str = "", derived: bool = False,
+                cross: CrossVersion | None = None) -> list[str]:
     """Differences between a replay's results ``a`` and the recording's ``b`` beyond the
-    faithful tolerances, each line naming the value, both numbers and the tolerance."""
+    faithful tolerances, each line naming the value, both numbers and the tolerance; with
+    ``cross`` (a session made by another version of the image analysis) its row keys within the
+    analysis's stated accuracy."""
     if _number(a) and _number(b):
         how = _tolerance(key, derived)
         if _within(float(a), float(b), how):
@@ -137,17 +141,27 @@ def diff_within(a: Any, b: Any, path: str = "results", key: str = "", derived: b
                 continue  # a key this labkit adds, absent from an older recording
             if k not in a or k not in b:
                 out.append(f"{path}.{k}: only in the {'replay' if k in a else 'recording'}")
+            elif cross is not None and k in cross.accuracy:
+                out += cross_diff(cross, k, a, b, f"{path}.{k}")
             else:
-                out += diff_within(a[k], b[k], f"{path}.{k}", k, derived or k == "fit")
+                out += diff_within(a[k], b[k], f"{path}.{k}", k, derived or k == "fit", cross)
         return out
     if isinstance(a, list):
         if len(a) != len(b):
             return [f"{path}: {len(a)} entries in the replay, {len(b)} in the recording"]
         return [d for i, (x, y) in enumerate(zip(a, b, strict=True))
-                for d in diff_within(x, y, f"{path}[{i}]", key, derived)]
+                for d in diff_within(x, y, f"{path}[{i}]", key, derived, cross)]
     if a == b:
         return []
     return [f"{path}: replay {a!r}, recording {b!r}"]
+
+
+def cross_diff(cross: CrossVersion, key: str, a: dict[str, Any], b: dict[str, Any], path: str) -> list[str]:
+    """``key`` of the replay's point ``a`` against the recording's ``b`` within the stated accuracy
+    of an image analysis whose version differs from the recording's."""
+    if cross.agrees(key, a[key], b[key], a, b):
+        return []
+    return [f"{path}: replay {a[key]!r}, recording {b[key]!r} (beyond {cross.words(key)})"]
 
 
 def _reason_key(reason: Any) -> str:
@@ -220,12 +234,14 @@ def diff_decisions(replayed: list[dict[str, Any]], recorded: list[dict[str, Any]
 
 
 def diff_results(a: Any, b: Any, path: str = "results", derived: bool = False,
-                 derived_keys: frozenset[str] = DERIVED_KEYS) -> list[str]:
+                 derived_keys: frozenset[str] = DERIVED_KEYS, cross: CrossVersion | None = None) -> list[str]:
     """Human-readable differences between two JSON values, both values printed.
 
     Everything is compared exactly except numbers below a key in ``derived_keys`` (by default
     :data:`DERIVED_KEYS`; a replay adds the protocol's image-analysis columns, ``Column.analysis``),
-    which are compared within :data:`REPLAY_FIT_RTOL` (their last digits depend on the CPU).
+    which are compared within :data:`REPLAY_FIT_RTOL` (their last digits depend on the CPU), and,
+    with ``cross`` (a session made by another version of the image analysis), its row keys within
+    the analysis's stated accuracy.
     """
     if derived and isinstance(a, int | float) and isinstance(b, int | float) \
             and not isinstance(a, bool) and not isinstance(b, bool):
@@ -241,14 +257,18 @@ def diff_results(a: Any, b: Any, path: str = "results", derived: bool = False,
                 continue
             if k not in a or k not in b:
                 out.append(f"{path}.{k}: only in {'replay' if k in a else 'recording'}")
+            elif cross is not None and k in cross.accuracy:
+                out += cross_diff(cross, k, a, b, f"{path}.{k}")
             else:
-                out += diff_results(a[k], b[k], f"{path}.{k}", derived or k in derived_keys, derived_keys)
+                out += diff_results(a[k], b[k], f"{path}.{k}", derived or k in derived_keys, derived_keys,
+                                    cross)
         return out
     if isinstance(a, list):
         if len(a) != len(b):
             return [f"{path}: {len(a)} entries != {len(b)}"]
         pairs = enumerate(zip(a, b, strict=True))
-        return [d for i, (x, y) in pairs for d in diff_results(x, y, f"{path}[{i}]", derived, derived_keys)]
+        return [d for i, (x, y) in pairs
+                for d in diff_results(x, y, f"{path}[{i}]", derived, derived_keys, cross)]
     if a == b or (isinstance(a, float) and math.isnan(a) and math.isnan(b)):
         return []
     return [f"{path}: replay {a!r} != recording {b!r}"]
@@ -272,3 +292,6 @@ class ReplayOutcome:
     #: analysis level: the points were recomputed from the bytes (False: a protocol without an
     #: analysis-only rule, whose points were taken as recorded)
     recomputed: bool = True
+    #: the session was made by another version of its image analysis: how its numbers were
+    #: compared (labkit.protocols.analysis_versions.CrossVersion.note); None for the same version
+    analysis_note: str | None = None

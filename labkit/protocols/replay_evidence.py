@@ -15,10 +15,13 @@ from __future__ import annotations
 import json
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from labkit.protocols.replay_compare import ADDED_KEYS, close_enough
 from labkit.readings import declared
+
+if TYPE_CHECKING:
+    from labkit.protocols.analysis_versions import CrossVersion
 
 #: the reading keys compared (the time, the number and the bytes it came from)
 READING_KEYS = ("t", "value", "raw")
@@ -129,7 +132,7 @@ def _same(a: Any, b: Any, tolerant: bool = False) -> bool:
 
 
 def diff_points(replayed: list[dict[str, Any]], recorded: list[tuple[str, Any]],
-                tolerant: frozenset[str] = frozenset()) -> list[str]:
+                tolerant: frozenset[str] = frozenset(), cross: CrossVersion | None = None) -> list[str]:
     """Each recorded point event (``events.jsonl:LINE``) against the replay's point of the same
     step; keys in ``tolerant`` (a protocol's image-analysis columns) compared within
     :data:`~labkit.protocols.replay_compare.REPLAY_FIT_RTOL`. A point line that is damaged or
@@ -142,7 +145,9 @@ def diff_points(replayed: list[dict[str, Any]], recorded: list[tuple[str, Any]],
             continue
         again = by_step[point["step"]]
         keys = sorted(k for k in set(point) | set(again)
-                      if not _same(point.get(k), again.get(k), k in tolerant)
+                      if not (cross.agrees(k, again.get(k), point.get(k), again, point)
+                              if cross is not None and k in cross.accuracy
+                              else _same(point.get(k), again.get(k), k in tolerant))
                       and not (k not in point and k in ADDED_KEYS))  # a key newer than the recording
         if not keys:
             continue

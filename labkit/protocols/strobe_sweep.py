@@ -43,6 +43,7 @@ from labkit.protocols.paper_figures import EQ_5_97, STROBE_SWEEP_ROW
 from labkit.protocols.params import ParamError
 from labkit.rig import Rig
 from labkit.units import rad_s_to_rpm, rpm_to_rad_s
+from labkit.vision.strobe.version import STROBE_ANALYSIS
 
 #: the strobe's status lines during a burst: one with a flag STROBE_FLAGS marks as possibly
 #: wrong makes the burst doubtful; the lock wait gives up after this many seconds
@@ -219,6 +220,7 @@ class StrobeSweep(ProtocolDef):
     summary = "tilt phi, lateral amplitude beta and RC offset delta vs rotor speed under the locked strobe"
     fit_model = "cone-angle"
     row = STROBE_SWEEP_ROW
+    image_analysis = STROBE_ANALYSIS
     hints = EQ_5_97
     defaults: dict[str, Any] = {
         "speeds_rpm": [4000.0 + 1000.0 * i for i in range(5)],  # 4000:8000:1000

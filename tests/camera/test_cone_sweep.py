@@ -10,6 +10,8 @@ import sys
 
 import pytest
 
+from labkit.vision.laser.version import LASER_ANALYSIS
+
 
 def test_cone_sweep_on_the_emulated_camera_rig_fits_the_model_and_replays(tmp_path):
     run = subprocess.run([sys.executable, "-m", "labkit", "run", "emulated-camera", "cone-sweep",
@@ -32,6 +34,8 @@ def test_cone_sweep_on_the_emulated_camera_rig_fits_the_model_and_replays(tmp_pa
     for p, predicted in zip(ok, fit["predicted_rad"], strict=True):
         assert predicted == pytest.approx(p["model_cone_angle_rad"], rel=0.05)
     session = out["session"]
+    meta = json.loads((tmp_path / session.rsplit("/", 1)[-1] / "run.json").read_text())
+    assert meta["analyses"] == {"laser": LASER_ANALYSIS.version}  # the analysis that made its points
     size = sum(f.stat().st_size for f in (tmp_path / session.rsplit("/", 1)[-1]).rglob("*") if f.is_file())
     assert size < 20e6
     replay = subprocess.run([sys.executable, "-m", "labkit", "replay", session],

@@ -27,3 +27,4 @@ def scale_point(session: Path, step: int, key: str, factor: float) -> None:
         if event.get("type") == "point" and event["point"].get("step") == step:
             event["point"][key] = point[key]
     (session / "events.jsonl").write_text("".join(json.dumps(e) + "\n" for e in events))
+

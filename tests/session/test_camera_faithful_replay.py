@@ -2,7 +2,9 @@
 (`labkit run rigs/emulated-camera.toml cone-sweep --clock real`, recorded by
 analysis/record_real_sessions.py) runs through the cone-sweep protocol again, its frame cassette
 served at its recorded times (labkit.devices.camera.faithful); the same decisions, speeds within
-0.5 %, cone angles within relative 1e-6 (the recorded bytes analysed again)."""
+0.5 %, cone angles within relative 1e-6 (the recorded bytes analysed again) when today's laser
+analysis is the one that made the recording, else within its stated accuracy (the fixture was made
+by version 1: docs/explanation/replay.md#analysis-versions)."""
 
 from __future__ import annotations
 
@@ -14,9 +16,11 @@ import pytest
 from session_edits import without_digests
 
 from labkit.cli import main
+from labkit.protocols.analysis_versions import recorded_version
 from labkit.protocols.replay import choose_level, replay_session
 from labkit.protocols.replay_compare import REPLAY_FIT_RTOL, decisions
 from labkit.session import load_session_record
+from labkit.vision.laser.version import LASER_ANALYSIS
 
 SESSION = Path(__file__).resolve().parents[2] / "recordings" / "sessions" / "real-cone-sweep"
 
@@ -42,9 +46,15 @@ def test_its_steps_speeds_and_cone_angles_are_the_recorded_ones():
         [(d["decision"], d["step"]) for d in decisions(record.events)]
     replayed, recorded = result.outcome.results["points"], record.results["points"]
     assert len(replayed) == len(recorded) == 3
+    same_analysis = recorded_version(record.meta, "laser") == LASER_ANALYSIS.version
+    assert (result.analysis_note is None) == same_analysis
     for mine, theirs in zip(replayed, recorded, strict=True):
         assert mine["speed_rpm"] == pytest.approx(theirs["speed_rpm"], rel=0.005)
-        assert mine["cone_angle_rad"] == pytest.approx(theirs["cone_angle_rad"], rel=REPLAY_FIT_RTOL)
+        if same_analysis:
+            assert mine["cone_angle_rad"] == pytest.approx(theirs["cone_angle_rad"], rel=REPLAY_FIT_RTOL)
+        else:  # version 2's settled refits moved step 2's angle by 1.4e-6
+            assert LASER_ANALYSIS.accuracy["tilt"].agrees(mine["cone_angle_rad"], theirs["cone_angle_rad"])
+            assert mine["cone_angle_rad"] == pytest.approx(theirs["cone_angle_rad"], rel=1e-5)
         assert (mine["verdict"], mine["retaken"], mine["frames"]) == \
             (theirs["verdict"], theirs["retaken"], theirs["frames"])
 
@@ -56,13 +66,14 @@ def _copy(tmp_path: Path) -> Path:
     return session
 
 
-def test_a_cone_angle_off_by_one_in_ten_thousand_is_named(tmp_path, capsys):
+def test_a_cone_angle_beyond_the_analysis_accuracy_is_named(tmp_path, capsys):
     session = _copy(tmp_path)
     results = json.loads((session / "results.json").read_text())
-    results["points"][1]["cone_angle_rad"] *= 1.0001  # not what the recorded frames give
+    results["points"][1]["cone_angle_rad"] *= 1.03  # not what the recorded frames give, by 3 %
     (session / "results.json").write_text(json.dumps(results))
     assert main(["replay", str(session)]) == 1
-    assert "results.points[1].cone_angle_rad" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "results.points[1].cone_angle_rad" in err and "stated accuracy (1 %)" in err
 
 
 def test_a_burst_the_recording_did_not_take_is_named_by_its_step(tmp_path, capsys):

@@ -36,6 +36,10 @@ MIN_POINTS = 20
 # trace nearly as well as it explained the part: rms <= PRIOR_RMS_FACTOR x its rms + PRIOR_RMS_SLACK_PX
 PRIOR_RMS_FACTOR = 1.5
 PRIOR_RMS_SLACK_PX = 0.5
+# a refit from a fit already close to its points (the wander's rounds, the band polish) stops at
+# the first step in which the curve moved by less than this (px):
+# docs/decisions/0039-laser-refits-stop-when-settled.md
+SETTLE_PX = 1e-3
 
 
 @dataclass
@@ -160,10 +164,14 @@ def _solve_point_to_line(z: np.ndarray, sw: np.ndarray, tau: np.ndarray, rows: F
 
 
 def _icp_rows(z: np.ndarray, w: np.ndarray, tau: np.ndarray, rows: FitRows, iterations: int, fit_drift: bool,
-              samples: np.ndarray) -> tuple[FitRows, np.ndarray]:
+              samples: np.ndarray, settle_px: float | None = None) -> tuple[FitRows, np.ndarray]:
     """Point-to-line ICP of every row on the same points; returns the rows and their weighted rms
     residuals (inf for a degenerate trochoid whose second term dominates: a circle traced |k|
-    times). Stops early once every row has stopped moving."""
+    times). Stops early once every row has stopped moving: every sixth step when no row's ``c, A,
+    B`` moved by 1e-3 px, or with ``settle_px`` after the first step in which none moved by that
+    with each point's closest curve point searched afresh (a step of Newton refinements that settles
+    is followed by such a search: near a trochoid's crossings Newton keeps a point on the wrong
+    branch)."""
     sw = np.sqrt(w)
     trochoid = rows.k != -1
     t = None
@@ -171,8 +179,9 @@ def _icp_rows(z: np.ndarray, w: np.ndarray, tau: np.ndarray, rows: FitRows, iter
     def centred() -> np.ndarray:
         return z[None, :] - rows.col("c") - rows.col("v") * tau[None, :]
 
+    searched = False  # settling is judged on a step whose closest points were searched afresh
     for it in range(iterations):
-        if it % 6 == 0:
+        if it % 6 == 0 or searched:
             t = closest_parameters(centred(), rows, samples)
         else:
             assert t is not None  # set at iteration 0 (it % 6 == 0)
@@ -186,6 +195,12 @@ def _icp_rows(z: np.ndarray, w: np.ndarray, tau: np.ndarray, rows: FitRows, iter
         rows = FitRows(rows.k, c, a, b, v)
         if it % 6 == 5 and bool(np.all(moved < 1e-3)):
             break
+        if settle_px is not None and bool(np.all(moved < settle_px)):
+            if searched or it % 6 == 0:
+                break
+            searched = True  # Newton steps settled: search the closest points afresh, then judge
+        else:
+            searched = False
     if t is None or iterations < 3:
         t = closest_parameters(centred(), rows, samples)
     else:  # warm: the last parameters are close, a Newton refinement is enough
@@ -205,11 +220,12 @@ def _curve_fit(rows: FitRows, rms: np.ndarray, i: int) -> CurveFit:
 
 
 def _icp(z: np.ndarray, w: np.ndarray, tau: np.ndarray, k: int, c: complex, a: complex, b: complex,
-         iterations: int, fit_drift: bool, samples: int, v: complex = 0j) -> CurveFit:
+         iterations: int, fit_drift: bool, samples: int, v: complex = 0j,
+         settle_px: float | None = None) -> CurveFit:
     """ICP of one curve (:func:`_icp_rows` with one row)."""
     rows = FitRows(np.array([k]), np.array([c], complex), np.array([a], complex), np.array([b], complex),
                  np.array([v], complex))
-    return _curve_fit(*_icp_rows(z, w, tau, rows, iterations, fit_drift, np.array([samples])), 0)
+    return _curve_fit(*_icp_rows(z, w, tau, rows, iterations, fit_drift, np.array([samples]), settle_px), 0)
 
 
 def _ellipse_start(z: np.ndarray) -> tuple[complex, complex, complex]:
@@ -376,7 +392,12 @@ def polished_on_band(ellipse: CurveFit, band: tuple, full: tuple, max_points: in
     moved to the centre line's."""
     idx = _subsample(len(band[0]), max_points, seed=2)
     subset: list[Any] = [None if a is None else np.asarray(a)[idx] for a in band]  # times may be None
-    polished = without_outliers(polish(ellipse, *subset), *subset)
+    # started from the ellipse's drift, its centre moved to the subset's mean time (the band is the
+    # same light as the centre line: the refit only settles; see SETTLE_PX)
+    pts, wts, tms = subset
+    start = replace(ellipse, c=ellipse.c + ellipse.drift * (_mean_time(tms) - _mean_time(full[2])))
+    polished = without_outliers(refit_settled(start, pts, wts, tms, SETTLE_PX, 12), pts, wts, tms,
+                                settle_px=SETTLE_PX)
     shift = polished.drift * (_mean_time(full[2]) - _mean_time(subset[2]))
     z, w, tau = prepare_points(*full)
     return _icp(z, w, tau, -1, polished.c + shift, polished.a, polished.b, 0, False, 1440, polished.drift)
@@ -386,11 +407,13 @@ OUTLIER_SIGMAS = 3.0  # a last refit leaves out points this many robust sigmas o
 
 
 def without_outliers(fit: CurveFit, points: np.ndarray, weights: np.ndarray | None = None,
-                     times: np.ndarray | None = None, iterations: int = 12) -> CurveFit:
+                     times: np.ndarray | None = None, iterations: int = 12,
+                     settle_px: float | None = None) -> CurveFit:
     """Refit ``fit`` without the points farther from it than ``OUTLIER_SIGMAS`` robust sigmas
     (sigma = 1.4826 x the median distance, at least 1/3 px): specks of compression ringing or
     halo beside a bright trace, a few % of the points but tens of px off, would otherwise pull
-    the centre and b. The rms residual of the result is over the points kept."""
+    the centre and b. The rms residual of the result is over the points kept; ``settle_px`` as
+    in :func:`refit_settled`."""
     z, w, tau = prepare_points(points, weights, times)
     rows = FitRows.of([fit])
     samples = np.array([1440 if fit.k == -1 else 200 * abs(fit.k)])
@@ -400,7 +423,7 @@ def without_outliers(fit: CurveFit, points: np.ndarray, weights: np.ndarray | No
     if keep.all() or keep.sum() < MIN_POINTS:
         return fit
     return _icp(z[keep], w[keep], tau[keep], fit.k, fit.c, fit.a, fit.b, iterations, times is not None,
-                int(samples[0]), fit.drift)
+                int(samples[0]), fit.drift, settle_px)
 
 
 def two_way_rms(residual: float, coverage: float) -> float:
@@ -434,6 +457,18 @@ def polish(fit: CurveFit, points: np.ndarray, weights: np.ndarray | None = None,
     z, w, tau = prepare_points(points, weights, times)
     samples = 1440 if fit.k == -1 else 360 * abs(fit.k)
     return _icp(z, w, tau, fit.k, fit.c, fit.a, fit.b, iterations, times is not None, samples)
+
+
+def refit_settled(fit: CurveFit, points: np.ndarray, weights: np.ndarray | None, times: np.ndarray | None,
+                  settle_px: float, max_iterations: int) -> CurveFit:
+    """:func:`polish` of a fit whose points moved a little (the wander's rounds): started from the
+    fit's own drift (``times`` centred on the time ``fit`` refers to), and stopped at the first
+    step in which ``c, A, B`` moved by less than ``settle_px`` in all (``max_iterations`` only
+    bounds a fit that does not settle)."""
+    z, w, tau = prepare_points(points, weights, times)
+    samples = 1440 if fit.k == -1 else 360 * abs(fit.k)
+    return _icp(z, w, tau, fit.k, fit.c, fit.a, fit.b, max_iterations, times is not None, samples,
+                fit.drift if times is not None else 0j, settle_px)
 
 
 def _name(fit: CurveFit) -> str:
