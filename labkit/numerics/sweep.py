@@ -16,7 +16,7 @@ Where the chunks run:
   ``dask[distributed]``); a scheduler that does not answer within ``timeout_s`` is a clear
   :class:`SweepError`, not a hang. A large ``evaluate`` is sent to every worker once
   (``Client.scatter(..., broadcast=True)``), a small one rides in each task (:func:`_shared`),
-  and a task returns its rows as one pickled blob (:func:`_evaluate_packed`,
+  and a task takes its points and returns its rows as one pickled blob each (:func:`_evaluate_packed`,
   docs/decisions/0038-dask-results-as-one-blob.md).
 
 ``chunk=None`` (the default) sizes the chunks from the pending points and the slots that run
@@ -134,13 +134,18 @@ def _evaluate_keyed(evaluate: Evaluate, chunk: list[tuple[str, dict]]) -> list[d
     return [_clean_nan({"key": k, **p, **r}) for (k, p), r in zip(chunk, results, strict=True)]
 
 
-def _evaluate_packed(evaluate: Evaluate, chunk: list[tuple[str, dict]]) -> bytes:
-    """:func:`_evaluate_keyed` with its rows pickled into one blob: what a Dask task returns.
+def _evaluate_packed(evaluate: Evaluate, chunk: bytes) -> bytes:
+    """:func:`_evaluate_keyed` on a pickled chunk, its rows pickled into one blob: a Dask task.
+
+    Both ways one ``bytes`` object, for the same reason. The scheduler unpickles every task it is
+    sent and pickles it again for its worker: a chunk as a list of point dicts cost it 0.12 CPU s
+    per 16 500-point map, on the cores the workers compute on, where a blob is copied as it is.
     Dask serialises a returned list item by item (a pickle call, a dispatch lookup and metrics
     per row, on the worker's event loop, which waits for the GIL the computing thread holds);
-    one ``bytes`` object is one frame, sent as it is. The blob is unpickled by the client, which
-    trusts its workers as Dask itself does (it unpickles whatever they return)."""
-    return pickle.dumps(_evaluate_keyed(evaluate, chunk), protocol=pickle.HIGHEST_PROTOCOL)
+    one ``bytes`` object is one frame, sent as it is. The blobs are unpickled by the worker and
+    the client, which trust each other as Dask itself does (it unpickles whatever they send)."""
+    rows = _evaluate_keyed(evaluate, pickle.loads(chunk))
+    return pickle.dumps(rows, protocol=pickle.HIGHEST_PROTOCOL)
 
 
 def connect(scheduler: str, timeout_s: float = 10.0):
@@ -264,7 +269,8 @@ def _execute(chunks, evaluate: Evaluate, workers: int, client):
         from distributed import as_completed as dask_completed
 
         shared = _shared(client, evaluate)
-        futures = client.map(_evaluate_packed, [shared] * len(chunks), chunks, pure=False)
+        blobs = [pickle.dumps(c, protocol=pickle.HIGHEST_PROTOCOL) for c in chunks]
+        futures = client.map(_evaluate_packed, [shared] * len(blobs), blobs, pure=False)
         # results travel with the completion notice (one gather per batch of finished tasks, not
         # one round trip per task), and each future is dropped once its rows are out
         for fut, blob in dask_completed(futures, with_results=True, loop=client.loop):
