@@ -15,6 +15,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from labkit.control import build_speed_control
+from labkit.control.loop import short_of_reach
 from labkit.control.pi import PIGains, PIState, SettleDetector, pi_step, ramp_toward
 from labkit.emulators.model_plant import Imperfections, ModelMotor
 from labkit.io.clock import VirtualClock, use_clock
@@ -80,22 +81,40 @@ def test_the_integral_term_never_asks_for_more_than_the_duty_left_over_the_feed_
         assert -1e-9 <= held <= GAINS.max_duty + 1e-9, (held, state.integral)
 
 
-def test_the_emulated_rig_settles_at_the_top_of_issue_28s_plan_on_the_virtual_clock():
-    # the speed loop over the SMC and tachometer emulators' bytes: from rest to 23 053 RPM
-    # (step 4 737 of issue 28's plan, which did not settle within 20 s)
+def hold_on_the_emulated_rig(target_rpm: float, seconds: float = 20.0):
+    """(settled, virtual time, snapshot, why it cannot settle or None) of the speed loop over
+    the SMC and tachometer emulators' bytes, from rest to ``target_rpm``."""
     clock = VirtualClock()
     with use_clock(clock):
         opened = open_rig(parse_rig(RIG.read_text(), str(RIG)), clock)
         control = build_speed_control(opened, clock)
         try:
-            control.set_targets({"rotor": rpm_to_rad_s(23053.0)})
-            while not control.settled() and control.tripped is None and clock.now() < 20.0:
+            control.set_targets({"rotor": rpm_to_rad_s(target_rpm)})
+            while not control.settled() and control.tripped is None and clock.now() < seconds:
                 clock.sleep(PERIOD)
-            settled, settled_at, snapshot = control.settled(), clock.now(), control.snapshots()["rotor"]
+            loop = control.loops["rotor"]
+            outcome = control.settled(), clock.now(), loop.snapshot, short_of_reach(loop)
         finally:
             control.stop()
             opened.close()
     assert control.tripped is None, control.tripped
+    return outcome
+
+
+def test_the_emulated_rig_settles_at_the_top_of_issue_28s_plan_on_the_virtual_clock():
+    # from rest to 23 053 RPM: step 4 737 of issue 28's plan, which did not settle within 20 s
+    settled, settled_at, snapshot, beyond = hold_on_the_emulated_rig(23053.0)
     assert settled and settled_at < 10.0, (settled_at, snapshot)
     assert snapshot.measured_rad_s is not None
     assert abs(rad_s_to_rpm(snapshot.measured_rad_s) - 23053.0) <= 100.0
+    assert beyond is None
+
+
+def test_a_target_beyond_the_loaded_motor_says_where_the_rotor_tops_out():
+    # 23 600 RPM is under the rig's 24 000 RPM limit and its 23 873 RPM full speed, but the
+    # loaded motor tops out at 23 197 RPM at full duty: no settling, and the reason says so
+    settled, _, snapshot, beyond = hold_on_the_emulated_rig(23600.0, seconds=12.0)
+    assert not settled and snapshot.duty == GAINS.max_duty
+    assert beyond is not None and "cannot reach 23600 RPM" in beyond, beyond
+    topped = float(beyond.split("tops out at ")[1].split(" RPM")[0])
+    assert 23100 < topped < 23300, beyond
