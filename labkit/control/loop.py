@@ -317,6 +317,21 @@ class SpeedControl:
             return {name: loop.snapshot for name, loop in self.loops.items()}
 
 
+def short_of_reach(loop: SpeedLoop) -> str | None:
+    """Why ``loop`` cannot settle where it is: its duty at the cap and the rotor below the
+    target, i.e. the motor gives all it may and tops out short of the target, or so close to
+    the settle band's edge that its jitter keeps leaving the band (a target beyond this rig
+    under its load); None otherwise."""
+    s = loop.snapshot
+    if s.measured_rad_s is None or s.duty < loop.gains.max_duty - 1e-6 or s.measured_rad_s >= s.target_rad_s:
+        return None
+    rpm = 30.0 / math.pi
+    return (f"{loop.name}: the duty is at its cap {loop.gains.max_duty:.2f} and the rotor tops out at "
+            f"{s.measured_rad_s * rpm:.0f} RPM, {(s.target_rad_s - s.measured_rad_s) * rpm:.0f} RPM below "
+            f"the target (settle tolerance {loop.settle.tolerance * rpm:.0f} RPM): the motor cannot reach "
+            f"{s.target_rad_s * rpm:.0f} RPM under its load (lower the plan's top speed)")
+
+
 def duty_cap(max_duty: float, max_speed_rad_s: float, full_speed_rad_s: float) -> float:
     """The highest duty a loop may command: the rig's ``max_duty``, and no more than the duty
     whose feed-forward speed ``duty * full_speed`` is the rig's ``max_speed``, so a tachometer

@@ -12,7 +12,7 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 from labkit import documents as doc
-from labkit.control.loop import SpeedControl
+from labkit.control.loop import SpeedControl, short_of_reach
 from labkit.devices.base import Device
 from labkit.devices.kinds import (
     BalanceKind,
@@ -200,7 +200,9 @@ class RunContext:
                     f"{n}: target {rad_s_to_rpm(s.target_rad_s):.0f} RPM, measured "
                     + ("none" if s.measured_rad_s is None else f"{rad_s_to_rpm(s.measured_rad_s):.0f} RPM")
                     + f", duty {s.duty:.2f}" for n, s in snaps.items())
-                raise LabkitError(f"speed did not settle within {timeout:.0f} s ({state}); motors at zero")
+                beyond = [why for loop in self.control.loops.values() if (why := short_of_reach(loop))]
+                raise LabkitError(f"speed did not settle within {timeout:.0f} s ({state}); motors at zero"
+                                  + "".join(f"; {why}" for why in beyond))
             self.clock.sleep(self.control.period_s)
             self._control_event()
 
