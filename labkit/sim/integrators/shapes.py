@@ -62,6 +62,7 @@ from labkit.sim.integrators.splitting import (
     ST_BLOWUP,
     ST_NONFINITE,
     ST_OK,
+    axis_angle_matrix,
     health,
     step_event,
     store_sample,
@@ -142,19 +143,7 @@ def _top_turn(m00, m01, m02, m10, m11, m12, m20, m21, m22, lx, ly, lz, i_r, k_a,
         m20, m21 = cz * m20 + sz * m21, -sz * m20 + cz * m21
     if ln > 0.0:  # left-multiply by the rotation about L by h |L| / I_R (rotate_axis_angle)
         ax, ay, az = lx / ln, ly / ln, lz / ln
-        angle = h * ln / i_r
-        co = math.cos(angle)
-        s = math.sin(angle)
-        t = 1.0 - co
-        r00 = co + ax * ax * t
-        r01 = ax * ay * t - az * s
-        r02 = ax * az * t + ay * s
-        r10 = ay * ax * t + az * s
-        r11 = co + ay * ay * t
-        r12 = ay * az * t - ax * s
-        r20 = az * ax * t - ay * s
-        r21 = az * ay * t + ax * s
-        r22 = co + az * az * t
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = axis_angle_matrix(ax, ay, az, h * ln / i_r)
         m00, m10, m20 = (r00 * m00 + r01 * m10 + r02 * m20, r10 * m00 + r11 * m10 + r12 * m20,
                          r20 * m00 + r21 * m10 + r22 * m20)
         m01, m11, m21 = (r00 * m01 + r01 * m11 + r02 * m21, r10 * m01 + r11 * m11 + r12 * m21,

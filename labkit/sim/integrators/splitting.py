@@ -90,21 +90,21 @@ COMPOSITIONS: dict[str, tuple[np.ndarray, int]] = {
 }
 
 
-@njit(cache=True, _nrt=False)
-def rotate_axis_angle(M, ax, ay, az, angle):
-    """Left-multiply the 3x3 matrix ``M`` in place by the rotation about unit (ax, ay, az)."""
+@njit(cache=True, _nrt=False, inline="always")
+def axis_angle_matrix(ax, ay, az, angle):
+    """The rotation by ``angle`` about unit (ax, ay, az) (Rodrigues), its nine entries row by row."""
     c = math.cos(angle)
     s = math.sin(angle)
     t = 1.0 - c
-    r00 = c + ax * ax * t
-    r01 = ax * ay * t - az * s
-    r02 = ax * az * t + ay * s
-    r10 = ay * ax * t + az * s
-    r11 = c + ay * ay * t
-    r12 = ay * az * t - ax * s
-    r20 = az * ax * t - ay * s
-    r21 = az * ay * t + ax * s
-    r22 = c + az * az * t
+    return (c + ax * ax * t, ax * ay * t - az * s, ax * az * t + ay * s,
+            ay * ax * t + az * s, c + ay * ay * t, ay * az * t - ax * s,
+            az * ax * t - ay * s, az * ay * t + ax * s, c + az * az * t)
+
+
+@njit(cache=True, _nrt=False)
+def rotate_axis_angle(M, ax, ay, az, angle):
+    """Left-multiply the 3x3 matrix ``M`` in place by the rotation about unit (ax, ay, az)."""
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = axis_angle_matrix(ax, ay, az, angle)
     for j in range(3):
         a0, a1, a2 = M[0, j], M[1, j], M[2, j]
         M[0, j] = r00 * a0 + r01 * a1 + r02 * a2
