@@ -30,7 +30,14 @@ def test_dask_workers_store_the_in_process_rows(tmp_path):
         # a closure plain pickle cannot size goes to the workers by scatter, and gives the same rows
         scattered = run_sweep(points, lambda chunk: evaluate(chunk), chunk=4,
                               scheduler=cluster.address, timeout_s=60.0, progress=False)
+        from distributed import Client
+
+        with Client(cluster.address, set_as_default=False) as client:
+            held_rows = [run_sweep(points, evaluate, chunk=8, scheduler=client, progress=False).results
+                         for _ in range(2)]
+            assert client.status == "running"
     assert scattered.results == local.results
+    assert held_rows == [local.results, local.results]  # a held client serves two sweeps, left open
     assert remote.computed == len(points) == len(local.results)
     assert {r["verdict"] for r in local.results} == {"stable", "unstable"}
     stored_local, stored_dask = load_store(tmp_path / "local.jsonl"), load_store(tmp_path / "dask.jsonl")
