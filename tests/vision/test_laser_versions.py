@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from labkit.vision.laser.analyse import analyse_laser
-from labkit.vision.laser.pattern_fit import SETTLE_PX, fit_ellipse, polish, refit_settled
+from labkit.vision.laser.pattern_fit import SETTLE_PX, fit_ellipse, polish
 from labkit.vision.laser.version import LASER_ANALYSIS
 
 HERE = Path(__file__).resolve().parent
@@ -87,7 +87,7 @@ def drifting_ellipse(seed: int) -> tuple[np.ndarray, np.ndarray]:
 def test_a_settled_refit_lands_where_a_long_refit_does(seed):
     points, times = drifting_ellipse(seed)
     start = fit_ellipse(points[:300], times=times[:300], iterations=2)  # close, not converged
-    settled = refit_settled(start, points, None, times, SETTLE_PX, 40)
+    settled = polish(start, points, None, times, 40, SETTLE_PX)
     long = polish(start, points, None, times, iterations=40)  # from zero drift, 40 steps
     for name in ("c", "drift"):  # (a, b themselves turn with the curve parameter's origin)
         assert abs(getattr(settled, name) - getattr(long, name)) < LANDS_PX, name

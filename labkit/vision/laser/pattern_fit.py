@@ -396,7 +396,7 @@ def polished_on_band(ellipse: CurveFit, band: tuple, full: tuple, max_points: in
     # same light as the centre line: the refit only settles; see SETTLE_PX)
     pts, wts, tms = subset
     start = replace(ellipse, c=ellipse.c + ellipse.drift * (_mean_time(tms) - _mean_time(full[2])))
-    polished = without_outliers(refit_settled(start, pts, wts, tms, SETTLE_PX, 12), pts, wts, tms,
+    polished = without_outliers(polish(start, pts, wts, tms, 12, SETTLE_PX), pts, wts, tms,
                                 settle_px=SETTLE_PX)
     shift = polished.drift * (_mean_time(full[2]) - _mean_time(subset[2]))
     z, w, tau = prepare_points(*full)
@@ -413,7 +413,7 @@ def without_outliers(fit: CurveFit, points: np.ndarray, weights: np.ndarray | No
     (sigma = 1.4826 x the median distance, at least 1/3 px): specks of compression ringing or
     halo beside a bright trace, a few % of the points but tens of px off, would otherwise pull
     the centre and b. The rms residual of the result is over the points kept; ``settle_px`` as
-    in :func:`refit_settled`."""
+    in :func:`polish`."""
     z, w, tau = prepare_points(points, weights, times)
     rows = FitRows.of([fit])
     samples = np.array([1440 if fit.k == -1 else 200 * abs(fit.k)])
@@ -451,24 +451,18 @@ def coverage_rms(fit: CurveFit, z: np.ndarray, tau: np.ndarray, samples_per_loop
 
 
 def polish(fit: CurveFit, points: np.ndarray, weights: np.ndarray | None = None,
-           times: np.ndarray | None = None, iterations: int = 12) -> CurveFit:
+           times: np.ndarray | None = None, iterations: int = 12, settle_px: float | None = None) -> CurveFit:
     """Refit from ``fit`` on a different point set (e.g. every trace pixel instead of the thinned
-    centre line, which ends half a line width short of sharp tips)."""
+    centre line, which ends half a line width short of sharp tips), ``iterations`` steps from zero
+    drift. With ``settle_px`` (a fit whose points moved a little: the wander's rounds, the band
+    polish) it starts from the fit's own drift (``times`` centred on the time ``fit`` refers to) and
+    stops at the first step in which ``c, A, B`` moved by less than ``settle_px`` in all;
+    ``iterations`` then only bounds a fit that does not settle."""
     z, w, tau = prepare_points(points, weights, times)
     samples = 1440 if fit.k == -1 else 360 * abs(fit.k)
-    return _icp(z, w, tau, fit.k, fit.c, fit.a, fit.b, iterations, times is not None, samples)
-
-
-def refit_settled(fit: CurveFit, points: np.ndarray, weights: np.ndarray | None, times: np.ndarray | None,
-                  settle_px: float, max_iterations: int) -> CurveFit:
-    """:func:`polish` of a fit whose points moved a little (the wander's rounds): started from the
-    fit's own drift (``times`` centred on the time ``fit`` refers to), and stopped at the first
-    step in which ``c, A, B`` moved by less than ``settle_px`` in all (``max_iterations`` only
-    bounds a fit that does not settle)."""
-    z, w, tau = prepare_points(points, weights, times)
-    samples = 1440 if fit.k == -1 else 360 * abs(fit.k)
-    return _icp(z, w, tau, fit.k, fit.c, fit.a, fit.b, max_iterations, times is not None, samples,
-                fit.drift if times is not None else 0j, settle_px)
+    drift = fit.drift if settle_px is not None and times is not None else 0j
+    return _icp(z, w, tau, fit.k, fit.c, fit.a, fit.b, iterations, times is not None, samples, drift,
+                settle_px)
 
 
 def _name(fit: CurveFit) -> str:

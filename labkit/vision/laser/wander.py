@@ -25,8 +25,8 @@ from labkit.vision.laser.pattern_fit import (
     SETTLE_PX,
     Classification,
     CurveFit,
+    polish,
     polished_on_band,
-    refit_settled,
     without_outliers,
 )
 from labkit.vision.shared.curves import SIMPLER_TOLERANCE
@@ -255,7 +255,7 @@ def follow_wander(cls: Classification, points: np.ndarray, weights: np.ndarray |
         step = filled(raw, mid_times)
         total = _detrended(total + step, mid_times, counts)
         moved = z - total[ch]
-        fit = refit_settled(fit, xy_points(moved), w, t, SETTLE_PX, 8)
+        fit = polish(fit, xy_points(moved), w, t, 8, SETTLE_PX)
         if done >= rounds and (checked == len(mid_times) or checked <= before):
             break
     if fit.k != -1:
