@@ -30,15 +30,9 @@ from dataclasses import replace
 
 import numpy as np
 
+from labkit.vision.laser.icp import FitRows, closest_parameters, newton_parameters
 from labkit.vision.laser.nearest import PointTree
-from labkit.vision.laser.pattern_fit import (
-    Classification,
-    CurveFit,
-    FitRows,
-    closest_parameters,
-    newton_parameters,
-    prepare_points,
-)
+from labkit.vision.laser.pattern_fit import Classification, CurveFit, prepare_points
 from labkit.vision.laser.wander import Wander, dense_curve
 from labkit.vision.shared.curves import trochoid_from_coefficients
 
@@ -101,7 +95,7 @@ def cusp_fit(fit: CurveFit, points: np.ndarray, weights: np.ndarray | None = Non
 def _solve_fixed_shape(z: np.ndarray, sw: np.ndarray, tau: np.ndarray, k: int, b0: float, a: complex,
                        t: np.ndarray, drift: bool, v: complex) -> tuple[complex, complex, complex]:
     """One weighted least-squares step for ``c, A (, v)`` along each point's curve normal (plus a
-    fifth of the tangential residual, as in :func:`labkit.vision.laser.pattern_fit._solve_point_to_line`)."""
+    fifth of the tangential residual, as in :func:`labkit.vision.laser.icp.icp_rows`)."""
     shape = np.exp(1j * t) + b0 * np.exp(1j * k * t)
     tangent = 1j * a * (np.exp(1j * t) + k * b0 * np.exp(1j * k * t))
     tangent = tangent / np.maximum(np.abs(tangent), 1e-12)

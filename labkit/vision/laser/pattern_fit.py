@@ -18,15 +18,16 @@ from typing import Any
 import cv2
 import numpy as np
 
+from labkit.vision.laser.icp import FitRows, closest_parameters, icp_rows, newton_parameters  # noqa: F401 (API)
 from labkit.vision.laser.nearest import PointTree
 from labkit.vision.laser.starts import b_starts_for, trochoid_starts
 from labkit.vision.shared.curves import (
     CIRCLE_MAX_ELLIPTICITY,
-    MAX_TROCHOID_B,
     Pattern,
     a_for_k,
     ellipse_from_coefficients,
     k_for,
+    phasors,
     trochoid_beats,
     trochoid_from_coefficients,
 )
@@ -69,147 +70,11 @@ class Classification:
 
 
 def _curve(c: complex, a: complex, b: complex, k: int, t: np.ndarray) -> np.ndarray:
-    return c + a * np.exp(1j * t) + b * np.exp(1j * k * t)
-
-
-@dataclass
-class FitRows:
-    """Several fits of the same points advanced together (one row per start or candidate): complex
-    coefficients ``c, a, b, v`` and integer ``k``, each of shape (S,). Batching the rows turns
-    many small array operations into a few larger ones (the fit of a 250-point trace is
-    dominated by per-call overhead, not arithmetic)."""
-
-    k: np.ndarray
-    c: np.ndarray
-    a: np.ndarray
-    b: np.ndarray
-    v: np.ndarray
-
-    def col(self, name: str) -> np.ndarray:
-        return getattr(self, name)[:, None]
-
-    def take(self, index: list[int] | np.ndarray) -> FitRows:
-        """The rows at ``index``."""
-        return FitRows(self.k[index], self.c[index], self.a[index], self.b[index], self.v[index])
-
-    @staticmethod
-    def of(fits: list[CurveFit]) -> FitRows:
-        """One row per fit, starting where the fit ended."""
-        return FitRows(np.array([f.k for f in fits]), np.array([f.c for f in fits], complex),
-                     np.array([f.a for f in fits], complex), np.array([f.b for f in fits], complex),
-                     np.array([f.drift for f in fits], complex))
-
-
-def closest_parameters(z: np.ndarray, rows: FitRows, samples: np.ndarray) -> np.ndarray:
-    """Parameter t of the closest point of each row's centred curve ``A e^{it} + B e^{ikt}`` to
-    each of that row's z (S, N): nearest of ``samples`` curve points, then two Newton steps on
-    ``|z(t) - p|^2``."""
-    t = np.empty(z.shape)
-    for i in range(len(z)):
-        ts = np.linspace(0.0, 2 * math.pi, int(samples[i]), endpoint=False)
-        curve = _curve(0j, rows.a[i], rows.b[i], int(rows.k[i]), ts)
-        _, idx = PointTree(curve).query(z[i])
-        t[i] = ts[idx]
-    return newton_parameters(z, rows, t, 2)
-
-
-def newton_parameters(z: np.ndarray, rows: FitRows, t: np.ndarray, steps: int) -> np.ndarray:
-    """Refine closest-point parameters (S, N) by Newton steps on ``|A e^{it} + B e^{ikt} - z|^2``."""
-    a, b, k = rows.col("a"), rows.col("b"), rows.col("k")
-    for _ in range(steps):
-        e1, ek = np.exp(1j * t), np.exp(1j * k * t)
-        d = a * e1 + b * ek - z
-        d1 = 1j * (a * e1 + k * b * ek)
-        d2 = -(a * e1 + k * k * b * ek)
-        g = (np.conj(d) * d1).real
-        h = (np.abs(d1) ** 2 + (np.conj(d) * d2).real)
-        step = np.where(h > 1e-12, g / np.maximum(h, 1e-12), 0.0)
-        t = t - np.clip(step, -0.2, 0.2)
-    return t
+    e1, ek = phasors(t, k)
+    return c + a * e1 + b * ek
 
 
 PROBE_ITERATIONS = 4  # every start gets this many steps; only the best one is carried on
-TANGENTIAL_WEIGHT = 0.2  # share of the along-curve residual kept in the solve (stabilises it)
-
-
-def _solve_point_to_line(z: np.ndarray, sw: np.ndarray, tau: np.ndarray, rows: FitRows, t: np.ndarray,
-                         fit_drift: bool) -> np.ndarray:
-    """One linear solve per row for complex ``c, A, B (, v)`` (S, 3 or 4) with the curve parameters
-    t (S, N) fixed, minimising the residual along each point's curve normal plus
-    ``TANGENTIAL_WEIGHT`` times the residual along the tangent (point-to-line ICP: it converges in
-    a few steps where plain point-to-point ICP slides slowly along the curve)."""
-    e1, ek = np.exp(1j * t), np.exp(1j * rows.col("k") * t)
-    tangent = 1j * (rows.col("a") * e1 + rows.col("k") * rows.col("b") * ek)
-    tangent = tangent / np.maximum(np.abs(tangent), 1e-12)
-    basis = [np.ones_like(e1), e1, ek]
-    if fit_drift:
-        basis.append(np.broadcast_to(tau.astype(complex), e1.shape))
-    rows_m, rhs = [], []
-    for direction, weight in ((1j * tangent, 1.0), (tangent, TANGENTIAL_WEIGHT)):
-        # projection of (complex) x onto a unit direction d: Re(conj(d) x)
-        proj = np.conj(direction)
-        cols = []
-        for g in basis:  # unknown u = ur + i ui contributes Re(proj g) ur - Im(proj g) ui
-            pg = proj * g
-            cols += [pg.real, -pg.imag]
-        rows_m.append(np.stack(cols, axis=-1) * (sw * weight)[None, :, None])
-        rhs.append((proj * z).real * sw * weight)
-    m, y = np.concatenate(rows_m, axis=1), np.concatenate(rhs, axis=-1)
-    mt = np.swapaxes(m, 1, 2)
-    try:
-        x = np.linalg.solve(mt @ m, (mt @ y[:, :, None]))[:, :, 0]
-    except np.linalg.LinAlgError:
-        x = np.stack([np.linalg.lstsq(m[i], y[i], rcond=None)[0] for i in range(len(m))])
-    return x[:, 0::2] + 1j * x[:, 1::2]
-
-
-def _icp_rows(z: np.ndarray, w: np.ndarray, tau: np.ndarray, rows: FitRows, iterations: int, fit_drift: bool,
-              samples: np.ndarray, settle_px: float | None = None) -> tuple[FitRows, np.ndarray]:
-    """Point-to-line ICP of every row on the same points; returns the rows and their weighted rms
-    residuals (inf for a degenerate trochoid whose second term dominates: a circle traced |k|
-    times). Stops early once every row has stopped moving: every sixth step when no row's ``c, A,
-    B`` moved by 1e-3 px, or with ``settle_px`` after the first step in which none moved by that
-    with each point's closest curve point searched afresh (a step of Newton refinements that settles
-    is followed by such a search: near a trochoid's crossings Newton keeps a point on the wrong
-    branch)."""
-    sw = np.sqrt(w)
-    trochoid = rows.k != -1
-    t = None
-
-    def centred() -> np.ndarray:
-        return z[None, :] - rows.col("c") - rows.col("v") * tau[None, :]
-
-    searched = False  # settling is judged on a step whose closest points were searched afresh
-    for it in range(iterations):
-        if it % 6 == 0 or searched:
-            t = closest_parameters(centred(), rows, samples)
-        else:
-            assert t is not None  # set at iteration 0 (it % 6 == 0)
-            t = newton_parameters(centred(), rows, t, 2)
-        sol = _solve_point_to_line(z[None, :], sw, tau, rows, t, fit_drift)
-        c, a, b = sol[:, 0], sol[:, 1], sol[:, 2]
-        v = sol[:, 3] if fit_drift else np.zeros_like(c)
-        too_big = trochoid & (np.abs(b) > MAX_TROCHOID_B * np.abs(a))  # stay in the trochoid family
-        b = np.where(too_big, b * MAX_TROCHOID_B * np.abs(a) / np.maximum(np.abs(b), 1e-300), b)
-        moved = np.abs(c - rows.c) + np.abs(a - rows.a) + np.abs(b - rows.b)
-        rows = FitRows(rows.k, c, a, b, v)
-        if it % 6 == 5 and bool(np.all(moved < 1e-3)):
-            break
-        if settle_px is not None and bool(np.all(moved < settle_px)):
-            if searched or it % 6 == 0:
-                break
-            searched = True  # Newton steps settled: search the closest points afresh, then judge
-        else:
-            searched = False
-    if t is None or iterations < 3:
-        t = closest_parameters(centred(), rows, samples)
-    else:  # warm: the last parameters are close, a Newton refinement is enough
-        t = newton_parameters(centred(), rows, t, 2)
-    curve = rows.col("c") + rows.col("a") * np.exp(1j * t) + rows.col("b") * np.exp(1j * rows.col("k") * t)
-    r = np.abs(curve + rows.col("v") * tau[None, :] - z[None, :])
-    rms = np.sqrt(np.sum(w * r * r, axis=1) / np.sum(w))
-    degenerate = trochoid & ~(np.abs(rows.b) < 0.999 * MAX_TROCHOID_B * np.abs(rows.a))
-    return rows, np.where(degenerate, math.inf, rms)
 
 
 def _curve_fit(rows: FitRows, rms: np.ndarray, i: int) -> CurveFit:
@@ -225,7 +90,7 @@ def _icp(z: np.ndarray, w: np.ndarray, tau: np.ndarray, k: int, c: complex, a: c
     """ICP of one curve (:func:`_icp_rows` with one row)."""
     rows = FitRows(np.array([k]), np.array([c], complex), np.array([a], complex), np.array([b], complex),
                  np.array([v], complex))
-    return _curve_fit(*_icp_rows(z, w, tau, rows, iterations, fit_drift, np.array([samples]), settle_px), 0)
+    return _curve_fit(*icp_rows(z, w, tau, rows, iterations, fit_drift, np.array([samples]), settle_px), 0)
 
 
 def _ellipse_start(z: np.ndarray) -> tuple[complex, complex, complex]:
@@ -269,7 +134,7 @@ def fit_trochoids(points: np.ndarray, ks: list[int], weights: np.ndarray | None 
               for c, a, b in trochoid_starts(z, w, k, b_starts or b_starts_for(k))]
     k_col, c, a, b = (np.array(col) for col in zip(*starts, strict=True))
     probes = FitRows(k_col, c, a, b, np.zeros(len(starts), complex))
-    probes, rms = _icp_rows(z, w, tau, probes, PROBE_ITERATIONS, drift, 200 * np.abs(k_col))
+    probes, rms = icp_rows(z, w, tau, probes, PROBE_ITERATIONS, drift, 200 * np.abs(k_col))
     chosen = []
     for k in ks:
         mine = np.flatnonzero(k_col == k)
@@ -282,7 +147,7 @@ def fit_trochoids(points: np.ndarray, ks: list[int], weights: np.ndarray | None 
         else:  # every start degenerated; keep the least bad
             chosen.append(mine[np.argmin(np.abs(probes.b[mine]) / np.maximum(np.abs(probes.a[mine]), 1e-12))])
     best = probes.take(chosen)
-    rows, rms = _icp_rows(z, w, tau, best, max(0, iterations - PROBE_ITERATIONS), drift, 200 * np.abs(best.k))
+    rows, rms = icp_rows(z, w, tau, best, max(0, iterations - PROBE_ITERATIONS), drift, 200 * np.abs(best.k))
     return [_curve_fit(rows, rms, i) for i in range(len(ks))]
 
 
@@ -359,7 +224,7 @@ def classify(points: np.ndarray, weights: np.ndarray | None = None, times: np.nd
     refined = []
     if shortlist:  # refined together: one batch of ICP steps for both
         rows = FitRows.of(shortlist)
-        rows, rms = _icp_rows(z, w_, tau, rows, 20, full[2] is not None, 200 * np.abs(rows.k))
+        rows, rms = icp_rows(z, w_, tau, rows, 20, full[2] is not None, 200 * np.abs(rows.k))
         refined = [_curve_fit(rows, rms, i) for i in range(len(shortlist))]
     for fit in refined:
         residuals[_name(fit)], coverage[_name(fit)] = fit.rms_residual, coverage_rms(fit, z, tau)
@@ -442,7 +307,7 @@ def coverage_rms(fit: CurveFit, z: np.ndarray, tau: np.ndarray, samples_per_loop
     them, which this measure does see."""
     k = fit.k
     t = np.linspace(0.0, 2 * math.pi, samples_per_loop * max(2, abs(k)), endpoint=False)
-    e1, ek = np.exp(1j * t), np.exp(1j * k * t)
+    e1, ek = phasors(t, k)
     curve = fit.c + fit.a * e1 + fit.b * ek
     speed = np.abs(1j * fit.a * e1 + 1j * k * fit.b * ek)
     still = z - fit.drift * tau
