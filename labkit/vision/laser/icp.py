@@ -104,7 +104,7 @@ def newton_parameters(z: np.ndarray, rows: FitRows, t: np.ndarray, steps: int,
 TANGENTIAL_WEIGHT = 0.2  # share of the along-curve residual kept in the solve (stabilises it)
 
 
-def _solve_point_to_line(z: np.ndarray, sw: np.ndarray, tau: np.ndarray, rows: FitRows,
+def solve_point_to_line(z: np.ndarray, sw: np.ndarray, tau: np.ndarray, rows: FitRows,
                          at_t: tuple[np.ndarray, np.ndarray], fit_drift: bool) -> np.ndarray:
     """One linear solve per row for complex ``c, A, B (, v)`` (S, 3 or 4) with the curve parameters
     t (S, N) fixed (``at_t``: their :func:`phasors`), minimising the residual along each point's
@@ -173,7 +173,7 @@ def icp_rows(z: np.ndarray, w: np.ndarray, tau: np.ndarray, rows: FitRows, itera
             assert t is not None  # set at iteration 0 (it % 6 == 0)
             t = newton_parameters(centred(), rows, t, 2, at_t)
         at_t = phasors(t, rows.col("k"))
-        sol = _solve_point_to_line(z[None, :], sw, tau, rows, at_t, fit_drift)
+        sol = solve_point_to_line(z[None, :], sw, tau, rows, at_t, fit_drift)
         c, a, b = sol[:, 0], sol[:, 1], sol[:, 2]
         v = sol[:, 3] if fit_drift else np.zeros_like(c)
         too_big = trochoid & (np.abs(b) > MAX_TROCHOID_B * np.abs(a))  # stay in the trochoid family
