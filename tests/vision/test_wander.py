@@ -8,9 +8,12 @@ import math
 from dataclasses import replace
 
 import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
+from labkit.vision.laser.nearest import PointTree
 from labkit.vision.laser.pattern_fit import classify
-from labkit.vision.laser.wander import follow_wander
+from labkit.vision.laser.wander import follow_wander, lit_samples
 from labkit.vision.shared.curves import Pattern
 
 WIDTH = 4.0
@@ -82,3 +85,22 @@ def test_an_ellipse_is_polished_on_the_band_only_when_its_wander_is_needed():
         assert plain.needed == banded.needed and np.array_equal(plain.offsets, banded.offsets)
         outcomes[name] = (banded.needed, banded.fit == plain.fit)
     assert outcomes == {"wandering": (True, False), "steady": (False, True)}
+
+
+@settings(max_examples=80, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), loops=st.sampled_from([1, 3, 5]), arc=st.floats(0.05, 1.0),
+       count=st.integers(1, 400), width=st.floats(0.5, 20.0), spread=st.floats(0.0, 30.0))
+def test_lit_samples_are_the_samples_with_light_within_a_width(seed, loops, arc, count, width, spread):
+    """The shortcut of ``lit_samples`` against every sample-to-point distance: the same samples,
+    for traces that show part or all of the curve, points on it, beside it and far off, crossings."""
+    rng = np.random.default_rng(seed)
+    pattern = (Pattern("ellipse", (300.0, 200.0), 0.4, semi_axes=(120.0, 40.0)) if loops == 1 else
+               Pattern("epitrochoid", (300.0, 200.0), 0.4, scale=100.0, b=0.4, loops=loops))
+    t = np.linspace(0, 2 * math.pi, 2000, endpoint=False)
+    curve = pattern.points(t) @ np.array([1, 1j])
+    s = rng.uniform(0, arc * 2 * math.pi, count)
+    noise = rng.normal(0, spread, count) + 1j * rng.normal(0, spread, count)
+    points = pattern.points(s) @ np.array([1, 1j]) + noise
+    dist, idx = PointTree(curve).query(points)
+    want = np.min(np.abs(curve[:, None] - points[None, :]), axis=1) <= width
+    assert np.array_equal(lit_samples(curve, points, dist, idx, width), want)

@@ -90,10 +90,7 @@ def _registered(points: np.ndarray, curve: np.ndarray, share: np.ndarray, tree: 
     chunk's light covers too little of the curve or does not fix both directions."""
     pts = points - shift
     dist, idx = tree.query(pts)
-    # curve points with light within ``width``; the search bound (twice that) only prunes the
-    # tree search: every distance up to the bound comes back exactly as without it
-    lit = PointTree(pts).query(curve, distance_upper_bound=2 * width)[0] <= width
-    if float(np.sum(share[lit])) < MIN_CHUNK_COVERAGE:
+    if float(np.sum(share[lit_samples(curve, pts, dist, idx, width)])) < MIN_CHUNK_COVERAGE:
         return complex(np.nan, np.nan)
     residual = pts - curve[idx]
     if shift != 0:
@@ -105,6 +102,29 @@ def _registered(points: np.ndarray, curve: np.ndarray, share: np.ndarray, tree: 
         return complex(np.nan, np.nan)
     sx, sy = np.linalg.solve(m, np.array([nx @ d, ny @ d]))
     return shift + complex(sx, sy)
+
+
+def lit_samples(curve: np.ndarray, points: np.ndarray, dist: np.ndarray, idx: np.ndarray,
+                width: float) -> np.ndarray:
+    """Which samples of the closed ``curve`` have one of ``points`` within ``width`` (``dist``,
+    ``idx``: each point's distance to and index of its nearest sample). Exact, and cheaper than
+    querying every sample against the points: a sample a few places along the curve from a
+    point's nearest one is checked directly (for a chunk that shows the whole pattern these cover
+    nearly every sample), and only the samples that leaves dark are searched in a kd-tree of the
+    points (with a bound of twice ``width``, which only prunes: distances up to it are exact)."""
+    n = len(curve)
+    lit = np.zeros(n, bool)
+    near = dist <= width  # a point farther from every sample lights none
+    count = int(np.count_nonzero(near))
+    if count:
+        spacing = float(np.mean(np.abs(np.diff(curve))))
+        reach = max(1, min(int(width / max(spacing, 1e-9)) + 1, n // (2 * count) + 2))
+        window = (idx[near, None] + np.arange(-reach, reach + 1)[None, :]) % n
+        lit[window[np.abs(curve[window] - points[near, None]) <= width]] = True
+    dark = np.flatnonzero(~lit)
+    if len(dark):
+        lit[dark] = PointTree(points).query(curve[dark], distance_upper_bound=2 * width)[0] <= width
+    return lit
 
 
 class CoarseShift:
