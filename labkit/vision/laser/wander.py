@@ -160,9 +160,13 @@ class CoarseShift:
         return complex(self.shifts[int(np.argmin(np.mean(d * d, axis=1)))])
 
 
-# after ``rounds``, more rounds while the chunks registered grow in number: a chunk next to a
-# registered one comes within reach once its neighbour's offset is known (a camera moving 52 px
-# across a 1280x720 clip: 4, 6, 7, then 8 of 8 chunks)
+# rounds go on until one moves the offsets by less than ``WANDER_SETTLE_PX`` (rms over the chunks),
+# and while the chunks registered grow in number: a chunk next to a registered one comes within
+# reach once its neighbour's offset is known (a camera moving 52 px across a 1280x720 clip: 4, 6,
+# 7, then 8 of 8 chunks). The offsets' change shrinks about 4x per round (the 720p bench clip:
+# 0.34, 0.047, 0.012 px): what 0.05 px leaves is ~0.015 px, a thirtieth of the centre's stated
+# accuracy (labkit/vision/laser/version.py). ADR 0043.
+WANDER_SETTLE_PX = 0.05
 MAX_ROUNDS = 8
 SEARCH_SHARE = 0.1  # a chunk's coarse shift is searched within this share of the pattern's radius
 
@@ -242,10 +246,11 @@ class Wander:
 
 
 def follow_wander(cls: Classification, points: np.ndarray, weights: np.ndarray | None, times: np.ndarray,
-                  width: float, band: tuple | None = None, rounds: int = 3,
+                  width: float, band: tuple | None = None, settle_px: float = WANDER_SETTLE_PX,
                   max_points: int = 3000) -> Wander | None:
-    """Alternate chunk offsets and a refit of ``cls.best`` (see the module docstring); None for
-    fewer than ``MIN_CHUNKS`` chunks. An ellipse whose wander is :attr:`Wander.needed` is polished
+    """Alternate chunk offsets and a refit of ``cls.best`` (see the module docstring) until a round
+    moves the offsets by less than ``settle_px`` (rms) and registers no more chunks than the one
+    before (at most ``MAX_ROUNDS``); None for fewer than ``MIN_CHUNKS`` chunks. An ellipse whose wander is :attr:`Wander.needed` is polished
     at the end on every trace pixel ``band`` (points, weights, times), moved by the offsets, as
     :func:`labkit.vision.laser.pattern_fit.classify` does (a thinned centre line ends short of a flat
     ellipse's tips). A wander that is not needed keeps the straight-drift fit in the analysis
@@ -265,18 +270,19 @@ def follow_wander(cls: Classification, points: np.ndarray, weights: np.ndarray |
     rms_straight = robust_rms(fit, z - fit.drift * (t - t_ref))
     total = np.zeros(len(mid_times), complex)
     checked = 0
-    for done in range(1, MAX_ROUNDS + 1):
+    for _ in range(MAX_ROUNDS):
         still = z - total[ch] - fit.drift * (t - t_ref)
         raw = chunk_offsets(fit, still, ch, len(mid_times), width, search_px(fit, width))
         before, checked = checked, int(np.isfinite(raw).sum())
         if checked == 0:  # no chunk can be registered: keep the straight drift
             zeros = np.zeros(len(mid_times), complex)
             return Wander(fit, t_ref, mid_times, zeros, 0, rms_straight, rms_straight)
-        step = filled(raw, mid_times)
-        total = _detrended(total + step, mid_times, counts)
+        previous = total
+        total = _detrended(total + filled(raw, mid_times), mid_times, counts)
         moved = z - total[ch]
         fit = polish(fit, xy_points(moved), w, t, 8, SETTLE_PX)
-        if done >= rounds and (checked == len(mid_times) or checked <= before):
+        change = float(np.sqrt(np.mean(np.abs(total - previous) ** 2)))
+        if change < settle_px and (checked == len(mid_times) or checked <= before):
             break
     if fit.k != -1:
         fit = without_outliers(fit, xy_points(moved), w, t)
