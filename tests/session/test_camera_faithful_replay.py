@@ -52,9 +52,10 @@ def test_its_steps_speeds_and_cone_angles_are_the_recorded_ones():
         assert mine["speed_rpm"] == pytest.approx(theirs["speed_rpm"], rel=0.005)
         if same_analysis:
             assert mine["cone_angle_rad"] == pytest.approx(theirs["cone_angle_rad"], rel=REPLAY_FIT_RTOL)
-        else:  # version 2's settled refits moved step 2's angle by 1.4e-6
+        else:  # version 2's settled refits moved step 2's angle by 1.4e-6, version 3's wander
+            # rounds that stop at 0.05 px moved one by 3.6e-5: far inside the stated 1 %
             assert LASER_ANALYSIS.accuracy["tilt"].agrees(mine["cone_angle_rad"], theirs["cone_angle_rad"])
-            assert mine["cone_angle_rad"] == pytest.approx(theirs["cone_angle_rad"], rel=1e-5)
+            assert mine["cone_angle_rad"] == pytest.approx(theirs["cone_angle_rad"], rel=1e-4)
         assert (mine["verdict"], mine["retaken"], mine["frames"]) == \
             (theirs["verdict"], theirs["retaken"], theirs["frames"])
 

@@ -9,8 +9,9 @@ from __future__ import annotations
 from labkit.vision.shared.versions import Accuracy, AnalysisVersion
 
 #: 1: the first (every session recorded before versions); 2: the wander's refits and the ellipse's
-#: band polish start from the fit's drift and stop once the curve settles (ADR 0039, ADR 0040)
-LASER_ANALYSIS = AnalysisVersion("laser", 2, {
+#: band polish start from the fit's drift and stop once the curve settles (ADR 0039, ADR 0040);
+#: 3: the wander's rounds stop once a round moves the chunk offsets by < 0.05 px (ADR 0043)
+LASER_ANALYSIS = AnalysisVersion("laser", 3, {
     "tilt": Accuracy("1 %", rel=0.01),                          # cone angle, tilt of each semi-axis
     "tilt_stderr": Accuracy("1 % of the tilt", rel=0.01, of_other=True),  # odd/even halves apart
     "centre": Accuracy("0.5 px", abs=0.5),
