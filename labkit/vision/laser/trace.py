@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from labkit.vision.laser.disc_opening import open_by_disc
 from labkit.vision.laser.window_centroids import BandLight, window_centroids
 from labkit.vision.shared.opencv_threads import one_opencv_thread, precise_distance_transform
 
@@ -60,7 +61,7 @@ def _background_levels(gray: np.ndarray, frame_px: int | None) -> np.ndarray:
     k = max(3, int(0.1 * (frame_px or max(h, w)) / 4) | 1)
     k = min(k, max(3, (min(sw, sh) - 1) | 1))
     disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
-    opened = cv2.morphologyEx(small, cv2.MORPH_OPEN, disc, borderType=cv2.BORDER_REPLICATE)
+    opened = open_by_disc(small, disc)
     opened = cv2.blur(opened, (max(1, k // 2), max(1, k // 2)))
     return cv2.resize(opened, (4 * sw, 4 * sh), interpolation=cv2.INTER_LINEAR)[:h, :w]
 
