@@ -236,7 +236,7 @@ def _centreline(mask: np.ndarray, res: np.ndarray, offset: tuple[int, int], subp
     light = res[bys, bxs]
     if subpixel:
         half = int(np.clip(half_width, 1, 12))
-        x, y = window_centroids(BandLight(light, bys, bxs, mask.shape), xs, ys, half)
+        x, y = window_centroids(BandLight(mask, bys, bxs, light), xs, ys, half)
         weights = np.clip(res[ys, xs], 1e-3, None).astype(float)
     pts = np.column_stack([x + offset[0], y + offset[1]])
     band = np.column_stack([bxs + offset[0], bys + offset[1]]).astype(float)

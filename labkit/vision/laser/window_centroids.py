@@ -2,11 +2,11 @@
 around each ridge pixel, on the light of the trace band (zero off the band).
 
 The band is a thin curve in its bounding box (about 4 % of it at 720p), so the windows' row sums
-are read from the band's pixels alone: prefix sums along the band in row-major order, two binary
-searches per window row. Every sum of integer light is exact that way, as it is in the two
-horizontal box filters over the whole box that :func:`dense_window_centroids` runs, so both give
-the same centroids bit for bit (``tests/vision/test_window_centroids.py``); light that is not
-integer goes the dense way.
+are read from the band's pixels alone: prefix sums along the band in row-major order, each window
+row a range of them, found from the integral image of the band's mask. Every sum of integer light
+is exact that way, as it is in the two horizontal box filters over the whole box that
+:func:`dense_window_centroids` runs, so both give the same centroids bit for bit
+(``tests/vision/test_trace_exact.py``); light that is not integer goes the dense way.
 """
 
 from __future__ import annotations
@@ -19,17 +19,18 @@ import numpy as np
 
 @dataclass(frozen=True)
 class BandLight:
-    """Light on a band of pixels and none elsewhere in an image of ``shape`` (rows, columns):
-    ``values`` (float32) at pixels ``(rows, cols)``, listed in row-major order."""
+    """Light on a band of pixels and none elsewhere: ``mask`` (bool image) marks the band,
+    ``rows``, ``cols`` list its pixels in row-major order (``np.nonzero(mask)``) and ``values``
+    (float32) their light."""
 
-    values: np.ndarray
+    mask: np.ndarray
     rows: np.ndarray
     cols: np.ndarray
-    shape: tuple[int, int]
+    values: np.ndarray
 
     def dense(self) -> np.ndarray:
         """The whole image (float32)."""
-        image = np.zeros(self.shape, np.float32)
+        image = np.zeros(self.mask.shape, np.float32)
         image[self.rows, self.cols] = self.values
         return image
 
@@ -41,13 +42,19 @@ def window_centroids(light: BandLight, xs: np.ndarray, ys: np.ndarray,
     keeps its own position. Only the asked-for windows add their rows up."""
     if not np.array_equal(light.values, np.round(light.values)):
         return dense_window_centroids(light.dense(), xs, ys, half)
-    height, width = light.shape
+    height, width = light.mask.shape
     rows = ys[:, None] + np.arange(-half, half + 1)[None, :]
     inside = (rows >= 0) & (rows < height)
     rows_in = np.clip(rows, 0, height - 1)
-    key = light.rows * width + light.cols  # ascending: row-major order
-    start = np.searchsorted(key, rows_in * width + np.maximum(xs - half, 0)[:, None], side="left")
-    stop = np.searchsorted(key, rows_in * width + np.minimum(xs + half, width - 1)[:, None], side="right")
+    # band pixels of window row (r, a..b): from row r's first one, skip those of row r left of a
+    # (counts in row r: differences of the integral image's rows r and r + 1), up to b
+    counts = cv2.integral(light.mask.view(np.uint8)).ravel()
+    row_first = np.searchsorted(light.rows, np.arange(height))[rows_in]
+    top = rows_in * (width + 1)
+    left = np.maximum(xs - half, 0)[:, None]
+    right = np.minimum(xs + half, width - 1)[:, None] + 1
+    start = row_first + counts[top + width + 1 + left] - counts[top + left]
+    stop = row_first + counts[top + width + 1 + right] - counts[top + right]
     # float32 light times float32 column, as the dense image's product; sums of integers: exact
     moments = light.values * light.cols.astype(np.float32)
     row_sum = _window_sums(light.values, start, stop)
