@@ -35,14 +35,11 @@ def _row_half_widths(kernel: np.ndarray) -> list[int] | None:
     rows, cols = kernel.shape
     if rows % 2 == 0 or cols % 2 == 0:
         return None
-    centre = cols // 2
-    widths = []
-    for row in kernel:
-        ones = np.flatnonzero(row)
-        if len(ones) == 0 or ones[0] + ones[-1] != 2 * centre or len(ones) != ones[-1] - ones[0] + 1:
-            return None
-        widths.append(int(ones[-1] - centre))
-    return widths
+    ones = kernel != 0
+    first = ones.argmax(axis=1)
+    last = cols - 1 - ones[:, ::-1].argmax(axis=1)
+    centred = ones.any(axis=1) & (first + last == cols - 1) & (ones.sum(axis=1) == last - first + 1)
+    return [int(w) for w in last - cols // 2] if centred.all() else None
 
 
 def _by_rows(image: np.ndarray, half_widths: list[int], pick: Callable) -> np.ndarray:
