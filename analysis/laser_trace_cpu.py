@@ -42,8 +42,9 @@ def save_chunks(clip: str, path: Path) -> str:
 
     source = open_frames(clip)
     chunks = analyse.accumulate(source, analyse.LaserQuality())
+    images = {f"image{i}": c.image for i, c in enumerate(chunks)}
     np.savez(path, frame_px=max(source.size), offsets=np.array([c.offset for c in chunks]),
-             spans=np.array([(c.first, c.last) for c in chunks]), **{f"image{i}": c.image for i, c in enumerate(chunks)})
+             spans=np.array([(c.first, c.last) for c in chunks]), **images)
     return f"{len(chunks)} chunks of {chunks[0].image.shape}"
 
 
@@ -132,9 +133,10 @@ def main() -> None:
         print(f"  {name:40s} CPU per pass: best {1e3 * min(cpu[name]):7.1f} ms  "
               f"median {1e3 * statistics.median(cpu[name]):7.1f} ms  "
               f"({args.rounds} processes x {args.passes} passes)")
+    mine = cpu[names[0]]
     for other in names[1:]:
-        print(f"  ratio this tree / {other}: median {statistics.median(cpu[names[0]]) / statistics.median(cpu[other]):.3f}"
-              f"  best {min(cpu[names[0]]) / min(cpu[other]):.3f}")
+        median = statistics.median(mine) / statistics.median(cpu[other])
+        print(f"  ratio this tree / {other}: median {median:.3f}  best {min(mine) / min(cpu[other]):.3f}")
     print(f"uptime at end:   {uptime()}")
 
 

@@ -141,8 +141,9 @@ CASES = {
     "colour circle, gradient, hole, halo": lambda: (_frame(
         (320, 240), CIRCLE, 4, gradient=60.0, hole_radius_px=8.0, noise_sigma=3.0, halo_sigma_px=5.0,
         halo_strength=0.3), {}),
-    "region of interest": lambda: (_frame((320, 240), CIRCLE, 4, gradient=60.0, noise_sigma=3.0)[40:220, 60:260],
-                                   {"offset": (60, 40), "frame_px": 320}),
+    "region of interest": lambda: (
+        _frame((320, 240), CIRCLE, 4, gradient=60.0, noise_sigma=3.0)[40:220, 60:260],
+        {"offset": (60, 40), "frame_px": 320}),
     "saturated epitrochoid, 640x480": lambda: (_frame(
         (640, 480), Pattern("epitrochoid", (330.0, 236.0), 0.4, scale=120.0, b=0.35, loops=4), 5,
         brightness=3.0, spot_sigma_px=3.0, noise_sigma=4.0, lamp=30.0), {}),
@@ -150,7 +151,8 @@ CASES = {
         (400, 300), Pattern("ellipse", (210.0, 140.0), 0.3, (120.0, 70.0)), 6, noise_sigma=2.0)),
         {"subpixel": False}),
     "faint half continuing the line": lambda: (_faint_half_ring(), {}),
-    "no light": lambda: (np.clip(np.random.default_rng(0).normal(60, 4, (120, 160, 3)), 0, 255).astype(np.uint8), {}),
+    "no light": lambda: (
+        np.clip(np.random.default_rng(0).normal(60, 4, (120, 160, 3)), 0, 255).astype(np.uint8), {}),
 }
 
 
@@ -252,9 +254,10 @@ def test_the_bright_pixels_are_those_cv2_threshold_sets(seed, level, ulps):
     rng = np.random.default_rng(seed)
     smooth = rng.normal(level, 5, (37, 41)).astype(np.float32)
     smooth[::3, ::5] = np.float32(level)
-    t = float(np.float32(level))
-    t = float(np.nextafter(np.float32(t), np.float32(np.inf * np.sign(ulps)), dtype=np.float32)) if ulps else t
-    t += ulps * 1e-9  # between float32 values too
+    t = np.float32(level)
+    if ulps:
+        t = np.nextafter(t, np.float32(np.inf * np.sign(ulps)), dtype=np.float32)
+    t = float(t) + ulps * 1e-9  # between float32 values too
     _, bright = cv2.threshold(smooth, t, 255, cv2.THRESH_BINARY)
     assert np.array_equal(smooth > np.float32(t), bright > 0)
 

@@ -223,7 +223,7 @@ def _centreline(mask: np.ndarray, res: np.ndarray, offset: tuple[int, int], subp
     offset = (offset[0] + x0, offset[1] + y0)
     dist = precise_distance_transform(mask.view(np.uint8))
     nearby = cv2.dilate(dist, np.ones((3, 3), np.uint8))
-    nearby -= 0.35
+    np.subtract(nearby, 0.35, out=nearby)
     ridge = dist >= nearby
     ridge &= mask  # dist > 0
     ys, xs = _nonzero(ridge)
