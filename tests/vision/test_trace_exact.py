@@ -23,6 +23,7 @@ from labkit.vision.laser.trace import (
     TracePoints,
     background,
     brightness,
+    contrast_to_noise,
     integer_noise,
     residual,
     robust_noise,
@@ -287,3 +288,10 @@ def test_the_precise_distance_transform_is_exact_on_any_pool(threads):
         cv2.setNumThreads(before)
     want = _exact_distances(mask)
     assert got.tobytes() == want.tobytes() and inside.tobytes() == want.tobytes()
+
+
+def test_contrast_to_noise_is_the_plain_ratio():
+    gray = brightness(_frame((320, 240), CIRCLE, 4, gradient=60.0, noise_sigma=3.0))
+    res = gray.astype(np.float32) - background(gray, 320)
+    want = float(cv2.GaussianBlur(res, (0, 0), 1.0).max()) / robust_noise(res)
+    assert contrast_to_noise(gray, 320) == want

@@ -108,9 +108,9 @@ def contrast_to_noise(gray: np.ndarray, frame_px: int | None = None) -> float:
     """How far the brightest light stands above the background, in units of the noise: the
     smoothed peak residual over the robust noise, exactly as :func:`trace_points` scores light
     (its detection threshold is ``snr`` = 8 on this scale). ``gray``: one channel (H, W)."""
-    res = gray.astype(np.float32) - background(gray, frame_px)
-    noise = robust_noise(res)
-    return float(cv2.GaussianBlur(res, (0, 0), 1.0).max()) / noise
+    with one_opencv_thread():
+        res = residual(gray, frame_px)
+        return float(cv2.GaussianBlur(res, (0, 0), 1.0).max()) / integer_noise(res)
 
 
 def trace_points(image: np.ndarray, offset: tuple[int, int] = (0, 0), subpixel: bool = True,
