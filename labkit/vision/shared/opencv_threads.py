@@ -17,8 +17,9 @@ or on a caller's ``cv2.setNumThreads``.
 ``cv2.setNumThreads`` is global to the process, so the sections here are counted under one lock:
 nested or concurrent :func:`one_opencv_thread` sections share one switch (the count saved by the
 first is restored by the last), and a distance transform holds the lock while it runs. OpenCV calls
-in other threads during a section run on one thread as well (the same pixels); a video's decoder
-threads are FFmpeg's, not OpenCV's pool.
+in other threads during a section run on one thread as well: the same pixels for every operation
+but the precise distance transform, which therefore goes through :func:`precise_distance_transform`
+everywhere in labkit. A video's decoder threads are FFmpeg's, not OpenCV's pool.
 """
 
 from __future__ import annotations
