@@ -16,6 +16,10 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from labkit.vision.laser.disc_opening import open_by_disc
+from labkit.vision.laser.window_centroids import BandLight, window_centroids
+from labkit.vision.shared.opencv_threads import one_opencv_thread, precise_distance_transform
+
 
 @dataclass
 class TracePoints:
@@ -42,6 +46,11 @@ def background(gray: np.ndarray, frame_px: int | None = None) -> np.ndarray:
     """Smooth background (screen light, gradients, lamps) as float32: a grey-scale opening with a
     disc of ~1/10 of the image size on a 4x reduced copy removes every bright structure narrower
     than that (trace lines, their halo, small loops) and keeps broad light and the dark hole."""
+    return _background_levels(gray, frame_px).astype(np.float32)
+
+
+def _background_levels(gray: np.ndarray, frame_px: int | None) -> np.ndarray:
+    """:func:`background` in grey levels (uint8, a view of the full-size estimate)."""
     h, w = gray.shape
     # OpenCV reduces by exactly 4 several times faster than by 4.006: pad to a multiple of 4
     pad_h, pad_w = -h % 4, -w % 4
@@ -52,9 +61,15 @@ def background(gray: np.ndarray, frame_px: int | None = None) -> np.ndarray:
     k = max(3, int(0.1 * (frame_px or max(h, w)) / 4) | 1)
     k = min(k, max(3, (min(sw, sh) - 1) | 1))
     disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
-    opened = cv2.morphologyEx(small, cv2.MORPH_OPEN, disc, borderType=cv2.BORDER_REPLICATE)
+    opened = open_by_disc(small, disc)
     opened = cv2.blur(opened, (max(1, k // 2), max(1, k // 2)))
-    return cv2.resize(opened, (4 * sw, 4 * sh), interpolation=cv2.INTER_LINEAR)[:h, :w].astype(np.float32)
+    return cv2.resize(opened, (4 * sw, 4 * sh), interpolation=cv2.INTER_LINEAR)[:h, :w]
+
+
+def residual(gray: np.ndarray, frame_px: int | None = None) -> np.ndarray:
+    """``gray`` minus its :func:`background` as float32, in one pass: every value is an integer
+    (a difference of two grey levels), exactly ``gray.astype(np.float32) - background(gray)``."""
+    return cv2.subtract(gray, _background_levels(gray, frame_px), dtype=cv2.CV_32F)
 
 
 def robust_noise(residual: np.ndarray, samples: int = 50000) -> float:
@@ -65,13 +80,37 @@ def robust_noise(residual: np.ndarray, samples: int = 50000) -> float:
     return max(0.5, 1.4826 * float(np.median(np.abs(sample - med))))
 
 
+def integer_noise(residual: np.ndarray, samples: int = 50000) -> float:
+    """:func:`robust_noise` of a residual whose values are integers in [-255, 255] (a
+    :func:`residual`), the same float, from a histogram of the sample instead of two sorts: both
+    medians (an order statistic or the mean of two) are exact in float32 either way."""
+    sample = residual.ravel()[:: max(1, residual.size // samples)]
+    counts = np.bincount(sample.astype(np.intp) + 255, minlength=511)
+    n = len(sample)
+    med = _histogram_median(counts, n) - 255  # in grey levels; a half level when n is even
+    # twice each deviation |v - med| is an integer: 2 |v - med| = |2 v - 2 med|
+    doubled = np.abs(2 * np.arange(-255, 256) - round(2 * med))
+    mad = _histogram_median(np.bincount(doubled, weights=counts, minlength=1022), n) / 2
+    return max(0.5, 1.4826 * mad)
+
+
+def _histogram_median(counts: np.ndarray, n: int) -> float:
+    """``np.median`` of ``n`` integers given as ``counts[v]`` = how many equal ``v``."""
+    cumulative = np.cumsum(counts)
+    upper = int(np.searchsorted(cumulative, n // 2, side="right"))
+    if n % 2:
+        return float(upper)
+    lower = int(np.searchsorted(cumulative, n // 2 - 1, side="right"))
+    return (lower + upper) / 2
+
+
 def contrast_to_noise(gray: np.ndarray, frame_px: int | None = None) -> float:
     """How far the brightest light stands above the background, in units of the noise: the
     smoothed peak residual over the robust noise, exactly as :func:`trace_points` scores light
     (its detection threshold is ``snr`` = 8 on this scale). ``gray``: one channel (H, W)."""
-    res = gray.astype(np.float32) - background(gray, frame_px)
-    noise = robust_noise(res)
-    return float(cv2.GaussianBlur(res, (0, 0), 1.0).max()) / noise
+    with one_opencv_thread():
+        res = residual(gray, frame_px)
+        return float(cv2.GaussianBlur(res, (0, 0), 1.0).max()) / integer_noise(res)
 
 
 def trace_points(image: np.ndarray, offset: tuple[int, int] = (0, 0), subpixel: bool = True,
@@ -90,9 +129,14 @@ def trace_points(image: np.ndarray, offset: tuple[int, int] = (0, 0), subpixel: 
     Weights are residuals (sub-pixel) or 1. ``frame_px`` is the long side of the full frame when
     ``image`` is a region of interest (window sizes scale with it).
     """
-    gray = brightness(image)
-    res = gray.astype(np.float32) - background(gray, frame_px)
-    noise = robust_noise(res)
+    with one_opencv_thread():  # small images: the pool's splitting costs more CPU than it saves
+        return _trace_points(brightness(image), offset, subpixel, snr, relative_floor, frame_px)
+
+
+def _trace_points(gray: np.ndarray, offset: tuple[int, int], subpixel: bool, snr: float,
+                  relative_floor: float, frame_px: int | None) -> TracePoints:
+    res = residual(gray, frame_px)
+    noise = integer_noise(res)
     smooth = cv2.GaussianBlur(res, (0, 0), 1.0)
     peak = float(smooth.max())
     empty = TracePoints(np.zeros((0, 2)), np.zeros(0), peak, noise)
@@ -105,8 +149,8 @@ def trace_points(image: np.ndarray, offset: tuple[int, int] = (0, 0), subpixel: 
     # smoothed image (only when the noise, not the peak, sets the floor)
     weak_floor = floor if floor <= relative_floor * peak else max(snr * robust_noise(smooth, 10000),
                                                                     relative_floor * peak)
-    _, bright = cv2.threshold(smooth, min(floor, weak_floor), 255, cv2.THRESH_BINARY)
-    bx, by, bw, bh = cv2.boundingRect(bright.astype(np.uint8))
+    # the pixels cv2.threshold(smooth, t, 255, THRESH_BINARY) sets: above t rounded to float32
+    bx, by, bw, bh = cv2.boundingRect((smooth > np.float32(min(floor, weak_floor))).view(np.uint8))
     if bw == 0 or bh == 0:
         return empty
     # only the bounding box of the light that may be trace matters (plus the window)
@@ -114,7 +158,8 @@ def trace_points(image: np.ndarray, offset: tuple[int, int] = (0, 0), subpixel: 
     x1, y1 = min(w, bx + bw + r + 2), min(h, by + bh + r + 2)
     smooth, res = smooth[y0:y1, x0:x1], res[y0:y1, x0:x1]
     local = cv2.dilate(smooth, np.ones((2 * r + 1, 2 * r + 1), np.uint8))  # square: separable, fast
-    band = (smooth >= 0.5 * local) & (smooth > 0)
+    band = smooth >= local * 0.5
+    band &= smooth > 0
     mask = band & (local >= floor)
     if weak_floor < floor:
         mask = _continued(mask, band & (local >= weak_floor), local)
@@ -167,7 +212,7 @@ def _centreline(mask: np.ndarray, res: np.ndarray, offset: tuple[int, int], subp
     """Thin the trace band to its centre line: ridge of the distance transform (the medial axis,
     insensitive to a saturated flat top), then optionally move each ridge pixel to the intensity
     centroid of a window as wide as the band (sub-pixel refinement)."""
-    bx, by, bw, bh = cv2.boundingRect(mask.astype(np.uint8))
+    bx, by, bw, bh = cv2.boundingRect(mask.view(np.uint8))
     if bw == 0 or bh == 0:
         return TracePoints(np.zeros((0, 2)), np.zeros(0), peak, noise)
     # work inside the trace's bounding box (plus a margin for the windows)
@@ -176,23 +221,26 @@ def _centreline(mask: np.ndarray, res: np.ndarray, offset: tuple[int, int], subp
     x1, y1 = min(mask.shape[1], bx + bw + pad), min(mask.shape[0], by + bh + pad)
     mask, res = mask[y0:y1, x0:x1], res[y0:y1, x0:x1]
     offset = (offset[0] + x0, offset[1] + y0)
-    m8 = mask.astype(np.uint8)
-    dist = cv2.distanceTransform(m8, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
-    ridge = (dist >= cv2.dilate(dist, np.ones((3, 3), np.uint8)) - 0.35) & (dist > 0)
+    dist = precise_distance_transform(mask.view(np.uint8))
+    nearby = cv2.dilate(dist, np.ones((3, 3), np.uint8))
+    np.subtract(nearby, 0.35, out=nearby)
+    ridge = dist >= nearby
+    ridge &= mask  # dist > 0
     ys, xs = _nonzero(ridge)
     if len(xs) == 0:
         return TracePoints(np.zeros((0, 2)), np.zeros(0), peak, noise)
     x, y = xs.astype(float), ys.astype(float)
     weights = np.ones(len(xs))
     half_width = float(np.median(dist[ys, xs]))
+    bys, bxs = _nonzero(mask)
+    light = res[bys, bxs]
     if subpixel:
         half = int(np.clip(half_width, 1, 12))
-        x, y = _window_centroids(np.where(mask, res, 0).astype(np.float32), xs, ys, half)
+        x, y = window_centroids(BandLight(mask, bys, bxs, light), xs, ys, half)
         weights = np.clip(res[ys, xs], 1e-3, None).astype(float)
     pts = np.column_stack([x + offset[0], y + offset[1]])
-    bys, bxs = _nonzero(mask)
     band = np.column_stack([bxs + offset[0], bys + offset[1]]).astype(float)
-    band_w = np.clip(res[bys, bxs], 1e-3, None).astype(float) if subpixel else np.ones(len(bxs))
+    band_w = np.clip(light, 1e-3, None).astype(float) if subpixel else np.ones(len(bxs))
     return TracePoints(pts, weights, peak, noise, band, band_w, 2.0 * half_width)
 
 
@@ -204,29 +252,6 @@ def _nonzero(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return np.zeros(0, np.intp), np.zeros(0, np.intp)
     found = found.reshape(-1, 2)
     return found[:, 1].astype(np.intp), found[:, 0].astype(np.intp)
-
-
-def _window_centroids(weights: np.ndarray, xs: np.ndarray, ys: np.ndarray,
-                      half: int) -> tuple[np.ndarray, np.ndarray]:
-    """Intensity centroid of the ``(2 half + 1)^2`` window of ``weights`` around each pixel
-    ``(xs, ys)``; light outside the image counts as none, and a pixel whose window holds no light
-    keeps its own position. Row sums of every window come from two horizontal box filters; only
-    the asked-for windows add their rows up (the trace is a thin curve in its bounding box)."""
-    k = 2 * half + 1
-    columns = np.arange(weights.shape[1], dtype=np.float32)[None, :]
-    row_sum = cv2.boxFilter(weights, -1, (k, 1), normalize=False, borderType=cv2.BORDER_CONSTANT)
-    row_moment = cv2.boxFilter(weights * columns, -1, (k, 1), normalize=False, borderType=cv2.BORDER_CONSTANT)
-    rows = ys[:, None] + np.arange(-half, half + 1)[None, :]
-    inside = (rows >= 0) & (rows < weights.shape[0])
-    rows_in, cols = np.clip(rows, 0, weights.shape[0] - 1), xs[:, None]
-    r0 = np.where(inside, row_sum[rows_in, cols], 0.0)
-    s0 = r0.sum(axis=1)
-    sx = np.where(inside, row_moment[rows_in, cols], 0.0).sum(axis=1)
-    sy = (r0 * rows).sum(axis=1)
-    ok = s0 > 0
-    x, y = xs.astype(float), ys.astype(float)
-    x[ok], y[ok] = sx[ok] / s0[ok], sy[ok] / s0[ok]
-    return x, y
 
 
 @dataclass
