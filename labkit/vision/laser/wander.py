@@ -250,8 +250,9 @@ def follow_wander(cls: Classification, points: np.ndarray, weights: np.ndarray |
                   max_points: int = 3000) -> Wander | None:
     """Alternate chunk offsets and a refit of ``cls.best`` (see the module docstring) until a round
     moves the offsets by less than ``settle_px`` (rms) and registers no more chunks than the one
-    before (at most ``MAX_ROUNDS``); None for fewer than ``MIN_CHUNKS`` chunks. An ellipse whose wander is :attr:`Wander.needed` is polished
-    at the end on every trace pixel ``band`` (points, weights, times), moved by the offsets, as
+    before (at most ``MAX_ROUNDS``); None for fewer than ``MIN_CHUNKS`` chunks. An ellipse whose
+    wander is :attr:`Wander.needed` is polished at the end on every trace pixel ``band`` (points,
+    weights, times), moved by the offsets, as
     :func:`labkit.vision.laser.pattern_fit.classify` does (a thinned centre line ends short of a flat
     ellipse's tips). A wander that is not needed keeps the straight-drift fit in the analysis
     (:func:`labkit.vision.laser.pattern._steadied`), so its fit is not polished: that polish is a third of
