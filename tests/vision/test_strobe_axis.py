@@ -86,3 +86,21 @@ def test_room_light_whose_removal_matters_did_not_settle_or_outweighs_the_body_i
     e.update(room_light_settled=True, room_light_fraction=0.6)
     q = strobe_quality(e)
     assert q["verdict"] == "doubtful" and "outweighs" in q["reasons"][0]
+
+
+def test_room_light_fitted_on_a_few_frames_that_does_not_hold_for_the_clip_is_doubtful(tmp_path):
+    """The room light is fitted on a few frames; on the robustness suite's strobe-cylinder-26-hard
+    the tilt on those frames and on every frame differed by 16 %, and the result was 0.012 rad off
+    with verdict ok. A difference over ROOM_LIGHT_HOLDS (10 %) now says doubtful and why."""
+    e = _evidence(tmp_path)
+    phi, beta = e["tilt_amplitude_rad"], e["lateral_amplitude_px"]
+    e.update(room_light_fraction=0.2, room_light_settled=True, tilt_amplitude_uncorrected_rad=0.98 * phi,
+             lateral_amplitude_uncorrected_px=beta, room_light_frames_fitted=6,
+             tilt_amplitude_fitted_frames_rad=0.95 * phi)
+    assert strobe_quality(e)["verdict"] == "ok"  # 5 % apart: as the suite's right results
+    e.update(tilt_amplitude_fitted_frames_rad=0.84 * phi)
+    q = strobe_quality(e)
+    assert q["verdict"] == "doubtful"
+    assert any("fitted on 6 frames, does not hold for the whole clip" in r for r in q["reasons"])
+    e.update(tilt_amplitude_fitted_frames_rad=None)  # a result of version 1: nothing to compare
+    assert strobe_quality(e)["verdict"] == "ok"

@@ -208,6 +208,7 @@ def _without_room_light(light: ClipLight, first: _Measured, model: PhaseModel) -
         change = abs(now.motion.phi - before) / max(now.motion.phi, 1e-12)
         rounds += 1
     alpha = 0.0 if fit is None else fit.alpha
+    on_fitted = now.motion.phi  # the tilt on the frames the room light was fitted on
     if fit is not None:
         whole = _measure(poses_without_ghost(light, first.poses, fit), model)
         if len(whole.idx) >= MIN_FRAMES:
@@ -219,6 +220,7 @@ def _without_room_light(light: ClipLight, first: _Measured, model: PhaseModel) -
                  "fraction_of_light": alpha, "rounds": rounds, "settled": change <= ROOM_LIGHT_SETTLED,
                  "last_change": change if math.isfinite(change) else None, "frames_fitted": len(fitted),
                  "tilt_amplitude_uncorrected_rad": first.motion.phi,
+                 "tilt_amplitude_fitted_frames_rad": on_fitted,
                  "lateral_amplitude_uncorrected_px": first.motion.beta}
 
 
@@ -440,6 +442,8 @@ def _evidence(source, poses, found, orient: ClipOrientation, model: PhaseModel, 
             "room_light_fraction": (room or {}).get("fraction_of_light"),
             "room_light_settled": (room or {}).get("settled"),
             "tilt_amplitude_uncorrected_rad": (room or {}).get("tilt_amplitude_uncorrected_rad"),
+            "tilt_amplitude_fitted_frames_rad": (room or {}).get("tilt_amplitude_fitted_frames_rad"),
+            "room_light_frames_fitted": (room or {}).get("frames_fitted"),
             "lateral_amplitude_uncorrected_px": (room or {}).get("lateral_amplitude_uncorrected_px"),
             "axis_method": "linear moments" if room is None else "linear moments, room light taken out",
             "body_half_length_px": half, "body_size_fraction": half / min(w, h),

@@ -67,6 +67,9 @@ class RoomLight:
     frames_fitted: int
     tilt_amplitude_uncorrected_rad: float
     lateral_amplitude_uncorrected_px: float
+    # the tilt on the frames fitted, before the whole clip was measured (None: a result of strobe
+    # analysis version 1, which did not keep it)
+    tilt_amplitude_fitted_frames_rad: float | None = None
 
     def to_json(self) -> dict[str, Any]:
         return _fields_json(self)
