@@ -110,7 +110,7 @@ def lit_samples(curve: np.ndarray, points: np.ndarray, dist: np.ndarray, idx: np
     ``idx``: each point's distance to and index of its nearest sample). Exact, and cheaper than
     querying every sample against the points: a sample a few places along the curve from a
     point's nearest one is checked directly (for a chunk that shows the whole pattern these cover
-    nearly every sample), and only the samples that leaves dark are searched in a kd-tree of the
+    nearly every sample), and only the samples this leaves dark are searched in a kd-tree of the
     points (with a bound of twice ``width``, which only prunes: distances up to it are exact)."""
     n = len(curve)
     lit = np.zeros(n, bool)
