@@ -12,11 +12,12 @@ that quantity (:class:`CrossVersion`), and the replay says so.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 from labkit.protocols.replay_compare import diff_results
-from labkit.protocols.runner import normalise
+from labkit.protocols.runner import fit_or_error, normalise
 from labkit.vision.shared.versions import FIRST_VERSION, Accuracy, AnalysisVersion
 
 #: run.json's key: analysis name -> version
@@ -95,11 +96,16 @@ def recorded_fit_diffs(protocol: Any, recorded: dict[str, Any]) -> list[str]:
     tolerance, and is not compared with the recorded one: a parameter the points determine
     poorly moves with them by more than any fixed share (cone-sweep's tau_S/I, a 1 % correction
     to I omega^2, moved 4 % and two of its standard errors when one speed moved by 0.02 %)."""
-    points = list(recorded.get("points") or [])
-    try:
-        fit = protocol.fit(points)
-    except Exception as exc:  # noqa: BLE001 - as the runner records a failed quick fit
-        fit = {"model": getattr(protocol, "fit_model", "unknown"), "params": {},
-               "error": f"{type(exc).__name__}: {exc}"}
+    fit = fit_or_error(protocol, list(recorded.get("points") or []))
     return [f"{line} (the fit of results.json's own points)"
             for line in diff_results(normalise(fit), recorded.get("fit"), "results.fit", derived=True)]
+
+
+def diff_points_then_fit(protocol: Any, replayed: dict[str, Any], recorded: dict[str, Any],
+                         compare: Callable[[Any, Any], list[str]]) -> list[str]:
+    """A replay's results against ``results.json`` where the replay's fit is not held against the
+    recorded one (the faithful level, and any level for a session made by another version of its
+    image analysis): everything but the fit by ``compare``, and the recorded fit as the fit of
+    the recorded points (:func:`recorded_fit_diffs`)."""
+    without_fit = compare({**replayed, "fit": None}, {**recorded, "fit": None})
+    return without_fit + recorded_fit_diffs(protocol, recorded)

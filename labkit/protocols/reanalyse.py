@@ -31,12 +31,12 @@ from labkit.devices.balance.mtsics import parse_weight
 from labkit.devices.strobe.protocol import parse_status_line
 from labkit.devices.strobe.protocol import strip_junk as strip_strobe_junk
 from labkit.devices.tachometer.labkit_tach import parse_tach_sample, strip_junk
-from labkit.protocols.analysis_versions import cross_version, recorded_fit_diffs
+from labkit.protocols.analysis_versions import cross_version, diff_points_then_fit
 from labkit.protocols.params import resolve_params
 from labkit.protocols.reanalysis import Parsed, RecordedRun, point_event
 from labkit.protocols.registry import get_protocol
 from labkit.protocols.replay_compare import ReplayOutcome, diff_within
-from labkit.protocols.runner import RunOutcome, normalise
+from labkit.protocols.runner import RunOutcome, fit_or_error, normalise
 from labkit.rig import load_rig
 from labkit.session import SessionRecord
 from labkit.units import rpm_to_rad_s, to_si
@@ -133,12 +133,7 @@ def reanalyse_session(record: SessionRecord) -> Any:
         why_not = str(exc) or f"no analysis-only rule for protocol {protocol.name!r}"
     points = list(record.meta.get("carried_points") or []) + points
     protocol.plan(rig, params)  # sets what the fit needs from the parameters (e.g. w_ref)
-    try:
-        fit = protocol.fit(points)
-    except Exception as exc:  # noqa: BLE001 - as the runner records a failed quick fit
-        fit = {"model": getattr(protocol, "fit_model", "unknown"), "params": {},
-               "error": f"{type(exc).__name__}: {exc}"}
-    results = normalise({"protocol": protocol.name, "points": points, "fit": fit})
+    results = normalise({"protocol": protocol.name, "points": points, "fit": fit_or_error(protocol, points)})
     recorded = record.results
     cross = cross_version(protocol, record.meta) if why_not is None else None
     if recorded is None:
@@ -146,8 +141,7 @@ def reanalyse_session(record: SessionRecord) -> Any:
     elif cross is None:
         diffs = diff_within(results, recorded)
     else:  # another version of the image analysis: its numbers within its stated accuracy
-        diffs = diff_within({**results, "fit": None}, {**recorded, "fit": None}, cross=cross)
-        diffs += recorded_fit_diffs(protocol, recorded)
+        diffs = diff_points_then_fit(protocol, results, recorded, lambda a, b: diff_within(a, b, cross=cross))
     outcome = RunOutcome("completed", None, record.path, results)
     if why_not is not None:
         notes.append(f"{why_not}: the points of {protocol.name} are taken as recorded, only the fit is "

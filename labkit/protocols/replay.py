@@ -27,7 +27,7 @@ from labkit.errors import CassetteError, LabkitError
 from labkit.hints import analysis_keys
 from labkit.io.clock import VirtualClock, recorded_runs, recorded_ticks, use_clock
 from labkit.io.replay_clock import ReplayClock
-from labkit.protocols.analysis_versions import CrossVersion, cross_version, recorded_fit_diffs
+from labkit.protocols.analysis_versions import CrossVersion, cross_version, diff_points_then_fit
 from labkit.protocols.events import Sink
 from labkit.protocols.params import resolve_params
 from labkit.protocols.reading_evidence import faithful_reading_diffs
@@ -269,17 +269,16 @@ def replay_session(path: str | Path, sinks: list[Sink] | None = None, level: str
         elif cross is None:
             diffs += diff_results(replayed, recorded, derived_keys=tolerant)
         else:  # points within the stated accuracy; the recorded fit must follow from its points
-            diffs += diff_results({**replayed, "fit": None}, {**recorded, "fit": None}, derived_keys=tolerant,
-                                  cross=cross)
-            diffs += recorded_fit_diffs(protocol, recorded)
+            diffs += diff_points_then_fit(protocol, replayed, recorded,
+                                          lambda a, b: diff_results(a, b, derived_keys=tolerant, cross=cross))
         diffs += _evidence_diffs(record, evidence, tolerant, cross)
         return ReplayOutcome(outcome, recorded, not diffs, diffs, warnings, "exact",
                              decisions=replay_decisions, analysis_note=note)
     if recorded is None:
         diffs.append("recording has no results.json")
     else:
-        diffs += diff_within({**replayed, "fit": None}, {**recorded, "fit": None}, cross=cross)
-        diffs += recorded_fit_diffs(protocol, recorded)
+        diffs += diff_points_then_fit(protocol, replayed, recorded,
+                                      lambda a, b: diff_within(a, b, cross=cross))
     if not points:  # a resumed session's readings files also hold the first run's readings
         diffs += faithful_reading_diffs(record, rig, evidence.parsed)
     ports = [port.report() for port in runner.ports.values() if hasattr(port, "report")]

@@ -42,6 +42,17 @@ from labkit.protocols.plan import check_plan, format_plan
 from labkit.rig import Rig, open_rig
 
 
+def fit_or_error(protocol: Any, points: list[dict[str, Any]]) -> dict[str, Any]:
+    """``protocol.fit(points)``, or for a fit that raises, its model with no parameters and the
+    error: a failed quick fit must not lose the data (the run, a replay and a re-analysis record
+    it the same way)."""
+    try:
+        return protocol.fit(points)
+    except Exception as exc:  # noqa: BLE001 - any failure of a protocol's fit is recorded, not raised
+        return {"model": getattr(protocol, "fit_model", "unknown"), "params": {},
+                "error": f"{type(exc).__name__}: {exc}"}
+
+
 def normalise(value: Any) -> Any:
     """JSON-ready copy: NaN/inf -> None, tuples -> lists (what results.json reads back as)."""
     if isinstance(value, float) and not math.isfinite(value):
@@ -255,7 +266,8 @@ class Runner:
         if ctx is not None:
             ctx.log_tach_readings()
         points = self.previous_points + new_points
-        results = normalise({"protocol": self.protocol.name, "points": points, "fit": self._fit(points)})
+        fit = fit_or_error(self.protocol, points)
+        results = normalise({"protocol": self.protocol.name, "points": points, "fit": fit})
         self.bus.emit(doc.Results(t=self.clock.now(), results=results))
         steps_done = len(self.done_steps) + len(new_points)
         self.bus.emit(doc.RunStop(t=self.clock.now(), status=status, reason=reason, steps_done=steps_done))
@@ -276,9 +288,3 @@ class Runner:
                 status = "failed" if status == "completed" else status
         return RunOutcome(status, reason, self.session.path if self.session else None, results, error)
 
-    def _fit(self, points: list[dict[str, Any]]) -> dict[str, Any]:
-        try:
-            return self.protocol.fit(points)
-        except Exception as exc:  # noqa: BLE001 - a failed quick fit must not lose the data
-            return {"model": getattr(self.protocol, "fit_model", "unknown"), "params": {},
-                    "error": f"{type(exc).__name__}: {exc}"}
