@@ -35,6 +35,7 @@ from labkit.control.stopping import stop_motor
 from labkit.devices.kinds import MotorKind, TachometerKind
 from labkit.documents import Interlock, RunDocument
 from labkit.errors import LabkitError, SafetyError
+from labkit.units import rad_s_to_rpm
 
 Emit = Callable[[RunDocument], None]
 
@@ -325,11 +326,11 @@ def short_of_reach(loop: SpeedLoop) -> str | None:
     s = loop.snapshot
     if s.measured_rad_s is None or s.duty < loop.gains.max_duty - 1e-6 or s.measured_rad_s >= s.target_rad_s:
         return None
-    rpm = 30.0 / math.pi
     return (f"{loop.name}: the duty is at its cap {loop.gains.max_duty:.2f} and the rotor tops out at "
-            f"{s.measured_rad_s * rpm:.0f} RPM, {(s.target_rad_s - s.measured_rad_s) * rpm:.0f} RPM below "
-            f"the target (settle tolerance {loop.settle.tolerance * rpm:.0f} RPM): the motor cannot reach "
-            f"{s.target_rad_s * rpm:.0f} RPM under its load (lower the plan's top speed)")
+            f"{rad_s_to_rpm(s.measured_rad_s):.0f} RPM, "
+            f"{rad_s_to_rpm(s.target_rad_s - s.measured_rad_s):.0f} RPM below the target (settle tolerance "
+            f"{rad_s_to_rpm(loop.settle.tolerance):.0f} RPM): the motor cannot reach "
+            f"{rad_s_to_rpm(s.target_rad_s):.0f} RPM under its load (lower the plan's top speed)")
 
 
 def duty_cap(max_duty: float, max_speed_rad_s: float, full_speed_rad_s: float) -> float:
