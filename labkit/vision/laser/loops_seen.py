@@ -34,7 +34,7 @@ from labkit.vision.laser.icp import FitRows, closest_parameters, newton_paramete
 from labkit.vision.laser.nearest import PointTree
 from labkit.vision.laser.pattern_fit import Classification, CurveFit, prepare_points
 from labkit.vision.laser.wander import Wander, dense_curve
-from labkit.vision.shared.curves import trochoid_from_coefficients
+from labkit.vision.shared.curves import phasors, trochoid_from_coefficients
 
 
 def loop_width(k: int, b: float, scale: float, samples: int = 4000) -> float:
@@ -95,9 +95,10 @@ def cusp_fit(fit: CurveFit, points: np.ndarray, weights: np.ndarray | None = Non
 def _solve_fixed_shape(z: np.ndarray, sw: np.ndarray, tau: np.ndarray, k: int, b0: float, a: complex,
                        t: np.ndarray, drift: bool, v: complex) -> tuple[complex, complex, complex]:
     """One weighted least-squares step for ``c, A (, v)`` along each point's curve normal (plus a
-    fifth of the tangential residual, as in :func:`labkit.vision.laser.icp.icp_rows`)."""
-    shape = np.exp(1j * t) + b0 * np.exp(1j * k * t)
-    tangent = 1j * a * (np.exp(1j * t) + k * b0 * np.exp(1j * k * t))
+    fifth of the tangential residual, as in :func:`labkit.vision.laser.icp.solve_point_to_line`)."""
+    e1, ek = phasors(t, k)
+    shape = e1 + b0 * ek
+    tangent = 1j * a * (e1 + k * b0 * ek)
     tangent = tangent / np.maximum(np.abs(tangent), 1e-12)
     basis = [np.ones_like(shape), shape] + ([tau.astype(complex)] if drift else [])
     blocks, rhs = [], []

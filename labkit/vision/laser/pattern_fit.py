@@ -18,7 +18,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from labkit.vision.laser.icp import FitRows, closest_parameters, icp_rows, newton_parameters  # noqa: F401 (API)
+from labkit.vision.laser.icp import FitRows, closest_parameters, icp_rows
 from labkit.vision.laser.nearest import PointTree
 from labkit.vision.laser.starts import b_starts_for, trochoid_starts
 from labkit.vision.shared.curves import (
@@ -87,7 +87,7 @@ def _curve_fit(rows: FitRows, rms: np.ndarray, i: int) -> CurveFit:
 def _icp(z: np.ndarray, w: np.ndarray, tau: np.ndarray, k: int, c: complex, a: complex, b: complex,
          iterations: int, fit_drift: bool, samples: int, v: complex = 0j,
          settle_px: float | None = None) -> CurveFit:
-    """ICP of one curve (:func:`_icp_rows` with one row)."""
+    """ICP of one curve (:func:`labkit.vision.laser.icp.icp_rows` with one row)."""
     rows = FitRows(np.array([k]), np.array([c], complex), np.array([a], complex), np.array([b], complex),
                  np.array([v], complex))
     return _curve_fit(*icp_rows(z, w, tau, rows, iterations, fit_drift, np.array([samples]), settle_px), 0)
