@@ -18,7 +18,7 @@ from typing import Any
 
 from labkit.protocols.replay_compare import diff_results
 from labkit.protocols.runner import fit_or_error, normalise
-from labkit.vision.shared.versions import FIRST_VERSION, Accuracy, AnalysisVersion
+from labkit.vision.shared.versions import FIRST_VERSION, Accuracy, AnalysisVersion, is_number
 
 #: run.json's key: analysis name -> version
 RUN_KEY = "analyses"
@@ -55,7 +55,7 @@ class CrossVersion:
         other = None
         if key in self.of:
             refs = [r.get(self.of[key]) for r in (row_a, row_b) if isinstance(r, dict)]
-            numbers = [abs(float(v)) for v in refs if isinstance(v, int | float) and not isinstance(v, bool)]
+            numbers = [abs(float(v)) for v in refs if is_number(v)]
             other = max(numbers) if numbers else None
         return self.accuracy[key].agrees(a, b, other)
 

@@ -41,7 +41,7 @@ class Accuracy:
         refers to, the larger of the two results')."""
         if self.words_only:
             return _masked(a) == _masked(b)
-        if not (_number(a) and _number(b)):
+        if not (is_number(a) and is_number(b)):
             return a == b
         x, y = float(a), float(b)  # type: ignore[arg-type]
         if math.isnan(x) and math.isnan(y):
@@ -63,7 +63,8 @@ class AnalysisVersion:
         return ", ".join(f"{quantity} {acc.words}" for quantity, acc in self.accuracy.items())
 
 
-def _number(value: object) -> bool:
+def is_number(value: object) -> bool:
+    """An int or a float, not a bool (JSON numbers as results hold them)."""
     return isinstance(value, int | float) and not isinstance(value, bool)
 
 
