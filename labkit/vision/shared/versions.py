@@ -16,6 +16,7 @@ import math
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import TypeGuard
 
 #: a session whose run.json names no version of an analysis was made by its first version
 FIRST_VERSION = 1
@@ -43,7 +44,7 @@ class Accuracy:
             return _masked(a) == _masked(b)
         if not (is_number(a) and is_number(b)):
             return a == b
-        x, y = float(a), float(b)  # type: ignore[arg-type]
+        x, y = float(a), float(b)
         if math.isnan(x) and math.isnan(y):
             return True
         scale = abs(other) if self.of_other and other is not None else max(abs(x), abs(y))
@@ -63,7 +64,7 @@ class AnalysisVersion:
         return ", ".join(f"{quantity} {acc.words}" for quantity, acc in self.accuracy.items())
 
 
-def is_number(value: object) -> bool:
+def is_number(value: object) -> TypeGuard[int | float]:
     """An int or a float, not a bool (JSON numbers as results hold them)."""
     return isinstance(value, int | float) and not isinstance(value, bool)
 
